@@ -1,0 +1,212 @@
+//! The pinhole camera of lab sections 3 and 4: a position, a rotation `R` (yaw about y, plus an
+//! optional pitch), a focal length in pixels and an image size.
+//!
+//! Axes follow the lab: x right, **y down**, z forward. With yaw and pitch 0 the camera looks
+//! along +z; positive yaw turns the view to the right (forward moves toward +x); positive pitch
+//! tilts it up (toward −y). The lab's camera has only yaw; pitch is 0 by default and the lab's
+//! figures never use it.
+
+use glam::{Mat3, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::Ray;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Camera {
+    /// The pinhole: every primary ray starts here.
+    pub position: Vec3,
+    /// Rotation about the y axis, in radians (shown in degrees in the UI and CLI).
+    pub yaw: f32,
+    /// Rotation about the camera's x axis, in radians; positive looks up.
+    pub pitch: f32,
+    /// Distance from the pinhole to the image plane, in pixels (the lab's `f`).
+    pub focal_length: f32,
+    /// Image width `W` in pixels.
+    pub width: u32,
+    /// Image height `H` in pixels.
+    pub height: u32,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self::default_for(512, 512)
+    }
+}
+
+impl Camera {
+    /// The lab's default camera for a `width × height` image: at (0, 0, −3.001), looking along
+    /// +z, with `f = W` (a horizontal field of view of 2·atan(1/2) = 53.13°).
+    pub fn default_for(width: u32, height: u32) -> Self {
+        Self {
+            position: Vec3::new(0.0, 0.0, -3.001),
+            yaw: 0.0,
+            pitch: 0.0,
+            focal_length: width as f32,
+            width,
+            height,
+        }
+    }
+
+    /// The rotation `R` whose columns are right, down and forward (lab section 4):
+    /// `R = R_y(yaw) · R_x(pitch)`.
+    pub fn rotation(&self) -> Mat3 {
+        Mat3::from_rotation_y(self.yaw) * Mat3::from_rotation_x(self.pitch)
+    }
+
+    pub fn right(&self) -> Vec3 {
+        self.rotation().x_axis
+    }
+
+    pub fn down(&self) -> Vec3 {
+        self.rotation().y_axis
+    }
+
+    pub fn forward(&self) -> Vec3 {
+        self.rotation().z_axis
+    }
+
+    /// The ray through the image-plane point `(px, py)`, in pixels from the top-left corner:
+    /// direction `R · (px − W/2, py − H/2, f)` (lab equation 24, with its `y − W/2` typo read as
+    /// `y − H/2`). The centre of pixel `(x, y)` is `(x + 0.5, y + 0.5)`.
+    pub fn primary_ray(&self, px: f32, py: f32) -> Ray {
+        let d = Vec3::new(
+            px - self.width as f32 / 2.0,
+            py - self.height as f32 / 2.0,
+            self.focal_length,
+        );
+        Ray::new(self.position, self.rotation() * d)
+    }
+
+    /// The ray through the centre of pixel `(x, y)`.
+    pub fn pixel_ray(&self, x: u32, y: u32) -> Ray {
+        self.primary_ray(x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// Horizontal field of view, `2·atan(W/2 / f)`, in degrees.
+    pub fn horizontal_fov_degrees(&self) -> f32 {
+        2.0 * (self.width as f32 / 2.0 / self.focal_length)
+            .atan()
+            .to_degrees()
+    }
+
+    /// Vertical field of view, `2·atan(H/2 / f)`, in degrees.
+    pub fn vertical_fov_degrees(&self) -> f32 {
+        2.0 * (self.height as f32 / 2.0 / self.focal_length)
+            .atan()
+            .to_degrees()
+    }
+
+    /// Turns the camera (yaw and pitch) so that `target` is at the centre of the image. A target
+    /// at the camera's own position leaves it unchanged.
+    pub fn look_at(&mut self, target: Vec3) {
+        let d = target - self.position;
+        let horizontal = (d.x * d.x + d.z * d.z).sqrt();
+        if d.length_squared() == 0.0 || !d.is_finite() {
+            return;
+        }
+        self.yaw = d.x.atan2(d.z);
+        self.pitch = (-d.y).atan2(horizontal);
+    }
+
+    /// The same view at another resolution: focal length scales with the width, so the field of
+    /// view is kept. Used for the progressive preview and when the user changes the image size.
+    pub fn with_resolution(&self, width: u32, height: u32) -> Self {
+        Self {
+            focal_length: self.focal_length * width as f32 / self.width as f32,
+            width,
+            height,
+            ..*self
+        }
+    }
+
+    /// Moves the camera along its own forward axis, projected on the floor plane, as the lab's
+    /// Up/Down keys do (the y position stays put when pitched).
+    pub fn move_forward(&mut self, distance: f32) {
+        let f = Mat3::from_rotation_y(self.yaw).z_axis;
+        self.position += distance * f;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn centre_ray_points_along_forward() {
+        // For an even W the image centre is the corner shared by four pixels: (W/2, H/2).
+        let cam = Camera::default_for(512, 384);
+        let r = cam.primary_ray(256.0, 192.0);
+        assert_eq!(r.origin, Vec3::new(0.0, 0.0, -3.001));
+        assert!(close(r.direction, Vec3::Z));
+        let mut turned = cam;
+        turned.yaw = 0.3;
+        assert!(close(
+            turned.primary_ray(256.0, 192.0).direction,
+            turned.forward()
+        ));
+    }
+
+    #[test]
+    fn corner_rays_match_the_field_of_view() {
+        // W = H = 512, f = 512: the image's left edge is at atan(256/512) = 26.565° from forward,
+        // so the horizontal field of view is 53.130°.
+        let cam = Camera::default_for(512, 512);
+        assert!((cam.horizontal_fov_degrees() - 53.130_1).abs() < 1e-3);
+        assert!((cam.vertical_fov_degrees() - 53.130_1).abs() < 1e-3);
+        let left = cam.primary_ray(0.0, 256.0).direction;
+        let half = left.x.abs().atan2(left.z).to_degrees();
+        assert!((2.0 * half - cam.horizontal_fov_degrees()).abs() < 1e-3);
+        // A 512×256 image with f = 512: vertical field of view 2·atan(128/512) = 28.072°.
+        let wide = Camera::default_for(512, 256);
+        assert!((wide.vertical_fov_degrees() - 28.072_5).abs() < 1e-3);
+        let top = wide.primary_ray(256.0, 0.0).direction;
+        assert!((2.0 * top.y.abs().atan2(top.z).to_degrees() - 28.072_5).abs() < 1e-3);
+        // The top-left corner ray goes left (−x) and up (−y).
+        let corner = cam.primary_ray(0.0, 0.0).direction;
+        assert!(corner.x < 0.0 && corner.y < 0.0 && corner.z > 0.0);
+    }
+
+    #[test]
+    fn yaw_90_turns_forward_to_plus_x() {
+        let mut cam = Camera::default();
+        cam.yaw = 90f32.to_radians();
+        assert!(close(cam.forward(), Vec3::X));
+        // Right turns from +x to −z, down stays +y.
+        assert!(close(cam.right(), Vec3::new(0.0, 0.0, -1.0)));
+        assert!(close(cam.down(), Vec3::Y));
+    }
+
+    #[test]
+    fn look_at_faces_its_target() {
+        let mut cam = Camera::default();
+        for target in [
+            Vec3::ZERO,
+            Vec3::new(0.7, 0.0, 0.5),
+            Vec3::new(-0.5, 0.9, 1.0),
+            Vec3::new(0.2, -0.8, -5.0),
+        ] {
+            cam.look_at(target);
+            let to_target = (target - cam.position).normalize();
+            assert!(close(cam.forward(), to_target), "{target}");
+            let centre = cam.primary_ray(256.0, 256.0);
+            assert!(close(centre.direction, to_target));
+        }
+        // The box centre is straight ahead of the default camera: yaw and pitch stay 0.
+        let mut cam = Camera::default();
+        cam.look_at(Vec3::ZERO);
+        assert_eq!((cam.yaw, cam.pitch), (0.0, 0.0));
+    }
+
+    #[test]
+    fn with_resolution_keeps_the_field_of_view() {
+        let cam = Camera::default_for(1024, 768);
+        let small = cam.with_resolution(128, 96);
+        assert_eq!(small.focal_length, 128.0);
+        assert!((small.horizontal_fov_degrees() - cam.horizontal_fov_degrees()).abs() < 1e-4);
+    }
+}

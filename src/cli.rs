@@ -1,0 +1,323 @@
+//! The command line: `raylab render` writes an image; with no command, `raylab` starts the
+//! workbench.
+//!
+//! A thin layer over the library: arguments become a [`RenderSettings`], which is validated,
+//! rendered and saved. Every bad value ends the program with one line naming it and a non-zero
+//! exit code, before anything is written.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+use raylab::film::OutputFormat;
+use raylab::render::render;
+use raylab::scene::cornell_box;
+use raylab::settings::{MAX_IMAGE_SIDE, MAX_SAMPLES};
+use raylab::{Camera, RenderSettings, Shading, Stage};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "raylab",
+    version,
+    about = "A raytracing workbench for learning"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render an image of the scene to a PNG or EXR file (defaults: the lab's figure 7, 512×512).
+    Render(RenderArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Output file: .png (the lab's display: clamped, no gamma) or .exr (linear floats).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Lab stage: flat (fig. 2), incoming (fig. 3), direct (fig. 5), shadows (fig. 6), lab (fig. 7).
+    #[arg(long, default_value = "lab", value_name = "STAGE")]
+    pub stage: Stage,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "W")]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "H")]
+    pub height: u32,
+    /// Focal length in pixels [default: the width, a 53.13° horizontal field of view].
+    #[arg(long, value_parser = parse_positive, value_name = "F", allow_hyphen_values = true)]
+    pub focal: Option<f32>,
+    /// Camera position [default: 0,0,-3.001].
+    #[arg(long, value_parser = parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub camera: Option<Vec3>,
+    /// Camera yaw in degrees; positive turns right.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_finite, allow_hyphen_values = true)]
+    pub yaw: f32,
+    /// Light position [default: 0,-0.5,-0.7].
+    #[arg(long, value_parser = parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub light: Option<Vec3>,
+    /// Light power in watts per colour channel [default: 14].
+    #[arg(long, value_parser = parse_non_negative, value_name = "P", allow_hyphen_values = true)]
+    pub light_power: Option<f32>,
+    /// Constant indirect light N, or "off" [default: 0.5 for the lab stage, off for the others].
+    #[arg(long, value_parser = parse_indirect, value_name = "N|off", allow_hyphen_values = true)]
+    pub indirect: Option<Indirect>,
+    /// Shadow rays [default: on for the shadows and lab stages].
+    #[arg(long, value_parser = parse_on_off, value_name = "on|off")]
+    pub shadows: Option<bool>,
+    /// Samples per pixel; more than 1 jitters within the pixel (anti-aliasing).
+    #[arg(long, default_value_t = 1, value_parser = parse_samples)]
+    pub samples: u32,
+    /// Seed for the sample jitter.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Render threads [default: one per core].
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024), value_name = "N")]
+    pub threads: Option<u16>,
+}
+
+/// The `--indirect` value: a constant N, or off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Indirect {
+    Off,
+    Constant(f32),
+}
+
+impl RenderArgs {
+    /// The settings these arguments describe.
+    pub fn settings(&self) -> RenderSettings {
+        let mut camera = Camera::default_for(self.width, self.height);
+        if let Some(f) = self.focal {
+            camera.focal_length = f;
+        }
+        if let Some(p) = self.camera {
+            camera.position = p;
+        }
+        camera.yaw = self.yaw.to_radians();
+        let mut settings = RenderSettings {
+            camera,
+            shading: Shading::for_stage(self.stage),
+            samples_per_pixel: self.samples,
+            seed: self.seed,
+            ..RenderSettings::default()
+        };
+        if let Some(p) = self.light {
+            settings.light.position = p;
+        }
+        if let Some(p) = self.light_power {
+            settings.light.power = Vec3::splat(p);
+        }
+        if let Some(shadows) = self.shadows {
+            settings.shading.shadows = shadows;
+        }
+        match self.indirect {
+            Some(Indirect::Constant(n)) => {
+                settings.shading.indirect = true;
+                settings.shading.indirect_light = Vec3::splat(n);
+            }
+            Some(Indirect::Off) => settings.shading.indirect = false,
+            None => {}
+        }
+        settings
+    }
+}
+
+/// Parses the arguments and runs the command; the one place errors become exit codes.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            // --help and --version.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            let text = e.render().to_string();
+            eprintln!("{}", text.lines().next().unwrap_or("error: bad arguments"));
+            return ExitCode::from(2);
+        }
+    };
+    let result = match cli.command {
+        Some(Command::Render(args)) => run_render(&args),
+        None => crate::start_workbench(),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
+    // Refuse what can't be written before spending time on the render.
+    OutputFormat::from_path(&args.out)?;
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        anyhow::bail!(
+            "could not write '{}': folder '{}' does not exist",
+            args.out.display(),
+            dir.display()
+        );
+    }
+    let settings = args.settings();
+    settings.validate()?;
+    let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-render-{i}"));
+    if let Some(n) = args.threads {
+        pool = pool.num_threads(n.into());
+    }
+    let pool = pool.build().context("could not start the render threads")?;
+
+    let scene = cornell_box();
+    let start = Instant::now();
+    let image = pool.install(|| render(&scene, &settings));
+    let elapsed = start.elapsed();
+    image.save(&args.out)?;
+
+    let c = &settings.camera;
+    println!(
+        "rendered {}×{} ({}, {} spp) in {:.1} ms on {} threads → {}",
+        c.width,
+        c.height,
+        settings.shading.stage,
+        settings.samples_per_pixel,
+        elapsed.as_secs_f64() * 1e3,
+        pool.current_num_threads(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn parse_finite(s: &str) -> Result<f32, String> {
+    let x: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!("{s} is not a finite number"))
+    }
+}
+
+fn parse_positive(s: &str) -> Result<f32, String> {
+    let x = parse_finite(s)?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{s} must be > 0"))
+    }
+}
+
+fn parse_non_negative(s: &str) -> Result<f32, String> {
+    let x = parse_finite(s)?;
+    if x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{s} must be ≥ 0"))
+    }
+}
+
+fn parse_side(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(n) if (1..=MAX_IMAGE_SIDE).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "{s} must be a whole number of pixels from 1 to {MAX_IMAGE_SIDE}"
+        )),
+    }
+}
+
+fn parse_samples(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(n) if (1..=MAX_SAMPLES).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "{s} must be a whole number from 1 to {MAX_SAMPLES}"
+        )),
+    }
+}
+
+fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let [x, y, z] = parts[..] else {
+        return Err(format!("'{s}' is not three numbers X,Y,Z"));
+    };
+    Ok(Vec3::new(
+        parse_finite(x)?,
+        parse_finite(y)?,
+        parse_finite(z)?,
+    ))
+}
+
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("'{s}' is neither on nor off")),
+    }
+}
+
+fn parse_indirect(s: &str) -> Result<Indirect, String> {
+    if s == "off" {
+        Ok(Indirect::Off)
+    } else {
+        parse_non_negative(s).map(Indirect::Constant)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(extra: &[&str]) -> RenderArgs {
+        let mut argv = vec!["raylab", "render", "--out", "x.png"];
+        argv.extend_from_slice(extra);
+        match Cli::try_parse_from(argv).unwrap().command {
+            Some(Command::Render(a)) => a,
+            None => panic!("no command"),
+        }
+    }
+
+    #[test]
+    fn defaults_are_figure_7() {
+        assert_eq!(args(&[]).settings(), RenderSettings::default());
+    }
+
+    #[test]
+    fn switches_override_the_stage() {
+        let s = args(&["--stage", "direct", "--shadows", "on", "--indirect", "0.25"]).settings();
+        assert_eq!(s.shading.stage, Stage::Direct);
+        assert!(s.shading.shadows && s.shading.indirect);
+        assert_eq!(s.shading.indirect_light, Vec3::splat(0.25));
+        let s = args(&["--indirect", "off", "--camera", "-0.5,0,-2", "--yaw", "-90"]).settings();
+        assert!(!s.shading.indirect && s.shading.shadows);
+        assert_eq!(s.camera.position, Vec3::new(-0.5, 0.0, -2.0));
+        assert_eq!(s.camera.yaw, -std::f32::consts::FRAC_PI_2);
+    }
+
+    #[test]
+    fn bad_values_are_refused() {
+        for bad in [
+            &["--width", "0"][..],
+            &["--height", "16385"],
+            &["--focal", "0"],
+            &["--focal", "nan"],
+            &["--camera", "1,2"],
+            &["--light", "0,inf,0"],
+            &["--stage", "phong"],
+            &["--shadows", "maybe"],
+            &["--light-power", "-1"],
+            &["--threads", "0"],
+        ] {
+            let mut argv = vec!["raylab", "render", "--out", "x.png"];
+            argv.extend_from_slice(bad);
+            assert!(Cli::try_parse_from(&argv).is_err(), "{bad:?} accepted");
+        }
+    }
+}

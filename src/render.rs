@@ -1,0 +1,136 @@
+//! Rendering: one sample per pixel of a whole image, traced in parallel and cancellable.
+//!
+//! [`trace_pixel`] is the lab's `Draw` loop body: camera ray → [`shade`]. [`render_pass`] runs
+//! it for every pixel, rows in parallel on the current rayon pool, and gives up between rows as
+//! soon as `cancelled()` says so — that is what lets the workbench drop stale work at once.
+//! [`render`] accumulates `samples_per_pixel` passes into a [`Film`].
+//!
+//! Each sample's jitter depends only on (seed, pixel, sample index), so the image is the same
+//! whatever the thread count.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::film::{Film, Image};
+use crate::sampling::pixel_offset;
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+use crate::shading::shade;
+
+/// Returned when a render stops because its caller no longer wants it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("render cancelled")]
+pub struct Cancelled;
+
+/// The value of sample `sample` of pixel `(x, y)`.
+pub fn trace_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, sample: u32) -> Vec3 {
+    let (dx, dy) = pixel_offset(settings.seed, x, y, sample);
+    let ray = settings.camera.primary_ray(x as f32 + dx, y as f32 + dy);
+    shade(scene, &settings.light, &settings.shading, &ray)
+}
+
+/// One sample per pixel (sample index `sample`) of the whole image, or [`Cancelled`] if
+/// `cancelled()` turned true before the last row was done.
+pub fn render_pass(
+    scene: &Scene,
+    settings: &RenderSettings,
+    sample: u32,
+    cancelled: &(dyn Fn() -> bool + Sync),
+) -> Result<Image, Cancelled> {
+    let (width, height) = (settings.camera.width, settings.camera.height);
+    let mut image = Image::new(width, height);
+    image
+        .pixels
+        .par_chunks_mut(width as usize)
+        .enumerate()
+        .try_for_each(|(y, row)| {
+            if cancelled() {
+                return Err(Cancelled);
+            }
+            for (x, pixel) in row.iter_mut().enumerate() {
+                *pixel = trace_pixel(scene, settings, x as u32, y as u32, sample);
+            }
+            Ok(())
+        })?;
+    Ok(image)
+}
+
+/// The full image: `samples_per_pixel` passes averaged. Not cancellable; for the command line
+/// and tests.
+pub fn render(scene: &Scene, settings: &RenderSettings) -> Image {
+    let mut film = Film::new(settings.camera.width, settings.camera.height);
+    for sample in 0..settings.samples_per_pixel.max(1) {
+        match render_pass(scene, settings, sample, &|| false) {
+            Ok(pass) => film.add_pass(&pass),
+            Err(Cancelled) => unreachable!("never cancelled"),
+        }
+    }
+    film.resolve()
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    use super::*;
+    use crate::scene::cornell_box;
+
+    fn small() -> RenderSettings {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(64, 48);
+        s
+    }
+
+    #[test]
+    fn same_image_whatever_the_thread_count() {
+        let scene = cornell_box();
+        let mut settings = small();
+        settings.samples_per_pixel = 3;
+        let images: Vec<Image> = [1, 2, 5]
+            .into_iter()
+            .map(|threads| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| render(&scene, &settings))
+            })
+            .collect();
+        assert_eq!(images[0], images[1]);
+        assert_eq!(images[0], images[2]);
+    }
+
+    #[test]
+    fn a_cancelled_pass_stops_early() {
+        let scene = cornell_box();
+        let rows = AtomicUsize::new(0);
+        // Cancel after a few rows have asked: the rest are never traced.
+        let cancel = || rows.fetch_add(1, Ordering::Relaxed) >= 4;
+        let result = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| render_pass(&scene, &small(), 0, &cancel));
+        assert_eq!(result, Err(Cancelled));
+        assert_eq!(rows.load(Ordering::Relaxed), 5);
+    }
+
+    #[test]
+    fn extra_samples_soften_edges_but_not_flat_areas() {
+        let scene = cornell_box();
+        let mut settings = small();
+        // The flat stage is piecewise constant: only pixels on an edge can change.
+        settings.shading = crate::Shading::for_stage(crate::Stage::Flat);
+        let one = render(&scene, &settings);
+        settings.samples_per_pixel = 16;
+        let many = render(&scene, &settings);
+        let changed = one
+            .pixels
+            .iter()
+            .zip(&many.pixels)
+            .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3)
+            .count();
+        // 64×48 = 3072 pixels; the edges of walls and blocks cross a few hundred.
+        assert!(changed > 50 && changed < one.pixels.len() / 5, "{changed}");
+    }
+}

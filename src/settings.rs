@@ -1,0 +1,158 @@
+//! Everything that determines an image, in one serialisable value.
+//!
+//! The command line, the workbench's panels and saved screenshots all describe a render with a
+//! [`RenderSettings`]; the renderer takes nothing else. `#[serde(default)]` everywhere means an
+//! older or partial settings file still loads, with the lab's values for what it lacks.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::camera::Camera;
+use crate::light::PointLight;
+use crate::shading::Shading;
+
+/// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+/// The most samples per pixel a render may ask for.
+pub const MAX_SAMPLES: u32 = 1 << 16;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RenderSettings {
+    /// The camera, including the image size.
+    pub camera: Camera,
+    pub light: PointLight,
+    pub shading: Shading,
+    /// Samples per pixel to accumulate; 1 traces each pixel's centre (the lab's image), more
+    /// jitter inside the pixel and average (anti-aliasing).
+    pub samples_per_pixel: u32,
+    /// Seed of every random choice; the same seed gives the same image.
+    pub seed: u64,
+}
+
+impl Default for RenderSettings {
+    /// Figure 7 of the lab at 512 × 512.
+    fn default() -> Self {
+        Self {
+            camera: Camera::default(),
+            light: PointLight::default(),
+            shading: Shading::default(),
+            samples_per_pixel: 1,
+            seed: 0,
+        }
+    }
+}
+
+/// A value the renderer can't use; the message names it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("invalid {name} {value}: {reason}")]
+pub struct SettingsError {
+    pub name: &'static str,
+    pub value: String,
+    pub reason: &'static str,
+}
+
+impl RenderSettings {
+    /// Checks every value before a render: sizes in 1..=16384, finite numbers, a positive focal
+    /// length, non-negative light power and indirect light, 1..=65536 samples.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let c = &self.camera;
+        check_side("width", c.width)?;
+        check_side("height", c.height)?;
+        check_vec("camera position", c.position)?;
+        check_finite("yaw", c.yaw)?;
+        check_finite("pitch", c.pitch)?;
+        check_finite("focal length", c.focal_length)?;
+        if c.focal_length <= 0.0 {
+            return Err(err("focal length", c.focal_length, "must be > 0"));
+        }
+        check_vec("light position", self.light.position)?;
+        check_vec("light power", self.light.power)?;
+        if self.light.power.min_element() < 0.0 {
+            return Err(err("light power", self.light.power, "must be ≥ 0"));
+        }
+        check_vec("indirect light", self.shading.indirect_light)?;
+        if self.shading.indirect_light.min_element() < 0.0 {
+            let n = self.shading.indirect_light;
+            return Err(err("indirect light", n, "must be ≥ 0"));
+        }
+        if !(1..=MAX_SAMPLES).contains(&self.samples_per_pixel) {
+            let s = self.samples_per_pixel;
+            return Err(err("samples per pixel", s, "must be between 1 and 65536"));
+        }
+        Ok(())
+    }
+}
+
+fn err(name: &'static str, value: impl std::fmt::Display, reason: &'static str) -> SettingsError {
+    SettingsError {
+        name,
+        value: value.to_string(),
+        reason,
+    }
+}
+
+fn check_side(name: &'static str, side: u32) -> Result<(), SettingsError> {
+    if (1..=MAX_IMAGE_SIDE).contains(&side) {
+        Ok(())
+    } else {
+        Err(err(name, side, "must be between 1 and 16384"))
+    }
+}
+
+fn check_finite(name: &'static str, x: f32) -> Result<(), SettingsError> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(err(name, x, "must be a finite number"))
+    }
+}
+
+fn check_vec(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(err(name, v, "must be finite"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_round_trip_through_json() {
+        let s = RenderSettings::default();
+        s.validate().unwrap();
+        let json = serde_json::to_string(&s).unwrap();
+        assert_eq!(serde_json::from_str::<RenderSettings>(&json).unwrap(), s);
+        // A partial file keeps the defaults for what it lacks.
+        let partial: RenderSettings =
+            serde_json::from_str(r#"{"light": {"position": [0.5, 0.0, 0.0]}}"#).unwrap();
+        assert_eq!(partial.light.position, Vec3::new(0.5, 0.0, 0.0));
+        assert_eq!(partial.light.power, Vec3::splat(14.0));
+        assert_eq!(partial.camera, Camera::default());
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let mut s = RenderSettings::default();
+        s.camera.width = 0;
+        assert_eq!(s.validate().unwrap_err().name, "width");
+        let mut s = RenderSettings::default();
+        s.camera.height = 16_385;
+        assert_eq!(s.validate().unwrap_err().name, "height");
+        let mut s = RenderSettings::default();
+        s.camera.focal_length = -1.0;
+        assert_eq!(s.validate().unwrap_err().name, "focal length");
+        let mut s = RenderSettings::default();
+        s.light.position.y = f32::NAN;
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.name, "light position");
+        assert!(e.to_string().contains("NaN"), "{e}");
+        let mut s = RenderSettings::default();
+        s.camera.yaw = f32::INFINITY;
+        assert_eq!(s.validate().unwrap_err().name, "yaw");
+    }
+}

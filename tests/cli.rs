@@ -1,0 +1,174 @@
+//! The `raylab render` command, run as a user runs it.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn raylab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(args)
+        .output()
+        .expect("run raylab")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn renders_a_png_and_an_exr_of_the_requested_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("fig7.png");
+    let exr = dir.path().join("fig7.exr");
+    for (path, w, h) in [(&png, "64", "48"), (&exr, "40", "30")] {
+        let out = raylab(&[
+            "render",
+            "--out",
+            path.to_str().unwrap(),
+            "--width",
+            w,
+            "--height",
+            h,
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains(" ms "), "prints the render time: {stdout}");
+    }
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (64, 48));
+    assert_eq!(img.color(), image::ColorType::Rgb8);
+    let img = image::open(&exr).unwrap();
+    assert_eq!((img.width(), img.height()), (40, 30));
+    // Linear floats: the brightest back-wall pixels are not clamped to 1... and the centre is
+    // the white back wall, grey (r = g = b).
+    let rgb = img.to_rgb32f();
+    let c = rgb.get_pixel(20, 12);
+    assert!(c[0] > 0.3 && (c[0] - c[2]).abs() < 1e-6, "{c:?}");
+    // No temporary files are left behind.
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}
+
+#[test]
+fn the_png_is_the_labs_display_of_the_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("a.png");
+    let exr = dir.path().join("a.exr");
+    for path in [&png, &exr] {
+        let out = raylab(&[
+            "render",
+            "--out",
+            path.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--light-power",
+            "60",
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let png = image::open(&png).unwrap().to_rgb8();
+    let exr = image::open(&exr).unwrap().to_rgb32f();
+    let mut above_one = 0;
+    for (p, e) in png.pixels().zip(exr.pixels()) {
+        for c in 0..3 {
+            let want = (e[c].clamp(0.0, 1.0) * 255.0).round() as u8;
+            assert_eq!(p[c], want);
+            above_one += usize::from(e[c] > 1.0);
+        }
+    }
+    assert!(
+        above_one > 0,
+        "a 60 W light overexposes some pixels, kept unclamped in the EXR"
+    );
+}
+
+fn assert_refused(args: &[&str], names: &str, out_path: &Path) {
+    let out = raylab(args);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    let err = stderr(&out);
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "one line for {args:?}: {err}"
+    );
+    assert!(
+        err.contains(names),
+        "{args:?}: '{err}' should name '{names}'"
+    );
+    assert!(!out_path.exists(), "{args:?} left a file");
+}
+
+#[test]
+fn bad_arguments_exit_non_zero_with_one_line_and_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let o = out.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["render", "--out", o, "--width", "0"], "--width"),
+        (&["render", "--out", o, "--height", "16385"], "--height"),
+        (&["render", "--out", o, "--focal", "-3"], "--focal"),
+        (&["render", "--out", o, "--focal", "0"], "--focal"),
+        (&["render", "--out", o, "--yaw", "NaN"], "--yaw"),
+        (&["render", "--out", o, "--camera", "0,inf,0"], "--camera"),
+        (&["render", "--out", o, "--light", "a,b,c"], "--light"),
+        (&["render", "--out", o, "--stage", "phong"], "phong"),
+        (&["render", "--out", o, "--shadows", "yes"], "--shadows"),
+        (&["render", "--out", o, "--threads", "0"], "--threads"),
+    ];
+    for (args, names) in cases {
+        assert_refused(args, names, &out);
+    }
+    let jpg = dir.path().join("x.jpg");
+    assert_refused(&["render", "--out", jpg.to_str().unwrap()], "x.jpg", &jpg);
+    let missing = dir.path().join("no/such/folder/x.png");
+    assert_refused(
+        &["render", "--out", missing.to_str().unwrap()],
+        "does not exist",
+        &missing,
+    );
+}
+
+#[test]
+fn an_unwritable_folder_is_reported_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    // A path whose "folder" is a file: no user, root included, can create anything in it.
+    let file = dir.path().join("file");
+    std::fs::write(&file, b"x").unwrap();
+    let out = file.join("x.png");
+    assert_refused(
+        &[
+            "render",
+            "--out",
+            out.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "8",
+        ],
+        "x.png",
+        &out,
+    );
+    // Writing onto a directory's name fails at the rename and leaves no temporary file.
+    let target = dir.path().join("taken.png");
+    std::fs::create_dir(&target).unwrap();
+    let r = raylab(&[
+        "render",
+        "--out",
+        target.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+    ]);
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("taken.png"), "{}", stderr(&r));
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}
