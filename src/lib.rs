@@ -22,6 +22,7 @@ pub mod film;
 pub mod geometry;
 pub mod intersect;
 pub mod light;
+pub mod progressive;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -1,0 +1,695 @@
+//! The render controller: progressive rendering on a worker thread, for the workbench window.
+//!
+//! A [`Controller`] owns a named worker thread (`raylab-progressive`) and its own rayon pool
+//! (`raylab-render-N`). [`Controller::submit`] hands it a [`RenderSettings`] and a scene; each
+//! submission gets a new *generation*. The worker renders, for the newest generation only:
+//!
+//! 1. a coarse preview at about 1/8 of the resolution (on screen a frame or two after a change),
+//! 2. the full resolution at sample 0 (the pixel centres: the lab's image),
+//! 3. further jittered passes, averaged in a [`Film`], up to `samples_per_pixel` (the target),
+//!
+//! and publishes a [`Frame`] after each pass. Then it sleeps on its channel (no CPU) until the
+//! next submission.
+//!
+//! A submission makes the running pass stale: the pass's `cancelled` closure compares its
+//! generation with the current one, so it stops within one row. Publishing checks the generation
+//! under the same lock that `submit` bumps it under, so a stale frame is never published after a
+//! newer submission, and frames come out in increasing generation order. The UI polls
+//! [`Controller::take_frame`], which never waits; a notify callback (the app's
+//! `request_repaint`) tells it when there is something to take.
+//!
+//! Nothing here knows about egui. The same settings always give the same image.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
+use std::sync::{Arc, Condvar, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use crate::film::{Film, Image};
+use crate::render::{Cancelled, render_pass};
+use crate::scene::Scene;
+use crate::settings::{RenderSettings, SettingsError};
+
+/// The preview's size divisor: a 1024² image previews at 128².
+pub const PREVIEW_DIVISOR: u32 = 8;
+
+/// Images narrower and shorter than this skip the preview: their first full pass is as quick.
+pub const PREVIEW_MIN_SIDE: u32 = 64;
+
+/// A finished pass of the newest job.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// The submission this frame belongs to (increases with every submission).
+    pub generation: u64,
+    /// The settings that made it (for a preview, still the full-resolution settings).
+    pub settings: RenderSettings,
+    /// The image in linear floats: the preview, or the mean of `samples` full passes.
+    pub image: Arc<Image>,
+    /// The same image through the lab's display transform, as 8-bit RGBA.
+    pub rgba: Vec<u8>,
+    /// Full-resolution passes averaged so far (0 for a preview).
+    pub samples: u32,
+    /// The sample target, `settings.samples_per_pixel`.
+    pub target: u32,
+    /// Whether this is the coarse preview.
+    pub is_preview: bool,
+    /// Time spent tracing this pass, in milliseconds.
+    pub pass_ms: f64,
+    /// Primary rays per second of this pass, in millions.
+    pub mrays_per_s: f64,
+    /// Time from the submission to the end of this pass, in milliseconds.
+    pub since_submit_ms: f64,
+}
+
+impl Frame {
+    /// Whether the sample target is reached: no more frames will come for this generation.
+    pub fn is_final(&self) -> bool {
+        !self.is_preview && self.samples >= self.target
+    }
+}
+
+/// Why a submission was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum ControllerError {
+    #[error(transparent)]
+    Invalid(#[from] SettingsError),
+    #[error("the render thread has stopped")]
+    Stopped,
+    #[error("could not start the render threads: {0}")]
+    Spawn(String),
+}
+
+/// Called by the worker after it publishes a frame (the app passes `ctx.request_repaint`).
+pub type Notify = Box<dyn Fn() + Send + Sync>;
+
+enum Message {
+    Job {
+        generation: u64,
+        settings: RenderSettings,
+        scene: Arc<Scene>,
+        submitted: Instant,
+    },
+    Threads {
+        generation: u64,
+        threads: usize,
+    },
+    Quit,
+}
+
+/// State shared by the controller and its worker.
+struct Shared {
+    /// Bumped by every submission and thread change, under `slot`'s lock.
+    generation: AtomicU64,
+    /// The newest published frame, until the UI takes it.
+    slot: Mutex<Option<Frame>>,
+    /// The newest generation the worker has finished (target reached), for [`Controller::wait_idle`].
+    done: Mutex<u64>,
+    done_changed: Condvar,
+    /// Jobs abandoned before their target because a newer submission arrived.
+    abandoned_jobs: AtomicU64,
+    /// A problem the worker met (the thread pool could not be rebuilt), until the UI takes it.
+    error: Mutex<Option<String>>,
+    notify: Notify,
+}
+
+impl Shared {
+    fn current(&self) -> u64 {
+        self.generation.load(Ordering::SeqCst)
+    }
+}
+
+/// The progressive renderer: see the module docs.
+pub struct Controller {
+    shared: Arc<Shared>,
+    sender: Sender<Message>,
+    worker: Option<JoinHandle<()>>,
+    threads: usize,
+}
+
+impl Controller {
+    /// Starts the worker with a pool of `threads` render threads (0: one per core).
+    pub fn new(threads: usize, notify: Notify) -> Result<Self, ControllerError> {
+        let threads = resolve_threads(threads);
+        let pool = build_pool(threads).map_err(ControllerError::Spawn)?;
+        let shared = Arc::new(Shared {
+            generation: AtomicU64::new(0),
+            slot: Mutex::new(None),
+            done: Mutex::new(0),
+            done_changed: Condvar::new(),
+            abandoned_jobs: AtomicU64::new(0),
+            error: Mutex::new(None),
+            notify,
+        });
+        let (sender, receiver) = mpsc::channel();
+        let worker_shared = Arc::clone(&shared);
+        let worker = std::thread::Builder::new()
+            .name("raylab-progressive".to_owned())
+            .spawn(move || Worker::new(worker_shared, receiver, pool).run())
+            .map_err(|e| ControllerError::Spawn(e.to_string()))?;
+        Ok(Self {
+            shared,
+            sender,
+            worker: Some(worker),
+            threads,
+        })
+    }
+
+    /// Starts a new job, making any running one stale. Returns its generation.
+    ///
+    /// Never blocks on the renderer: it takes only the frame slot's lock, which the worker holds
+    /// just long enough to move a frame in.
+    pub fn submit(
+        &self,
+        scene: &Arc<Scene>,
+        settings: &RenderSettings,
+    ) -> Result<u64, ControllerError> {
+        settings.validate()?;
+        let submitted = Instant::now();
+        self.bump_and_send(|generation| Message::Job {
+            generation,
+            settings: settings.clone(),
+            scene: Arc::clone(scene),
+            submitted,
+        })
+    }
+
+    /// Rebuilds the render pool with `threads` threads (0: one per core) and restarts the
+    /// current job on it.
+    pub fn set_threads(&mut self, threads: usize) -> Result<u64, ControllerError> {
+        let threads = resolve_threads(threads);
+        self.threads = threads;
+        self.bump_and_send(|generation| Message::Threads {
+            generation,
+            threads,
+        })
+    }
+
+    /// The number of render threads asked for.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The newest generation handed out.
+    pub fn generation(&self) -> u64 {
+        self.shared.current()
+    }
+
+    /// The newest frame published since the last call, if any. Never waits: if the worker
+    /// happens to hold the lock this instant, returns `None` (the worker's notify follows).
+    pub fn take_frame(&self) -> Option<Frame> {
+        match self.shared.slot.try_lock() {
+            Ok(mut slot) => slot.take(),
+            Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner().take(),
+            Err(std::sync::TryLockError::WouldBlock) => None,
+        }
+    }
+
+    /// A problem the worker met since the last call.
+    pub fn take_error(&self) -> Option<String> {
+        self.shared.error.try_lock().ok().and_then(|mut e| e.take())
+    }
+
+    /// Jobs abandoned so far, before their target, because a newer one arrived.
+    pub fn abandoned_jobs(&self) -> u64 {
+        self.shared.abandoned_jobs.load(Ordering::SeqCst)
+    }
+
+    /// Blocks until the newest job has reached its sample target, or `timeout` passes. Returns
+    /// whether it finished. For tests and scripts: **never call this on the UI thread**.
+    pub fn wait_idle(&self, timeout: std::time::Duration) -> bool {
+        let deadline = Instant::now() + timeout;
+        let mut done = self
+            .shared
+            .done
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        loop {
+            if *done >= self.shared.current() {
+                return true;
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return false;
+            }
+            done = match self.shared.done_changed.wait_timeout(done, deadline - now) {
+                Ok((guard, _)) => guard,
+                Err(p) => p.into_inner().0,
+            };
+        }
+    }
+
+    fn bump_and_send(&self, message: impl FnOnce(u64) -> Message) -> Result<u64, ControllerError> {
+        // Bump under the slot's lock, and drop any frame the UI has not taken yet: it is stale.
+        let mut slot = self
+            .shared
+            .slot
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let generation = self.shared.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        *slot = None;
+        self.sender
+            .send(message(generation))
+            .map_err(|_| ControllerError::Stopped)?;
+        Ok(generation)
+    }
+}
+
+impl Drop for Controller {
+    fn drop(&mut self) {
+        // Cancel the running pass, then let the worker leave its loop.
+        self.shared.generation.fetch_add(1, Ordering::SeqCst);
+        let _ = self.sender.send(Message::Quit);
+        if let Some(worker) = self.worker.take() {
+            let _ = worker.join();
+        }
+    }
+}
+
+fn resolve_threads(threads: usize) -> usize {
+    if threads == 0 {
+        default_threads()
+    } else {
+        threads
+    }
+}
+
+/// One render thread per core.
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+fn build_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("raylab-render-{i}"))
+        .build()
+        .map_err(|e| e.to_string())
+}
+
+/// The size of the coarse preview for a `width × height` image, or `None` to skip it.
+pub fn preview_size(width: u32, height: u32) -> Option<(u32, u32)> {
+    if width.max(height) < PREVIEW_MIN_SIDE {
+        return None;
+    }
+    Some((
+        (width / PREVIEW_DIVISOR).max(1),
+        (height / PREVIEW_DIVISOR).max(1),
+    ))
+}
+
+struct Job {
+    generation: u64,
+    settings: RenderSettings,
+    scene: Arc<Scene>,
+    submitted: Instant,
+}
+
+struct Worker {
+    shared: Arc<Shared>,
+    receiver: Receiver<Message>,
+    pool: rayon::ThreadPool,
+    /// The newest job, kept so a thread change can restart it.
+    job: Option<Job>,
+}
+
+impl Worker {
+    fn new(shared: Arc<Shared>, receiver: Receiver<Message>, pool: rayon::ThreadPool) -> Self {
+        Self {
+            shared,
+            receiver,
+            pool,
+            job: None,
+        }
+    }
+
+    fn run(mut self) {
+        // Wait (asleep) for a message, then take every message already queued: only the newest
+        // job matters.
+        while let Ok(first) = self.receiver.recv() {
+            let mut pending = Some(first);
+            let mut run = false;
+            while let Some(message) = pending.take() {
+                match message {
+                    Message::Quit => return,
+                    Message::Job {
+                        generation,
+                        settings,
+                        scene,
+                        submitted,
+                    } => {
+                        self.job = Some(Job {
+                            generation,
+                            settings,
+                            scene,
+                            submitted,
+                        });
+                        run = true;
+                    }
+                    Message::Threads {
+                        generation,
+                        threads,
+                    } => {
+                        self.rebuild_pool(threads);
+                        if let Some(job) = &mut self.job {
+                            job.generation = generation;
+                            job.submitted = Instant::now();
+                            run = true;
+                        } else {
+                            self.mark_done(generation);
+                        }
+                    }
+                }
+                pending = match self.receiver.try_recv() {
+                    Ok(m) => Some(m),
+                    Err(TryRecvError::Empty) => None,
+                    Err(TryRecvError::Disconnected) => return,
+                };
+            }
+            if run && let Some(job) = &self.job {
+                if self.render_job(job) {
+                    self.mark_done(job.generation);
+                } else {
+                    self.shared.abandoned_jobs.fetch_add(1, Ordering::SeqCst);
+                }
+            }
+        }
+    }
+
+    fn rebuild_pool(&mut self, threads: usize) {
+        match build_pool(threads) {
+            Ok(pool) => self.pool = pool,
+            Err(e) => {
+                if let Ok(mut slot) = self.shared.error.lock() {
+                    *slot = Some(format!("could not start {threads} render threads: {e}"));
+                }
+            }
+        }
+    }
+
+    fn mark_done(&self, generation: u64) {
+        let mut done = self
+            .shared
+            .done
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        *done = (*done).max(generation);
+        self.shared.done_changed.notify_all();
+    }
+
+    /// Renders the job's preview and passes up to its target. Returns `false` if a newer job
+    /// made it stale on the way.
+    fn render_job(&self, job: &Job) -> bool {
+        let shared = &self.shared;
+        let stale = || shared.current() != job.generation;
+        let settings = &job.settings;
+        let target = settings.samples_per_pixel.max(1);
+        let (width, height) = (settings.camera.width, settings.camera.height);
+
+        if let Some((w, h)) = preview_size(width, height) {
+            let mut preview = settings.clone();
+            preview.camera = settings.camera.with_resolution(w, h);
+            let Some((image, pass_ms)) = self.pass(job, &preview, 0) else {
+                return false;
+            };
+            let frame = self.frame(job, image, 0, true, pass_ms, u64::from(w) * u64::from(h));
+            if !self.publish(frame) {
+                return false;
+            }
+        }
+
+        let mut film = Film::new(width, height);
+        for sample in 0..target {
+            let Some((pass, pass_ms)) = self.pass(job, settings, sample) else {
+                return false;
+            };
+            film.add_pass(&pass);
+            // The mean of one pass is the pass itself: skip the copy.
+            let image = if sample == 0 { pass } else { film.resolve() };
+            if stale() {
+                return false;
+            }
+            let rays = u64::from(width) * u64::from(height);
+            let frame = self.frame(job, image, sample + 1, false, pass_ms, rays);
+            if !self.publish(frame) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// One pass, or `None` if the job went stale.
+    fn pass(&self, job: &Job, settings: &RenderSettings, sample: u32) -> Option<(Image, f64)> {
+        let shared = &self.shared;
+        let cancelled = || shared.current() != job.generation;
+        if cancelled() {
+            return None;
+        }
+        let start = Instant::now();
+        let result = self
+            .pool
+            .install(|| render_pass(&job.scene, settings, sample, &cancelled));
+        match result {
+            Ok(image) => Some((image, start.elapsed().as_secs_f64() * 1e3)),
+            Err(Cancelled) => None,
+        }
+    }
+
+    fn frame(
+        &self,
+        job: &Job,
+        image: Image,
+        samples: u32,
+        is_preview: bool,
+        pass_ms: f64,
+        rays: u64,
+    ) -> Frame {
+        let rgba = image.to_rgba8();
+        Frame {
+            generation: job.generation,
+            settings: job.settings.clone(),
+            image: Arc::new(image),
+            rgba,
+            samples,
+            target: job.settings.samples_per_pixel.max(1),
+            is_preview,
+            pass_ms,
+            mrays_per_s: if pass_ms > 0.0 {
+                rays as f64 / (pass_ms * 1e3)
+            } else {
+                0.0
+            },
+            since_submit_ms: job.submitted.elapsed().as_secs_f64() * 1e3,
+        }
+    }
+
+    /// Puts the frame in the slot unless its generation is stale; returns whether it did.
+    fn publish(&self, frame: Frame) -> bool {
+        {
+            let mut slot = self
+                .shared
+                .slot
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner);
+            // `submit` bumps the generation under this lock: checked here, no newer submission
+            // can slip in before the frame is in place.
+            if self.shared.current() != frame.generation {
+                return false;
+            }
+            *slot = Some(frame);
+        }
+        (self.shared.notify)();
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicUsize;
+    use std::time::Duration;
+
+    use super::*;
+    use crate::render::render;
+    use crate::scene::cornell_box;
+
+    const TIMEOUT: Duration = Duration::from_secs(60);
+
+    fn small(width: u32, height: u32, samples: u32) -> RenderSettings {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(width, height);
+        s.samples_per_pixel = samples;
+        s
+    }
+
+    fn quiet() -> Notify {
+        Box::new(|| {})
+    }
+
+    /// Takes frames until one is final for `generation`, checking the order on the way.
+    fn last_frame(controller: &Controller, generation: u64) -> Frame {
+        let deadline = Instant::now() + TIMEOUT;
+        let mut newest_seen = 0;
+        loop {
+            if let Some(frame) = controller.take_frame() {
+                assert!(frame.generation >= newest_seen, "an older frame came later");
+                newest_seen = frame.generation;
+                if frame.generation == generation && frame.is_final() {
+                    return frame;
+                }
+            }
+            assert!(
+                Instant::now() < deadline,
+                "no final frame within {TIMEOUT:?}"
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    #[test]
+    fn previews_then_accumulates_to_the_target() {
+        let scene = Arc::new(cornell_box());
+        let frames = Arc::new(Mutex::new(Vec::new()));
+        let notified = Arc::new(AtomicUsize::new(0));
+        let n = Arc::clone(&notified);
+        let controller =
+            Controller::new(2, Box::new(move || _ = n.fetch_add(1, Ordering::SeqCst))).unwrap();
+        let settings = small(96, 64, 4);
+        let generation = controller.submit(&scene, &settings).unwrap();
+        // Collect every frame as it comes (the UI would see only the newest of a burst).
+        let deadline = Instant::now() + TIMEOUT;
+        while frames
+            .lock()
+            .unwrap()
+            .last()
+            .is_none_or(|f: &Frame| !f.is_final())
+        {
+            if let Some(f) = controller.take_frame() {
+                frames.lock().unwrap().push(f);
+            }
+            assert!(Instant::now() < deadline);
+            std::thread::yield_now();
+        }
+        assert!(controller.wait_idle(TIMEOUT));
+        let frames = frames.lock().unwrap();
+        let last = frames.last().unwrap();
+        assert_eq!(last.generation, generation);
+        assert_eq!((last.samples, last.target), (4, 4));
+        assert_eq!((last.image.width, last.image.height), (96, 64));
+        assert_eq!(last.rgba.len(), 96 * 64 * 4);
+        assert_eq!(*last.image, render(&scene, &settings));
+        if let Some(first) = frames.first().filter(|f| f.is_preview) {
+            assert_eq!((first.image.width, first.image.height), (12, 8));
+        }
+        // Sample counts only grow.
+        assert!(frames.windows(2).all(|w| w[0].samples <= w[1].samples));
+        assert!(notified.load(Ordering::SeqCst) >= 1);
+    }
+
+    #[test]
+    fn a_newer_job_cancels_an_older_one() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(1, quiet()).unwrap();
+        // A job far too long to finish within the test: 512², 4096 samples.
+        let old = controller.submit(&scene, &small(512, 512, 4096)).unwrap();
+        // Wait until it is into its full-resolution passes.
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            if controller.take_frame().is_some_and(|f| !f.is_preview) {
+                break;
+            }
+            assert!(Instant::now() < deadline, "the old job never got going");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let newer = small(32, 32, 2);
+        let generation = controller.submit(&scene, &newer).unwrap();
+        assert!(generation > old);
+        let start = Instant::now();
+        let frame = last_frame(&controller, generation);
+        assert_eq!(frame.settings, newer);
+        assert!(controller.wait_idle(TIMEOUT));
+        // The old job was abandoned, not run to its end (4096 passes of 512²).
+        assert_eq!(controller.abandoned_jobs(), 1);
+        assert!(start.elapsed() < Duration::from_secs(20));
+        // And it publishes nothing more: the worker is idle on the newest job.
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+    }
+
+    #[test]
+    fn after_1000_rapid_changes_the_last_settings_win() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let mut settings = small(48, 32, 2);
+        let mut newest_seen = 0;
+        let mut generation = 0;
+        for i in 0..1000 {
+            settings.light.position.x = -0.8 + 1.6 * i as f32 / 999.0;
+            generation = controller.submit(&scene, &settings).unwrap();
+            // The UI polls between changes: whatever it sees is never older than before.
+            if let Some(frame) = controller.take_frame() {
+                assert!(frame.generation >= newest_seen);
+                newest_seen = frame.generation;
+            }
+        }
+        let frame = last_frame(&controller, generation);
+        assert_eq!(frame.settings, settings);
+        assert_eq!(*frame.image, render(&scene, &settings));
+        assert!(controller.wait_idle(TIMEOUT));
+        assert!(controller.take_frame().is_none());
+    }
+
+    #[test]
+    fn the_same_settings_give_the_same_image() {
+        let scene = Arc::new(cornell_box());
+        let settings = small(40, 40, 3);
+        let images: Vec<Arc<Image>> = [1, 2]
+            .into_iter()
+            .map(|threads| {
+                let controller = Controller::new(threads, quiet()).unwrap();
+                let generation = controller.submit(&scene, &settings).unwrap();
+                last_frame(&controller, generation).image
+            })
+            .collect();
+        assert_eq!(images[0], images[1]);
+        // A third run on a controller that rendered something else first.
+        let controller = Controller::new(2, quiet()).unwrap();
+        let other = small(40, 40, 1);
+        let g = controller.submit(&scene, &other).unwrap();
+        last_frame(&controller, g);
+        let g = controller.submit(&scene, &settings).unwrap();
+        assert_eq!(last_frame(&controller, g).image, images[0]);
+    }
+
+    #[test]
+    fn changing_threads_restarts_the_job() {
+        let scene = Arc::new(cornell_box());
+        let mut controller = Controller::new(1, quiet()).unwrap();
+        let settings = small(32, 32, 2);
+        let g = controller.submit(&scene, &settings).unwrap();
+        last_frame(&controller, g);
+        let g = controller.set_threads(2).unwrap();
+        assert_eq!(controller.threads(), 2);
+        let frame = last_frame(&controller, g);
+        assert_eq!(*frame.image, render(&scene, &settings));
+    }
+
+    #[test]
+    fn invalid_settings_are_refused_before_any_work() {
+        let controller = Controller::new(1, quiet()).unwrap();
+        let mut s = small(16, 16, 1);
+        s.camera.focal_length = 0.0;
+        let scene = Arc::new(cornell_box());
+        assert!(matches!(
+            controller.submit(&scene, &s),
+            Err(ControllerError::Invalid(_))
+        ));
+        assert_eq!(controller.generation(), 0);
+    }
+
+    #[test]
+    fn preview_sizes() {
+        assert_eq!(preview_size(1024, 768), Some((128, 96)));
+        assert_eq!(preview_size(512, 4), Some((64, 1)));
+        assert_eq!(preview_size(32, 32), None);
+    }
+}
