@@ -1,0 +1,469 @@
+//! The workbench window: the render beside parameter panels, re-traced live.
+//!
+//! The app is thin. Panels ([`panels`]), keys and the mouse ([`input`]) edit one
+//! [`RenderSettings`] value in [`WorkbenchState`]; actions come back as [`Command`]s, handled in
+//! [`WorkbenchApp::handle`]. Once a frame, [`WorkbenchApp::sync_render`] — the one place a
+//! change becomes a render job — compares the settings with the last submitted ones and hands
+//! any change to the [`Controller`], which renders on its own threads. The UI thread only polls
+//! for finished frames and never waits on the renderer.
+
+mod input;
+mod panels;
+mod persistence;
+mod screenshot;
+mod stats;
+#[cfg(test)]
+mod tests;
+mod viewport;
+
+use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::time::Instant;
+
+use eframe::egui;
+use raylab::progressive::{Controller, Frame};
+use raylab::scene::{Scene, cornell_box};
+use raylab::{Camera, Image, RenderSettings, Shading, Stage};
+
+use persistence::WorkbenchState;
+use stats::Stats;
+use viewport::Viewport;
+
+/// The window title (scripts find the window by it).
+pub const TITLE: &str = "raylab";
+
+/// A UI action, handled in one place ([`WorkbenchApp::handle`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Command {
+    ResetCamera,
+    LookAtBoxCentre,
+    /// Switch stage, with the shadows and indirect switches its figure uses.
+    SetStage(Stage),
+    ResetToLabDefaults,
+    SaveScreenshot,
+    ToggleHelp,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StatusKind {
+    Info,
+    Notice,
+    Error,
+}
+
+/// The status line at the bottom of the window.
+#[derive(Clone, Debug)]
+pub struct Status {
+    pub text: String,
+    pub kind: StatusKind,
+}
+
+/// The frame on screen, without its display pixels (those went to the texture).
+#[derive(Clone, Debug)]
+pub struct Shown {
+    pub generation: u64,
+    pub settings: RenderSettings,
+    pub image: Arc<Image>,
+    pub samples: u32,
+    pub target: u32,
+    pub is_preview: bool,
+}
+
+impl Shown {
+    #[cfg(test)]
+    fn is_final(&self) -> bool {
+        !self.is_preview && self.samples >= self.target
+    }
+}
+
+pub struct WorkbenchApp {
+    state: WorkbenchState,
+    scene: Arc<Scene>,
+    controller: Option<Controller>,
+    /// The settings of the newest job handed to the controller, and its generation.
+    submitted: Option<RenderSettings>,
+    submitted_generation: u64,
+    viewport: Viewport,
+    shown: Option<Shown>,
+    /// The newest full-resolution frame (what a screenshot saves).
+    last_full: Option<Shown>,
+    stats: Stats,
+    status: Option<Status>,
+    show_help: bool,
+    /// A screenshot was asked for before the full-resolution image was ready.
+    screenshot_wanted: bool,
+    screenshots_saving: Vec<Receiver<Result<screenshot::Saved, String>>>,
+    /// When the newest job was submitted, and UI frames since.
+    change: Option<(Instant, u32)>,
+    log_frames: bool,
+}
+
+/// Opens the workbench window; returns when it is closed.
+pub fn run() -> anyhow::Result<()> {
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title(TITLE)
+            .with_app_id(TITLE)
+            .with_inner_size([1180.0, 760.0])
+            .with_min_inner_size([480.0, 320.0]),
+        ..Default::default()
+    };
+    eframe::run_native(
+        TITLE,
+        options,
+        Box::new(|cc| Ok(Box::new(WorkbenchApp::new(cc)))),
+    )
+    .map_err(|e| {
+        anyhow::anyhow!(
+            "could not open the workbench window: {e}\n\
+             (no display? run it under Xvfb: `xvfb-run -a raylab`, or use `raylab render --out image.png`)"
+        )
+    })
+}
+
+impl WorkbenchApp {
+    pub fn new(cc: &eframe::CreationContext<'_>) -> Self {
+        let (state, notice) = persistence::load(cc.storage);
+        Self::with_state(&cc.egui_ctx, state, notice)
+    }
+
+    fn with_state(ctx: &egui::Context, state: WorkbenchState, notice: Option<String>) -> Self {
+        let repaint = ctx.clone();
+        let (controller, error) = match Controller::new(
+            state.render_threads,
+            Box::new(move || repaint.request_repaint()),
+        ) {
+            Ok(c) => (Some(c), None),
+            Err(e) => (None, Some(format!("The renderer could not start: {e}"))),
+        };
+        let status = match (error, notice) {
+            (Some(text), _) => Some(Status {
+                text,
+                kind: StatusKind::Error,
+            }),
+            (None, Some(text)) => Some(Status {
+                text,
+                kind: StatusKind::Notice,
+            }),
+            (None, None) => None,
+        };
+        Self {
+            state,
+            scene: Arc::new(cornell_box()),
+            controller,
+            submitted: None,
+            submitted_generation: 0,
+            viewport: Viewport::default(),
+            shown: None,
+            last_full: None,
+            stats: Stats::default(),
+            status,
+            show_help: false,
+            screenshot_wanted: false,
+            screenshots_saving: Vec::new(),
+            change: None,
+            log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
+        }
+    }
+
+    fn set_status(&mut self, kind: StatusKind, text: impl Into<String>) {
+        self.status = Some(Status {
+            text: text.into(),
+            kind,
+        });
+    }
+
+    /// The one place that turns a settings change into a render job.
+    fn sync_render(&mut self) {
+        let Some(controller) = &mut self.controller else {
+            return;
+        };
+        let mut restarted = None;
+        if self.state.render_threads != controller.threads() {
+            restarted = Some(controller.set_threads(self.state.render_threads));
+        }
+        if self.submitted.as_ref() != Some(&self.state.settings) {
+            self.submitted = Some(self.state.settings.clone());
+            restarted = Some(controller.submit(&self.scene, &self.state.settings));
+        }
+        match restarted {
+            Some(Ok(generation)) => {
+                self.submitted_generation = generation;
+                self.change = Some((Instant::now(), 0));
+                self.stats.threads = controller.threads();
+            }
+            Some(Err(e)) => self.set_status(StatusKind::Error, format!("Not rendered: {e}")),
+            None => {}
+        }
+    }
+
+    /// Takes the newest finished frame, if any, and shows it.
+    fn receive_frames(&mut self, ctx: &egui::Context) {
+        let Some(controller) = &self.controller else {
+            return;
+        };
+        let (error, frame) = (controller.take_error(), controller.take_frame());
+        if let Some(error) = error {
+            self.set_status(StatusKind::Error, error);
+        }
+        let Some(frame) = frame else {
+            return;
+        };
+        // Frames come in generation order; this guard only documents it.
+        if self
+            .shown
+            .as_ref()
+            .is_some_and(|s| frame.generation < s.generation)
+        {
+            return;
+        }
+        self.show_frame(ctx, frame);
+    }
+
+    fn show_frame(&mut self, ctx: &egui::Context, frame: Frame) {
+        let (w, h) = (frame.image.width, frame.image.height);
+        self.viewport.set_image(ctx, w, h, &frame.rgba);
+        if frame.generation >= self.submitted_generation
+            && let Some((start, frames)) = self.change.take()
+        {
+            self.stats.change_to_image = Some((start.elapsed().as_secs_f64() * 1e3, frames));
+        }
+        self.stats.samples = frame.samples;
+        self.stats.target = frame.target;
+        self.stats.is_preview = frame.is_preview;
+        if !frame.is_preview {
+            self.stats.full_pass = Some((frame.pass_ms, w, h));
+            self.stats.mrays_per_s = Some(frame.mrays_per_s);
+        }
+        let shown = Shown {
+            generation: frame.generation,
+            settings: frame.settings,
+            image: frame.image,
+            samples: frame.samples,
+            target: frame.target,
+            is_preview: frame.is_preview,
+        };
+        if !shown.is_preview {
+            self.last_full = Some(shown.clone());
+        }
+        self.shown = Some(shown);
+        if self.screenshot_wanted && self.current_full_frame().is_some() {
+            self.screenshot_wanted = false;
+            self.start_screenshot(ctx);
+        }
+    }
+
+    /// The newest full-resolution frame, if it belongs to the current settings.
+    fn current_full_frame(&self) -> Option<&Shown> {
+        self.last_full
+            .as_ref()
+            .filter(|f| f.generation >= self.submitted_generation)
+    }
+
+    fn handle(&mut self, command: Command, ctx: &egui::Context) {
+        let settings = &mut self.state.settings;
+        match command {
+            Command::ResetCamera => {
+                settings.camera =
+                    Camera::default_for(settings.camera.width, settings.camera.height);
+            }
+            Command::LookAtBoxCentre => settings.camera.look_at(glam::Vec3::ZERO),
+            Command::SetStage(stage) => {
+                settings.shading = Shading {
+                    indirect_light: settings.shading.indirect_light,
+                    ..Shading::for_stage(stage)
+                };
+            }
+            Command::ResetToLabDefaults => {
+                *settings = persistence::lab_defaults();
+                self.set_status(StatusKind::Info, "Reset to the lab's defaults (figure 7)");
+            }
+            Command::SaveScreenshot => {
+                // Make sure a change made this very frame is rendered first.
+                self.sync_render();
+                if self.current_full_frame().is_some() {
+                    self.start_screenshot(ctx);
+                } else {
+                    self.screenshot_wanted = true;
+                    self.set_status(
+                        StatusKind::Info,
+                        "Saving the screenshot when the full-resolution image is ready...",
+                    );
+                }
+            }
+            Command::ToggleHelp => self.show_help = !self.show_help,
+        }
+    }
+
+    /// Saves the current full-resolution image on a short-lived thread (PNG encoding of a large
+    /// image takes longer than a UI frame).
+    fn start_screenshot(&mut self, ctx: &egui::Context) {
+        let Some(full) = self.current_full_frame() else {
+            return;
+        };
+        let mut settings = full.settings.clone();
+        settings.samples_per_pixel = full.samples;
+        let request = screenshot::Request {
+            folder: self.state.screenshot_folder.clone(),
+            image: Arc::clone(&full.image),
+            settings,
+            sample_target: full.target,
+            time: chrono::Local::now(),
+        };
+        let (sender, receiver) = mpsc::channel();
+        let repaint = ctx.clone();
+        let spawned = std::thread::Builder::new()
+            .name("raylab-screenshot".to_owned())
+            .spawn(move || {
+                let result = screenshot::save(&request).map_err(|e| format!("{e:#}"));
+                let _ = sender.send(result);
+                repaint.request_repaint();
+            });
+        match spawned {
+            Ok(_) => {
+                self.screenshots_saving.push(receiver);
+                self.set_status(StatusKind::Info, "Saving the screenshot...");
+            }
+            Err(e) => self.set_status(
+                StatusKind::Error,
+                format!("could not start saving the screenshot: {e}"),
+            ),
+        }
+    }
+
+    fn receive_screenshots(&mut self) {
+        let mut results = Vec::new();
+        self.screenshots_saving
+            .retain(|receiver| match receiver.try_recv() {
+                Ok(result) => {
+                    results.push(result);
+                    false
+                }
+                Err(TryRecvError::Empty) => true,
+                Err(TryRecvError::Disconnected) => {
+                    results.push(Err("the screenshot thread stopped".to_owned()));
+                    false
+                }
+            });
+        for result in results {
+            match result {
+                Ok(saved) => {
+                    let shown = std::fs::canonicalize(&saved.png).unwrap_or(saved.png);
+                    self.set_status(
+                        StatusKind::Info,
+                        format!("Saved {} (settings beside it as .json)", shown.display()),
+                    );
+                }
+                Err(e) => self.set_status(StatusKind::Error, e),
+            }
+        }
+    }
+
+    fn status_ui(&self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| match &self.status {
+            Some(status) => {
+                let color = match status.kind {
+                    StatusKind::Info => ui.visuals().text_color(),
+                    StatusKind::Notice => ui.visuals().warn_fg_color,
+                    StatusKind::Error => ui.visuals().error_fg_color,
+                };
+                ui.label(egui::RichText::new(&status.text).color(color));
+            }
+            None => {
+                ui.label("Ready. F1 lists the keys.");
+            }
+        });
+    }
+
+    fn help_ui(&mut self, ctx: &egui::Context) {
+        egui::Window::new("Help")
+            .open(&mut self.show_help)
+            .resizable(false)
+            .collapsible(false)
+            .show(ctx, |ui| {
+                egui::Grid::new("help-keys")
+                    .striped(true)
+                    .num_columns(2)
+                    .show(ui, |ui| {
+                        for (keys, action) in input::HELP {
+                            ui.strong(*keys);
+                            ui.label(*action);
+                            ui.end_row();
+                        }
+                    });
+                ui.separator();
+                ui.label(
+                    "Keys act when no text field has focus. Every change re-traces at once: \
+                     a coarse preview first, then full resolution, then more samples up to the \
+                     sample target.",
+                );
+            });
+    }
+
+    /// Whether the newest job has reached its target on screen and nothing else is pending.
+    #[cfg(test)]
+    pub fn is_settled(&self) -> bool {
+        let generation = self.controller.as_ref().map_or(0, Controller::generation);
+        self.submitted.as_ref() == Some(&self.state.settings)
+            && self
+                .shown
+                .as_ref()
+                .is_some_and(|s| s.generation == generation && s.is_final())
+            && !self.screenshot_wanted
+            && self.screenshots_saving.is_empty()
+    }
+}
+
+impl eframe::App for WorkbenchApp {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        let start = Instant::now();
+        let ctx = ui.ctx().clone();
+        self.receive_frames(&ctx);
+        self.receive_screenshots();
+        if let Some((_, frames)) = &mut self.change {
+            *frames += 1;
+        }
+
+        let mut commands = input::keys(&ctx, &mut self.state.settings);
+
+        egui::Panel::bottom("status").show(ui, |ui| self.status_ui(ui));
+        egui::Panel::left("controls")
+            .resizable(true)
+            .default_size(330.0)
+            .show(ui, |ui| {
+                commands.extend(panels::controls_ui(ui, &mut self.state, &self.stats));
+            });
+        egui::CentralPanel::default_margins().show(ui, |ui| {
+            let pointer = self.viewport.viewport_ui(ui);
+            if pointer.pressed
+                && let Some(id) = ui.memory(|m| m.focused())
+            {
+                // Clicking the image gives the keys back to the camera and light.
+                ui.memory_mut(|m| m.surrender_focus(id));
+            }
+            input::pointer(&pointer, &mut self.state.settings.camera);
+        });
+        for command in commands {
+            self.handle(command, &ctx);
+        }
+        self.help_ui(&ctx);
+        self.sync_render();
+
+        self.stats.ui_frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.stats.frame_cpu_ms = frame.info().cpu_usage.map(|s| f64::from(s) * 1e3);
+        if self.log_frames {
+            eprintln!(
+                "raylab-frame ui_ms={:.2} frame_cpu_ms={:.2} samples={} target={} preview={}",
+                self.stats.ui_frame_ms,
+                self.stats.frame_cpu_ms.unwrap_or(f64::NAN),
+                self.stats.samples,
+                self.stats.target,
+                self.stats.is_preview,
+            );
+        }
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        persistence::save(storage, &self.state);
+    }
+}

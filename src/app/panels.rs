@@ -1,0 +1,243 @@
+//! The side panel: grouped, labelled controls that edit the one [`RenderSettings`] value in
+//! place, and return [`Command`]s for actions (reset, save, …) that the app handles in one place.
+//!
+//! Every control has a label; AccessKit exposes it, which is what screen readers and the tests
+//! find them by.
+
+use eframe::egui;
+use raylab::{Camera, PointLight, RenderSettings, Shading, Stage};
+
+use super::Command;
+use super::persistence::WorkbenchState;
+use super::stats::Stats;
+
+/// Square resolutions offered as presets; any width × height can be typed too.
+pub const RESOLUTION_PRESETS: [u32; 5] = [128, 256, 512, 768, 1024];
+/// The largest side the panel offers (the library allows more, from the command line).
+pub const MAX_SIDE_UI: u32 = 4096;
+/// The largest sample target the panel offers.
+pub const MAX_SAMPLES_UI: u32 = 4096;
+/// The most render threads the panel offers.
+pub const MAX_THREADS_UI: usize = 64;
+
+/// The stage's name in the selector: what it is and the lab figure it reproduces.
+pub fn stage_label(stage: Stage) -> String {
+    let what = match stage {
+        Stage::Flat => "Flat colour",
+        Stage::Incoming => "Incoming light",
+        Stage::Direct => "Direct light",
+        Stage::Shadows => "Shadows",
+        Stage::Lab => "Lab",
+    };
+    format!("{what} (figure {})", stage.figure())
+}
+
+/// What the stage computes, in the lab's terms (with the glyphs egui's default font has: `·`
+/// for the lab's element-wise `∗`).
+pub fn stage_equation(stage: Stage) -> &'static str {
+    match stage {
+        Stage::Flat => "ρ, the reflectance",
+        Stage::Incoming => "D, the incoming light (eq. 27)",
+        Stage::Direct => "ρ·D (eq. 28)",
+        Stage::Shadows => "ρ·D with shadows (eq. 28, §5.1)",
+        Stage::Lab => "ρ·(D + N) with shadows (eq. 30)",
+    }
+}
+
+/// The whole side panel.
+pub fn controls_ui(ui: &mut egui::Ui, state: &mut WorkbenchState, stats: &Stats) -> Vec<Command> {
+    let mut commands = Vec::new();
+    ui.horizontal_wrapped(|ui| {
+        if ui.button("Reset to lab defaults").clicked() {
+            commands.push(Command::ResetToLabDefaults);
+        }
+        if ui.button("Help").on_hover_text("F1").clicked() {
+            commands.push(Command::ToggleHelp);
+        }
+    });
+    ui.separator();
+    egui::ScrollArea::vertical().show(ui, |ui| {
+        egui::CollapsingHeader::new("Camera")
+            .default_open(true)
+            .show(ui, |ui| {
+                camera_ui(ui, &mut state.settings.camera, &mut commands)
+            });
+        egui::CollapsingHeader::new("Light")
+            .default_open(true)
+            .show(ui, |ui| light_ui(ui, &mut state.settings.light));
+        egui::CollapsingHeader::new("Shading")
+            .default_open(true)
+            .show(ui, |ui| {
+                shading_ui(ui, &mut state.settings.shading, &mut commands)
+            });
+        egui::CollapsingHeader::new("Image")
+            .default_open(true)
+            .show(ui, |ui| {
+                image_ui(ui, &mut state.settings, &mut state.render_threads)
+            });
+        egui::CollapsingHeader::new("Stats")
+            .default_open(true)
+            .show(ui, |ui| stats.stats_ui(ui));
+        egui::CollapsingHeader::new("Screenshot")
+            .default_open(true)
+            .show(ui, |ui| {
+                screenshot_ui(ui, &mut state.screenshot_folder, &mut commands)
+            });
+    });
+    commands
+}
+
+pub fn camera_ui(ui: &mut egui::Ui, camera: &mut Camera, commands: &mut Vec<Command>) {
+    ui.add(egui::Slider::new(&mut camera.position.x, -2.0..=2.0).text("Camera x"));
+    ui.add(egui::Slider::new(&mut camera.position.y, -2.0..=2.0).text("Camera y"));
+    ui.add(egui::Slider::new(&mut camera.position.z, -6.0..=2.0).text("Camera z"));
+    degrees_slider(ui, &mut camera.yaw, -180.0..=180.0, "Yaw");
+    degrees_slider(ui, &mut camera.pitch, -89.0..=89.0, "Pitch");
+    let w = camera.width as f32;
+    ui.add(
+        egui::Slider::new(&mut camera.focal_length, 0.1 * w..=10.0 * w)
+            .logarithmic(true)
+            .max_decimals(1)
+            .suffix(" px")
+            .text("Focal length"),
+    );
+    ui.label(format!(
+        "Field of view: {:.1}° horizontal, {:.1}° vertical",
+        camera.horizontal_fov_degrees(),
+        camera.vertical_fov_degrees()
+    ));
+    ui.horizontal_wrapped(|ui| {
+        if ui.button("Look at the box centre").clicked() {
+            commands.push(Command::LookAtBoxCentre);
+        }
+        if ui.button("Reset camera").clicked() {
+            commands.push(Command::ResetCamera);
+        }
+    });
+}
+
+/// A slider in degrees over an angle stored in radians; the value changes only when the
+/// slider does, so no rounding creeps in from converting back and forth.
+fn degrees_slider(
+    ui: &mut egui::Ui,
+    radians: &mut f32,
+    range: std::ops::RangeInclusive<f32>,
+    label: &str,
+) {
+    let mut degrees = radians.to_degrees();
+    let response = ui.add(
+        egui::Slider::new(&mut degrees, range)
+            .suffix("°")
+            .max_decimals(1)
+            .text(label),
+    );
+    if response.changed() {
+        *radians = degrees.to_radians();
+    }
+}
+
+pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
+    ui.add(egui::Slider::new(&mut light.position.x, -1.5..=1.5).text("Light x"));
+    ui.add(egui::Slider::new(&mut light.position.y, -1.5..=1.5).text("Light y"));
+    ui.add(egui::Slider::new(&mut light.position.z, -1.5..=1.5).text("Light z"));
+    // The lab's light is white: one power for the three channels.
+    let mut power = light.power.x;
+    let response = ui.add(
+        egui::Slider::new(&mut power, 0.0..=100.0)
+            .suffix(" W")
+            .text("Light power"),
+    );
+    if response.changed() {
+        light.power = glam::Vec3::splat(power);
+    }
+}
+
+pub fn shading_ui(ui: &mut egui::Ui, shading: &mut Shading, commands: &mut Vec<Command>) {
+    egui::ComboBox::new("stage", "Stage")
+        .selected_text(stage_label(shading.stage))
+        .show_ui(ui, |ui| {
+            for stage in Stage::ALL {
+                let label = stage_label(stage);
+                if ui
+                    .selectable_label(shading.stage == stage, label)
+                    .on_hover_text(stage_equation(stage))
+                    .clicked()
+                {
+                    commands.push(Command::SetStage(stage));
+                }
+            }
+        });
+    ui.label(format!("Computes {}", stage_equation(shading.stage)));
+    ui.checkbox(&mut shading.shadows, "Shadows");
+    ui.checkbox(&mut shading.indirect, "Indirect light");
+    let mut n = shading.indirect_light.x;
+    let response = ui.add_enabled(
+        shading.indirect,
+        egui::Slider::new(&mut n, 0.0..=1.0).text("Indirect N"),
+    );
+    if response.changed() {
+        shading.indirect_light = glam::Vec3::splat(n);
+    }
+}
+
+pub fn image_ui(ui: &mut egui::Ui, settings: &mut RenderSettings, threads: &mut usize) {
+    let camera = &mut settings.camera;
+    let (mut width, mut height) = (camera.width, camera.height);
+    let current = format!("{width} × {height}");
+    egui::ComboBox::new("resolution", "Resolution")
+        .selected_text(current)
+        .show_ui(ui, |ui| {
+            for side in RESOLUTION_PRESETS {
+                let selected = width == side && height == side;
+                if ui
+                    .selectable_label(selected, format!("{side} × {side}"))
+                    .clicked()
+                {
+                    (width, height) = (side, side);
+                }
+            }
+        });
+    ui.horizontal(|ui| {
+        let w = ui.label("Width");
+        ui.add(egui::DragValue::new(&mut width).range(1..=MAX_SIDE_UI))
+            .labelled_by(w.id);
+        let h = ui.label("Height");
+        ui.add(egui::DragValue::new(&mut height).range(1..=MAX_SIDE_UI))
+            .labelled_by(h.id);
+    });
+    if (width, height) != (camera.width, camera.height) {
+        // Keep the field of view: the focal length follows the width.
+        *camera = camera.with_resolution(width, height);
+    }
+    ui.add(
+        egui::Slider::new(&mut settings.samples_per_pixel, 1..=MAX_SAMPLES_UI)
+            .logarithmic(true)
+            .text("Sample target"),
+    )
+    .on_hover_text("Samples per pixel to accumulate: 1 is the lab's image, more anti-alias it");
+    ui.add(egui::Slider::new(threads, 1..=MAX_THREADS_UI).text("Render threads"));
+}
+
+pub fn screenshot_ui(
+    ui: &mut egui::Ui,
+    folder: &mut std::path::PathBuf,
+    commands: &mut Vec<Command>,
+) {
+    let mut text = folder.to_string_lossy().into_owned();
+    ui.horizontal(|ui| {
+        let label = ui.label("Screenshot folder");
+        let response = ui
+            .add(egui::TextEdit::singleline(&mut text).desired_width(f32::INFINITY))
+            .labelled_by(label.id);
+        if response.changed() {
+            *folder = std::path::PathBuf::from(&text);
+        }
+    });
+    if ui
+        .button("Save screenshot")
+        .on_hover_text("Ctrl+S: the render at full resolution, as PNG, with its settings as .json")
+        .clicked()
+    {
+        commands.push(Command::SaveScreenshot);
+    }
+}

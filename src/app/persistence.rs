@@ -1,0 +1,191 @@
+//! What the workbench remembers between runs: one serde value, [`WorkbenchState`], kept as JSON
+//! in eframe's storage under [`STORAGE_KEY`].
+//!
+//! A settings file that does not parse, comes from another version of the format, or holds
+//! values the renderer refuses falls back to the lab's defaults, with a notice that says why.
+
+use std::path::PathBuf;
+
+use raylab::RenderSettings;
+use serde::{Deserialize, Serialize};
+
+/// The key in eframe's storage.
+pub const STORAGE_KEY: &str = "raylab-workbench";
+
+/// The version of [`WorkbenchState`]'s format; a file with another version is not trusted.
+pub const STATE_VERSION: u32 = 1;
+
+/// The workbench's sample target: the lab's image (sample 0, the pixel centres) first, then
+/// jittered samples averaged up to this many (anti-aliased edges).
+pub const DEFAULT_SAMPLE_TARGET: u32 = 16;
+
+/// Everything the workbench persists.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct WorkbenchState {
+    /// The format version, [`STATE_VERSION`] when written by this build.
+    pub version: u32,
+    /// The one settings value the panels, keys and mouse edit.
+    pub settings: RenderSettings,
+    /// Threads in the render pool.
+    pub render_threads: usize,
+    /// Where screenshots go.
+    pub screenshot_folder: PathBuf,
+}
+
+impl Default for WorkbenchState {
+    fn default() -> Self {
+        Self {
+            version: STATE_VERSION,
+            settings: lab_defaults(),
+            render_threads: raylab::progressive::default_threads(),
+            screenshot_folder: PathBuf::from("."),
+        }
+    }
+}
+
+/// The lab's figure 7 at 512 × 512, accumulated to [`DEFAULT_SAMPLE_TARGET`] samples.
+pub fn lab_defaults() -> RenderSettings {
+    RenderSettings {
+        samples_per_pixel: DEFAULT_SAMPLE_TARGET,
+        ..RenderSettings::default()
+    }
+}
+
+impl WorkbenchState {
+    pub fn to_json(&self) -> String {
+        // A struct of numbers, strings and paths: serialising can't fail short of a non-UTF-8
+        // path, which then is saved as the default folder.
+        serde_json::to_string_pretty(self).unwrap_or_else(|_| {
+            let fallback = Self {
+                screenshot_folder: PathBuf::from("."),
+                ..self.clone()
+            };
+            serde_json::to_string_pretty(&fallback).unwrap_or_default()
+        })
+    }
+
+    /// Reads a saved state, or says why it can't be used.
+    pub fn from_json(json: &str) -> Result<Self, String> {
+        let value: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| format!("it is not valid JSON ({e})"))?;
+        let version = value.get("version").and_then(serde_json::Value::as_u64);
+        if version != Some(u64::from(STATE_VERSION)) {
+            let found = version.map_or("none".to_owned(), |v| v.to_string());
+            return Err(format!(
+                "it is from another version of raylab (format {found}, expected {STATE_VERSION})"
+            ));
+        }
+        let state: Self =
+            serde_json::from_value(value).map_err(|e| format!("it does not fit ({e})"))?;
+        state
+            .settings
+            .validate()
+            .map_err(|e| format!("it holds an {e}"))?;
+        if state.render_threads == 0 {
+            return Err("it asks for 0 render threads".to_owned());
+        }
+        Ok(state)
+    }
+}
+
+/// The saved state, or the defaults and a notice saying why the saved one was not used.
+pub fn load(storage: Option<&dyn eframe::Storage>) -> (WorkbenchState, Option<String>) {
+    let Some(json) = storage.and_then(|s| s.get_string(STORAGE_KEY)) else {
+        return (WorkbenchState::default(), None);
+    };
+    match WorkbenchState::from_json(&json) {
+        Ok(state) => (state, None),
+        Err(why) => (
+            WorkbenchState::default(),
+            Some(format!(
+                "Saved settings ignored: {why}. Using the lab's defaults."
+            )),
+        ),
+    }
+}
+
+pub fn save(storage: &mut dyn eframe::Storage, state: &WorkbenchState) {
+    storage.set_string(STORAGE_KEY, state.to_json());
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashMap;
+
+    use super::*;
+
+    #[derive(Default)]
+    struct MemoryStorage(HashMap<String, String>);
+
+    impl eframe::Storage for MemoryStorage {
+        fn get_string(&self, key: &str) -> Option<String> {
+            self.0.get(key).cloned()
+        }
+        fn set_string(&mut self, key: &str, value: String) {
+            self.0.insert(key.to_owned(), value);
+        }
+        fn remove_string(&mut self, key: &str) {
+            self.0.remove(key);
+        }
+        fn flush(&mut self) {}
+    }
+
+    fn stored(json: &str) -> MemoryStorage {
+        let mut s = MemoryStorage::default();
+        eframe::Storage::set_string(&mut s, STORAGE_KEY, json.to_owned());
+        s
+    }
+
+    #[test]
+    fn state_round_trips_through_storage() {
+        let mut state = WorkbenchState::default();
+        state.settings.light.position.x = 0.25;
+        state.render_threads = 3;
+        state.screenshot_folder = PathBuf::from("/tmp/shots");
+        let mut storage = MemoryStorage::default();
+        save(&mut storage, &state);
+        assert_eq!(load(Some(&storage)), (state, None));
+    }
+
+    #[test]
+    fn nothing_saved_gives_the_defaults_quietly() {
+        assert_eq!(load(None), (WorkbenchState::default(), None));
+        let empty = MemoryStorage::default();
+        assert_eq!(load(Some(&empty)), (WorkbenchState::default(), None));
+        assert_eq!(WorkbenchState::default().settings, lab_defaults());
+    }
+
+    #[test]
+    fn corrupt_outdated_or_invalid_files_fall_back_with_a_notice() {
+        for (json, says) in [
+            ("{not json", "not valid JSON"),
+            (r#"{"settings": {}}"#, "another version"),
+            (r#"{"version": 99}"#, "another version"),
+            (
+                r#"{"version": 1, "settings": {"samples_per_pixel": "many"}}"#,
+                "does not fit",
+            ),
+            (
+                r#"{"version": 1, "settings": {"camera": {"focal_length": -5}}}"#,
+                "focal length",
+            ),
+            (r#"{"version": 1, "render_threads": 0}"#, "0 render threads"),
+        ] {
+            let (state, notice) = load(Some(&stored(json)));
+            assert_eq!(state, WorkbenchState::default(), "{json}");
+            let notice = notice.unwrap_or_default();
+            assert!(notice.contains(says), "{json}: {notice}");
+        }
+    }
+
+    #[test]
+    fn a_partial_current_file_keeps_defaults_for_the_rest() {
+        let (state, notice) = load(Some(&stored(
+            r#"{"version": 1, "settings": {"light": {"position": [0.5, 0.0, 0.0]}}}"#,
+        )));
+        assert_eq!(notice, None);
+        assert_eq!(state.settings.light.position.x, 0.5);
+        assert_eq!(state.settings.camera, raylab::Camera::default());
+    }
+}

@@ -1,0 +1,122 @@
+//! The render on screen: one texture, scaled to fit the central panel with its aspect kept.
+//!
+//! Frames arrive as 8-bit RGBA (the lab's display transform is applied on the render thread) and
+//! replace the texture's pixels in place. A small image shown two or more times its size uses
+//! nearest filtering, so a coarse preview shows honest pixels rather than a blur.
+
+use std::sync::Arc;
+
+use eframe::egui;
+
+/// Magnification from which pixels are shown as blocks (nearest filtering).
+const NEAREST_FROM_SCALE: f32 = 2.0;
+
+/// What the pointer did on the image this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ViewportInput {
+    /// Drag on the image, in points.
+    pub drag_delta: egui::Vec2,
+    /// Wheel or touchpad scroll over the image, in points (positive: away from the user).
+    pub scroll_y: f32,
+    /// The image was clicked or a drag started on it.
+    pub pressed: bool,
+}
+
+#[derive(Default)]
+pub struct Viewport {
+    texture: Option<egui::TextureHandle>,
+    pixels: Option<Arc<egui::ColorImage>>,
+    options: egui::TextureOptions,
+}
+
+impl Viewport {
+    /// Replaces the shown image.
+    pub fn set_image(&mut self, ctx: &egui::Context, width: u32, height: u32, rgba: &[u8]) {
+        let image = Arc::new(egui::ColorImage::from_rgba_unmultiplied(
+            [width as usize, height as usize],
+            rgba,
+        ));
+        match &mut self.texture {
+            Some(texture) => texture.set(Arc::clone(&image), self.options),
+            None => {
+                self.texture =
+                    Some(ctx.load_texture("raylab-render", Arc::clone(&image), self.options));
+            }
+        }
+        self.pixels = Some(image);
+    }
+
+    /// The shown image's size in pixels.
+    #[cfg(test)]
+    pub fn image_size(&self) -> Option<[usize; 2]> {
+        self.pixels.as_ref().map(|p| p.size)
+    }
+
+    /// Draws the image fitted into the available space and reports pointer input on it.
+    pub fn viewport_ui(&mut self, ui: &mut egui::Ui) -> ViewportInput {
+        let available = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(available, egui::Sense::click_and_drag());
+        let (Some(texture), Some(pixels)) = (&mut self.texture, &self.pixels) else {
+            ui.put(available, egui::Label::new("Rendering..."));
+            return ViewportInput::default();
+        };
+        let size = egui::vec2(pixels.size[0] as f32, pixels.size[1] as f32);
+        let rect = fit_rect(available, size);
+
+        // Pick the filter for the scale it is shown at; re-upload only when that changes.
+        let scale = rect.width() * ui.ctx().pixels_per_point() / size.x.max(1.0);
+        let wanted = if scale >= NEAREST_FROM_SCALE {
+            egui::TextureOptions::NEAREST
+        } else {
+            egui::TextureOptions::LINEAR
+        };
+        if wanted != self.options {
+            self.options = wanted;
+            texture.set(Arc::clone(pixels), wanted);
+        }
+
+        let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+        ui.painter()
+            .image(texture.id(), rect, uv, egui::Color32::WHITE);
+
+        let scroll_y = if response.hovered() {
+            ui.input(|i| i.smooth_scroll_delta.y)
+        } else {
+            0.0
+        };
+        ViewportInput {
+            drag_delta: if response.dragged() {
+                response.drag_delta()
+            } else {
+                egui::Vec2::ZERO
+            },
+            scroll_y,
+            pressed: response.clicked() || response.drag_started(),
+        }
+    }
+}
+
+/// The largest rect of `image`'s aspect that fits in `available`, centred.
+pub fn fit_rect(available: egui::Rect, image: egui::Vec2) -> egui::Rect {
+    if image.x <= 0.0 || image.y <= 0.0 || available.width() <= 0.0 || available.height() <= 0.0 {
+        return egui::Rect::from_center_size(available.center(), egui::Vec2::ZERO);
+    }
+    let scale = (available.width() / image.x).min(available.height() / image.y);
+    egui::Rect::from_center_size(available.center(), image * scale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fit_keeps_the_aspect_and_centres() {
+        let area = egui::Rect::from_min_size(egui::pos2(10.0, 20.0), egui::vec2(800.0, 400.0));
+        let r = fit_rect(area, egui::vec2(512.0, 512.0));
+        assert_eq!(r.size(), egui::vec2(400.0, 400.0));
+        assert_eq!(r.center(), area.center());
+        let r = fit_rect(area, egui::vec2(1024.0, 256.0));
+        assert_eq!(r.size(), egui::vec2(800.0, 200.0));
+        assert_eq!(fit_rect(area, egui::Vec2::ZERO).size(), egui::Vec2::ZERO);
+    }
+}
