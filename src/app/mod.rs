@@ -418,11 +418,12 @@ impl eframe::App for WorkbenchApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let start = Instant::now();
         let ctx = ui.ctx().clone();
-        self.receive_frames(&ctx);
-        self.receive_screenshots();
+        // Frames since the last change, this one included.
         if let Some((_, frames)) = &mut self.change {
             *frames += 1;
         }
+        self.receive_frames(&ctx);
+        self.receive_screenshots();
 
         let mut commands = input::keys(&ctx, &mut self.state.settings);
 

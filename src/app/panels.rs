@@ -48,6 +48,16 @@ pub fn stage_equation(stage: Stage) -> &'static str {
 pub fn controls_ui(ui: &mut egui::Ui, state: &mut WorkbenchState, stats: &Stats) -> Vec<Command> {
     let mut commands = Vec::new();
     ui.horizontal_wrapped(|ui| {
+        if ui
+            .button("Save screenshot")
+            .on_hover_text(
+                "Ctrl+S: the render at full resolution, as PNG, with its settings as .json, \
+                 into the folder under Screenshot",
+            )
+            .clicked()
+        {
+            commands.push(Command::SaveScreenshot);
+        }
         if ui.button("Reset to lab defaults").clicked() {
             commands.push(Command::ResetToLabDefaults);
         }
@@ -80,9 +90,7 @@ pub fn controls_ui(ui: &mut egui::Ui, state: &mut WorkbenchState, stats: &Stats)
             .show(ui, |ui| stats.stats_ui(ui));
         egui::CollapsingHeader::new("Screenshot")
             .default_open(true)
-            .show(ui, |ui| {
-                screenshot_ui(ui, &mut state.screenshot_folder, &mut commands)
-            });
+            .show(ui, |ui| screenshot_ui(ui, &mut state.screenshot_folder));
     });
     commands
 }
@@ -218,26 +226,16 @@ pub fn image_ui(ui: &mut egui::Ui, settings: &mut RenderSettings, threads: &mut 
     ui.add(egui::Slider::new(threads, 1..=MAX_THREADS_UI).text("Render threads"));
 }
 
-pub fn screenshot_ui(
-    ui: &mut egui::Ui,
-    folder: &mut std::path::PathBuf,
-    commands: &mut Vec<Command>,
-) {
+pub fn screenshot_ui(ui: &mut egui::Ui, folder: &mut std::path::PathBuf) {
     let mut text = folder.to_string_lossy().into_owned();
     ui.horizontal(|ui| {
         let label = ui.label("Screenshot folder");
         let response = ui
             .add(egui::TextEdit::singleline(&mut text).desired_width(f32::INFINITY))
-            .labelled_by(label.id);
+            .labelled_by(label.id)
+            .on_hover_text("Screenshots are saved here as raylab-YYYYMMDD-HHMMSS.png");
         if response.changed() {
             *folder = std::path::PathBuf::from(&text);
         }
     });
-    if ui
-        .button("Save screenshot")
-        .on_hover_text("Ctrl+S: the render at full resolution, as PNG, with its settings as .json")
-        .clicked()
-    {
-        commands.push(Command::SaveScreenshot);
-    }
 }
