@@ -96,6 +96,7 @@ pub struct WorkbenchApp {
     /// When the newest job was submitted, and UI frames since.
     change: Option<(Instant, u32)>,
     log_frames: bool,
+    started: Instant,
 }
 
 /// Opens the workbench window; returns when it is closed.
@@ -163,6 +164,7 @@ impl WorkbenchApp {
             screenshots_saving: Vec::new(),
             change: None,
             log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
+            started: Instant::now(),
         }
     }
 
@@ -453,18 +455,30 @@ impl eframe::App for WorkbenchApp {
         self.stats.ui_frame_ms = start.elapsed().as_secs_f64() * 1e3;
         self.stats.frame_cpu_ms = frame.info().cpu_usage.map(|s| f64::from(s) * 1e3);
         if self.log_frames {
+            // One line a frame, for scripts: fields in a fixed order.
+            let (change_ms, change_frames) = self.stats.change_to_image.unwrap_or((f64::NAN, 0));
             eprintln!(
-                "raylab-frame ui_ms={:.2} frame_cpu_ms={:.2} samples={} target={} preview={}",
+                "raylab-frame ui_ms={:.2} frame_cpu_ms={:.2} samples={} target={} preview={} \
+                 t_ms={:.1} change_to_image_ms={:.1} change_frames={} full_pass_ms={:.1}",
                 self.stats.ui_frame_ms,
                 self.stats.frame_cpu_ms.unwrap_or(f64::NAN),
                 self.stats.samples,
                 self.stats.target,
                 self.stats.is_preview,
+                self.started.elapsed().as_secs_f64() * 1e3,
+                change_ms,
+                change_frames,
+                self.stats.full_pass.map_or(f64::NAN, |(ms, _, _)| ms),
             );
         }
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         persistence::save(storage, &self.state);
+    }
+
+    /// Saved on close, and every few seconds in case the app is killed instead.
+    fn auto_save_interval(&self) -> std::time::Duration {
+        std::time::Duration::from_secs(5)
     }
 }

@@ -96,9 +96,9 @@ pub fn controls_ui(ui: &mut egui::Ui, state: &mut WorkbenchState, stats: &Stats)
 }
 
 pub fn camera_ui(ui: &mut egui::Ui, camera: &mut Camera, commands: &mut Vec<Command>) {
-    ui.add(egui::Slider::new(&mut camera.position.x, -2.0..=2.0).text("Camera x"));
-    ui.add(egui::Slider::new(&mut camera.position.y, -2.0..=2.0).text("Camera y"));
-    ui.add(egui::Slider::new(&mut camera.position.z, -6.0..=2.0).text("Camera z"));
+    position_slider(ui, &mut camera.position.x, -2.0..=2.0, "Camera x");
+    position_slider(ui, &mut camera.position.y, -2.0..=2.0, "Camera y");
+    position_slider(ui, &mut camera.position.z, -6.0..=2.0, "Camera z");
     degrees_slider(ui, &mut camera.yaw, -180.0..=180.0, "Yaw");
     degrees_slider(ui, &mut camera.pitch, -89.0..=89.0, "Pitch");
     let w = camera.width as f32;
@@ -124,6 +124,21 @@ pub fn camera_ui(ui: &mut egui::Ui, camera: &mut Camera, commands: &mut Vec<Comm
     });
 }
 
+/// A slider over a coordinate. The keys may move a point past the slider's ends: the value is
+/// kept as it is, not clamped back.
+fn position_slider(
+    ui: &mut egui::Ui,
+    value: &mut f32,
+    range: std::ops::RangeInclusive<f32>,
+    label: &str,
+) {
+    ui.add(
+        egui::Slider::new(value, range)
+            .clamping(egui::SliderClamping::Edits)
+            .text(label),
+    );
+}
+
 /// A slider in degrees over an angle stored in radians; the value changes only when the
 /// slider does, so no rounding creeps in from converting back and forth.
 fn degrees_slider(
@@ -145,9 +160,9 @@ fn degrees_slider(
 }
 
 pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
-    ui.add(egui::Slider::new(&mut light.position.x, -1.5..=1.5).text("Light x"));
-    ui.add(egui::Slider::new(&mut light.position.y, -1.5..=1.5).text("Light y"));
-    ui.add(egui::Slider::new(&mut light.position.z, -1.5..=1.5).text("Light z"));
+    position_slider(ui, &mut light.position.x, -1.0..=1.0, "Light x");
+    position_slider(ui, &mut light.position.y, -1.0..=1.0, "Light y");
+    position_slider(ui, &mut light.position.z, -1.0..=1.0, "Light z");
     // The lab's light is white: one power for the three channels.
     let mut power = light.power.x;
     let response = ui.add(

@@ -439,3 +439,31 @@ fn render_threads_rebuild_the_pool() {
     );
     assert_eq!(*shown(&h).image, render(&cornell_box(), &settings(&h)));
 }
+
+#[test]
+fn a_corrupt_settings_file_shows_a_notice_and_starts_on_the_defaults() {
+    #[derive(Default)]
+    struct Corrupt;
+    impl eframe::Storage for Corrupt {
+        fn get_string(&self, _key: &str) -> Option<String> {
+            Some("{\"version\": 1, \"settings\": {\"camera\": [".to_owned())
+        }
+        fn set_string(&mut self, _key: &str, _value: String) {}
+        fn remove_string(&mut self, _key: &str) {}
+        fn flush(&mut self) {}
+    }
+    let (mut state, notice) = persistence::load(Some(&Corrupt));
+    assert_eq!(state, WorkbenchState::default());
+    // Small, so the test is quick; the notice is what matters here.
+    state.settings.camera = state.settings.camera.with_resolution(64, 48);
+    let mut h = Harness::builder()
+        .with_size([1400.0, 1400.0])
+        .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, notice));
+    settle(&mut h);
+    assert_eq!(status(&h).1, StatusKind::Notice);
+    assert!(
+        h.query_by_label_contains("Saved settings ignored")
+            .is_some()
+    );
+    assert!(h.query_by_label_contains("lab's defaults").is_some());
+}
