@@ -467,3 +467,15 @@ fn a_corrupt_settings_file_shows_a_notice_and_starts_on_the_defaults() {
     );
     assert!(h.query_by_label_contains("lab's defaults").is_some());
 }
+
+#[test]
+fn after_using_a_slider_with_the_mouse_the_arrows_move_the_camera() {
+    let mut h = harness(small_state());
+    h.get_by_role_and_label(Role::Slider, "Light x").click();
+    h.step();
+    let z = settings(&h).camera.position.z;
+    h.key_press(Key::ArrowUp);
+    h.step();
+    assert!((settings(&h).camera.position.z - (z + 0.1)).abs() < 1e-6);
+    settle(&mut h);
+}
