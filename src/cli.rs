@@ -1,5 +1,5 @@
-//! The command line: `raylab render` writes an image; with no command, `raylab` starts the
-//! workbench.
+//! The command line: `raylab render` writes an image, `raylab bench` measures the tracer;
+//! with no command, `raylab` starts the workbench.
 //!
 //! A thin layer over the library: arguments become a [`RenderSettings`], which is validated,
 //! rendered and saved. Every bad value ends the program with one line naming it and a non-zero
@@ -12,9 +12,11 @@ use std::time::Instant;
 use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
+use raylab::accel::{AccelKind, Isa};
+use raylab::bench::{BenchConfig, bench_scene};
 use raylab::film::OutputFormat;
 use raylab::render::render;
-use raylab::scene::cornell_box;
+use raylab::scene::SceneChoice;
 use raylab::settings::{MAX_IMAGE_SIDE, MAX_SAMPLES};
 use raylab::{Camera, RenderSettings, Shading, Stage};
 
@@ -33,6 +35,40 @@ pub struct Cli {
 pub enum Command {
     /// Render an image of the scene to a PNG or EXR file (defaults: the lab's figure 7, 512×512).
     Render(RenderArgs),
+    /// Measure the tracer per scene: BVH build time, Mrays/s of primary and shadow rays, and
+    /// the milliseconds of one lab pass (medians over repeated passes).
+    Bench(BenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Scene to measure: cornell, bunny, teapot or terrain [default: all four].
+    #[arg(long, value_name = "NAME", conflicts_with = "obj")]
+    pub scene: Option<SceneChoice>,
+    /// Measure an OBJ file standing in the Cornell box instead.
+    #[arg(long, value_name = "FILE")]
+    pub obj: Option<PathBuf>,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "W")]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "H")]
+    pub height: u32,
+    /// Threads [default: one per core].
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024), value_name = "N")]
+    pub threads: Option<u16>,
+    /// Timed passes per figure; the median is reported.
+    #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=10_000), value_name = "N")]
+    pub passes: u32,
+    /// Acceleration structure: auto, brute, flat, bvh2 or bvh8 (to compare them).
+    #[arg(long, default_value = "auto", value_name = "KIND")]
+    pub accel: AccelKind,
+    /// Use the scalar kernels even where AVX2 is available (to compare them).
+    #[arg(long)]
+    pub scalar: bool,
+    /// Print one JSON object per scene (one per line) instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -40,6 +76,17 @@ pub struct RenderArgs {
     /// Output file: .png (the lab's display: clamped, no gamma) or .exr (linear floats).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    /// Scene: cornell, bunny, teapot or terrain.
+    #[arg(
+        long,
+        default_value = "cornell",
+        value_name = "NAME",
+        conflicts_with = "obj"
+    )]
+    pub scene: SceneChoice,
+    /// An OBJ file to stand in the Cornell box instead of a built-in scene.
+    #[arg(long, value_name = "FILE")]
+    pub obj: Option<PathBuf>,
     /// Lab stage: flat (fig. 2), incoming (fig. 3), direct (fig. 5), shadows (fig. 6), lab (fig. 7).
     #[arg(long, default_value = "lab", value_name = "STAGE")]
     pub stage: Stage,
@@ -89,6 +136,14 @@ pub enum Indirect {
 }
 
 impl RenderArgs {
+    /// The scene these arguments choose.
+    pub fn scene_choice(&self) -> SceneChoice {
+        match &self.obj {
+            Some(path) => SceneChoice::Obj(path.clone()),
+            None => self.scene.clone(),
+        }
+    }
+
     /// The settings these arguments describe.
     pub fn settings(&self) -> RenderSettings {
         let mut camera = Camera::default_for(self.width, self.height);
@@ -144,6 +199,7 @@ pub fn main() -> ExitCode {
     };
     let result = match cli.command {
         Some(Command::Render(args)) => run_render(&args),
+        Some(Command::Bench(args)) => run_bench(&args),
         None => crate::start_workbench(),
     };
     match result {
@@ -175,7 +231,8 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let pool = pool.build().context("could not start the render threads")?;
 
-    let scene = cornell_box();
+    let choice = args.scene_choice();
+    let scene = pool.install(|| choice.load())?;
     let start = Instant::now();
     let image = pool.install(|| render(&scene, &settings));
     let elapsed = start.elapsed();
@@ -183,7 +240,8 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
 
     let c = &settings.camera;
     println!(
-        "rendered {}×{} ({}, {} spp) in {:.1} ms on {} threads → {}",
+        "rendered {} {}×{} ({}, {} spp) in {:.1} ms on {} threads → {}",
+        choice,
         c.width,
         c.height,
         settings.shading.stage,
@@ -192,6 +250,76 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         pool.current_num_threads(),
         args.out.display()
     );
+    Ok(())
+}
+
+fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
+    let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-bench-{i}"));
+    if let Some(n) = args.threads {
+        pool = pool.num_threads(n.into());
+    }
+    let pool = pool.build().context("could not start the bench threads")?;
+    let scenes: Vec<SceneChoice> = match (&args.obj, &args.scene) {
+        (Some(path), _) => vec![SceneChoice::Obj(path.clone())],
+        (None, Some(choice)) => vec![choice.clone()],
+        (None, None) => SceneChoice::BUILT_IN.to_vec(),
+    };
+    let isa = if args.scalar {
+        Isa::Scalar
+    } else {
+        Isa::best()
+    };
+    let config = BenchConfig {
+        width: args.width,
+        height: args.height,
+        passes: args.passes as usize,
+    };
+    if !args.json {
+        println!(
+            "{:<10} {:>9} {:>6} {:>6} {:>10} {:>12} {:>12} {:>10}",
+            "scene",
+            "triangles",
+            "accel",
+            "isa",
+            "build ms",
+            "primary Mr/s",
+            "shadow Mr/s",
+            "lab ms"
+        );
+    }
+    for choice in scenes {
+        let report = pool.install(|| -> anyhow::Result<_> {
+            let scene = choice.load()?.rebuilt(args.accel, isa);
+            let kind = scene.accel().kind();
+            let report = bench_scene(&choice.name(), &scene, args.accel, isa, &config);
+            Ok((report, kind))
+        })?;
+        let (r, kind) = report;
+        if args.json {
+            println!("{}", serde_json::to_string(&r)?);
+        } else {
+            println!(
+                "{:<10} {:>9} {:>6} {:>6} {:>10.2} {:>12.1} {:>12.1} {:>10.2}",
+                r.scene,
+                r.triangles,
+                kind.name(),
+                isa.name(),
+                r.build_ms,
+                r.primary_mrays_per_s,
+                r.shadow_mrays_per_s,
+                r.lab_pass_ms
+            );
+        }
+    }
+    if !args.json {
+        println!(
+            "{}×{}, {} threads, medians of {} passes",
+            args.width,
+            args.height,
+            pool.current_num_threads(),
+            args.passes
+        );
+    }
     Ok(())
 }
 
@@ -280,7 +408,7 @@ mod tests {
         argv.extend_from_slice(extra);
         match Cli::try_parse_from(argv).unwrap().command {
             Some(Command::Render(a)) => a,
-            None => panic!("no command"),
+            _ => panic!("not render"),
         }
     }
 
@@ -299,6 +427,69 @@ mod tests {
         assert!(!s.shading.indirect && s.shading.shadows);
         assert_eq!(s.camera.position, Vec3::new(-0.5, 0.0, -2.0));
         assert_eq!(s.camera.yaw, -std::f32::consts::FRAC_PI_2);
+    }
+
+    #[test]
+    fn scenes_are_chosen_by_name_or_file() {
+        assert_eq!(args(&[]).scene_choice(), SceneChoice::Cornell);
+        assert_eq!(
+            args(&["--scene", "bunny"]).scene_choice(),
+            SceneChoice::Bunny
+        );
+        let a = args(&["--obj", "m/dragon.obj"]);
+        assert_eq!(
+            a.scene_choice(),
+            SceneChoice::Obj(PathBuf::from("m/dragon.obj"))
+        );
+        for bad in [
+            &["--scene", "dragon"][..],
+            &["--scene", "bunny", "--obj", "x.obj"],
+        ] {
+            let mut argv = vec!["raylab", "render", "--out", "x.png"];
+            argv.extend_from_slice(bad);
+            assert!(Cli::try_parse_from(&argv).is_err(), "{bad:?} accepted");
+        }
+    }
+
+    #[test]
+    fn bench_arguments() {
+        let parse = |extra: &[&str]| {
+            let mut argv = vec!["raylab", "bench"];
+            argv.extend_from_slice(extra);
+            match Cli::try_parse_from(argv).map(|c| c.command) {
+                Ok(Some(Command::Bench(b))) => Ok(b),
+                Ok(_) => panic!("not bench"),
+                Err(e) => Err(e),
+            }
+        };
+        let b = parse(&[]).unwrap();
+        assert_eq!(
+            (b.scene, b.width, b.height, b.json),
+            (None, 512, 512, false)
+        );
+        let b = parse(&[
+            "--scene",
+            "terrain",
+            "--threads",
+            "2",
+            "--json",
+            "--accel",
+            "bvh2",
+        ])
+        .unwrap();
+        assert_eq!(b.scene, Some(SceneChoice::Terrain));
+        assert_eq!(
+            (b.threads, b.json, b.accel),
+            (Some(2), true, AccelKind::Bvh2)
+        );
+        for bad in [
+            &["--width", "0"][..],
+            &["--scene", "x"],
+            &["--accel", "kd"],
+            &["--passes", "0"],
+        ] {
+            assert!(parse(bad).is_err(), "{bad:?} accepted");
+        }
     }
 
     #[test]

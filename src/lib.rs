@@ -17,6 +17,8 @@
 //! assert!(centre.x > 0.4 && (centre.x - centre.z).abs() < 1e-6);
 //! ```
 
+pub mod accel;
+pub mod bench;
 pub mod camera;
 pub mod film;
 pub mod geometry;

@@ -1,16 +1,25 @@
 //! Scenes: triangles plus the materials they reference.
 //!
-//! The built-in scene is the lab's Cornell box ([`cornell_box`]); later sources of geometry
-//! (OBJ models, generated terrain) produce the same [`Scene`] value.
+//! The built-in scene is the lab's Cornell box ([`cornell_box`]); OBJ models standing in it
+//! ([`obj`]) and a fractal terrain ([`terrain`]) produce the same [`Scene`] value. A
+//! [`SceneChoice`] names any of them (`cornell`, `bunny`, `teapot`, `terrain`, or an OBJ file).
 
 mod cornell;
+pub mod obj;
+pub mod terrain;
 
 pub use cornell::{CORNELL_TRIANGLES, cornell_box};
 
-use glam::Vec3;
+use std::fmt;
+use std::path::PathBuf;
+use std::str::FromStr;
 
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::{Ray, Triangle};
-use crate::intersect::{self, Intersection};
+use crate::intersect::{self, Intersection, intersect_triangle};
 
 /// How a surface scatters light. The lab models every surface as ideally diffuse (figure 4,
 /// left); specular kinds are a road-map extension and get their own variants.
@@ -40,23 +49,54 @@ impl Material {
 }
 
 /// Geometry and materials to trace. Every triangle's `material` indexes `materials`.
+///
+/// [`Scene::new`] builds the acceleration structure ([`Accel`]) that answers
+/// [`Scene::closest_intersection`] and [`Scene::occluded`]. The fields stay public for reading;
+/// to change the geometry, make a new scene (a scene whose triangle count no longer matches its
+/// structure falls back to the brute-force loop rather than answer wrongly).
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
+    accel: Accel,
 }
 
 impl Scene {
+    /// A scene with the acceleration structure that suits it (see [`Accel::new`]), built on the
+    /// current rayon pool.
     pub fn new(triangles: Vec<Triangle>, materials: Vec<Material>) -> Self {
+        Self::with_accel(triangles, materials, AccelKind::Auto, Isa::best())
+    }
+
+    /// A scene with a chosen acceleration structure and kernels (benchmarks and tests compare
+    /// them).
+    pub fn with_accel(
+        triangles: Vec<Triangle>,
+        materials: Vec<Material>,
+        kind: AccelKind,
+        isa: Isa,
+    ) -> Self {
         debug_assert!(
             triangles
                 .iter()
                 .all(|t| (t.material as usize) < materials.len())
         );
+        let accel = Accel::build(&triangles, kind, isa);
         Self {
             triangles,
             materials,
+            accel,
         }
+    }
+
+    /// The same geometry with another acceleration structure.
+    pub fn rebuilt(self, kind: AccelKind, isa: Isa) -> Self {
+        Self::with_accel(self.triangles, self.materials, kind, isa)
+    }
+
+    /// The acceleration structure.
+    pub fn accel(&self) -> &Accel {
+        &self.accel
     }
 
     /// The material of triangle `index`.
@@ -65,12 +105,159 @@ impl Scene {
     }
 
     /// The closest hit along `ray` with `t < t_max` (the lab's `ClosestIntersection`).
+    ///
+    /// Equal to [`intersect::closest_intersection_brute_force`], the lowest index winning ties.
+    #[inline]
     pub fn closest_intersection(&self, ray: &Ray, t_max: f32) -> Option<Intersection> {
-        intersect::closest_intersection_brute_force(ray, &self.triangles, t_max)
+        if !self.accel.built_for(self.triangles.len()) {
+            return intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
+        }
+        let (index, _) = self.accel.closest(&self.triangles, ray, t_max)?;
+        // The kernels compute exactly what `intersect_triangle` does: this repeats the winning
+        // test to get u and v, bit for bit.
+        let (t, u, v) = intersect_triangle(ray, &self.triangles[index], f32::INFINITY)?;
+        Some(Intersection {
+            position: ray.at(t),
+            distance: t,
+            triangle_index: index,
+            u,
+            v,
+        })
     }
 
     /// Whether anything lies along `ray` with `t < t_max` (a shadow ray's question).
+    #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        intersect::occluded_brute_force(ray, &self.triangles, t_max)
+        if !self.accel.built_for(self.triangles.len()) {
+            return intersect::occluded_brute_force(ray, &self.triangles, t_max);
+        }
+        self.accel.occluded(&self.triangles, ray, t_max)
+    }
+}
+
+/// A scene by name: what the command line's `--scene`/`--obj` and the workbench's scene
+/// selector choose from.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SceneChoice {
+    /// The lab's Cornell box (30 triangles).
+    #[default]
+    Cornell,
+    /// The Stanford bunny (3,674 triangles) standing in the box.
+    Bunny,
+    /// The Utah teapot (992 triangles) standing in the box.
+    Teapot,
+    /// A fractal terrain of about a million triangles covering the box's floor.
+    Terrain,
+    /// Any OBJ file, standing in the box.
+    Obj(PathBuf),
+}
+
+impl SceneChoice {
+    /// The built-in scenes, by name.
+    pub const BUILT_IN: [SceneChoice; 4] = [
+        SceneChoice::Cornell,
+        SceneChoice::Bunny,
+        SceneChoice::Teapot,
+        SceneChoice::Terrain,
+    ];
+
+    /// The name: `cornell`, `bunny`, `teapot`, `terrain`, or the OBJ file's name.
+    pub fn name(&self) -> String {
+        match self {
+            SceneChoice::Cornell => "cornell".into(),
+            SceneChoice::Bunny => "bunny".into(),
+            SceneChoice::Teapot => "teapot".into(),
+            SceneChoice::Terrain => "terrain".into(),
+            SceneChoice::Obj(path) => path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            ),
+        }
+    }
+
+    /// Builds the scene and its acceleration structure (on the current rayon pool).
+    pub fn load(&self) -> Result<Scene, SceneError> {
+        match self {
+            SceneChoice::Cornell => Ok(cornell_box()),
+            SceneChoice::Bunny => {
+                let mesh = obj::builtin(obj::BUNNY_OBJ, "bunny")?;
+                Ok(obj::model_in_box(
+                    &mesh,
+                    &obj::Placement::FRONT_LEFT,
+                    "bunny",
+                ))
+            }
+            SceneChoice::Teapot => {
+                let mesh = obj::builtin(obj::TEAPOT_OBJ, "teapot")?;
+                Ok(obj::model_in_box(&mesh, &obj::Placement::TEAPOT, "teapot"))
+            }
+            SceneChoice::Terrain => Ok(terrain::terrain_scene(&terrain::TerrainSpec::default())),
+            SceneChoice::Obj(path) => obj::obj_scene(path),
+        }
+    }
+}
+
+impl fmt::Display for SceneChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+impl FromStr for SceneChoice {
+    type Err = String;
+
+    /// A built-in scene's name (an OBJ file is chosen with [`SceneChoice::Obj`]).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        SceneChoice::BUILT_IN
+            .into_iter()
+            .find(|c| c.name() == s)
+            .ok_or_else(|| {
+                format!("unknown scene '{s}' (expected cornell, bunny, teapot or terrain)")
+            })
+    }
+}
+
+/// Why a scene could not be made; the message names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("could not read OBJ file '{}': {reason}", path.display())]
+    Read { path: PathBuf, reason: String },
+    #[error("could not load OBJ file '{}': {reason}", path.display())]
+    Obj { path: PathBuf, reason: String },
+    #[error("OBJ file '{}' has no triangles", path.display())]
+    EmptyMesh { path: PathBuf },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scene_choices_parse_name_and_round_trip_through_json() {
+        for c in SceneChoice::BUILT_IN {
+            assert_eq!(c.name().parse::<SceneChoice>(), Ok(c.clone()));
+            let json = serde_json::to_string(&c).unwrap();
+            assert_eq!(serde_json::from_str::<SceneChoice>(&json).unwrap(), c);
+        }
+        assert!(
+            "dragon"
+                .parse::<SceneChoice>()
+                .unwrap_err()
+                .contains("dragon")
+        );
+        let obj = SceneChoice::Obj(PathBuf::from("/models/dragon.obj"));
+        assert_eq!(obj.name(), "dragon.obj");
+        let json = serde_json::to_string(&obj).unwrap();
+        assert_eq!(serde_json::from_str::<SceneChoice>(&json).unwrap(), obj);
+        assert_eq!(SceneChoice::default(), SceneChoice::Cornell);
+    }
+
+    #[test]
+    fn a_missing_obj_file_is_an_error_naming_it() {
+        let e = SceneChoice::Obj(PathBuf::from("/no/such/dir/x.obj"))
+            .load()
+            .unwrap_err();
+        assert!(e.to_string().contains("/no/such/dir/x.obj"), "{e}");
     }
 }

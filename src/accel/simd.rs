@@ -1,0 +1,316 @@
+//! The two inner loops of tracing, eight lanes at a time: a ray against the eight boxes of a
+//! wide node, and a ray against a packet of eight triangles.
+//!
+//! Each kernel has a scalar twin ([`Scalar`]) — plain loops over the lanes, the readable
+//! definition — and an AVX2 version ([`Avx2`]) chosen at run time when the CPU has AVX2 and
+//! FMA. The triangle kernels do exactly the operations of
+//! [`crate::intersect::intersect_triangle`] in the same order (no fused multiply-add), so every
+//! lane's `t`, `u`, `v` are bit-identical to the scalar test's: the fast path accepts the very
+//! same edges and returns the very same hits as the brute-force loop.
+
+use crate::intersect::EDGE_TOLERANCE;
+
+use super::bvh::RayBoxData;
+
+/// Lanes per node and per triangle packet.
+pub const LANES: usize = 8;
+
+/// Eight triangles, structure of arrays: `v0`, `e1 = v1 − v0`, `e2 = v2 − v0` per axis, and the
+/// scene index of each (`u32::MAX` for an unused lane, whose zero edges can never be hit).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct Packet8 {
+    pub v0: [[f32; LANES]; 3],
+    pub e1: [[f32; LANES]; 3],
+    pub e2: [[f32; LANES]; 3],
+    pub index: [u32; LANES],
+}
+
+impl Packet8 {
+    pub const EMPTY: Packet8 = Packet8 {
+        v0: [[0.0; LANES]; 3],
+        e1: [[0.0; LANES]; 3],
+        e2: [[0.0; LANES]; 3],
+        index: [u32::MAX; LANES],
+    };
+}
+
+/// A node of the wide tree: the boxes of up to eight children, per axis, and what each child is
+/// (see [`super::wide`]). Unused slots have an empty box (min +∞, max −∞) that no ray enters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct Node8 {
+    /// min x, min y, min z, max x, max y, max z.
+    pub bounds: [[f32; LANES]; 6],
+    pub child: [u32; LANES],
+}
+
+/// A ray prepared for the kernels.
+#[derive(Clone, Copy, Debug)]
+pub struct RayK {
+    pub origin: [f32; 3],
+    pub direction: [f32; 3],
+    pub inv: [f32; 3],
+    pub origin_inv: [f32; 3],
+    /// Per axis, the row of [`Node8::bounds`] holding the near plane, and the far one.
+    pub near: [usize; 3],
+    pub far: [usize; 3],
+}
+
+impl RayK {
+    pub fn new(ray: &crate::geometry::Ray) -> Self {
+        let b = RayBoxData::new(ray);
+        let near = [0, 1, 2].map(|a| if b.negative[a] { a + 3 } else { a });
+        let far = [0, 1, 2].map(|a| if b.negative[a] { a } else { a + 3 });
+        Self {
+            origin: ray.origin.to_array(),
+            direction: ray.direction.to_array(),
+            inv: b.inv.to_array(),
+            origin_inv: b.origin_inv.to_array(),
+            near,
+            far,
+        }
+    }
+}
+
+/// The kernels the traversals are written against.
+pub trait Kernels: Copy {
+    /// Bit `i` set when the ray enters child box `i` within `[0, t_limit]`, and each box's
+    /// entry distance.
+    fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]);
+    /// The nearest hit in the packet with `0 ≤ t < t_limit`: `(lane, t)`, the lowest lane
+    /// among equal `t`.
+    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<(usize, f32)>;
+    /// Whether any triangle of the packet is hit with `0 ≤ t < t_limit`.
+    fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool;
+}
+
+/// The scalar twin: one lane at a time.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Scalar;
+
+/// `intersect_triangle` on one lane: the same operations in the same order.
+#[inline(always)]
+fn lane_hit(p: &Packet8, i: usize, r: &RayK, t_limit: f32) -> Option<f32> {
+    let [ox, oy, oz] = r.origin;
+    let [dx, dy, dz] = r.direction;
+    let (e1x, e1y, e1z) = (p.e1[0][i], p.e1[1][i], p.e1[2][i]);
+    let (e2x, e2y, e2z) = (p.e2[0][i], p.e2[1][i], p.e2[2][i]);
+    // n = e1 × e2
+    let nx = e1y * e2z - e2y * e1z;
+    let ny = e1z * e2x - e2z * e1x;
+    let nz = e1x * e2y - e2x * e1y;
+    // b = s − v0
+    let bx = ox - p.v0[0][i];
+    let by = oy - p.v0[1][i];
+    let bz = oz - p.v0[2][i];
+    let inv_det = 1.0 / -(dx * nx + dy * ny + dz * nz);
+    let t = (bx * nx + by * ny + bz * nz) * inv_det;
+    if !(t >= 0.0 && t < t_limit) {
+        return None;
+    }
+    // m = b × d
+    let mx = by * dz - dy * bz;
+    let my = bz * dx - dz * bx;
+    let mz = bx * dy - dx * by;
+    let u = (e2x * mx + e2y * my + e2z * mz) * inv_det;
+    let v = -(e1x * mx + e1y * my + e1z * mz) * inv_det;
+    (u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE).then_some(t)
+}
+
+impl Kernels for Scalar {
+    #[inline(always)]
+    fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
+        let mut mask = 0;
+        let mut t_near = [0.0; LANES];
+        for (i, t_out) in t_near.iter_mut().enumerate() {
+            let mut t0 = 0.0f32;
+            let mut t1 = t_limit;
+            for axis in 0..3 {
+                let near = node.bounds[r.near[axis]][i];
+                let far = node.bounds[r.far[axis]][i];
+                t0 = t0.max((near - r.origin[axis]) * r.inv[axis]);
+                t1 = t1.min((far - r.origin[axis]) * r.inv[axis]);
+            }
+            *t_out = t0;
+            if t0 <= t1 {
+                mask |= 1 << i;
+            }
+        }
+        (mask, t_near)
+    }
+
+    #[inline(always)]
+    fn nearest(self, p: &Packet8, r: &RayK, t_limit: f32) -> Option<(usize, f32)> {
+        let mut best: Option<(usize, f32)> = None;
+        let mut limit = t_limit;
+        for i in 0..LANES {
+            if let Some(t) = lane_hit(p, i, r, limit) {
+                best = Some((i, t));
+                limit = t;
+            }
+        }
+        best
+    }
+
+    #[inline(always)]
+    fn any(self, p: &Packet8, r: &RayK, t_limit: f32) -> bool {
+        (0..LANES).any(|i| lane_hit(p, i, r, t_limit).is_some())
+    }
+}
+
+/// The AVX2 kernels. A value of this type exists only on a CPU with AVX2 and FMA.
+#[derive(Clone, Copy, Debug)]
+pub struct Avx2 {
+    _proof: (),
+}
+
+impl Avx2 {
+    /// The AVX2 kernels if this CPU runs them.
+    pub fn detect() -> Option<Self> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            return Some(Self { _proof: () });
+        }
+        None
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Kernels for Avx2 {
+    #[inline(always)]
+    fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
+        // SAFETY: an `Avx2` value is only made by `detect`, after checking for AVX2 and FMA.
+        unsafe { x86::boxes(node, ray, t_limit) }
+    }
+
+    #[inline(always)]
+    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<(usize, f32)> {
+        // SAFETY: as above.
+        unsafe { x86::nearest(packet, ray, t_limit) }
+    }
+
+    #[inline(always)]
+    fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool {
+        // SAFETY: as above.
+        unsafe { x86::any(packet, ray, t_limit) }
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+impl Kernels for Avx2 {
+    fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
+        Scalar.boxes(node, ray, t_limit)
+    }
+    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<(usize, f32)> {
+        Scalar.nearest(packet, ray, t_limit)
+    }
+    fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool {
+        Scalar.any(packet, ray, t_limit)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::*;
+
+    use super::{LANES, Node8, Packet8, RayK};
+    use crate::intersect::EDGE_TOLERANCE;
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn load(a: &[f32; LANES]) -> __m256 {
+        // SAFETY: `a` is a valid reference to eight f32, readable as 32 bytes.
+        unsafe { _mm256_loadu_ps(a.as_ptr()) }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub fn boxes(node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
+        let mut t0 = _mm256_setzero_ps();
+        let mut t1 = _mm256_set1_ps(t_limit);
+        for axis in 0..3 {
+            let inv = _mm256_set1_ps(r.inv[axis]);
+            let oinv = _mm256_set1_ps(r.origin_inv[axis]);
+            // (plane − o)·inv as plane·inv − o·inv in one rounding; the padding of the boxes
+            // covers the difference from the scalar form.
+            let near = _mm256_fmsub_ps(load(&node.bounds[r.near[axis]]), inv, oinv);
+            let far = _mm256_fmsub_ps(load(&node.bounds[r.far[axis]]), inv, oinv);
+            t0 = _mm256_max_ps(t0, near);
+            t1 = _mm256_min_ps(t1, far);
+        }
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1)) as u32;
+        let mut t_near = [0.0f32; LANES];
+        // SAFETY: `t_near` is writable for eight f32.
+        unsafe { _mm256_storeu_ps(t_near.as_mut_ptr(), t0) };
+        (mask, t_near)
+    }
+
+    /// `t` of every lane (NaN or out of range for a miss) and the mask of hits.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn hits(p: &Packet8, r: &RayK, t_limit: f32) -> (__m256, __m256) {
+        let [ox, oy, oz] = r.origin.map(|x| _mm256_set1_ps(x));
+        let [dx, dy, dz] = r.direction.map(|x| _mm256_set1_ps(x));
+        let (e1x, e1y, e1z) = (load(&p.e1[0]), load(&p.e1[1]), load(&p.e1[2]));
+        let (e2x, e2y, e2z) = (load(&p.e2[0]), load(&p.e2[1]), load(&p.e2[2]));
+        let mul = |a, b| _mm256_mul_ps(a, b);
+        let sub = |a, b| _mm256_sub_ps(a, b);
+        let add = |a, b| _mm256_add_ps(a, b);
+        // Exactly `intersect_triangle`, lane by lane: see `lane_hit`.
+        let nx = sub(mul(e1y, e2z), mul(e2y, e1z));
+        let ny = sub(mul(e1z, e2x), mul(e2z, e1x));
+        let nz = sub(mul(e1x, e2y), mul(e2x, e1y));
+        let bx = sub(ox, load(&p.v0[0]));
+        let by = sub(oy, load(&p.v0[1]));
+        let bz = sub(oz, load(&p.v0[2]));
+        let sign = _mm256_set1_ps(-0.0);
+        let det = add(add(mul(dx, nx), mul(dy, ny)), mul(dz, nz));
+        let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), _mm256_xor_ps(det, sign));
+        let t = mul(add(add(mul(bx, nx), mul(by, ny)), mul(bz, nz)), inv_det);
+        let mx = sub(mul(by, dz), mul(dy, bz));
+        let my = sub(mul(bz, dx), mul(dz, bx));
+        let mz = sub(mul(bx, dy), mul(dx, by));
+        let u = mul(add(add(mul(e2x, mx), mul(e2y, my)), mul(e2z, mz)), inv_det);
+        let e1m = add(add(mul(e1x, mx), mul(e1y, my)), mul(e1z, mz));
+        let v = mul(_mm256_xor_ps(e1m, sign), inv_det);
+        let lo = _mm256_set1_ps(-EDGE_TOLERANCE);
+        let in_t = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_setzero_ps()),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_limit)),
+        );
+        let in_uv = _mm256_and_ps(
+            _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(u, lo),
+                _mm256_cmp_ps::<_CMP_GE_OQ>(v, lo),
+            ),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(add(u, v), _mm256_set1_ps(1.0 + EDGE_TOLERANCE)),
+        );
+        (t, _mm256_and_ps(in_t, in_uv))
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub fn nearest(p: &Packet8, r: &RayK, t_limit: f32) -> Option<(usize, f32)> {
+        let (t, hit) = hits(p, r, t_limit);
+        if _mm256_movemask_ps(hit) == 0 {
+            return None;
+        }
+        let t = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), t, hit);
+        // Horizontal minimum, broadcast to every lane.
+        let m = _mm256_min_ps(t, _mm256_permute2f128_ps::<1>(t, t));
+        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b01_00_11_10>(m));
+        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m));
+        let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t, m), hit);
+        let lane = (_mm256_movemask_ps(at_min) as u32).trailing_zeros() as usize;
+        Some((lane, _mm256_cvtss_f32(m)))
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub fn any(p: &Packet8, r: &RayK, t_limit: f32) -> bool {
+        let (_, hit) = hits(p, r, t_limit);
+        _mm256_movemask_ps(hit) != 0
+    }
+}

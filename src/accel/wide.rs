@@ -1,0 +1,294 @@
+//! The fast path: an 8-wide BVH collapsed from the binary one, with triangles in 8-wide
+//! packets, traversed with the [`Kernels`] of [`super::simd`] — and the flat packet list that
+//! beats any tree on a scene as small as the Cornell box.
+//!
+//! A child reference is a `u32`: a node index, or [`LEAF`] | packet index (a leaf is exactly one
+//! packet of up to eight triangles), or [`EMPTY`].
+//!
+//! Closest-hit traversal visits children front to back (a small sorted stack) and skips boxes
+//! beyond the best hit; shadow rays stop at the first hit. Ties at the same `t` go to the lowest
+//! triangle index, so results equal the brute-force loop's exactly.
+
+use crate::geometry::{Ray, Triangle};
+
+use super::bvh::{BOX_T_SLACK, Bvh};
+use super::simd::{Kernels, LANES, Node8, Packet8, RayK};
+
+pub const LEAF: u32 = 1 << 31;
+pub const EMPTY: u32 = u32::MAX;
+
+/// Stack entries that fit in the fixed-size traversal stack; deeper trees use a heap one.
+const STACK_INLINE: usize = 64;
+
+impl Node8 {
+    const fn empty() -> Self {
+        Self {
+            bounds: [
+                [f32::INFINITY; LANES],
+                [f32::INFINITY; LANES],
+                [f32::INFINITY; LANES],
+                [f32::NEG_INFINITY; LANES],
+                [f32::NEG_INFINITY; LANES],
+                [f32::NEG_INFINITY; LANES],
+            ],
+            child: [EMPTY; LANES],
+        }
+    }
+}
+
+/// Packs triangles `indices` (at most eight, in ascending order) into a packet.
+pub fn packet(triangles: &[Triangle], indices: &[u32]) -> Packet8 {
+    debug_assert!(indices.len() <= LANES);
+    let mut p = Packet8::EMPTY;
+    for (lane, &i) in indices.iter().enumerate() {
+        let t = &triangles[i as usize];
+        let (e1, e2) = t.edges();
+        for axis in 0..3 {
+            p.v0[axis][lane] = t.v0[axis];
+            p.e1[axis][lane] = e1[axis];
+            p.e2[axis][lane] = e2[axis];
+        }
+        p.index[lane] = i;
+    }
+    p
+}
+
+/// Every triangle in packets, in index order: the SIMD brute-force loop.
+#[derive(Clone, Debug, Default)]
+pub struct Flat {
+    pub packets: Vec<Packet8>,
+}
+
+impl Flat {
+    pub fn build(triangles: &[Triangle]) -> Self {
+        let indices: Vec<u32> = (0..triangles.len() as u32).collect();
+        Self {
+            packets: indices
+                .chunks(LANES)
+                .map(|c| packet(triangles, c))
+                .collect(),
+        }
+    }
+
+    #[inline(always)]
+    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+        let r = RayK::new(ray);
+        let mut best = None;
+        let mut limit = t_max;
+        // Packets and lanes are in index order and the limit is strict: the first of equal
+        // hits wins, as in the brute-force loop.
+        for p in &self.packets {
+            if let Some((lane, t)) = k.nearest(p, &r, limit) {
+                best = Some((p.index[lane], t));
+                limit = t;
+            }
+        }
+        best
+    }
+
+    #[inline(always)]
+    pub fn occluded<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
+        let r = RayK::new(ray);
+        self.packets.iter().any(|p| k.any(p, &r, t_max))
+    }
+}
+
+/// An 8-wide BVH.
+#[derive(Clone, Debug)]
+pub struct Bvh8 {
+    pub nodes: Vec<Node8>,
+    pub packets: Vec<Packet8>,
+    /// The root reference ([`EMPTY`] for an empty scene).
+    pub root: u32,
+    /// The most stack entries a traversal can need.
+    pub max_stack: usize,
+}
+
+impl Default for Bvh8 {
+    fn default() -> Self {
+        Self {
+            nodes: Vec::new(),
+            packets: Vec::new(),
+            root: EMPTY,
+            max_stack: 1,
+        }
+    }
+}
+
+impl Bvh8 {
+    /// Collapses a binary BVH: each wide node takes its binary node's two children and keeps
+    /// opening the interior child with the largest surface area until it has eight.
+    pub fn from_binary(bvh: &Bvh, triangles: &[Triangle]) -> Self {
+        let mut out = Self::default();
+        if bvh.nodes.is_empty() {
+            return out;
+        }
+        out.nodes.reserve(bvh.nodes.len() / 4 + 1);
+        out.packets.reserve(bvh.nodes.len() / 2 + 1);
+        let (root, need) = out.collapse(bvh, triangles, 0);
+        out.root = root;
+        out.max_stack = need + 1;
+        out
+    }
+
+    /// Returns the reference to binary node `index` and the stack entries its subtree needs.
+    fn collapse(&mut self, bvh: &Bvh, triangles: &[Triangle], index: usize) -> (u32, usize) {
+        let node = &bvh.nodes[index];
+        if node.is_leaf() {
+            let mut ids = bvh.leaf_indices(node).to_vec();
+            ids.sort_unstable();
+            self.packets.push(packet(triangles, &ids));
+            return (LEAF | (self.packets.len() - 1) as u32, 0);
+        }
+        let mut kids: Vec<usize> = bvh.children(index).to_vec();
+        while kids.len() < LANES {
+            let widest = kids
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| !bvh.nodes[k].is_leaf())
+                .max_by(|a, b| {
+                    let area = |k: usize| bvh.nodes[k].bounds.half_area();
+                    area(*a.1).total_cmp(&area(*b.1))
+                })
+                .map(|(slot, _)| slot);
+            let Some(slot) = widest else { break };
+            let [a, b] = bvh.children(kids[slot]);
+            kids[slot] = a;
+            kids.push(b);
+        }
+        let at = self.nodes.len();
+        self.nodes.push(Node8::empty());
+        let mut need = 0;
+        for (slot, &k) in kids.iter().enumerate() {
+            let (reference, child_need) = self.collapse(bvh, triangles, k);
+            need = need.max(child_need);
+            let b = bvh.nodes[k].bounds;
+            let n = &mut self.nodes[at];
+            for axis in 0..3 {
+                n.bounds[axis][slot] = b.min[axis];
+                n.bounds[axis + 3][slot] = b.max[axis];
+            }
+            n.child[slot] = reference;
+        }
+        (at as u32, need + kids.len())
+    }
+
+    /// The closest hit `(triangle index, t)` with `t < t_max`, lowest index among ties.
+    #[inline(always)]
+    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+        if self.root == EMPTY {
+            return None;
+        }
+        if self.max_stack <= STACK_INLINE {
+            let mut stack = [(0u32, 0f32); STACK_INLINE];
+            self.closest_on(k, ray, t_max, &mut stack)
+        } else {
+            let mut stack = vec![(0u32, 0f32); self.max_stack];
+            self.closest_on(k, ray, t_max, &mut stack)
+        }
+    }
+
+    #[inline(always)]
+    fn closest_on<K: Kernels>(
+        &self,
+        k: K,
+        ray: &Ray,
+        t_max: f32,
+        stack: &mut [(u32, f32)],
+    ) -> Option<(u32, f32)> {
+        let r = RayK::new(ray);
+        let mut best_t = t_max;
+        let mut best_i = u32::MAX;
+        stack[0] = (self.root, 0.0);
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (item, t_near) = stack[sp];
+            if t_near > best_t * BOX_T_SLACK {
+                continue;
+            }
+            if item & LEAF != 0 {
+                let p = &self.packets[(item & !LEAF) as usize];
+                // Once there is a hit, candidates at its very distance count too (ties).
+                let limit = if best_i == u32::MAX {
+                    t_max
+                } else {
+                    best_t.next_up()
+                };
+                if let Some((lane, t)) = k.nearest(p, &r, limit) {
+                    let i = p.index[lane];
+                    if t < best_t || i < best_i {
+                        best_t = t;
+                        best_i = i;
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[item as usize];
+            let (mut mask, t) = k.boxes(node, &r, best_t * BOX_T_SLACK);
+            // Push the hit children sorted so that the nearest is on top.
+            let base = sp;
+            while mask != 0 {
+                let slot = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let entry = (node.child[slot], t[slot]);
+                let mut j = sp;
+                while j > base && stack[j - 1].1 < entry.1 {
+                    stack[j] = stack[j - 1];
+                    j -= 1;
+                }
+                stack[j] = entry;
+                sp += 1;
+            }
+        }
+        (best_i != u32::MAX).then_some((best_i, best_t))
+    }
+
+    /// Whether any triangle is hit with `0 ≤ t < t_max`; stops at the first.
+    #[inline(always)]
+    pub fn occluded<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
+        if self.root == EMPTY {
+            return false;
+        }
+        if self.max_stack <= STACK_INLINE {
+            let mut stack = [0u32; STACK_INLINE];
+            self.occluded_on(k, ray, t_max, &mut stack)
+        } else {
+            let mut stack = vec![0u32; self.max_stack];
+            self.occluded_on(k, ray, t_max, &mut stack)
+        }
+    }
+
+    #[inline(always)]
+    fn occluded_on<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32, stack: &mut [u32]) -> bool {
+        let r = RayK::new(ray);
+        let box_limit = t_max * BOX_T_SLACK;
+        stack[0] = self.root;
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let item = stack[sp];
+            if item & LEAF != 0 {
+                if k.any(&self.packets[(item & !LEAF) as usize], &r, t_max) {
+                    return true;
+                }
+                continue;
+            }
+            let node = &self.nodes[item as usize];
+            let (mut mask, _) = k.boxes(node, &r, box_limit);
+            while mask != 0 {
+                let slot = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                stack[sp] = node.child[slot];
+                sp += 1;
+            }
+        }
+        false
+    }
+
+    /// Memory used by nodes and packets, in bytes.
+    pub fn size_bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+            + std::mem::size_of_val(self.packets.as_slice())
+    }
+}

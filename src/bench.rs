@@ -1,0 +1,252 @@
+//! Measuring the tracer: what `raylab bench` and the criterion benchmarks report.
+//!
+//! For one scene at one resolution, on the current rayon pool:
+//!
+//! * `build_ms`: building the acceleration structure (median of a few builds);
+//! * `primary_mrays_per_s`: closest hits of the default camera's rays through every pixel
+//!   centre (rays made beforehand; only the tracing is timed);
+//! * `shadow_mrays_per_s`: any-hit queries of the shadow rays the `lab` stage casts from those
+//!   hits towards the light (the same rays as [`crate::light::in_shadow`]);
+//! * `lab_pass_ms`: one full [`render_pass`] of the `lab` stage (figure 7: primary rays,
+//!   shadow rays and shading).
+//!
+//! Every figure is the median over repeated passes, after a warm-up pass.
+
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::accel::{Accel, AccelKind, Isa};
+use crate::geometry::Ray;
+use crate::light::{PointLight, SHADOW_OFFSET, direct_light};
+use crate::render::render_pass;
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+use crate::{Camera, Shading, Stage};
+
+/// What to measure.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchConfig {
+    pub width: u32,
+    pub height: u32,
+    /// Timed passes per figure (the median is reported).
+    pub passes: usize,
+}
+
+impl Default for BenchConfig {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            passes: 15,
+        }
+    }
+}
+
+/// The figures for one scene; serialised as `raylab bench --json` prints them.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BenchReport {
+    pub scene: String,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    pub threads: usize,
+    pub build_ms: f64,
+    pub primary_mrays_per_s: f64,
+    pub shadow_mrays_per_s: f64,
+    pub lab_pass_ms: f64,
+}
+
+/// The median of some durations, in milliseconds.
+pub fn median_ms(mut times: Vec<Duration>) -> f64 {
+    if times.is_empty() {
+        return 0.0;
+    }
+    times.sort_unstable();
+    let n = times.len();
+    let mid = if n % 2 == 1 {
+        times[n / 2]
+    } else {
+        (times[n / 2 - 1] + times[n / 2]) / 2
+    };
+    mid.as_secs_f64() * 1e3
+}
+
+fn time<T>(f: impl FnOnce() -> T) -> (Duration, T) {
+    let start = Instant::now();
+    let out = f();
+    (start.elapsed(), out)
+}
+
+/// The lab stage at `width × height` from the default camera.
+pub fn lab_settings(width: u32, height: u32) -> RenderSettings {
+    RenderSettings {
+        camera: Camera::default_for(width, height),
+        shading: Shading::for_stage(Stage::Lab),
+        ..RenderSettings::default()
+    }
+}
+
+/// The camera's rays through every pixel centre, row by row.
+pub fn primary_rays(camera: &Camera) -> Vec<Ray> {
+    (0..camera.height)
+        .flat_map(|y| (0..camera.width).map(move |x| camera.pixel_ray(x, y)))
+        .collect()
+}
+
+/// The shadow rays the lab stage casts for these primary rays: from every lit-facing hit
+/// towards the light, as [`crate::light::in_shadow`] makes them, with their `t_max`.
+pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(Ray, f32)> {
+    primary
+        .par_iter()
+        .filter_map(|ray| {
+            let hit = scene.closest_intersection(ray, f32::INFINITY)?;
+            let normal = scene.triangles[hit.triangle_index].normal;
+            if direct_light(light, hit.position, normal) == Vec3::ZERO {
+                return None;
+            }
+            let side = if (light.position - hit.position).dot(normal) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            let origin = hit.position + side * SHADOW_OFFSET * normal;
+            let to_light = light.position - origin;
+            let distance = to_light.length();
+            (distance > SHADOW_OFFSET).then(|| {
+                let ray = Ray {
+                    origin,
+                    direction: to_light / distance,
+                };
+                (ray, distance - SHADOW_OFFSET)
+            })
+        })
+        .collect()
+}
+
+/// Closest hits of all `rays`, in parallel; returns how many hit (so the work is not optimised
+/// away).
+pub fn trace_primary(scene: &Scene, rays: &[Ray]) -> usize {
+    rays.par_chunks(1024)
+        .map(|c| {
+            c.iter()
+                .filter(|r| scene.closest_intersection(r, f32::INFINITY).is_some())
+                .count()
+        })
+        .sum()
+}
+
+/// Any-hit queries of all `rays`, in parallel; returns how many are blocked.
+pub fn trace_shadow(scene: &Scene, rays: &[(Ray, f32)]) -> usize {
+    rays.par_chunks(1024)
+        .map(|c| c.iter().filter(|(r, t)| scene.occluded(r, *t)).count())
+        .sum()
+}
+
+/// Measures `scene` (whose structure was built with `kind` and `isa`) on the current rayon pool.
+pub fn bench_scene(
+    name: &str,
+    scene: &Scene,
+    kind: AccelKind,
+    isa: Isa,
+    config: &BenchConfig,
+) -> BenchReport {
+    let passes = config.passes.max(1);
+    let builds = if scene.triangles.len() > 100_000 {
+        3
+    } else {
+        passes
+    };
+    let build_times: Vec<Duration> = (0..builds)
+        .map(|_| Accel::build(&scene.triangles, kind, isa).build_time())
+        .collect();
+
+    let settings = lab_settings(config.width, config.height);
+    let primary = primary_rays(&settings.camera);
+    let shadow = shadow_rays(scene, &settings.light, &primary);
+    let repeat = |f: &dyn Fn() -> usize| -> f64 {
+        std::hint::black_box(f());
+        median_ms(
+            (0..passes)
+                .map(|_| time(|| std::hint::black_box(f())).0)
+                .collect(),
+        )
+    };
+    let primary_ms = repeat(&|| trace_primary(scene, &primary));
+    let shadow_ms = repeat(&|| trace_shadow(scene, &shadow));
+    let lab_ms = repeat(&|| {
+        render_pass(scene, &settings, 0, &|| false).map_or(0, |image| image.pixels.len())
+    });
+    let mrays = |n: usize, ms: f64| if ms > 0.0 { n as f64 / ms / 1e3 } else { 0.0 };
+    BenchReport {
+        scene: name.to_string(),
+        triangles: scene.triangles.len(),
+        width: config.width,
+        height: config.height,
+        threads: rayon::current_num_threads(),
+        build_ms: median_ms(build_times),
+        primary_mrays_per_s: mrays(primary.len(), primary_ms),
+        shadow_mrays_per_s: mrays(shadow.len(), shadow_ms),
+        lab_pass_ms: lab_ms,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::cornell_box;
+
+    #[test]
+    fn medians() {
+        let ms = |v: &[u64]| median_ms(v.iter().map(|&m| Duration::from_millis(m)).collect());
+        assert_eq!(ms(&[5, 1, 3]), 3.0);
+        assert_eq!(ms(&[4, 1, 3, 2]), 2.5);
+        assert_eq!(ms(&[]), 0.0);
+    }
+
+    #[test]
+    fn a_small_bench_reports_plausible_figures() {
+        let scene = cornell_box();
+        let config = BenchConfig {
+            width: 32,
+            height: 32,
+            passes: 3,
+        };
+        let r = bench_scene("cornell", &scene, AccelKind::Auto, Isa::best(), &config);
+        assert_eq!(
+            (r.scene.as_str(), r.triangles, r.width),
+            ("cornell", 30, 32)
+        );
+        assert!(r.primary_mrays_per_s > 0.0 && r.shadow_mrays_per_s > 0.0);
+        assert!(r.lab_pass_ms > 0.0 && r.build_ms >= 0.0);
+        let json = serde_json::to_value(&r).unwrap();
+        for key in [
+            "scene",
+            "triangles",
+            "width",
+            "height",
+            "threads",
+            "build_ms",
+            "primary_mrays_per_s",
+            "shadow_mrays_per_s",
+            "lab_pass_ms",
+        ] {
+            assert!(json.get(key).is_some(), "{key}");
+        }
+    }
+
+    #[test]
+    fn shadow_rays_match_the_lab_pass() {
+        // Every shadow ray starts at a lit-facing hit and ends short of the light.
+        let scene = cornell_box();
+        let s = lab_settings(16, 16);
+        let rays = shadow_rays(&scene, &s.light, &primary_rays(&s.camera));
+        assert!(!rays.is_empty() && rays.len() <= 256);
+        for (r, t) in rays {
+            let end = r.at(t + SHADOW_OFFSET);
+            assert!((end - s.light.position).length() < 1e-4);
+        }
+    }
+}
