@@ -54,30 +54,39 @@ pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
     light.power * cos.max(0.0) / (4.0 * PI * r2)
 }
 
-/// Whether the segment from a surface point to the light is blocked (lab section 5.1): a shadow
-/// ray is cast toward the light and any hit closer than the light shadows the point.
+/// The shadow ray from a surface point toward the light, and the distance to stop at (lab
+/// section 5.1), or `None` when the light is on the surface (nothing can lie between).
 ///
 /// The ray starts [`SHADOW_OFFSET`] off the surface on the side the light is on, so the surface
-/// does not shadow itself.
-pub fn in_shadow(scene: &Scene, light: &PointLight, position: Vec3, normal: Vec3) -> bool {
-    let to_light = light.position - position;
-    let side = if to_light.dot(normal) >= 0.0 {
+/// can't shadow itself, and skips its first [`SHADOW_OFFSET`] along the way: at a corner, the
+/// offset point lies in the plane of the neighbouring wall, which would otherwise block it at
+/// `t = 0`. It stops [`SHADOW_OFFSET`] short of the light, so a light touching a surface is not
+/// hidden by that surface.
+pub fn shadow_ray(light: &PointLight, position: Vec3, normal: Vec3) -> Option<(Ray, f32)> {
+    let side = if (light.position - position).dot(normal) >= 0.0 {
         1.0
     } else {
         -1.0
     };
-    let origin = position + side * SHADOW_OFFSET * normal;
-    let to_light = light.position - origin;
+    let lifted = position + side * SHADOW_OFFSET * normal;
+    let to_light = light.position - lifted;
     let distance = to_light.length();
-    if !(distance > SHADOW_OFFSET) {
-        // The light is on the surface, or a coordinate is not finite: nothing lies between.
-        return false;
+    if !(distance > 3.0 * SHADOW_OFFSET) {
+        // The light is at the surface, or a coordinate is not finite.
+        return None;
     }
+    let direction = to_light / distance;
     let ray = Ray {
-        origin,
-        direction: to_light / distance,
+        origin: lifted + SHADOW_OFFSET * direction,
+        direction,
     };
-    scene.occluded(&ray, distance - SHADOW_OFFSET)
+    Some((ray, distance - 2.0 * SHADOW_OFFSET))
+}
+
+/// Whether the segment from a surface point to the light is blocked (lab section 5.1): a shadow
+/// ray is cast toward the light and any hit closer than the light shadows the point.
+pub fn in_shadow(scene: &Scene, light: &PointLight, position: Vec3, normal: Vec3) -> bool {
+    shadow_ray(light, position, normal).is_some_and(|(ray, t_max)| scene.occluded(&ray, t_max))
 }
 
 #[cfg(test)]
@@ -161,6 +170,26 @@ mod tests {
         );
         let scene = cornell_box();
         assert!(!in_shadow(&scene, &light, Vec3::new(0.0, 1.0, 0.0), n));
+    }
+
+    #[test]
+    fn corners_do_not_shadow_themselves() {
+        // Points on the edge where the left wall (x = −1) meets the ceiling (y = −1), lit from
+        // inside the box: lifting off one wall leaves the point in the other wall's plane.
+        let scene = cornell_box();
+        let light = PointLight::default();
+        for z in [-0.9, -0.248, 0.0, 0.5, 0.99] {
+            let p = Vec3::new(-1.0, -1.0, z);
+            for n in [Vec3::X, Vec3::Y] {
+                assert!(
+                    !in_shadow(&scene, &light, p, n),
+                    "corner ({p}) with normal {n}"
+                );
+            }
+        }
+        // The floor's corner with the back wall, lit by a light in front of the blocks.
+        let p = Vec3::new(0.9, 1.0, 1.0);
+        assert!(!in_shadow(&scene, &light, p, Vec3::new(0.0, -1.0, 0.0)));
     }
 
     #[test]
