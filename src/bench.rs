@@ -6,7 +6,7 @@
 //! * `primary_mrays_per_s`: closest hits of the default camera's rays through every pixel
 //!   centre (rays made beforehand; only the tracing is timed);
 //! * `shadow_mrays_per_s`: any-hit queries of the shadow rays the `lab` stage casts from those
-//!   hits towards the light (the same rays as [`crate::light::in_shadow`]);
+//!   hits towards the light (the same rays as [`crate::light::in_shadow`] casts);
 //! * `lab_pass_ms`: one full [`render_pass`] of the `lab` stage (figure 7: primary rays,
 //!   shadow rays and shading).
 //!
@@ -20,7 +20,7 @@ use serde::Serialize;
 
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::Ray;
-use crate::light::{PointLight, SHADOW_OFFSET, direct_light};
+use crate::light::{PointLight, direct_light, shadow_ray};
 use crate::render::render_pass;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -96,8 +96,8 @@ pub fn primary_rays(camera: &Camera) -> Vec<Ray> {
         .collect()
 }
 
-/// The shadow rays the lab stage casts for these primary rays: from every lit-facing hit
-/// towards the light, as [`crate::light::in_shadow`] makes them, with their `t_max`.
+/// The shadow rays the lab stage casts for these primary rays: from every hit that receives
+/// light, [`crate::light::shadow_ray`] towards the light, with its `t_max`.
 pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(Ray, f32)> {
     primary
         .par_iter()
@@ -107,21 +107,7 @@ pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(R
             if direct_light(light, hit.position, normal) == Vec3::ZERO {
                 return None;
             }
-            let side = if (light.position - hit.position).dot(normal) >= 0.0 {
-                1.0
-            } else {
-                -1.0
-            };
-            let origin = hit.position + side * SHADOW_OFFSET * normal;
-            let to_light = light.position - origin;
-            let distance = to_light.length();
-            (distance > SHADOW_OFFSET).then(|| {
-                let ray = Ray {
-                    origin,
-                    direction: to_light / distance,
-                };
-                (ray, distance - SHADOW_OFFSET)
-            })
+            shadow_ray(light, hit.position, normal)
         })
         .collect()
 }
@@ -245,8 +231,8 @@ mod tests {
         let rays = shadow_rays(&scene, &s.light, &primary_rays(&s.camera));
         assert!(!rays.is_empty() && rays.len() <= 256);
         for (r, t) in rays {
-            let end = r.at(t + SHADOW_OFFSET);
-            assert!((end - s.light.position).length() < 1e-4);
+            let end = r.at(t);
+            assert!((end - s.light.position).length() < 1e-3);
         }
     }
 }

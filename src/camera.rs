@@ -70,12 +70,20 @@ impl Camera {
     /// direction `R · (px − W/2, py − H/2, f)` (lab equation 24, with its `y − W/2` typo read as
     /// `y − H/2`). The centre of pixel `(x, y)` is `(x + 0.5, y + 0.5)`.
     pub fn primary_ray(&self, px: f32, py: f32) -> Ray {
+        self.primary_ray_rotated(&self.rotation(), px, py)
+    }
+
+    /// [`Camera::primary_ray`] with `R` = [`Camera::rotation`] computed once by the caller: a
+    /// render pass makes it once, not once per pixel (its sines and cosines cost more than
+    /// tracing a ray through the Cornell box).
+    #[inline]
+    pub fn primary_ray_rotated(&self, rotation: &Mat3, px: f32, py: f32) -> Ray {
         let d = Vec3::new(
             px - self.width as f32 / 2.0,
             py - self.height as f32 / 2.0,
             self.focal_length,
         );
-        Ray::new(self.position, self.rotation() * d)
+        Ray::new(self.position, *rotation * d)
     }
 
     /// The ray through the centre of pixel `(x, y)`.

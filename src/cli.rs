@@ -63,9 +63,9 @@ pub struct BenchArgs {
     /// Acceleration structure: auto, brute, flat, bvh2 or bvh8 (to compare them).
     #[arg(long, default_value = "auto", value_name = "KIND")]
     pub accel: AccelKind,
-    /// Use the scalar kernels even where AVX2 is available (to compare them).
-    #[arg(long)]
-    pub scalar: bool,
+    /// Kernels: best, avx512, avx2 or scalar (to compare them).
+    #[arg(long, default_value = "best", value_name = "ISA")]
+    pub isa: String,
     /// Print one JSON object per scene (one per line) instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -264,11 +264,12 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         (None, Some(choice)) => vec![choice.clone()],
         (None, None) => SceneChoice::BUILT_IN.to_vec(),
     };
-    let isa = if args.scalar {
-        Isa::Scalar
-    } else {
-        Isa::best()
-    };
+    let isa = Isa::by_name(&args.isa).with_context(|| {
+        format!(
+            "kernels '{}' are unknown or not supported by this CPU (expected best, avx512, avx2 or scalar)",
+            args.isa
+        )
+    })?;
     let config = BenchConfig {
         width: args.width,
         height: args.height,

@@ -12,7 +12,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::Ray;
-use crate::light::{PointLight, direct_light, in_shadow};
+use crate::light::{PointLight, direct_light, in_shadow, shadow_ray};
 use crate::scene::Scene;
 
 /// A step of the lab, named after what it shows.
@@ -176,6 +176,65 @@ pub fn shade(scene: &Scene, light: &PointLight, shading: &Shading, ray: &Ray) ->
     }
 }
 
+/// How many rays [`shade_batch`] takes through each phase together.
+pub const SHADE_BATCH: usize = 64;
+
+/// [`shade`] for many rays at once, bit for bit the same values.
+///
+/// The work is done in phases over up to [`SHADE_BATCH`] rays — all closest hits, then the
+/// light at every hit, then all shadow rays, then the sums — instead of ray by ray. Each phase is
+/// a loop of independent queries, which the CPU overlaps; ray by ray, every pixel's long chain
+/// of dependent divisions and square roots runs alone. On the Cornell box this halves the time
+/// of a lab pass (see PERFORMANCE.md).
+pub fn shade_batch(
+    scene: &Scene,
+    light: &PointLight,
+    shading: &Shading,
+    rays: &[Ray],
+    out: &mut [Vec3],
+) {
+    debug_assert_eq!(rays.len(), out.len());
+    for (rays, out) in rays.chunks(SHADE_BATCH).zip(out.chunks_mut(SHADE_BATCH)) {
+        let mut hits = [None; SHADE_BATCH];
+        for (hit, ray) in hits.iter_mut().zip(rays) {
+            *hit = scene.closest_intersection(ray, f32::INFINITY);
+        }
+        // ρ and D (before shadows) per hit, and the shadow rays to cast.
+        let mut rho_d = [(Vec3::ZERO, Vec3::ZERO); SHADE_BATCH];
+        let mut shadows = [None; SHADE_BATCH];
+        for i in 0..rays.len() {
+            let Some(hit) = hits[i] else { continue };
+            let rho = scene.material_of(hit.triangle_index).reflectance;
+            if shading.stage == Stage::Flat {
+                rho_d[i] = (rho, Vec3::ZERO);
+                continue;
+            }
+            let normal = scene.triangles[hit.triangle_index].normal;
+            let d = direct_light(light, hit.position, normal);
+            if shading.shadows && d != Vec3::ZERO {
+                shadows[i] = shadow_ray(light, hit.position, normal);
+            }
+            rho_d[i] = (rho, d);
+        }
+        for (shadow, (_, d)) in shadows.iter().zip(rho_d.iter_mut()) {
+            if let Some((ray, t_max)) = shadow
+                && scene.occluded(ray, *t_max)
+            {
+                *d = Vec3::ZERO;
+            }
+        }
+        for (i, value) in out.iter_mut().enumerate() {
+            let (rho, d) = rho_d[i];
+            *value = match (hits[i], shading.stage) {
+                (None, _) => Vec3::ZERO,
+                (Some(_), Stage::Flat) => rho,
+                (Some(_), Stage::Incoming) => d + shading.indirect_term(),
+                (Some(_), _) => rho * (d + shading.indirect_term()),
+            };
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -194,5 +253,31 @@ mod tests {
         assert_eq!(Shading::default().stage, Stage::Lab);
         assert!(Shading::default().shadows && Shading::default().indirect);
         assert_eq!(Shading::default().indirect_term(), Vec3::splat(0.5));
+    }
+
+    #[test]
+    fn the_batch_shades_exactly_like_shade() {
+        let scene = crate::scene::cornell_box();
+        let cam = crate::Camera::default_for(61, 47);
+        let rays: Vec<Ray> = (0..47)
+            .flat_map(|y| (0..61).map(move |x| (x, y)))
+            .map(|(x, y)| cam.pixel_ray(x, y))
+            .collect();
+        let light = PointLight::default();
+        for stage in Stage::ALL {
+            for shadows in [false, true] {
+                let mut shading = Shading::for_stage(stage);
+                shading.shadows = shadows;
+                let mut out = vec![Vec3::NAN; rays.len()];
+                shade_batch(&scene, &light, &shading, &rays, &mut out);
+                for (ray, got) in rays.iter().zip(&out) {
+                    let want = shade(&scene, &light, &shading, ray);
+                    assert_eq!(
+                        got.to_array().map(f32::to_bits),
+                        want.to_array().map(f32::to_bits)
+                    );
+                }
+            }
+        }
     }
 }

@@ -16,6 +16,8 @@ use glam::Vec3;
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{EDGE_TOLERANCE, intersect_triangle};
 
+use super::Hit;
+
 /// Bins per axis of the SAH build.
 const BINS: usize = 16;
 /// The most triangles a leaf holds: one 8-wide packet of the fast path.
@@ -253,17 +255,17 @@ impl Bvh {
         [index + 1, self.nodes[index].first_or_right as usize]
     }
 
-    /// The closest hit `(triangle index, t)` with `t < t_max`; among hits at the same `t`, the
+    /// The closest hit with `t < t_max`; among hits at the same `t`, the
     /// lowest index, exactly as [`crate::intersect::closest_intersection_brute_force`].
     ///
     /// The readable reference: nearer child first, boxes beyond the best hit skipped.
-    pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+    pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
         let root = self.nodes.first()?;
         let rb = RayBoxData::new(ray);
-        let mut best: Option<(u32, f32)> = None;
+        let mut best: Option<Hit> = None;
         let mut stack = vec![(0usize, rb.hit(&root.bounds, t_max * BOX_T_SLACK)?)];
         while let Some((index, t_near)) = stack.pop() {
-            let limit = best.map_or(t_max, |(_, t)| t);
+            let limit = best.map_or(t_max, |h| h.t);
             if t_near > limit * BOX_T_SLACK {
                 continue;
             }
@@ -271,11 +273,11 @@ impl Bvh {
             if node.is_leaf() {
                 for &i in self.leaf_indices(node) {
                     // Candidates at the best distance too: the lower index wins a tie.
-                    let limit = best.map_or(t_max, |(_, t)| t.next_up());
-                    if let Some((t, _, _)) = intersect_triangle(ray, &triangles[i as usize], limit)
-                        && best.is_none_or(|(bi, bt)| t < bt || i < bi)
+                    let limit = best.map_or(t_max, |h| h.t.next_up());
+                    if let Some((t, u, v)) = intersect_triangle(ray, &triangles[i as usize], limit)
+                        && best.is_none_or(|h| t < h.t || i < h.index)
                     {
-                        best = Some((i, t));
+                        best = Some(Hit { index: i, t, u, v });
                     }
                 }
                 continue;

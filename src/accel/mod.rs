@@ -23,12 +23,22 @@ use crate::geometry::{Ray, Triangle};
 use crate::intersect;
 
 use self::bvh::Bvh;
-use self::simd::{Avx2, Scalar};
+use self::simd::{Avx2, Avx512, Scalar};
 use self::wide::{Bvh8, Flat};
 
 /// Scenes with at most this many triangles use the flat packet list (measured: at 30
 /// triangles it is about twice as fast as the 8-wide BVH; at a few hundred the tree wins).
 pub const FLAT_MAX_TRIANGLES: usize = 64;
+
+/// A closest hit: the triangle's index in the scene and `t`, `u`, `v` exactly as
+/// [`intersect::intersect_triangle`] computes them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub index: u32,
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
 
 /// Which structure to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -88,19 +98,46 @@ impl FromStr for AccelKind {
 #[derive(Clone, Copy, Debug)]
 pub enum Isa {
     Scalar,
+    /// AVX2 + FMA: 8-wide everything.
     Avx2(Avx2),
+    /// AVX-512: the flat list 16 wide; the 8-wide BVH keeps its AVX2 kernels.
+    Avx512(Avx512),
 }
 
 impl Isa {
-    /// AVX2 + FMA when this CPU has them, else scalar.
+    /// The widest kernels this CPU runs: AVX-512, else AVX2 + FMA, else scalar.
     pub fn best() -> Self {
-        Avx2::detect().map_or(Isa::Scalar, Isa::Avx2)
+        match (Avx512::detect(), Avx2::detect()) {
+            (Some(k), _) => Isa::Avx512(k),
+            (None, Some(k)) => Isa::Avx2(k),
+            (None, None) => Isa::Scalar,
+        }
+    }
+
+    /// Every kernel set this CPU runs, scalar first.
+    pub fn available() -> Vec<Isa> {
+        let mut out = vec![Isa::Scalar];
+        out.extend(Avx2::detect().map(Isa::Avx2));
+        out.extend(Avx512::detect().map(Isa::Avx512));
+        out
+    }
+
+    /// The named kernel set, if this CPU runs it: `scalar`, `avx2`, `avx512` or `best`.
+    pub fn by_name(name: &str) -> Option<Isa> {
+        match name {
+            "best" => Some(Isa::best()),
+            "scalar" => Some(Isa::Scalar),
+            "avx2" => Avx2::detect().map(Isa::Avx2),
+            "avx512" => Avx512::detect().map(Isa::Avx512),
+            _ => None,
+        }
     }
 
     pub fn name(self) -> &'static str {
         match self {
             Isa::Scalar => "scalar",
             Isa::Avx2(_) => "avx2",
+            Isa::Avx512(_) => "avx512",
         }
     }
 }
@@ -189,21 +226,26 @@ impl Accel {
         self.triangles == n
     }
 
-    /// The closest hit `(triangle index, t)` with `0 ≤ t < t_max`: the lowest index among hits
-    /// at the same distance, exactly as the brute-force loop.
+    /// The closest hit with `0 ≤ t < t_max`: the lowest index among hits at the same
+    /// distance, exactly as the brute-force loop.
     #[inline]
-    pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<(usize, f32)> {
-        let hit = match (&self.structure, self.isa) {
+    pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
+        match (&self.structure, self.isa) {
             (Structure::BruteForce, _) => {
-                return intersect::closest_intersection_brute_force(ray, triangles, t_max)
-                    .map(|h| (h.triangle_index, h.distance));
+                intersect::closest_intersection_brute_force(ray, triangles, t_max).map(|h| Hit {
+                    index: h.triangle_index as u32,
+                    t: h.distance,
+                    u: h.u,
+                    v: h.v,
+                })
             }
             (Structure::Bvh2(b), _) => b.closest(triangles, ray, t_max),
             (Structure::Flat(f), Isa::Scalar) => f.closest(Scalar, ray, t_max),
             (Structure::Bvh8(b), Isa::Scalar) => b.closest(Scalar, ray, t_max),
+            (Structure::Flat(f), Isa::Avx512(k)) => closest_avx512(k, f, ray, t_max),
+            (s, Isa::Avx512(k)) => closest_avx2(k.avx2(), s, ray, t_max),
             (s, Isa::Avx2(k)) => closest_avx2(k, s, ray, t_max),
-        };
-        hit.map(|(i, t)| (i as usize, t))
+        }
     }
 
     /// Whether anything is hit with `0 ≤ t < t_max` (a shadow ray's any-hit query).
@@ -214,12 +256,14 @@ impl Accel {
             (Structure::Bvh2(b), _) => b.occluded(triangles, ray, t_max),
             (Structure::Flat(f), Isa::Scalar) => f.occluded(Scalar, ray, t_max),
             (Structure::Bvh8(b), Isa::Scalar) => b.occluded(Scalar, ray, t_max),
+            (Structure::Flat(f), Isa::Avx512(k)) => occluded_avx512(k, f, ray, t_max),
+            (s, Isa::Avx512(k)) => occluded_avx2(k.avx2(), s, ray, t_max),
             (s, Isa::Avx2(k)) => occluded_avx2(k, s, ray, t_max),
         }
     }
 }
 
-fn closest_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+fn closest_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: `k` proves the CPU has AVX2 and FMA.
@@ -241,7 +285,7 @@ fn occluded_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
 
 /// The traversals compiled with AVX2 enabled, so the kernels inline into them.
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
-fn closest_avx2_impl(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+fn closest_avx2_impl(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
     match s {
         Structure::Flat(f) => f.closest(k, ray, t_max),
         Structure::Bvh8(b) => b.closest(k, ray, t_max),
@@ -256,4 +300,34 @@ fn occluded_avx2_impl(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
         Structure::Bvh8(b) => b.occluded(k, ray, t_max),
         Structure::BruteForce | Structure::Bvh2(_) => false,
     }
+}
+
+fn closest_avx512(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> Option<Hit> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // SAFETY: `k` proves the CPU has AVX-512 F and DQ.
+        unsafe { closest_avx512_impl(k, f, ray, t_max) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    closest_avx512_impl(k, f, ray, t_max)
+}
+
+fn occluded_avx512(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // SAFETY: `k` proves the CPU has AVX-512 F and DQ.
+        unsafe { occluded_avx512_impl(k, f, ray, t_max) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    occluded_avx512_impl(k, f, ray, t_max)
+}
+
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx512f,avx512dq"))]
+fn closest_avx512_impl(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> Option<Hit> {
+    f.closest16(k, ray, t_max)
+}
+
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx512f,avx512dq"))]
+fn occluded_avx512_impl(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> bool {
+    f.occluded16(k, ray, t_max)
 }

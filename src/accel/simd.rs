@@ -15,24 +15,66 @@ use super::bvh::RayBoxData;
 /// Lanes per node and per triangle packet.
 pub const LANES: usize = 8;
 
-/// Eight triangles, structure of arrays: `v0`, `e1 = v1 − v0`, `e2 = v2 − v0` per axis, and the
+/// `N` triangles, structure of arrays: `v0`, `e1 = v1 − v0`, `e2 = v2 − v0` per axis, and the
 /// scene index of each (`u32::MAX` for an unused lane, whose zero edges can never be hit).
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(32))]
-pub struct Packet8 {
-    pub v0: [[f32; LANES]; 3],
-    pub e1: [[f32; LANES]; 3],
-    pub e2: [[f32; LANES]; 3],
-    pub index: [u32; LANES],
+#[repr(C, align(64))]
+pub struct Packet<const N: usize> {
+    pub v0: [[f32; N]; 3],
+    pub e1: [[f32; N]; 3],
+    pub e2: [[f32; N]; 3],
+    pub index: [u32; N],
 }
 
-impl Packet8 {
-    pub const EMPTY: Packet8 = Packet8 {
-        v0: [[0.0; LANES]; 3],
-        e1: [[0.0; LANES]; 3],
-        e2: [[0.0; LANES]; 3],
-        index: [u32::MAX; LANES],
+/// The packet of the wide BVH's leaves and the AVX2 kernels.
+pub type Packet8 = Packet<LANES>;
+/// The packet of the AVX-512 flat loop.
+pub type Packet16 = Packet<16>;
+
+impl<const N: usize> Packet<N> {
+    pub const EMPTY: Self = Self {
+        v0: [[0.0; N]; 3],
+        e1: [[0.0; N]; 3],
+        e2: [[0.0; N]; 3],
+        index: [u32::MAX; N],
     };
+
+    /// Packs triangles `indices` (at most `N`, in ascending order).
+    pub fn new(triangles: &[crate::geometry::Triangle], indices: &[u32]) -> Self {
+        debug_assert!(indices.len() <= N);
+        let mut p = Self::EMPTY;
+        for (lane, &i) in indices.iter().enumerate() {
+            let t = &triangles[i as usize];
+            let (e1, e2) = t.edges();
+            for axis in 0..3 {
+                p.v0[axis][lane] = t.v0[axis];
+                p.e1[axis][lane] = e1[axis];
+                p.e2[axis][lane] = e2[axis];
+            }
+            p.index[lane] = i;
+        }
+        p
+    }
+
+    /// The scalar twin of the packet kernels: the nearest hit, lowest lane among equal `t`.
+    #[inline(always)]
+    pub fn nearest_scalar(&self, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+        let mut best = None;
+        let mut limit = t_limit;
+        for lane in 0..N {
+            if let Some((t, u, v)) = lane_hit(self, lane, r, limit) {
+                best = Some(LaneHit { lane, t, u, v });
+                limit = t;
+            }
+        }
+        best
+    }
+
+    /// The scalar twin of the packet kernels: whether any lane is hit.
+    #[inline(always)]
+    pub fn any_scalar(&self, r: &RayK, t_limit: f32) -> bool {
+        (0..N).any(|lane| lane_hit(self, lane, r, t_limit).is_some())
+    }
 }
 
 /// A node of the wide tree: the boxes of up to eight children, per axis, and what each child is
@@ -78,11 +120,19 @@ pub trait Kernels: Copy {
     /// Bit `i` set when the ray enters child box `i` within `[0, t_limit]`, and each box's
     /// entry distance.
     fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]);
-    /// The nearest hit in the packet with `0 ≤ t < t_limit`: `(lane, t)`, the lowest lane
-    /// among equal `t`.
-    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<(usize, f32)>;
+    /// The nearest hit in the packet with `0 ≤ t < t_limit`, the lowest lane among equal `t`.
+    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit>;
     /// Whether any triangle of the packet is hit with `0 ≤ t < t_limit`.
     fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool;
+}
+
+/// A hit in a packet: the lane, and `t`, `u`, `v` as `intersect_triangle` computes them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LaneHit {
+    pub lane: usize,
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
 }
 
 /// The scalar twin: one lane at a time.
@@ -91,7 +141,12 @@ pub struct Scalar;
 
 /// `intersect_triangle` on one lane: the same operations in the same order.
 #[inline(always)]
-fn lane_hit(p: &Packet8, i: usize, r: &RayK, t_limit: f32) -> Option<f32> {
+fn lane_hit<const N: usize>(
+    p: &Packet<N>,
+    i: usize,
+    r: &RayK,
+    t_limit: f32,
+) -> Option<(f32, f32, f32)> {
     let [ox, oy, oz] = r.origin;
     let [dx, dy, dz] = r.direction;
     let (e1x, e1y, e1z) = (p.e1[0][i], p.e1[1][i], p.e1[2][i]);
@@ -115,7 +170,8 @@ fn lane_hit(p: &Packet8, i: usize, r: &RayK, t_limit: f32) -> Option<f32> {
     let mz = bx * dy - dx * by;
     let u = (e2x * mx + e2y * my + e2z * mz) * inv_det;
     let v = -(e1x * mx + e1y * my + e1z * mz) * inv_det;
-    (u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE).then_some(t)
+    (u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE)
+        .then_some((t, u, v))
 }
 
 impl Kernels for Scalar {
@@ -141,21 +197,13 @@ impl Kernels for Scalar {
     }
 
     #[inline(always)]
-    fn nearest(self, p: &Packet8, r: &RayK, t_limit: f32) -> Option<(usize, f32)> {
-        let mut best: Option<(usize, f32)> = None;
-        let mut limit = t_limit;
-        for i in 0..LANES {
-            if let Some(t) = lane_hit(p, i, r, limit) {
-                best = Some((i, t));
-                limit = t;
-            }
-        }
-        best
+    fn nearest(self, p: &Packet8, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+        p.nearest_scalar(r, t_limit)
     }
 
     #[inline(always)]
     fn any(self, p: &Packet8, r: &RayK, t_limit: f32) -> bool {
-        (0..LANES).any(|i| lane_hit(p, i, r, t_limit).is_some())
+        p.any_scalar(r, t_limit)
     }
 }
 
@@ -177,6 +225,57 @@ impl Avx2 {
     }
 }
 
+/// The AVX-512 kernels for 16-wide packets (the flat loop over a small scene). A value of this
+/// type exists only on a CPU with AVX-512 F and DQ (and AVX2 and FMA).
+#[derive(Clone, Copy, Debug)]
+pub struct Avx512 {
+    avx2: Avx2,
+}
+
+impl Avx512 {
+    /// The AVX-512 kernels if this CPU runs them.
+    pub fn detect() -> Option<Self> {
+        let avx2 = Avx2::detect()?;
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+        {
+            return Some(Self { avx2 });
+        }
+        let _ = avx2;
+        None
+    }
+
+    /// The AVX2 kernels (for the 8-wide BVH), which this CPU also has.
+    pub fn avx2(self) -> Avx2 {
+        self.avx2
+    }
+
+    /// The nearest hit in a 16-wide packet, lowest lane among equal `t`.
+    #[inline(always)]
+    pub fn nearest16(self, p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: an `Avx512` value is only made by `detect`, after checking for AVX-512.
+            unsafe { x86::nearest16(p, r, t_limit) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        p.nearest_scalar(r, t_limit)
+    }
+
+    /// Whether any triangle of a 16-wide packet is hit.
+    #[inline(always)]
+    pub fn any16(self, p: &Packet16, r: &RayK, t_limit: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: as above.
+            unsafe { x86::any16(p, r, t_limit) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        p.any_scalar(r, t_limit)
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 impl Kernels for Avx2 {
     #[inline(always)]
@@ -186,7 +285,7 @@ impl Kernels for Avx2 {
     }
 
     #[inline(always)]
-    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<(usize, f32)> {
+    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit> {
         // SAFETY: as above.
         unsafe { x86::nearest(packet, ray, t_limit) }
     }
@@ -203,7 +302,7 @@ impl Kernels for Avx2 {
     fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
         Scalar.boxes(node, ray, t_limit)
     }
-    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<(usize, f32)> {
+    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit> {
         Scalar.nearest(packet, ray, t_limit)
     }
     fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool {
@@ -215,7 +314,7 @@ impl Kernels for Avx2 {
 mod x86 {
     use std::arch::x86_64::*;
 
-    use super::{LANES, Node8, Packet8, RayK};
+    use super::{LANES, LaneHit, Node8, Packet8, Packet16, RayK};
     use crate::intersect::EDGE_TOLERANCE;
 
     #[inline]
@@ -247,10 +346,10 @@ mod x86 {
         (mask, t_near)
     }
 
-    /// `t` of every lane (NaN or out of range for a miss) and the mask of hits.
+    /// `t`, `u`, `v` of every lane (meaningless for a miss) and the mask of hits.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
-    fn hits(p: &Packet8, r: &RayK, t_limit: f32) -> (__m256, __m256) {
+    fn hits(p: &Packet8, r: &RayK, t_limit: f32) -> ([__m256; 3], __m256) {
         let [ox, oy, oz] = r.origin.map(|x| _mm256_set1_ps(x));
         let [dx, dy, dz] = r.direction.map(|x| _mm256_set1_ps(x));
         let (e1x, e1y, e1z) = (load(&p.e1[0]), load(&p.e1[1]), load(&p.e1[2]));
@@ -287,13 +386,13 @@ mod x86 {
             ),
             _mm256_cmp_ps::<_CMP_LE_OQ>(add(u, v), _mm256_set1_ps(1.0 + EDGE_TOLERANCE)),
         );
-        (t, _mm256_and_ps(in_t, in_uv))
+        ([t, u, v], _mm256_and_ps(in_t, in_uv))
     }
 
     #[inline]
     #[target_feature(enable = "avx2,fma")]
-    pub fn nearest(p: &Packet8, r: &RayK, t_limit: f32) -> Option<(usize, f32)> {
-        let (t, hit) = hits(p, r, t_limit);
+    pub fn nearest(p: &Packet8, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+        let ([t, u, v], hit) = hits(p, r, t_limit);
         if _mm256_movemask_ps(hit) == 0 {
             return None;
         }
@@ -304,7 +403,18 @@ mod x86 {
         let m = _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m));
         let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t, m), hit);
         let lane = (_mm256_movemask_ps(at_min) as u32).trailing_zeros() as usize;
-        Some((lane, _mm256_cvtss_f32(m)))
+        let mut uv = [[0.0f32; LANES]; 2];
+        // SAFETY: each row of `uv` is writable for eight f32.
+        unsafe {
+            _mm256_storeu_ps(uv[0].as_mut_ptr(), u);
+            _mm256_storeu_ps(uv[1].as_mut_ptr(), v);
+        }
+        Some(LaneHit {
+            lane,
+            t: _mm256_cvtss_f32(m),
+            u: uv[0][lane & (LANES - 1)],
+            v: uv[1][lane & (LANES - 1)],
+        })
     }
 
     #[inline]
@@ -312,5 +422,79 @@ mod x86 {
     pub fn any(p: &Packet8, r: &RayK, t_limit: f32) -> bool {
         let (_, hit) = hits(p, r, t_limit);
         _mm256_movemask_ps(hit) != 0
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq")]
+    fn load16(a: &[f32; 16]) -> __m512 {
+        // SAFETY: `a` is a valid reference to sixteen f32, readable as 64 bytes.
+        unsafe { _mm512_loadu_ps(a.as_ptr()) }
+    }
+
+    /// The AVX-512 form of `hits`: the same operations on sixteen lanes.
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq")]
+    fn hits16(p: &Packet16, r: &RayK, t_limit: f32) -> ([__m512; 3], __mmask16) {
+        let [ox, oy, oz] = r.origin.map(|x| _mm512_set1_ps(x));
+        let [dx, dy, dz] = r.direction.map(|x| _mm512_set1_ps(x));
+        let (e1x, e1y, e1z) = (load16(&p.e1[0]), load16(&p.e1[1]), load16(&p.e1[2]));
+        let (e2x, e2y, e2z) = (load16(&p.e2[0]), load16(&p.e2[1]), load16(&p.e2[2]));
+        let mul = |a, b| _mm512_mul_ps(a, b);
+        let sub = |a, b| _mm512_sub_ps(a, b);
+        let add = |a, b| _mm512_add_ps(a, b);
+        let nx = sub(mul(e1y, e2z), mul(e2y, e1z));
+        let ny = sub(mul(e1z, e2x), mul(e2z, e1x));
+        let nz = sub(mul(e1x, e2y), mul(e2x, e1y));
+        let bx = sub(ox, load16(&p.v0[0]));
+        let by = sub(oy, load16(&p.v0[1]));
+        let bz = sub(oz, load16(&p.v0[2]));
+        let sign = _mm512_set1_ps(-0.0);
+        let det = add(add(mul(dx, nx), mul(dy, ny)), mul(dz, nz));
+        let inv_det = _mm512_div_ps(_mm512_set1_ps(1.0), _mm512_xor_ps(det, sign));
+        let t = mul(add(add(mul(bx, nx), mul(by, ny)), mul(bz, nz)), inv_det);
+        let mx = sub(mul(by, dz), mul(dy, bz));
+        let my = sub(mul(bz, dx), mul(dz, bx));
+        let mz = sub(mul(bx, dy), mul(dx, by));
+        let u = mul(add(add(mul(e2x, mx), mul(e2y, my)), mul(e2z, mz)), inv_det);
+        let e1m = add(add(mul(e1x, mx), mul(e1y, my)), mul(e1z, mz));
+        let v = mul(_mm512_xor_ps(e1m, sign), inv_det);
+        let lo = _mm512_set1_ps(-EDGE_TOLERANCE);
+        let mut hit = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(t, _mm512_setzero_ps());
+        hit &= _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, _mm512_set1_ps(t_limit));
+        hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(u, lo);
+        hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, lo);
+        hit &= _mm512_cmp_ps_mask::<_CMP_LE_OQ>(add(u, v), _mm512_set1_ps(1.0 + EDGE_TOLERANCE));
+        ([t, u, v], hit)
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq")]
+    pub fn nearest16(p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+        let ([t, u, v], hit) = hits16(p, r, t_limit);
+        if hit == 0 {
+            return None;
+        }
+        let t = _mm512_mask_blend_ps(hit, _mm512_set1_ps(f32::INFINITY), t);
+        let m = _mm512_reduce_min_ps(t);
+        let at_min = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(hit, t, _mm512_set1_ps(m));
+        let lane = (at_min as u32).trailing_zeros() as usize & 15;
+        let mut uv = [[0.0f32; 16]; 2];
+        // SAFETY: each row of `uv` is writable for sixteen f32.
+        unsafe {
+            _mm512_storeu_ps(uv[0].as_mut_ptr(), u);
+            _mm512_storeu_ps(uv[1].as_mut_ptr(), v);
+        }
+        Some(LaneHit {
+            lane,
+            t: m,
+            u: uv[0][lane],
+            v: uv[1][lane],
+        })
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq")]
+    pub fn any16(p: &Packet16, r: &RayK, t_limit: f32) -> bool {
+        hits16(p, r, t_limit).1 != 0
     }
 }

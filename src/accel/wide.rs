@@ -11,8 +11,9 @@
 
 use crate::geometry::{Ray, Triangle};
 
+use super::Hit;
 use super::bvh::{BOX_T_SLACK, Bvh};
-use super::simd::{Kernels, LANES, Node8, Packet8, RayK};
+use super::simd::{Avx512, Kernels, LANES, Node8, Packet8, Packet16, RayK};
 
 pub const LEAF: u32 = 1 << 31;
 pub const EMPTY: u32 = u32::MAX;
@@ -38,25 +39,15 @@ impl Node8 {
 
 /// Packs triangles `indices` (at most eight, in ascending order) into a packet.
 pub fn packet(triangles: &[Triangle], indices: &[u32]) -> Packet8 {
-    debug_assert!(indices.len() <= LANES);
-    let mut p = Packet8::EMPTY;
-    for (lane, &i) in indices.iter().enumerate() {
-        let t = &triangles[i as usize];
-        let (e1, e2) = t.edges();
-        for axis in 0..3 {
-            p.v0[axis][lane] = t.v0[axis];
-            p.e1[axis][lane] = e1[axis];
-            p.e2[axis][lane] = e2[axis];
-        }
-        p.index[lane] = i;
-    }
-    p
+    Packet8::new(triangles, indices)
 }
 
-/// Every triangle in packets, in index order: the SIMD brute-force loop.
+/// Every triangle in packets, in index order: the SIMD brute-force loop. Kept both 8 and 16
+/// wide (a small scene: the copies cost nothing), for the AVX2 and the AVX-512 kernels.
 #[derive(Clone, Debug, Default)]
 pub struct Flat {
     pub packets: Vec<Packet8>,
+    pub packets16: Vec<Packet16>,
 }
 
 impl Flat {
@@ -65,22 +56,58 @@ impl Flat {
         Self {
             packets: indices
                 .chunks(LANES)
-                .map(|c| packet(triangles, c))
+                .map(|c| Packet8::new(triangles, c))
+                .collect(),
+            packets16: indices
+                .chunks(16)
+                .map(|c| Packet16::new(triangles, c))
                 .collect(),
         }
     }
 
+    /// [`Flat::closest`] on 16-wide packets with the AVX-512 kernels.
     #[inline(always)]
-    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+    pub fn closest16(&self, k: Avx512, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let r = RayK::new(ray);
+        let mut best = None;
+        let mut limit = t_max;
+        for p in &self.packets16 {
+            if let Some(h) = k.nearest16(p, &r, limit) {
+                best = Some(Hit {
+                    index: p.index[h.lane],
+                    t: h.t,
+                    u: h.u,
+                    v: h.v,
+                });
+                limit = h.t;
+            }
+        }
+        best
+    }
+
+    /// [`Flat::occluded`] on 16-wide packets with the AVX-512 kernels.
+    #[inline(always)]
+    pub fn occluded16(&self, k: Avx512, ray: &Ray, t_max: f32) -> bool {
+        let r = RayK::new(ray);
+        self.packets16.iter().any(|p| k.any16(p, &r, t_max))
+    }
+
+    #[inline(always)]
+    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
         let r = RayK::new(ray);
         let mut best = None;
         let mut limit = t_max;
         // Packets and lanes are in index order and the limit is strict: the first of equal
         // hits wins, as in the brute-force loop.
         for p in &self.packets {
-            if let Some((lane, t)) = k.nearest(p, &r, limit) {
-                best = Some((p.index[lane], t));
-                limit = t;
+            if let Some(h) = k.nearest(p, &r, limit) {
+                best = Some(Hit {
+                    index: p.index[h.lane],
+                    t: h.t,
+                    u: h.u,
+                    v: h.v,
+                });
+                limit = h.t;
             }
         }
         best
@@ -175,7 +202,7 @@ impl Bvh8 {
 
     /// The closest hit `(triangle index, t)` with `t < t_max`, lowest index among ties.
     #[inline(always)]
-    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
         if self.root == EMPTY {
             return None;
         }
@@ -195,10 +222,11 @@ impl Bvh8 {
         ray: &Ray,
         t_max: f32,
         stack: &mut [(u32, f32)],
-    ) -> Option<(u32, f32)> {
+    ) -> Option<Hit> {
         let r = RayK::new(ray);
         let mut best_t = t_max;
         let mut best_i = u32::MAX;
+        let mut best_uv = (0.0, 0.0);
         stack[0] = (self.root, 0.0);
         let mut sp = 1;
         while sp > 0 {
@@ -215,11 +243,12 @@ impl Bvh8 {
                 } else {
                     best_t.next_up()
                 };
-                if let Some((lane, t)) = k.nearest(p, &r, limit) {
-                    let i = p.index[lane];
-                    if t < best_t || i < best_i {
-                        best_t = t;
+                if let Some(h) = k.nearest(p, &r, limit) {
+                    let i = p.index[h.lane];
+                    if h.t < best_t || i < best_i {
+                        best_t = h.t;
                         best_i = i;
+                        best_uv = (h.u, h.v);
                     }
                 }
                 continue;
@@ -241,7 +270,12 @@ impl Bvh8 {
                 sp += 1;
             }
         }
-        (best_i != u32::MAX).then_some((best_i, best_t))
+        (best_i != u32::MAX).then_some(Hit {
+            index: best_i,
+            t: best_t,
+            u: best_uv.0,
+            v: best_uv.1,
+        })
     }
 
     /// Whether any triangle is hit with `0 ≤ t < t_max`; stops at the first.

@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::{Ray, Triangle};
-use crate::intersect::{self, Intersection, intersect_triangle};
+use crate::intersect::{self, Intersection};
 
 /// How a surface scatters light. The lab models every surface as ideally diffuse (figure 4,
 /// left); specular kinds are a road-map extension and get their own variants.
@@ -112,16 +112,13 @@ impl Scene {
         if !self.accel.built_for(self.triangles.len()) {
             return intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
         }
-        let (index, _) = self.accel.closest(&self.triangles, ray, t_max)?;
-        // The kernels compute exactly what `intersect_triangle` does: this repeats the winning
-        // test to get u and v, bit for bit.
-        let (t, u, v) = intersect_triangle(ray, &self.triangles[index], f32::INFINITY)?;
+        let hit = self.accel.closest(&self.triangles, ray, t_max)?;
         Some(Intersection {
-            position: ray.at(t),
-            distance: t,
-            triangle_index: index,
-            u,
-            v,
+            position: ray.at(hit.t),
+            distance: hit.t,
+            triangle_index: hit.index as usize,
+            u: hit.u,
+            v: hit.v,
         })
     }
 
