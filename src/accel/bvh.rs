@@ -31,7 +31,7 @@ const MAX_SAH_DEPTH: u32 = 40;
 const COST_TRAVERSAL: f32 = 1.0;
 /// SAH cost of a triangle in a leaf: triangles are tested eight at a time, so each costs less
 /// than a node visit.
-const COST_LEAF_TRIANGLE: f32 = 0.5;
+const COST_LEAF_TRIANGLE: f32 = 0.35;
 /// Relative padding of boxes against rounding, on top of the edge tolerance.
 const BOX_PAD_RELATIVE: f32 = 8e-6;
 /// Boxes are tested against `t_limit · BOX_T_SLACK`, so a box that starts exactly at the best
@@ -194,10 +194,16 @@ enum BuildNode {
 impl Bvh {
     /// Builds the tree with binned SAH, in parallel on the current rayon pool.
     pub fn build(triangles: &[Triangle]) -> Self {
+        Self::build_except(triangles, &[])
+    }
+
+    /// [`Bvh::build`] over every triangle but those in `excluded` (sorted indices).
+    pub fn build_except(triangles: &[Triangle], excluded: &[u32]) -> Self {
         use rayon::prelude::*;
         let mut prims: Vec<Prim> = triangles
             .par_iter()
             .enumerate()
+            .filter(|(i, _)| excluded.binary_search(&(*i as u32)).is_err())
             .filter_map(|(i, t)| {
                 Aabb::of_triangle(t).map(|bounds| Prim {
                     bounds,

@@ -23,8 +23,9 @@ use crate::geometry::{Ray, Triangle};
 use crate::intersect;
 
 use self::bvh::Bvh;
+use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
-use self::wide::{Bvh8, Flat};
+use self::wide::{Bvh8Big, Flat};
 
 /// Scenes with at most this many triangles use the flat packet list (measured: at 30
 /// triangles it is about twice as fast as the 8-wide BVH; at a few hundred the tree wins).
@@ -148,7 +149,7 @@ enum Structure {
     BruteForce,
     Flat(Flat),
     Bvh2(Bvh),
-    Bvh8(Bvh8),
+    Bvh8(Bvh8Big),
 }
 
 /// A built acceleration structure over one triangle list.
@@ -190,9 +191,7 @@ impl Accel {
             AccelKind::Auto | AccelKind::BruteForce => Structure::BruteForce,
             AccelKind::Flat => Structure::Flat(Flat::build(triangles)),
             AccelKind::Bvh2 => Structure::Bvh2(Bvh::build(triangles)),
-            AccelKind::Bvh8 => {
-                Structure::Bvh8(Bvh8::from_binary(&Bvh::build(triangles), triangles))
-            }
+            AccelKind::Bvh8 => Structure::Bvh8(Bvh8Big::build(triangles)),
         };
         Self {
             structure,
@@ -240,10 +239,13 @@ impl Accel {
                 })
             }
             (Structure::Bvh2(b), _) => b.closest(triangles, ray, t_max),
-            (Structure::Flat(f), Isa::Scalar) => f.closest(Scalar, ray, t_max),
-            (Structure::Bvh8(b), Isa::Scalar) => b.closest(Scalar, ray, t_max),
-            (Structure::Flat(f), Isa::Avx512(k)) => closest_avx512(k, f, ray, t_max),
-            (s, Isa::Avx512(k)) => closest_avx2(k.avx2(), s, ray, t_max),
+            (Structure::Flat(f), Isa::Scalar) => f.closest(Scalar, &RayK::new(ray), t_max),
+            (Structure::Bvh8(b), Isa::Scalar) => {
+                let r = RayK::new(ray);
+                let best = b.big.closest(Scalar, &r, t_max);
+                b.tree.closest(Scalar, &r, t_max, best)
+            }
+            (s, Isa::Avx512(k)) => closest_avx512(k, s, ray, t_max),
             (s, Isa::Avx2(k)) => closest_avx2(k, s, ray, t_max),
         }
     }
@@ -254,10 +256,12 @@ impl Accel {
         match (&self.structure, self.isa) {
             (Structure::BruteForce, _) => intersect::occluded_brute_force(ray, triangles, t_max),
             (Structure::Bvh2(b), _) => b.occluded(triangles, ray, t_max),
-            (Structure::Flat(f), Isa::Scalar) => f.occluded(Scalar, ray, t_max),
-            (Structure::Bvh8(b), Isa::Scalar) => b.occluded(Scalar, ray, t_max),
-            (Structure::Flat(f), Isa::Avx512(k)) => occluded_avx512(k, f, ray, t_max),
-            (s, Isa::Avx512(k)) => occluded_avx2(k.avx2(), s, ray, t_max),
+            (Structure::Flat(f), Isa::Scalar) => f.occluded(Scalar, &RayK::new(ray), t_max),
+            (Structure::Bvh8(b), Isa::Scalar) => {
+                let r = RayK::new(ray);
+                b.tree.occluded(Scalar, &r, t_max) || b.big.occluded(Scalar, &r, t_max)
+            }
+            (s, Isa::Avx512(k)) => occluded_avx512(k, s, ray, t_max),
             (s, Isa::Avx2(k)) => occluded_avx2(k, s, ray, t_max),
         }
     }
@@ -286,48 +290,75 @@ fn occluded_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
 /// The traversals compiled with AVX2 enabled, so the kernels inline into them.
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
 fn closest_avx2_impl(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
+    let r = RayK::new(ray);
     match s {
-        Structure::Flat(f) => f.closest(k, ray, t_max),
-        Structure::Bvh8(b) => b.closest(k, ray, t_max),
+        Structure::Flat(f) => f.closest(k, &r, t_max),
+        Structure::Bvh8(b) => {
+            let best = b.big.closest(k, &r, t_max);
+            b.tree.closest(k, &r, t_max, best)
+        }
         Structure::BruteForce | Structure::Bvh2(_) => None,
     }
 }
 
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
 fn occluded_avx2_impl(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
+    let r = RayK::new(ray);
     match s {
-        Structure::Flat(f) => f.occluded(k, ray, t_max),
-        Structure::Bvh8(b) => b.occluded(k, ray, t_max),
+        Structure::Flat(f) => f.occluded(k, &r, t_max),
+        Structure::Bvh8(b) => b.tree.occluded(k, &r, t_max) || b.big.occluded(k, &r, t_max),
         Structure::BruteForce | Structure::Bvh2(_) => false,
     }
 }
 
-fn closest_avx512(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> Option<Hit> {
+fn closest_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
     #[cfg(target_arch = "x86_64")]
     {
-        // SAFETY: `k` proves the CPU has AVX-512 F and DQ.
-        unsafe { closest_avx512_impl(k, f, ray, t_max) }
+        // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
+        unsafe { closest_avx512_impl(k, s, ray, t_max) }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    closest_avx512_impl(k, f, ray, t_max)
+    closest_avx512_impl(k, s, ray, t_max)
 }
 
-fn occluded_avx512(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> bool {
+fn occluded_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        // SAFETY: `k` proves the CPU has AVX-512 F and DQ.
-        unsafe { occluded_avx512_impl(k, f, ray, t_max) }
+        // SAFETY: as above.
+        unsafe { occluded_avx512_impl(k, s, ray, t_max) }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    occluded_avx512_impl(k, f, ray, t_max)
+    occluded_avx512_impl(k, s, ray, t_max)
 }
 
-#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx512f,avx512dq"))]
-fn closest_avx512_impl(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> Option<Hit> {
-    f.closest16(k, ray, t_max)
+/// The flat loop 16 wide; the tree with the AVX2 kernels, its large triangles 16 wide.
+#[cfg_attr(
+    target_arch = "x86_64",
+    target_feature(enable = "avx512f,avx512dq,avx2,fma")
+)]
+fn closest_avx512_impl(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
+    let r = RayK::new(ray);
+    match s {
+        Structure::Flat(f) => f.closest16(k, &r, t_max),
+        Structure::Bvh8(b) => {
+            let best = b.big.closest16(k, &r, t_max);
+            b.tree.closest(k.avx2(), &r, t_max, best)
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => None,
+    }
 }
 
-#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx512f,avx512dq"))]
-fn occluded_avx512_impl(k: Avx512, f: &Flat, ray: &Ray, t_max: f32) -> bool {
-    f.occluded16(k, ray, t_max)
+#[cfg_attr(
+    target_arch = "x86_64",
+    target_feature(enable = "avx512f,avx512dq,avx2,fma")
+)]
+fn occluded_avx512_impl(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> bool {
+    let r = RayK::new(ray);
+    match s {
+        Structure::Flat(f) => f.occluded16(k, &r, t_max),
+        Structure::Bvh8(b) => {
+            b.tree.occluded(k.avx2(), &r, t_max) || b.big.occluded16(k, &r, t_max)
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => false,
+    }
 }

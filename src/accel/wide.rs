@@ -9,7 +9,7 @@
 //! beyond the best hit; shadow rays stop at the first hit. Ties at the same `t` go to the lowest
 //! triangle index, so results equal the brute-force loop's exactly.
 
-use crate::geometry::{Ray, Triangle};
+use crate::geometry::Triangle;
 
 use super::Hit;
 use super::bvh::{BOX_T_SLACK, Bvh};
@@ -20,6 +20,8 @@ pub const EMPTY: u32 = u32::MAX;
 
 /// Stack entries that fit in the fixed-size traversal stack; deeper trees use a heap one.
 const STACK_INLINE: usize = 64;
+/// The stack of shallow trees.
+const STACK_SMALL: usize = 24;
 
 impl Node8 {
     const fn empty() -> Self {
@@ -53,6 +55,11 @@ pub struct Flat {
 impl Flat {
     pub fn build(triangles: &[Triangle]) -> Self {
         let indices: Vec<u32> = (0..triangles.len() as u32).collect();
+        Self::of(triangles, &indices)
+    }
+
+    /// The triangles `indices` (ascending) only.
+    pub fn of(triangles: &[Triangle], indices: &[u32]) -> Self {
         Self {
             packets: indices
                 .chunks(LANES)
@@ -67,12 +74,11 @@ impl Flat {
 
     /// [`Flat::closest`] on 16-wide packets with the AVX-512 kernels.
     #[inline(always)]
-    pub fn closest16(&self, k: Avx512, ray: &Ray, t_max: f32) -> Option<Hit> {
-        let r = RayK::new(ray);
+    pub fn closest16(&self, k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
         let mut best = None;
         let mut limit = t_max;
         for p in &self.packets16 {
-            if let Some(h) = k.nearest16(p, &r, limit) {
+            if let Some(h) = k.nearest16(p, r, limit) {
                 best = Some(Hit {
                     index: p.index[h.lane],
                     t: h.t,
@@ -87,20 +93,18 @@ impl Flat {
 
     /// [`Flat::occluded`] on 16-wide packets with the AVX-512 kernels.
     #[inline(always)]
-    pub fn occluded16(&self, k: Avx512, ray: &Ray, t_max: f32) -> bool {
-        let r = RayK::new(ray);
-        self.packets16.iter().any(|p| k.any16(p, &r, t_max))
+    pub fn occluded16(&self, k: Avx512, r: &RayK, t_max: f32) -> bool {
+        self.packets16.iter().any(|p| k.any16(p, r, t_max))
     }
 
     #[inline(always)]
-    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
-        let r = RayK::new(ray);
+    pub fn closest<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> Option<Hit> {
         let mut best = None;
         let mut limit = t_max;
         // Packets and lanes are in index order and the limit is strict: the first of equal
         // hits wins, as in the brute-force loop.
         for p in &self.packets {
-            if let Some(h) = k.nearest(p, &r, limit) {
+            if let Some(h) = k.nearest(p, r, limit) {
                 best = Some(Hit {
                     index: p.index[h.lane],
                     t: h.t,
@@ -114,9 +118,8 @@ impl Flat {
     }
 
     #[inline(always)]
-    pub fn occluded<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
-        let r = RayK::new(ray);
-        self.packets.iter().any(|p| k.any(p, &r, t_max))
+    pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
+        self.packets.iter().any(|p| k.any(p, r, t_max))
     }
 }
 
@@ -146,6 +149,10 @@ impl Bvh8 {
     /// Collapses a binary BVH: each wide node takes its binary node's two children and keeps
     /// opening the interior child with the largest surface area until it has eight.
     pub fn from_binary(bvh: &Bvh, triangles: &[Triangle]) -> Self {
+        Self::collapsed(bvh, triangles)
+    }
+
+    fn collapsed(bvh: &Bvh, triangles: &[Triangle]) -> Self {
         let mut out = Self::default();
         if bvh.nodes.is_empty() {
             return out;
@@ -202,16 +209,29 @@ impl Bvh8 {
 
     /// The closest hit `(triangle index, t)` with `t < t_max`, lowest index among ties.
     #[inline(always)]
-    pub fn closest<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
+    ///
+    /// `best` is a hit found elsewhere (or `None`): the result is the better of it and the
+    /// tree's closest hit.
+    pub fn closest<K: Kernels>(
+        &self,
+        k: K,
+        r: &RayK,
+        t_max: f32,
+        best: Option<Hit>,
+    ) -> Option<Hit> {
         if self.root == EMPTY {
-            return None;
+            return best;
         }
-        if self.max_stack <= STACK_INLINE {
+        // A stack on the stack, as small as the tree allows (it is cleared for every ray).
+        if self.max_stack <= STACK_SMALL {
+            let mut stack = [(0u32, 0f32); STACK_SMALL];
+            self.closest_on(k, r, t_max, best, &mut stack)
+        } else if self.max_stack <= STACK_INLINE {
             let mut stack = [(0u32, 0f32); STACK_INLINE];
-            self.closest_on(k, ray, t_max, &mut stack)
+            self.closest_on(k, r, t_max, best, &mut stack)
         } else {
             let mut stack = vec![(0u32, 0f32); self.max_stack];
-            self.closest_on(k, ray, t_max, &mut stack)
+            self.closest_on(k, r, t_max, best, &mut stack)
         }
     }
 
@@ -219,22 +239,18 @@ impl Bvh8 {
     fn closest_on<K: Kernels>(
         &self,
         k: K,
-        ray: &Ray,
+        r: &RayK,
         t_max: f32,
+        best: Option<Hit>,
         stack: &mut [(u32, f32)],
     ) -> Option<Hit> {
-        let r = RayK::new(ray);
-        let mut best_t = t_max;
-        let mut best_i = u32::MAX;
-        let mut best_uv = (0.0, 0.0);
-        stack[0] = (self.root, 0.0);
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let (item, t_near) = stack[sp];
-            if t_near > best_t * BOX_T_SLACK {
-                continue;
-            }
+        let (mut best_t, mut best_i, mut best_uv) = best
+            .map_or((t_max, u32::MAX, (0.0, 0.0)), |h| {
+                (h.t, h.index, (h.u, h.v))
+            });
+        let mut sp = 0;
+        let mut item = self.root;
+        'traversal: loop {
             if item & LEAF != 0 {
                 let p = &self.packets[(item & !LEAF) as usize];
                 // Once there is a hit, candidates at its very distance count too (ties).
@@ -243,7 +259,7 @@ impl Bvh8 {
                 } else {
                     best_t.next_up()
                 };
-                if let Some(h) = k.nearest(p, &r, limit) {
+                if let Some(h) = k.nearest(p, r, limit) {
                     let i = p.index[h.lane];
                     if h.t < best_t || i < best_i {
                         best_t = h.t;
@@ -251,23 +267,40 @@ impl Bvh8 {
                         best_uv = (h.u, h.v);
                     }
                 }
-                continue;
-            }
-            let node = &self.nodes[item as usize];
-            let (mut mask, t) = k.boxes(node, &r, best_t * BOX_T_SLACK);
-            // Push the hit children sorted so that the nearest is on top.
-            let base = sp;
-            while mask != 0 {
-                let slot = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let entry = (node.child[slot], t[slot]);
-                let mut j = sp;
-                while j > base && stack[j - 1].1 < entry.1 {
-                    stack[j] = stack[j - 1];
-                    j -= 1;
+            } else {
+                let node = &self.nodes[item as usize];
+                let (mut mask, t) = k.boxes(node, r, best_t * BOX_T_SLACK);
+                if mask != 0 && mask & (mask - 1) == 0 {
+                    // One child hit (the common case): go straight down.
+                    item = node.child[mask.trailing_zeros() as usize];
+                    continue;
                 }
-                stack[j] = entry;
-                sp += 1;
+                // Push the hit children sorted so that the nearest is on top.
+                let base = sp;
+                while mask != 0 {
+                    let slot = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let entry = (node.child[slot], t[slot]);
+                    let mut j = sp;
+                    while j > base && stack[j - 1].1 < entry.1 {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
+                    }
+                    stack[j] = entry;
+                    sp += 1;
+                }
+            }
+            // Next: the nearest pending child that may still hold a closer hit.
+            loop {
+                if sp == 0 {
+                    break 'traversal;
+                }
+                sp -= 1;
+                let (next, t_near) = stack[sp];
+                if t_near <= best_t * BOX_T_SLACK {
+                    item = next;
+                    break;
+                }
             }
         }
         (best_i != u32::MAX).then_some(Hit {
@@ -280,49 +313,99 @@ impl Bvh8 {
 
     /// Whether any triangle is hit with `0 ≤ t < t_max`; stops at the first.
     #[inline(always)]
-    pub fn occluded<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
+    pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
         if self.root == EMPTY {
             return false;
         }
-        if self.max_stack <= STACK_INLINE {
+        if self.max_stack <= STACK_SMALL {
+            let mut stack = [0u32; STACK_SMALL];
+            self.occluded_on(k, r, t_max, &mut stack)
+        } else if self.max_stack <= STACK_INLINE {
             let mut stack = [0u32; STACK_INLINE];
-            self.occluded_on(k, ray, t_max, &mut stack)
+            self.occluded_on(k, r, t_max, &mut stack)
         } else {
             let mut stack = vec![0u32; self.max_stack];
-            self.occluded_on(k, ray, t_max, &mut stack)
+            self.occluded_on(k, r, t_max, &mut stack)
         }
     }
 
     #[inline(always)]
-    fn occluded_on<K: Kernels>(&self, k: K, ray: &Ray, t_max: f32, stack: &mut [u32]) -> bool {
-        let r = RayK::new(ray);
+    fn occluded_on<K: Kernels>(&self, k: K, r: &RayK, t_max: f32, stack: &mut [u32]) -> bool {
         let box_limit = t_max * BOX_T_SLACK;
-        stack[0] = self.root;
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let item = stack[sp];
+        let mut sp = 0;
+        let mut item = self.root;
+        loop {
             if item & LEAF != 0 {
-                if k.any(&self.packets[(item & !LEAF) as usize], &r, t_max) {
+                if k.any(&self.packets[(item & !LEAF) as usize], r, t_max) {
                     return true;
                 }
-                continue;
+            } else {
+                let node = &self.nodes[item as usize];
+                let (mut mask, _) = k.boxes(node, r, box_limit);
+                if mask != 0 {
+                    // Descend into the first hit child, keep the others for later.
+                    item = node.child[mask.trailing_zeros() as usize];
+                    mask &= mask - 1;
+                    while mask != 0 {
+                        stack[sp] = node.child[mask.trailing_zeros() as usize];
+                        sp += 1;
+                        mask &= mask - 1;
+                    }
+                    continue;
+                }
             }
-            let node = &self.nodes[item as usize];
-            let (mut mask, _) = k.boxes(node, &r, box_limit);
-            while mask != 0 {
-                let slot = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                stack[sp] = node.child[slot];
-                sp += 1;
+            if sp == 0 {
+                return false;
             }
+            sp -= 1;
+            item = stack[sp];
         }
-        false
     }
 
     /// Memory used by nodes and packets, in bytes.
     pub fn size_bytes(&self) -> usize {
         std::mem::size_of_val(self.nodes.as_slice())
             + std::mem::size_of_val(self.packets.as_slice())
+    }
+}
+
+/// The 8-wide BVH plus, apart, the few triangles that are large next to the whole scene (the
+/// walls of the Cornell box): tested first in one flat packet, they give nearly every ray a
+/// close bound before the tree is entered, and they no longer swell the tree's boxes.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh8Big {
+    pub big: Flat,
+    pub tree: Bvh8,
+}
+
+/// At most this many triangles are set apart as large (one 16-wide packet).
+pub const MAX_BIG: usize = 16;
+/// A triangle is large when its box's surface area is at least this fraction of the scene's.
+pub const BIG_AREA_FRACTION: f32 = 0.15;
+
+impl Bvh8Big {
+    pub fn build(triangles: &[Triangle]) -> Self {
+        use super::bvh::Aabb;
+        let mut scene = Aabb::EMPTY;
+        let boxes: Vec<Option<Aabb>> = triangles.iter().map(Aabb::of_triangle).collect();
+        for b in boxes.iter().flatten() {
+            scene.grow(b);
+        }
+        let threshold = BIG_AREA_FRACTION * scene.half_area();
+        let mut big: Vec<(f32, u32)> = boxes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.map(|b| (b.half_area(), i as u32)))
+            .filter(|&(a, _)| a >= threshold)
+            .collect();
+        big.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        big.truncate(MAX_BIG);
+        let mut big: Vec<u32> = big.into_iter().map(|(_, i)| i).collect();
+        big.sort_unstable();
+        let tree = Bvh8::collapsed(&Bvh::build_except(triangles, &big), triangles);
+        Self {
+            big: Flat::of(triangles, &big),
+            tree,
+        }
     }
 }
