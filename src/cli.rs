@@ -5,6 +5,7 @@
 //! rendered and saved. Every bad value ends the program with one line naming it and a non-zero
 //! exit code, before anything is written.
 
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -275,8 +276,12 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         height: args.height,
         passes: args.passes as usize,
     };
+    // Written with `writeln!` so that a closed pipe (`raylab bench | head`) is an error, not a
+    // panic.
+    let mut out = std::io::stdout().lock();
     if !args.json {
-        println!(
+        writeln!(
+            out,
             "{:<10} {:>9} {:>6} {:>6} {:>10} {:>12} {:>12} {:>10}",
             "scene",
             "triangles",
@@ -286,7 +291,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             "primary Mr/s",
             "shadow Mr/s",
             "lab ms"
-        );
+        )?;
     }
     for choice in scenes {
         let report = pool.install(|| -> anyhow::Result<_> {
@@ -297,9 +302,10 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         })?;
         let (r, kind) = report;
         if args.json {
-            println!("{}", serde_json::to_string(&r)?);
+            writeln!(out, "{}", serde_json::to_string(&r)?)?;
         } else {
-            println!(
+            writeln!(
+                out,
                 "{:<10} {:>9} {:>6} {:>6} {:>10.2} {:>12.1} {:>12.1} {:>10.2}",
                 r.scene,
                 r.triangles,
@@ -309,17 +315,18 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
                 r.primary_mrays_per_s,
                 r.shadow_mrays_per_s,
                 r.lab_pass_ms
-            );
+            )?;
         }
     }
     if !args.json {
-        println!(
+        writeln!(
+            out,
             "{}×{}, {} threads, medians of {} passes",
             args.width,
             args.height,
             pool.current_num_threads(),
             args.passes
-        );
+        )?;
     }
     Ok(())
 }
