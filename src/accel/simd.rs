@@ -100,6 +100,18 @@ pub struct RayK {
 }
 
 impl RayK {
+    /// For the triangle kernels only (the flat loop): no box data, none of its divisions.
+    pub fn for_triangles(ray: &crate::geometry::Ray) -> Self {
+        Self {
+            origin: ray.origin.to_array(),
+            direction: ray.direction.to_array(),
+            inv: [0.0; 3],
+            origin_inv: [0.0; 3],
+            near: [0, 1, 2],
+            far: [3, 4, 5],
+        }
+    }
+
     pub fn new(ray: &crate::geometry::Ray) -> Self {
         let b = RayBoxData::new(ray);
         let near = [0, 1, 2].map(|a| if b.negative[a] { a + 3 } else { a });
