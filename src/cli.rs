@@ -77,6 +77,17 @@ pub struct RenderArgs {
     /// Output file: .png (the lab's display: clamped, no gamma) or .exr (linear floats).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    /// Take every setting from a JSON file: a workbench screenshot's .json (which reproduces the
+    /// screenshot exactly) or a bare settings object. Only --out and --threads combine with it.
+    #[arg(
+        long,
+        value_name = "FILE.json",
+        conflicts_with_all = [
+            "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw", "light",
+            "light_power", "indirect", "shadows", "samples", "seed",
+        ]
+    )]
+    pub settings: Option<PathBuf>,
     /// Scene: cornell, bunny, teapot or terrain.
     #[arg(
         long,
@@ -145,7 +156,15 @@ impl RenderArgs {
         }
     }
 
-    /// The settings these arguments describe.
+    /// The settings to render: from `--settings FILE.json`, or from the other arguments.
+    pub fn resolve_settings(&self) -> anyhow::Result<RenderSettings> {
+        match &self.settings {
+            Some(path) => read_settings_file(path),
+            None => Ok(self.settings()),
+        }
+    }
+
+    /// The settings the arguments other than `--settings` describe.
     pub fn settings(&self) -> RenderSettings {
         let mut camera = Camera::default_for(self.width, self.height);
         if let Some(f) = self.focal {
@@ -156,6 +175,7 @@ impl RenderArgs {
         }
         camera.yaw = self.yaw.to_radians();
         let mut settings = RenderSettings {
+            scene: self.scene_choice(),
             camera,
             shading: Shading::for_stage(self.stage),
             samples_per_pixel: self.samples,
@@ -181,6 +201,19 @@ impl RenderArgs {
         }
         settings
     }
+}
+
+/// Reads render settings from a JSON file: a screenshot's sidecar (whose `settings` field holds
+/// them) or a bare settings object. Missing fields take the lab's defaults.
+pub fn read_settings_file(path: &std::path::Path) -> anyhow::Result<RenderSettings> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("could not read settings file '{}'", path.display()))?;
+    let bad = || format!("settings file '{}' is not valid", path.display());
+    let mut value: serde_json::Value = serde_json::from_str(&text).with_context(bad)?;
+    if let Some(inner) = value.get_mut("settings") {
+        value = inner.take();
+    }
+    serde_json::from_value(value).with_context(bad)
 }
 
 /// Parses the arguments and runs the command; the one place errors become exit codes.
@@ -224,7 +257,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let settings = args.settings();
+    let settings = args.resolve_settings()?;
     settings.validate()?;
     let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-render-{i}"));
     if let Some(n) = args.threads {
@@ -232,7 +265,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let pool = pool.build().context("could not start the render threads")?;
 
-    let choice = args.scene_choice();
+    let choice = &settings.scene;
     let scene = pool.install(|| choice.load())?;
     let start = Instant::now();
     let image = pool.install(|| render(&scene, &settings));

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
 use crate::light::PointLight;
+use crate::scene::SceneChoice;
 use crate::shading::Shading;
 
 /// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
@@ -20,6 +21,8 @@ pub const MAX_SAMPLES: u32 = 1 << 16;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RenderSettings {
+    /// The scene to trace: the lab's Cornell box by default.
+    pub scene: SceneChoice,
     /// The camera, including the image size.
     pub camera: Camera,
     pub light: PointLight,
@@ -35,6 +38,7 @@ impl Default for RenderSettings {
     /// Figure 7 of the lab at 512 × 512.
     fn default() -> Self {
         Self {
+            scene: SceneChoice::Cornell,
             camera: Camera::default(),
             light: PointLight::default(),
             shading: Shading::default(),

@@ -172,3 +172,76 @@ fn an_unwritable_folder_is_reported_and_leaves_nothing() {
         .collect();
     assert_eq!(names.len(), 2, "{names:?}");
 }
+
+#[test]
+fn settings_from_a_json_file_reproduce_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let direct = dir.path().join("direct.exr");
+    let args = [
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--stage",
+        "shadows",
+        "--yaw",
+        "12",
+        "--light",
+        "0.2,-0.4,-0.5",
+        "--samples",
+        "3",
+        "--seed",
+        "9",
+    ];
+    let mut argv = vec!["render", "--out", direct.to_str().unwrap()];
+    argv.extend_from_slice(&args);
+    assert!(raylab(&argv).status.success());
+
+    // The same settings as a workbench screenshot's sidecar would hold them.
+    let json = dir.path().join("shot.json");
+    std::fs::write(
+        &json,
+        r#"{"image": "shot.png", "sample_target": 16, "settings": {
+            "camera": {"position": [0, 0, -3.001], "yaw": 0.20943952, "focal_length": 40,
+                       "width": 40, "height": 30},
+            "light": {"position": [0.2, -0.4, -0.5]},
+            "shading": {"stage": "shadows", "shadows": true, "indirect": false},
+            "samples_per_pixel": 3, "seed": 9}}"#,
+    )
+    .unwrap();
+    let from_json = dir.path().join("from-json.exr");
+    let out = raylab(&[
+        "render",
+        "--out",
+        from_json.to_str().unwrap(),
+        "--settings",
+        json.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let a = image::open(&direct).unwrap().to_rgb32f();
+    let b = image::open(&from_json).unwrap().to_rgb32f();
+    assert_eq!(a.as_raw(), b.as_raw());
+
+    // --settings takes everything from the file: other settings are refused.
+    let r = raylab(&[
+        "render",
+        "--out",
+        "x.png",
+        "--settings",
+        json.to_str().unwrap(),
+        "--width",
+        "8",
+    ]);
+    assert!(!r.status.success());
+    // A malformed file is named.
+    std::fs::write(&json, "{ not json").unwrap();
+    let r = raylab(&[
+        "render",
+        "--out",
+        from_json.to_str().unwrap(),
+        "--settings",
+        json.to_str().unwrap(),
+    ]);
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("shot.json"), "{}", stderr(&r));
+}

@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use eframe::egui;
 use raylab::progressive::{Controller, Frame};
-use raylab::scene::{Scene, cornell_box};
+use raylab::scene::{Scene, SceneChoice, cornell_box};
 use raylab::{Camera, Image, RenderSettings, Shading, Stage};
 
 use persistence::WorkbenchState;
@@ -78,7 +78,11 @@ impl Shown {
 
 pub struct WorkbenchApp {
     state: WorkbenchState,
+    /// The loaded scene, and which choice it is.
     scene: Arc<Scene>,
+    scene_choice: SceneChoice,
+    /// A scene being built on a loader thread (the terrain takes about half a second).
+    scene_loading: Option<SceneLoad>,
     controller: Option<Controller>,
     /// The settings of the newest job handed to the controller, and its generation.
     submitted: Option<RenderSettings>,
@@ -97,6 +101,13 @@ pub struct WorkbenchApp {
     change: Option<(Instant, u32)>,
     log_frames: bool,
     started: Instant,
+}
+
+/// A scene being loaded off the UI thread.
+struct SceneLoad {
+    choice: SceneChoice,
+    started: Instant,
+    result: Receiver<Result<Scene, String>>,
 }
 
 /// Opens the workbench window; returns when it is closed.
@@ -151,6 +162,8 @@ impl WorkbenchApp {
         Self {
             state,
             scene: Arc::new(cornell_box()),
+            scene_choice: SceneChoice::Cornell,
+            scene_loading: None,
             controller,
             submitted: None,
             submitted_generation: 0,
@@ -175,11 +188,95 @@ impl WorkbenchApp {
         });
     }
 
+    /// Starts loading the scene the settings ask for, unless it is loaded or on its way.
+    fn sync_scene(&mut self, ctx: &egui::Context) {
+        let wanted = &self.state.settings.scene;
+        if *wanted == self.scene_choice
+            || self
+                .scene_loading
+                .as_ref()
+                .is_some_and(|l| l.choice == *wanted)
+        {
+            return;
+        }
+        if self.scene_loading.is_some() {
+            // One load at a time: the wanted scene starts when the running load ends.
+            return;
+        }
+        let choice = wanted.clone();
+        let (sender, receiver) = mpsc::channel();
+        let repaint = ctx.clone();
+        let job = choice.clone();
+        let spawned = std::thread::Builder::new()
+            .name("raylab-scene-loader".to_owned())
+            .spawn(move || {
+                let _ = sender.send(job.load().map_err(|e| e.to_string()));
+                repaint.request_repaint();
+            });
+        match spawned {
+            Ok(_) => {
+                self.set_status(StatusKind::Info, format!("Loading the {choice} scene..."));
+                self.scene_loading = Some(SceneLoad {
+                    choice,
+                    started: Instant::now(),
+                    result: receiver,
+                });
+            }
+            Err(e) => {
+                self.state.settings.scene = self.scene_choice.clone();
+                self.set_status(StatusKind::Error, format!("Could not load {choice}: {e}"));
+            }
+        }
+    }
+
+    /// Takes a finished scene load: the new scene, or an error that puts the old one back.
+    fn receive_scene(&mut self) {
+        let Some(load) = &self.scene_loading else {
+            return;
+        };
+        let result = match load.result.try_recv() {
+            Ok(result) => result,
+            Err(TryRecvError::Empty) => return,
+            Err(TryRecvError::Disconnected) => Err("the loader thread stopped".to_owned()),
+        };
+        let Some(load) = self.scene_loading.take() else {
+            return;
+        };
+        match result {
+            Ok(scene) => {
+                let ms = load.started.elapsed().as_secs_f64() * 1e3;
+                self.set_status(
+                    StatusKind::Info,
+                    format!(
+                        "Loaded the {} scene: {} triangles in {ms:.0} ms",
+                        load.choice,
+                        scene.triangles.len()
+                    ),
+                );
+                self.scene = Arc::new(scene);
+                self.scene_choice = load.choice;
+                // Render the new scene even if nothing else changed.
+                self.submitted = None;
+            }
+            Err(e) => {
+                // Nothing is lost: the scene on screen stays, and so do its settings.
+                if self.state.settings.scene == load.choice {
+                    self.state.settings.scene = self.scene_choice.clone();
+                }
+                self.set_status(StatusKind::Error, e);
+            }
+        }
+    }
+
     /// The one place that turns a settings change into a render job.
     fn sync_render(&mut self) {
         let Some(controller) = &mut self.controller else {
             return;
         };
+        if self.state.settings.scene != self.scene_choice {
+            // The scene is still loading: the image on screen stays until it is ready.
+            return;
+        }
         let mut restarted = None;
         if self.state.render_threads != controller.threads() {
             restarted = Some(controller.set_threads(self.state.render_threads));
@@ -413,6 +510,7 @@ impl WorkbenchApp {
                 .is_some_and(|s| s.generation == generation && s.is_final())
             && !self.screenshot_wanted
             && self.screenshots_saving.is_empty()
+            && self.scene_loading.is_none()
     }
 }
 
@@ -424,6 +522,7 @@ impl eframe::App for WorkbenchApp {
         if let Some((_, frames)) = &mut self.change {
             *frames += 1;
         }
+        self.receive_scene();
         self.receive_frames(&ctx);
         self.receive_screenshots();
 
@@ -434,7 +533,13 @@ impl eframe::App for WorkbenchApp {
             .resizable(true)
             .default_size(330.0)
             .show(ui, |ui| {
-                commands.extend(panels::controls_ui(ui, &mut self.state, &self.stats));
+                let loading = self.scene_loading.as_ref().map(|l| &l.choice);
+                commands.extend(panels::controls_ui(
+                    ui,
+                    &mut self.state,
+                    &self.stats,
+                    loading,
+                ));
             });
         egui::CentralPanel::default_margins().show(ui, |ui| {
             let pointer = self.viewport.viewport_ui(ui);
@@ -450,6 +555,7 @@ impl eframe::App for WorkbenchApp {
             self.handle(command, &ctx);
         }
         self.help_ui(&ctx);
+        self.sync_scene(&ctx);
         self.sync_render();
 
         self.stats.ui_frame_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -5,6 +5,7 @@
 //! find them by.
 
 use eframe::egui;
+use raylab::scene::SceneChoice;
 use raylab::{Camera, PointLight, RenderSettings, Shading, Stage};
 
 use super::Command;
@@ -45,7 +46,12 @@ pub fn stage_equation(stage: Stage) -> &'static str {
 }
 
 /// The whole side panel.
-pub fn controls_ui(ui: &mut egui::Ui, state: &mut WorkbenchState, stats: &Stats) -> Vec<Command> {
+pub fn controls_ui(
+    ui: &mut egui::Ui,
+    state: &mut WorkbenchState,
+    stats: &Stats,
+    loading: Option<&SceneChoice>,
+) -> Vec<Command> {
     let mut commands = Vec::new();
     ui.horizontal_wrapped(|ui| {
         if ui
@@ -67,6 +73,11 @@ pub fn controls_ui(ui: &mut egui::Ui, state: &mut WorkbenchState, stats: &Stats)
     });
     ui.separator();
     egui::ScrollArea::vertical().show(ui, |ui| {
+        egui::CollapsingHeader::new("Scene")
+            .default_open(true)
+            .show(ui, |ui| {
+                scene_ui(ui, &mut state.settings.scene, &mut state.obj_path, loading)
+            });
         egui::CollapsingHeader::new("Camera")
             .default_open(true)
             .show(ui, |ui| {
@@ -93,6 +104,51 @@ pub fn controls_ui(ui: &mut egui::Ui, state: &mut WorkbenchState, stats: &Stats)
             .show(ui, |ui| screenshot_ui(ui, &mut state.screenshot_folder));
     });
     commands
+}
+
+/// The scene: the lab's box or a model standing in it, or any OBJ file.
+pub fn scene_ui(
+    ui: &mut egui::Ui,
+    scene: &mut SceneChoice,
+    obj_path: &mut String,
+    loading: Option<&SceneChoice>,
+) {
+    ui.horizontal(|ui| {
+        egui::ComboBox::new("scene", "Scene")
+            .selected_text(scene_label(scene))
+            .show_ui(ui, |ui| {
+                for choice in SceneChoice::BUILT_IN {
+                    let label = scene_label(&choice);
+                    if ui.selectable_label(*scene == choice, label).clicked() {
+                        *scene = choice;
+                    }
+                }
+            });
+        if let Some(choice) = loading {
+            ui.spinner();
+            ui.label(format!("loading {choice}"));
+        }
+    });
+    ui.horizontal(|ui| {
+        let label = ui.label("OBJ file");
+        ui.add(egui::TextEdit::singleline(obj_path).desired_width(160.0))
+            .labelled_by(label.id)
+            .on_hover_text("A path to any .obj file: it stands on the box's floor");
+        if ui.button("Load OBJ").clicked() && !obj_path.trim().is_empty() {
+            *scene = SceneChoice::Obj(obj_path.trim().into());
+        }
+    });
+}
+
+/// The scene's name in the selector.
+pub fn scene_label(choice: &SceneChoice) -> String {
+    match choice {
+        SceneChoice::Cornell => "Cornell box (the lab)".to_owned(),
+        SceneChoice::Bunny => "Stanford bunny".to_owned(),
+        SceneChoice::Teapot => "Utah teapot".to_owned(),
+        SceneChoice::Terrain => "Fractal terrain (1M triangles)".to_owned(),
+        SceneChoice::Obj(_) => format!("OBJ: {choice}"),
+    }
 }
 
 pub fn camera_ui(ui: &mut egui::Ui, camera: &mut Camera, commands: &mut Vec<Command>) {

@@ -31,6 +31,8 @@ pub struct WorkbenchState {
     pub render_threads: usize,
     /// Where screenshots go.
     pub screenshot_folder: PathBuf,
+    /// The path typed in the Scene panel's OBJ field.
+    pub obj_path: String,
 }
 
 impl Default for WorkbenchState {
@@ -40,6 +42,7 @@ impl Default for WorkbenchState {
             settings: lab_defaults(),
             render_threads: raylab::progressive::default_threads(),
             screenshot_folder: PathBuf::from("."),
+            obj_path: String::new(),
         }
     }
 }
@@ -55,10 +58,14 @@ pub fn lab_defaults() -> RenderSettings {
 impl WorkbenchState {
     pub fn to_json(&self) -> String {
         // A struct of numbers, strings and paths: serialising can't fail short of a non-UTF-8
-        // path, which then is saved as the default folder.
+        // path, which then is saved as the default folder and the Cornell box.
         serde_json::to_string_pretty(self).unwrap_or_else(|_| {
             let fallback = Self {
                 screenshot_folder: PathBuf::from("."),
+                settings: RenderSettings {
+                    scene: raylab::scene::SceneChoice::Cornell,
+                    ..self.settings.clone()
+                },
                 ..self.clone()
             };
             serde_json::to_string_pretty(&fallback).unwrap_or_default()

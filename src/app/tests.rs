@@ -14,7 +14,7 @@ use egui_kittest::kittest::Queryable as _;
 use glam::Vec3;
 use raylab::light::{direct_light, in_shadow, shadow_ray};
 use raylab::render::render;
-use raylab::scene::cornell_box;
+use raylab::scene::{SceneChoice, cornell_box};
 use raylab::{Image, RenderSettings, Shading, Stage};
 
 use super::persistence::{WorkbenchState, lab_defaults};
@@ -346,7 +346,7 @@ fn the_labs_keys_move_camera_and_light() {
 
     // While a text field has focus, keys type instead.
     h.get_by_label("Screenshot folder").click();
-    let text_field = h.get_by_role(Role::TextInput);
+    let text_field = h.get_by_role_and_label(Role::TextInput, "Screenshot folder");
     text_field.focus();
     h.step();
     h.key_press(Key::ArrowUp);
@@ -466,4 +466,53 @@ fn after_using_a_slider_with_the_mouse_the_arrows_move_the_camera() {
     h.step();
     assert!((settings(&h).camera.position.z - (z + 0.1)).abs() < 1e-6);
     settle(&mut h);
+}
+
+#[test]
+fn the_scene_selector_loads_a_model_off_the_ui_thread() {
+    let mut h = harness(small_state());
+    let cornell = shown(&h);
+    assert_eq!(cornell.settings.scene, SceneChoice::Cornell);
+    h.get_by_role_and_label(Role::ComboBox, "Scene").click();
+    h.run_steps(2);
+    h.get_by_label("Stanford bunny").click();
+    settle(&mut h);
+    let bunny = shown(&h);
+    assert_eq!(bunny.settings.scene, SceneChoice::Bunny);
+    assert!(h.state().scene.triangles.len() > 3_000);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Info);
+    assert!(text.contains("bunny"), "{text}");
+    // The bunny stands on the floor in front of the back wall: some pixels change, and the
+    // walls at the image's edges do not.
+    let differing = (0..bunny.image.pixels.len())
+        .filter(|&i| changed(bunny.image.pixels[i], cornell.image.pixels[i]))
+        .count();
+    assert!(differing > 300, "{differing}");
+    assert!(!changed(bunny.image.get(1, 48), cornell.image.get(1, 48)));
+}
+
+#[test]
+fn a_missing_obj_file_shows_an_error_and_keeps_the_scene() {
+    let mut h = harness(small_state());
+    let before = shown(&h);
+    let missing = "/no/such/model.obj";
+    let field = h.get_by_role_and_label(Role::TextInput, "OBJ file");
+    field.focus();
+    h.step();
+    h.get_by_role_and_label(Role::TextInput, "OBJ file")
+        .type_text(missing);
+    h.run_steps(2);
+    assert_eq!(h.state().state.obj_path, missing);
+    h.get_by_label("Load OBJ").click();
+    settle(&mut h);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Error);
+    assert!(text.contains("model.obj"), "{text}");
+    assert_eq!(settings(&h).scene, SceneChoice::Cornell);
+    assert_eq!(shown(&h).image, before.image);
+    // The app goes on: a change still re-renders.
+    h.get_by_role_and_label(Role::CheckBox, "Shadows").click();
+    settle(&mut h);
+    assert!(!shown(&h).settings.shading.shadows);
 }
