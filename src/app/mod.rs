@@ -459,18 +459,23 @@ impl WorkbenchApp {
     }
 
     fn status_ui(&self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| match &self.status {
-            Some(status) => {
-                let color = match status.kind {
-                    StatusKind::Info => ui.visuals().text_color(),
-                    StatusKind::Notice => ui.visuals().warn_fg_color,
-                    StatusKind::Error => ui.visuals().error_fg_color,
-                };
-                ui.label(egui::RichText::new(&status.text).color(color));
+        ui.horizontal(|ui| {
+            match &self.status {
+                Some(status) => {
+                    let color = match status.kind {
+                        StatusKind::Info => ui.visuals().text_color(),
+                        StatusKind::Notice => ui.visuals().warn_fg_color,
+                        StatusKind::Error => ui.visuals().error_fg_color,
+                    };
+                    ui.label(egui::RichText::new(&status.text).color(color));
+                }
+                None => {
+                    ui.label("Ready. F1 lists the keys.");
+                }
             }
-            None => {
-                ui.label("Ready. F1 lists the keys.");
-            }
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                ui.label(self.stats.summary());
+            });
         });
     }
 

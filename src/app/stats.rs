@@ -29,6 +29,21 @@ impl Stats {
         self.is_preview || self.samples < self.target
     }
 
+    /// One line for the status bar, so the timing stays in view when the panel is scrolled.
+    pub fn summary(&self) -> String {
+        let pass = self.full_pass.map_or_else(
+            || "pass -".to_owned(),
+            |(ms, _, _)| format!("pass {ms:.1} ms"),
+        );
+        let samples = if self.is_preview {
+            "preview".to_owned()
+        } else {
+            format!("{}/{} spp", self.samples, self.target)
+        };
+        let frame = self.frame_cpu_ms.unwrap_or(self.ui_frame_ms);
+        format!("{pass} · UI {frame:.1} ms · {samples}")
+    }
+
     pub fn stats_ui(&self, ui: &mut egui::Ui) {
         match self.full_pass {
             Some((ms, w, h)) => ui.label(format!("Last full pass: {ms:.1} ms ({w} × {h})")),
