@@ -274,10 +274,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
 
     let c = &settings.camera;
     println!(
-        "rendered {} {}×{} ({}, {} spp) in {:.1} ms on {} threads → {}",
+        "rendered {} {}×{} (field of view {:.1}° × {:.1}°, {}, {} spp) in {:.1} ms on {} threads → {}",
         choice,
         c.width,
         c.height,
+        c.horizontal_fov_degrees(),
+        c.vertical_fov_degrees(),
         settings.shading.stage,
         settings.samples_per_pixel,
         elapsed.as_secs_f64() * 1e3,

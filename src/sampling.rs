@@ -59,12 +59,21 @@ impl Rng {
 /// Where in pixel `(x, y)` sample `sample` looks, as an offset in [0, 1)² from its top-left
 /// corner. Sample 0 is the pixel centre, so a one-sample render is exactly the lab's image;
 /// later samples are uniformly jittered and average to an anti-aliased pixel.
+///
+/// One 64-bit hash of (seed, pixel, sample) gives both coordinates (24 bits each): this runs
+/// once per pixel per pass, and a full generator here cost a third of a Cornell box pass.
+#[inline]
 pub fn pixel_offset(seed: u64, x: u32, y: u32, sample: u32) -> (f32, f32) {
     if sample == 0 {
         return (0.5, 0.5);
     }
-    let mut rng = Rng::for_pixel_sample(seed, x, y, sample);
-    (rng.next_f32(), rng.next_f32())
+    let pixel = (u64::from(y) << 32) | u64::from(x);
+    let h = mix64(mix64(seed ^ u64::from(sample).wrapping_mul(PCG_MULTIPLIER)) ^ pixel);
+    const SCALE: f32 = 1.0 / 16_777_216.0;
+    (
+        (h >> 40) as f32 * SCALE,
+        ((h >> 16) & 0xff_ffff) as f32 * SCALE,
+    )
 }
 
 #[cfg(test)]
@@ -94,6 +103,30 @@ mod tests {
         assert_ne!(pixel_offset(1, 10, 20, 1), pixel_offset(1, 10, 20, 2));
         assert_ne!(pixel_offset(1, 10, 20, 1), pixel_offset(1, 11, 20, 1));
         assert_eq!(pixel_offset(1, 10, 20, 3), pixel_offset(1, 10, 20, 3));
+    }
+
+    /// The jitter covers the pixel evenly: 10 × 10 cells, 100,000 samples over many pixels and
+    /// sample indices. With 99 degrees of freedom the 99.9% quantile of χ² is 148.2.
+    #[test]
+    fn pixel_offsets_are_uniform_by_chi_squared() {
+        let mut cells = [0u32; 100];
+        let mut n = 0;
+        for sample in 1..=40 {
+            for y in 0..50 {
+                for x in 0..50 {
+                    let (u, v) = pixel_offset(7, x, y, sample);
+                    assert!((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v));
+                    cells[(v * 10.0) as usize * 10 + (u * 10.0) as usize] += 1;
+                    n += 1;
+                }
+            }
+        }
+        let expected = n as f64 / 100.0;
+        let chi2: f64 = cells
+            .iter()
+            .map(|&o| (o as f64 - expected).powi(2) / expected)
+            .sum();
+        assert!(chi2 < 148.2, "chi² = {chi2}");
     }
 
     /// A chi-squared test of uniformity (Nori's statistical tests): 100,000 draws into 20 bins.

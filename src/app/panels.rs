@@ -113,22 +113,23 @@ pub fn scene_ui(
     obj_path: &mut String,
     loading: Option<&SceneChoice>,
 ) {
-    ui.horizontal(|ui| {
-        egui::ComboBox::new("scene", "Scene")
-            .selected_text(scene_label(scene))
-            .show_ui(ui, |ui| {
-                for choice in SceneChoice::BUILT_IN {
-                    let label = scene_label(&choice);
-                    if ui.selectable_label(*scene == choice, label).clicked() {
-                        *scene = choice;
-                    }
+    egui::ComboBox::new("scene", "Scene")
+        .selected_text(scene_label(scene))
+        .show_ui(ui, |ui| {
+            for choice in SceneChoice::BUILT_IN {
+                let label = scene_label(&choice);
+                if ui.selectable_label(*scene == choice, label).clicked() {
+                    *scene = choice;
                 }
-            });
-        if let Some(choice) = loading {
+            }
+        });
+    if let Some(choice) = loading {
+        // On a line of its own, so the panel does not widen while it shows.
+        ui.horizontal(|ui| {
             ui.spinner();
-            ui.label(format!("loading {choice}"));
-        }
-    });
+            ui.label(format!("Loading {choice}..."));
+        });
+    }
     ui.horizontal(|ui| {
         let label = ui.label("OBJ file");
         ui.add(egui::TextEdit::singleline(obj_path).desired_width(160.0))
