@@ -56,7 +56,7 @@ grep -q "full_pass_ms" "$log" || { echo "measure-window: no frames logged" >&2; 
 echo "measure-window: $side² reached 16 samples; dragging the Light x slider"
 
 # The Light x slider's handle (value 0 in -1.5..1.5) in the default layout.
-xdotool mousemove --window "$window" 75 269
+xdotool mousemove --window "$window" 75 338
 before=$(wc -l <"$log")
 xdotool mousedown 1
 for i in $(seq 0 40); do
