@@ -516,3 +516,24 @@ fn a_missing_obj_file_shows_an_error_and_keeps_the_scene() {
     settle(&mut h);
     assert!(!shown(&h).settings.shading.shadows);
 }
+
+#[test]
+fn non_finite_values_never_reach_the_renderer() {
+    let mut h = harness(small_state());
+    let before = shown(&h);
+    for (label, value) in [
+        ("Light x", f64::NAN),
+        ("Camera z", f64::INFINITY),
+        ("Focal length", f64::NAN),
+        ("Light power", f64::NEG_INFINITY),
+    ] {
+        h.get_by_role_and_label(Role::Slider, label)
+            .set_value_accesskit(value);
+        settle(&mut h);
+        let s = settings(&h);
+        assert!(s.validate().is_ok(), "{label} = {value}: {s:?}");
+        assert!(shown(&h).image.pixels.iter().all(|p| p.is_finite()));
+    }
+    // Still rendering, and still the box.
+    assert_eq!(shown(&h).image.width, before.image.width);
+}
