@@ -1,18 +1,10 @@
 //! The `raylab render` command, run as a user runs it.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn raylab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raylab"))
-        .args(args)
-        .output()
-        .expect("run raylab")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use common::{files_in, raylab, stderr};
 
 #[test]
 fn renders_a_png_and_an_exr_of_the_requested_size() {
@@ -38,16 +30,12 @@ fn renders_a_png_and_an_exr_of_the_requested_size() {
     assert_eq!(img.color(), image::ColorType::Rgb8);
     let img = image::open(&exr).unwrap();
     assert_eq!((img.width(), img.height()), (40, 30));
-    // Linear floats: the brightest back-wall pixels are not clamped to 1... and the centre is
-    // the white back wall, grey (r = g = b).
+    // Linear floats: the centre is the white back wall, lit and grey (r = g = b).
     let rgb = img.to_rgb32f();
     let c = rgb.get_pixel(20, 12);
     assert!(c[0] > 0.3 && (c[0] - c[2]).abs() < 1e-6, "{c:?}");
     // No temporary files are left behind.
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
+    let names = files_in(dir.path());
     assert_eq!(names.len(), 2, "{names:?}");
 }
 
@@ -166,10 +154,7 @@ fn an_unwritable_folder_is_reported_and_leaves_nothing() {
     ]);
     assert!(!r.status.success());
     assert!(stderr(&r).contains("taken.png"), "{}", stderr(&r));
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
+    let names = files_in(dir.path());
     assert_eq!(names.len(), 2, "{names:?}");
 }
 

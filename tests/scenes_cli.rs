@@ -1,17 +1,8 @@
 //! `raylab render --scene/--obj` and `raylab bench`, run as a user runs them.
 
-use std::process::{Command, Output};
+mod common;
 
-fn raylab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raylab"))
-        .args(args)
-        .output()
-        .expect("run raylab")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use common::{raylab, stderr};
 
 #[test]
 fn renders_the_built_in_models_and_an_obj_file() {
