@@ -59,21 +59,12 @@ impl Rng {
 /// Where in pixel `(x, y)` sample `sample` looks, as an offset in [0, 1)² from its top-left
 /// corner. Sample 0 is the pixel centre, so a one-sample render is exactly the lab's image;
 /// later samples are uniformly jittered and average to an anti-aliased pixel.
-///
-/// One 64-bit hash of (seed, pixel, sample) gives both coordinates (24 bits each): this runs
-/// once per pixel per pass, and a full generator here cost a third of a Cornell box pass.
-#[inline]
 pub fn pixel_offset(seed: u64, x: u32, y: u32, sample: u32) -> (f32, f32) {
     if sample == 0 {
         return (0.5, 0.5);
     }
-    let pixel = (u64::from(y) << 32) | u64::from(x);
-    let h = mix64(mix64(seed ^ u64::from(sample).wrapping_mul(PCG_MULTIPLIER)) ^ pixel);
-    const SCALE: f32 = 1.0 / 16_777_216.0;
-    (
-        (h >> 40) as f32 * SCALE,
-        ((h >> 16) & 0xff_ffff) as f32 * SCALE,
-    )
+    let mut rng = Rng::for_pixel_sample(seed, x, y, sample);
+    (rng.next_f32(), rng.next_f32())
 }
 
 #[cfg(test)]
