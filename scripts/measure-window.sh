@@ -17,23 +17,10 @@ mkdir -p "$out"
 cargo build --release --quiet
 bin="$root/target/release/raylab"
 
-display=""
-for n in $(seq 151 199); do
-  if [ ! -e "/tmp/.X$n-lock" ] && [ ! -e "/tmp/.X11-unix/X$n" ]; then display=":$n"; break; fi
-done
-[ -n "$display" ] || { echo "measure-window: no free X display number" >&2; exit 1; }
-xvfb_pid=""
-app_pid=""
-cleanup() {
-  [ -n "$app_pid" ] && kill "$app_pid" 2>/dev/null || true
-  [ -n "$xvfb_pid" ] && kill "$xvfb_pid" 2>/dev/null || true
-  wait 2>/dev/null || true
-}
-trap cleanup EXIT
-Xvfb "$display" -screen 0 1280x800x24 -nolisten tcp >"$out/xvfb.log" 2>&1 &
-xvfb_pid=$!
-export DISPLAY="$display"
-for _ in $(seq 100); do xdotool getdisplaygeometry >/dev/null 2>&1 && break; sleep 0.1; done
+# shellcheck source=scripts/xvfb-common.sh
+source "$root/scripts/xvfb-common.sh"
+start_xvfb measure-window 151 199 "$out"
+display=$DISPLAY
 
 # A settings file for a SIDE² image (eframe keeps its storage as RON: a map of strings).
 rm -rf "$out/xdg"

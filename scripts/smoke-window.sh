@@ -28,33 +28,10 @@ echo "smoke-window: cargo build --release"
 cargo build --release --quiet
 bin="$root/target/release/raylab"
 
-# A display number nobody uses.
-display=""
-for n in $(seq 91 150); do
-  if [ ! -e "/tmp/.X$n-lock" ] && [ ! -e "/tmp/.X11-unix/X$n" ]; then
-    display=":$n"
-    break
-  fi
-done
-[ -n "$display" ] || { echo "smoke-window: no free X display number" >&2; exit 1; }
-
-xvfb_pid=""
-app_pid=""
-cleanup() {
-  [ -n "$app_pid" ] && kill "$app_pid" 2>/dev/null || true
-  [ -n "$xvfb_pid" ] && kill "$xvfb_pid" 2>/dev/null || true
-  wait 2>/dev/null || true
-}
-trap cleanup EXIT
-
-Xvfb "$display" -screen 0 1280x800x24 -nolisten tcp >"$out/xvfb.log" 2>&1 &
-xvfb_pid=$!
-export DISPLAY="$display"
-for _ in $(seq 100); do
-  xdotool getdisplaygeometry >/dev/null 2>&1 && break
-  sleep 0.1
-done
-xdotool getdisplaygeometry >/dev/null || { echo "smoke-window: Xvfb did not start" >&2; exit 1; }
+# shellcheck source=scripts/xvfb-common.sh
+source "$root/scripts/xvfb-common.sh"
+start_xvfb smoke-window 91 150 "$out"
+display=$DISPLAY
 
 # A fresh settings folder: the app starts on the lab's defaults (figure 7, 512², 16 samples).
 rm -rf "$out/xdg"
