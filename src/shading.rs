@@ -63,14 +63,15 @@ impl Stage {
         }
     }
 
-    /// The lab's equation for this stage.
+    /// What this stage computes, in the lab's terms and equation numbers. `·` stands for the
+    /// lab's element-wise product `∗` (a glyph the workbench's font lacks).
     pub fn equation(self) -> &'static str {
         match self {
-            Stage::Flat => "ρ",
-            Stage::Incoming => "D (27)",
-            Stage::Direct => "ρ ∗ D (28)",
-            Stage::Shadows => "ρ ∗ D, shadowed (28, §5.1)",
-            Stage::Lab => "ρ ∗ (D + N), shadowed (30)",
+            Stage::Flat => "ρ, the reflectance",
+            Stage::Incoming => "D, the incoming light (eq. 27)",
+            Stage::Direct => "ρ·D (eq. 28)",
+            Stage::Shadows => "ρ·D with shadows (eq. 28, §5.1)",
+            Stage::Lab => "ρ·(D + N) with shadows (eq. 30)",
         }
     }
 

@@ -33,18 +33,6 @@ pub fn stage_label(stage: Stage) -> String {
     format!("{what} (figure {})", stage.figure())
 }
 
-/// What the stage computes, in the lab's terms (with the glyphs egui's default font has: `·`
-/// for the lab's element-wise `∗`).
-pub fn stage_equation(stage: Stage) -> &'static str {
-    match stage {
-        Stage::Flat => "ρ, the reflectance",
-        Stage::Incoming => "D, the incoming light (eq. 27)",
-        Stage::Direct => "ρ·D (eq. 28)",
-        Stage::Shadows => "ρ·D with shadows (eq. 28, §5.1)",
-        Stage::Lab => "ρ·(D + N) with shadows (eq. 30)",
-    }
-}
-
 /// The whole side panel.
 pub fn controls_ui(
     ui: &mut egui::Ui,
@@ -240,14 +228,14 @@ pub fn shading_ui(ui: &mut egui::Ui, shading: &mut Shading, commands: &mut Vec<C
                 let label = stage_label(stage);
                 if ui
                     .selectable_label(shading.stage == stage, label)
-                    .on_hover_text(stage_equation(stage))
+                    .on_hover_text(stage.equation())
                     .clicked()
                 {
                     commands.push(Command::SetStage(stage));
                 }
             }
         });
-    ui.label(format!("Computes {}", stage_equation(shading.stage)));
+    ui.label(format!("Computes {}", shading.stage.equation()));
     ui.checkbox(&mut shading.shadows, "Shadows");
     ui.checkbox(&mut shading.indirect, "Indirect light");
     let mut n = shading.indirect_light.x;
