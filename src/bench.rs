@@ -14,13 +14,13 @@
 
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::Ray;
-use crate::light::{PointLight, direct_light, shadow_ray};
+use crate::integrator::HitTerms;
+use crate::light::PointLight;
 use crate::render::render_pass;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -104,10 +104,8 @@ pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(R
         .filter_map(|ray| {
             let hit = scene.closest_intersection(ray, f32::INFINITY)?;
             let normal = scene.triangles[hit.triangle_index].normal;
-            if direct_light(light, hit.position, normal) == Vec3::ZERO {
-                return None;
-            }
-            shadow_ray(light, hit.position, normal)
+            let rho = scene.material_of(hit.triangle_index).reflectance;
+            HitTerms::at(light, Stage::Lab, true, hit.position, normal, rho).shadow_ray
         })
         .collect()
 }

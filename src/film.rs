@@ -151,18 +151,44 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
     result.map_err(wrap)
 }
 
-/// Accumulates passes of one view into a running mean (progressive refinement).
+/// Accumulates passes of one view into a running mean (progressive refinement), and, if asked,
+/// the sum of squares that estimates how noisy that mean still is ([`Film::noise`]).
 #[derive(Clone, Debug)]
 pub struct Film {
     sum: Image,
+    /// Per pixel, the sum of the squared sample values (the mean of the three channels), when
+    /// the noise is tracked.
+    sum_sq: Option<Vec<f32>>,
     samples: u32,
+}
+
+/// How far the accumulated image may still be from the converged one, estimated from the
+/// spread of each pixel's samples (the sample variance s², over n samples).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoiseEstimate {
+    /// The standard error of the image's mean value over its mean value:
+    /// √(Σᵢ sᵢ²/n) / Σᵢ mᵢ, pixels taken as independent.
+    pub relative_error_of_mean: f64,
+    /// The share of pixels whose own relative standard error, sᵢ/√n / mᵢ, is above 1% (a pixel
+    /// that is black with no spread counts as converged; black with spread, as above).
+    pub share_of_pixels_above_1_percent: f64,
 }
 
 impl Film {
     pub fn new(width: u32, height: u32) -> Self {
         Self {
             sum: Image::new(width, height),
+            sum_sq: None,
             samples: 0,
+        }
+    }
+
+    /// A film that also tracks the spread of each pixel's samples, for [`Film::noise`] (four
+    /// more bytes per pixel).
+    pub fn with_noise(width: u32, height: u32) -> Self {
+        Self {
+            sum_sq: Some(vec![0.0; width as usize * height as usize]),
+            ..Self::new(width, height)
         }
     }
 
@@ -185,7 +211,44 @@ impl Film {
         for (s, p) in self.sum.pixels.iter_mut().zip(&pass.pixels) {
             *s += *p;
         }
+        if let Some(sum_sq) = &mut self.sum_sq {
+            for (s, p) in sum_sq.iter_mut().zip(&pass.pixels) {
+                let y = channel_mean(*p);
+                *s += y * y;
+            }
+        }
         self.samples += 1;
+    }
+
+    /// The estimated remaining noise, from two samples on, if the film tracks it.
+    pub fn noise(&self) -> Option<NoiseEstimate> {
+        let sum_sq = self.sum_sq.as_ref()?;
+        if self.samples < 2 {
+            return None;
+        }
+        let n = f64::from(self.samples);
+        let (mut sum_mean, mut sum_var_of_mean, mut above) = (0.0f64, 0.0f64, 0usize);
+        for (s, &sq) in self.sum.pixels.iter().zip(sum_sq) {
+            let mean = f64::from(channel_mean(*s)) / n;
+            // s² = (Σy² − n·m²)/(n − 1); rounding can make it slightly negative.
+            let variance = ((f64::from(sq) - n * mean * mean) / (n - 1.0)).max(0.0);
+            let variance_of_mean = variance / n;
+            sum_mean += mean;
+            sum_var_of_mean += variance_of_mean;
+            let error = variance_of_mean.sqrt();
+            if error > 0.01 * mean.abs() && error > 1e-12 {
+                above += 1;
+            }
+        }
+        let pixels = self.sum.pixels.len().max(1) as f64;
+        Some(NoiseEstimate {
+            relative_error_of_mean: if sum_mean > 0.0 {
+                sum_var_of_mean.sqrt() / sum_mean
+            } else {
+                0.0
+            },
+            share_of_pixels_above_1_percent: above as f64 / pixels,
+        })
     }
 
     /// The mean of the passes so far (black before the first).
@@ -203,9 +266,36 @@ impl Film {
     }
 }
 
+/// The mean of a value's three channels: the scalar whose spread the noise estimate follows.
+fn channel_mean(p: Vec3) -> f32 {
+    (p.x + p.y + p.z) * (1.0 / 3.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two pixels over four passes, by hand. Pixel 0 is constant 1: no spread. Pixel 1 takes
+    /// 1, 3, 1, 3 (grey): mean 2, s² = (1+1+1+1)/3 = 4/3, its mean's variance s²/n = 1/3, so
+    /// its relative error is √(1/3)/2 = 0.2887 (> 1%). The image mean's relative error is
+    /// √(0 + 1/3) / (1 + 2) = 0.19245; half the pixels are above 1%.
+    #[test]
+    fn noise_estimate_by_hand() {
+        let mut film = Film::with_noise(2, 1);
+        assert_eq!(film.noise(), None, "nothing yet");
+        for v in [1.0, 3.0, 1.0, 3.0] {
+            let mut pass = Image::new(2, 1);
+            pass.pixels = vec![Vec3::ONE, Vec3::splat(v)];
+            film.add_pass(&pass);
+        }
+        let noise = film.noise().unwrap();
+        assert!(
+            (noise.relative_error_of_mean - 0.19245).abs() < 1e-5,
+            "{noise:?}"
+        );
+        assert_eq!(noise.share_of_pixels_above_1_percent, 0.5);
+        assert_eq!(Film::new(2, 1).noise(), None, "not tracked");
+    }
 
     #[test]
     fn display_transform_clamps_and_rounds_without_gamma() {

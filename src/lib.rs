@@ -2,8 +2,9 @@
 //! raytracing lab (COMS30115 coursework 1) and its Cornell box.
 //!
 //! The library reads like the lab: [`scene`] → [`camera`] → [`geometry::Ray`] →
-//! [`intersect`] (`closest_intersection`) → [`shading`] (with [`light::direct_light`], the lab's
-//! equation 27) → [`film`]. [`render`] runs that for every pixel, in parallel and cancellably.
+//! [`intersect`] (`closest_intersection`) → [`integrator`] (the lab's stages with
+//! [`light::direct_light`], its equation 27, and the path tracer; [`material`] for mirror and
+//! glass) → [`film`]. [`render`] runs that for every pixel, in parallel and cancellably.
 //!
 //! ```
 //! use raylab::{RenderSettings, render, scene::cornell_box};
@@ -22,17 +23,19 @@ pub mod bench;
 pub mod camera;
 pub mod film;
 pub mod geometry;
+pub mod integrator;
 pub mod intersect;
 pub mod light;
+pub mod material;
 pub mod progressive;
 pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod settings;
-pub mod shading;
 
 pub use camera::Camera;
 pub use film::Image;
+pub use integrator::{Shading, Stage};
 pub use light::PointLight;
+pub use material::{Material, MaterialKind, MaterialPreset};
 pub use settings::RenderSettings;
-pub use shading::{Shading, Stage};

@@ -26,7 +26,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-use crate::film::{Film, Image};
+use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, render_pass};
 use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsError};
@@ -60,6 +60,8 @@ pub struct Frame {
     pub mrays_per_s: f64,
     /// Time from the submission to the end of this pass, in milliseconds.
     pub since_submit_ms: f64,
+    /// The estimated remaining noise of the accumulated image (from 2 samples on).
+    pub noise: Option<NoiseEstimate>,
 }
 
 impl Frame {
@@ -412,13 +414,14 @@ impl Worker {
             let Some((image, pass_ms)) = self.pass(job, &preview, 0) else {
                 return false;
             };
-            let frame = self.frame(job, image, 0, true, pass_ms, u64::from(w) * u64::from(h));
+            let rays = u64::from(w) * u64::from(h);
+            let frame = self.frame(job, image, 0, true, pass_ms, rays, None);
             if !self.publish(frame) {
                 return false;
             }
         }
 
-        let mut film = Film::new(width, height);
+        let mut film = Film::with_noise(width, height);
         for sample in 0..target {
             let Some((pass, pass_ms)) = self.pass(job, settings, sample) else {
                 return false;
@@ -430,7 +433,8 @@ impl Worker {
                 return false;
             }
             let rays = u64::from(width) * u64::from(height);
-            let frame = self.frame(job, image, sample + 1, false, pass_ms, rays);
+            let noise = film.noise();
+            let frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise);
             if !self.publish(frame) {
                 return false;
             }
@@ -455,6 +459,7 @@ impl Worker {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn frame(
         &self,
         job: &Job,
@@ -463,6 +468,7 @@ impl Worker {
         is_preview: bool,
         pass_ms: f64,
         rays: u64,
+        noise: Option<NoiseEstimate>,
     ) -> Frame {
         let rgba = image.to_rgba8();
         Frame {
@@ -480,6 +486,7 @@ impl Worker {
                 0.0
             },
             since_submit_ms: job.submitted.elapsed().as_secs_f64() * 1e3,
+            noise,
         }
     }
 

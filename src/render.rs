@@ -1,48 +1,74 @@
 //! Rendering: one sample per pixel of a whole image, traced in parallel and cancellable.
 //!
-//! [`trace_pixel`] is the lab's `Draw` loop body: camera ray → [`shade`]. [`render_pass`] runs
-//! it for every pixel, rows in parallel on the current rayon pool, and gives up between rows as
-//! soon as `cancelled()` says so — that is what lets the workbench drop stale work at once.
-//! [`render`] accumulates `samples_per_pixel` passes into a [`Film`].
+//! [`trace_pixel`] is the lab's `Draw` loop body for one pixel: camera ray → integrator.
+//! [`render_pass`] does the same for every pixel, rows in parallel on the current rayon pool,
+//! in batches ([`Tracer::trace`]), and gives up between rows as soon as `cancelled()` says so —
+//! that is what lets the workbench drop stale work at once. [`render`] accumulates
+//! `samples_per_pixel` passes into a [`Film`].
 //!
-//! Each sample's jitter depends only on (seed, pixel, sample index), so the image is the same
-//! whatever the thread count.
+//! Each sample's jitter and random numbers depend only on (seed, pixel, sample index), so the
+//! image is the same whatever the thread count, and any pixel can be recomputed on its own.
 
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use crate::film::{Film, Image};
 use crate::geometry::Ray;
-use crate::sampling::pixel_offset;
+use crate::integrator::{BATCH, Tracer};
+use crate::sampling::{Rng, pixel_offset, pixel_sample};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
-use crate::shading::{SHADE_BATCH, shade, shade_batch};
 
 /// Returned when a render stops because its caller no longer wants it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("render cancelled")]
 pub struct Cancelled;
 
-/// The value of sample `sample` of pixel `(x, y)`.
+/// The value of sample `sample` of pixel `(x, y)`: exactly what [`render_pass`] puts there.
 pub fn trace_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, sample: u32) -> Vec3 {
-    trace_pixel_rotated(scene, settings, &settings.camera.rotation(), x, y, sample)
+    let tracer = Tracer::new(scene, settings);
+    let rotation = settings.camera.rotation();
+    let mut ray = [Ray::new(Vec3::ZERO, Vec3::Z)];
+    let mut rng = [Rng::new(0)];
+    camera_sample(
+        &tracer,
+        settings,
+        &rotation,
+        x,
+        y,
+        sample,
+        &mut ray[0],
+        &mut rng[0],
+    );
+    let mut out = [Vec3::ZERO];
+    tracer.trace(&ray, &mut rng, &mut out);
+    out[0]
 }
 
-/// [`trace_pixel`] with the camera's rotation computed once per pass.
+/// The camera ray of sample `sample` of pixel `(x, y)` (equation 24, jittered after sample 0)
+/// and, if the integrator draws random numbers, the generator it continues with.
+#[allow(clippy::too_many_arguments)]
 #[inline]
-fn trace_pixel_rotated(
-    scene: &Scene,
+fn camera_sample(
+    tracer: &Tracer,
     settings: &RenderSettings,
     rotation: &Mat3,
     x: u32,
     y: u32,
     sample: u32,
-) -> Vec3 {
-    let (dx, dy) = pixel_offset(settings.seed, x, y, sample);
-    let ray = settings
+    ray: &mut Ray,
+    rng: &mut Rng,
+) {
+    let (dx, dy) = if tracer.uses_random_numbers() {
+        let (offset, stream) = pixel_sample(settings.seed, x, y, sample);
+        *rng = stream;
+        offset
+    } else {
+        pixel_offset(settings.seed, x, y, sample)
+    };
+    *ray = settings
         .camera
         .primary_ray_rotated(rotation, x as f32 + dx, y as f32 + dy);
-    shade(scene, &settings.light, &settings.shading, &ray)
 }
 
 /// One sample per pixel (sample index `sample`) of the whole image, or [`Cancelled`] if
@@ -55,6 +81,7 @@ pub fn render_pass(
 ) -> Result<Image, Cancelled> {
     let (width, height) = (settings.camera.width, settings.camera.height);
     let rotation = settings.camera.rotation();
+    let tracer = Tracer::new(scene, settings);
     let mut image = Image::new(width, height);
     image
         .pixels
@@ -64,29 +91,18 @@ pub fn render_pass(
             if cancelled() {
                 return Err(Cancelled);
             }
-            // Rays in batches, shaded phase by phase (`shade_batch`): the same values as
-            // `trace_pixel` gives pixel by pixel, faster.
             let mut rays = [Ray {
                 origin: Vec3::ZERO,
                 direction: Vec3::ZERO,
-            }; SHADE_BATCH];
-            for (c, chunk) in row.chunks_mut(SHADE_BATCH).enumerate() {
-                for (i, ray) in rays[..chunk.len()].iter_mut().enumerate() {
-                    let x = (c * SHADE_BATCH + i) as u32;
-                    let (dx, dy) = pixel_offset(settings.seed, x, y as u32, sample);
-                    *ray = settings.camera.primary_ray_rotated(
-                        &rotation,
-                        x as f32 + dx,
-                        y as f32 + dy,
-                    );
+            }; BATCH];
+            let mut rngs = [Rng::UNUSED; BATCH];
+            for (c, chunk) in row.chunks_mut(BATCH).enumerate() {
+                let n = chunk.len();
+                for (i, (ray, rng)) in rays[..n].iter_mut().zip(&mut rngs[..n]).enumerate() {
+                    let x = (c * BATCH + i) as u32;
+                    camera_sample(&tracer, settings, &rotation, x, y as u32, sample, ray, rng);
                 }
-                shade_batch(
-                    scene,
-                    &settings.light,
-                    &settings.shading,
-                    &rays[..chunk.len()],
-                    chunk,
-                );
+                tracer.trace(&rays[..n], &mut rngs[..n], chunk);
             }
             Ok(())
         })?;

@@ -22,6 +22,10 @@ fn mix64(mut x: u64) -> u64 {
 }
 
 impl Rng {
+    /// A placeholder for a slot whose generator is never drawn from (the lab stages draw
+    /// nothing); cheaper than seeding one.
+    pub const UNUSED: Rng = Rng { state: 0 };
+
     pub fn new(seed: u64) -> Self {
         let mut rng = Self {
             state: mix64(seed).wrapping_add(PCG_INCREMENT),
@@ -63,8 +67,53 @@ pub fn pixel_offset(seed: u64, x: u32, y: u32, sample: u32) -> (f32, f32) {
     if sample == 0 {
         return (0.5, 0.5);
     }
+    pixel_sample(seed, x, y, sample).0
+}
+
+/// [`pixel_offset`] and the generator the rest of the sample draws from (the path tracer's
+/// bounces), positioned after the jitter: one stream per (seed, pixel, sample), so any pixel
+/// can be recomputed exactly on its own.
+pub fn pixel_sample(seed: u64, x: u32, y: u32, sample: u32) -> ((f32, f32), Rng) {
     let mut rng = Rng::for_pixel_sample(seed, x, y, sample);
-    (rng.next_f32(), rng.next_f32())
+    if sample == 0 {
+        return ((0.5, 0.5), rng);
+    }
+    let offset = (rng.next_f32(), rng.next_f32());
+    (offset, rng)
+}
+
+/// A direction on the hemisphere around +z with density cos θ / π (Malley's method: a uniform
+/// point on the unit disk, lifted onto the hemisphere), from two uniform numbers in [0, 1).
+///
+/// For a diffuse surface this density is proportional to what the rendering equation weighs
+/// each direction by, so a sample's weight is the constant ρ (see [`crate::material`]).
+pub fn cosine_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
+    let r = u1.sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u2;
+    let (sin, cos) = phi.sin_cos();
+    glam::Vec3::new(r * cos, r * sin, (1.0 - u1).max(0.0).sqrt())
+}
+
+/// A direction on the hemisphere around +z with constant density 1 / (2π).
+pub fn uniform_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
+    let z = u1;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u2;
+    let (sin, cos) = phi.sin_cos();
+    glam::Vec3::new(r * cos, r * sin, z)
+}
+
+/// Two unit vectors that make a right-handed orthonormal basis with the unit vector `n`
+/// (Duff et al., "Building an Orthonormal Basis, Revisited", 2017: no branch on a near-axis
+/// `n` apart from its sign).
+pub fn orthonormal_basis(n: glam::Vec3) -> (glam::Vec3, glam::Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        glam::Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        glam::Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
 }
 
 #[cfg(test)]
@@ -118,6 +167,66 @@ mod tests {
             .map(|&o| (o as f64 - expected).powi(2) / expected)
             .sum();
         assert!(chi2 < 148.2, "chi² = {chi2}");
+    }
+
+    #[test]
+    fn pixel_sample_continues_the_jitters_stream() {
+        for sample in [0, 1, 7] {
+            let (offset, mut rng) = pixel_sample(3, 4, 5, sample);
+            assert_eq!(offset, pixel_offset(3, 4, 5, sample));
+            let mut again = Rng::for_pixel_sample(3, 4, 5, sample);
+            if sample > 0 {
+                again.next_u32();
+                again.next_u32();
+            }
+            assert_eq!(rng.next_u32(), again.next_u32());
+        }
+    }
+
+    #[test]
+    fn bases_are_orthonormal() {
+        let mut rng = Rng::new(11);
+        for _ in 0..1000 {
+            let n = glam::Vec3::new(
+                rng.uniform(-1.0, 1.0),
+                rng.uniform(-1.0, 1.0),
+                rng.uniform(-1.0, 1.0),
+            )
+            .normalize();
+            let (t, b) = orthonormal_basis(n);
+            for (p, q) in [(t, b), (t, n), (b, n)] {
+                assert!(p.dot(q).abs() < 1e-5);
+            }
+            assert!((t.length() - 1.0).abs() < 1e-5 && (b.length() - 1.0).abs() < 1e-5);
+            assert!((t.cross(b) - n).length() < 1e-5, "right-handed");
+        }
+        let (t, b) = orthonormal_basis(-glam::Vec3::Z);
+        assert!(t.is_finite() && b.is_finite());
+    }
+
+    /// Cosine-weighted directions by χ²: cos θ = √(1 − u1) has P(cos θ ≤ c) = c², so the
+    /// 20 bins of c² = cos²θ are equally likely; φ's 20 bins too.
+    #[test]
+    fn cosine_hemisphere_is_cosine_distributed_by_chi_squared() {
+        let mut rng = Rng::new(77);
+        let n = 100_000;
+        let (mut by_cos, mut by_phi) = ([0u32; 20], [0u32; 20]);
+        for _ in 0..n {
+            let d = cosine_hemisphere(rng.next_f32(), rng.next_f32());
+            assert!(d.z >= 0.0 && (d.length() - 1.0).abs() < 1e-5);
+            by_cos[((d.z * d.z) * 20.0).min(19.0) as usize] += 1;
+            let phi = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
+            by_phi[(phi / std::f32::consts::TAU * 20.0).min(19.0) as usize] += 1;
+        }
+        for bins in [by_cos, by_phi] {
+            let expected = n as f64 / 20.0;
+            let chi2: f64 = bins
+                .iter()
+                .map(|&o| (o as f64 - expected).powi(2) / expected)
+                .sum();
+            // 19 degrees of freedom: the 99.9% quantile is 43.8.
+            assert!(chi2 < 43.8, "chi² = {chi2}");
+        }
     }
 
     /// A chi-squared test of uniformity (Nori's statistical tests): 100,000 draws into 20 bins.

@@ -8,9 +8,10 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
+use crate::integrator::{MAX_SPECULAR_DEPTH, Shading};
 use crate::light::PointLight;
+use crate::material::MaterialPreset;
 use crate::scene::SceneChoice;
-use crate::shading::Shading;
 
 /// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
@@ -27,6 +28,8 @@ pub struct RenderSettings {
     pub camera: Camera,
     pub light: PointLight,
     pub shading: Shading,
+    /// Mirror and glass for the Cornell box's blocks (none: the lab's diffuse box).
+    pub material_preset: MaterialPreset,
     /// Samples per pixel to accumulate; 1 traces each pixel's centre (the lab's image), more
     /// jitter inside the pixel and average (anti-aliasing).
     pub samples_per_pixel: u32,
@@ -42,6 +45,7 @@ impl Default for RenderSettings {
             camera: Camera::default(),
             light: PointLight::default(),
             shading: Shading::default(),
+            material_preset: MaterialPreset::None,
             samples_per_pixel: 1,
             seed: 0,
         }
@@ -80,6 +84,10 @@ impl RenderSettings {
         if self.shading.indirect_light.min_element() < 0.0 {
             let n = self.shading.indirect_light;
             return Err(err("indirect light", n, "must be ≥ 0"));
+        }
+        if self.shading.specular_depth > MAX_SPECULAR_DEPTH {
+            let d = self.shading.specular_depth;
+            return Err(err("specular depth", d, "must be at most 12"));
         }
         if !(1..=MAX_SAMPLES).contains(&self.samples_per_pixel) {
             let s = self.samples_per_pixel;

@@ -29,8 +29,12 @@ pub fn stage_label(stage: Stage) -> String {
         Stage::Direct => "Direct light",
         Stage::Shadows => "Shadows",
         Stage::Lab => "Lab",
+        Stage::Path => "Path tracing (real light)",
     };
-    format!("{what} (figure {})", stage.figure())
+    match stage.figure() {
+        Some(figure) => format!("{what} (figure {figure})"),
+        None => what.to_owned(),
+    }
 }
 
 /// The whole side panel.

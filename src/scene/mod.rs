@@ -14,39 +14,12 @@ use std::fmt;
 use std::path::PathBuf;
 use std::str::FromStr;
 
-use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{self, Intersection};
-
-/// How a surface scatters light. The lab models every surface as ideally diffuse (figure 4,
-/// left); specular kinds are a road-map extension and get their own variants.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum MaterialKind {
-    #[default]
-    Diffuse,
-}
-
-/// A material: the lab's per-triangle `color`, which it uses as the diffuse reflectance ρ.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    /// ρ, the fraction of incoming light reflected per colour channel (section 5).
-    pub reflectance: Vec3,
-    pub kind: MaterialKind,
-}
-
-impl Material {
-    pub fn diffuse(name: impl Into<String>, reflectance: Vec3) -> Self {
-        Self {
-            name: name.into(),
-            reflectance,
-            kind: MaterialKind::Diffuse,
-        }
-    }
-}
+pub use crate::material::{Material, MaterialKind};
 
 /// Geometry and materials to trace. Every triangle's `material` indexes `materials`.
 ///

@@ -1,0 +1,545 @@
+//! Integrators: what a camera ray is worth.
+//!
+//! Two integrators share everything below the choice of what to compute:
+//!
+//! * [`lab`]: the lab's stages (figures 2, 3, 5, 6 and 7), with mirror and glass followed
+//!   Whitted-style: every specular branch is traced to a diffuse hit, which is then shaded as the
+//!   stage says. Deterministic: sample 0 is the lab's image.
+//! * [`path`]: Monte Carlo path tracing: the lab's direct term at every diffuse vertex plus real
+//!   indirect light from cosine-weighted bounces, where the lab adds the constant N.
+//!
+//! **Units.** The lab's value of a diffuse hit is R = ρ·D (equation 28), where D is the
+//! irradiance from the point light (equation 27). The radiance a diffuse surface reflects is
+//! (ρ/π)·D, so the lab's image is π × radiance. The path tracer keeps those units: its image is
+//! π × radiance too, so with no bounces it *is* the `shadows` stage, and each bounce adds the
+//! real indirect light that the lab's N stands in for.
+//!
+//! **One computation at a hit.** Both integrators evaluate a diffuse hit with [`HitTerms`]:
+//! [`HitTerms::at`] computes D (equation 27) and the shadow ray (section 5.1), the caller casts
+//! the shadow rays of a whole batch together and records whether each was blocked, and
+//! [`HitTerms::value`] combines ρ, D and N as equations 28–30 say. The one-ray path
+//! ([`Tracer::trace`] with one ray) is the batched path with a batch of one.
+
+pub mod lab;
+pub mod path;
+
+use std::borrow::Cow;
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::Ray;
+use crate::light::{PointLight, direct_light, shadow_ray};
+use crate::material::{Material, MaterialPreset};
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+
+/// How many rays the integrators take through each phase together. Phases (all closest hits,
+/// then the light at every hit, then all shadow rays, then the sums) are loops of independent
+/// queries, which the CPU overlaps; ray by ray, every pixel's long chain of dependent divisions
+/// and square roots runs alone. On the Cornell box this halves the time of a lab pass (see
+/// PERFORMANCE.md).
+pub const BATCH: usize = 64;
+
+/// A step of the lab, named after what it shows, or the path tracer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stage {
+    /// Figure 2: the colour ρ of the first surface hit.
+    Flat,
+    /// Figure 3: the incoming light D (equation 27), or T = D + N (equation 29) with indirect.
+    Incoming,
+    /// Figure 5: reflected direct light ρ ∗ D (equation 28), no shadows.
+    Direct,
+    /// Figure 6: ρ ∗ D with shadows (section 5.1).
+    Shadows,
+    /// Figure 7: ρ ∗ (D + N) with shadows (equation 30). The default.
+    #[default]
+    Lab,
+    /// Beyond the lab: path tracing, ρ ∗ D at every bounce plus real indirect light in place of
+    /// N (π × radiance, converging as samples accumulate).
+    Path,
+}
+
+impl Stage {
+    /// Every stage, the lab's five then `path`.
+    pub const ALL: [Stage; 6] = [
+        Stage::Flat,
+        Stage::Incoming,
+        Stage::Direct,
+        Stage::Shadows,
+        Stage::Lab,
+        Stage::Path,
+    ];
+
+    /// The lab's stages, in the order of its figures.
+    pub const LAB: [Stage; 5] = [
+        Stage::Flat,
+        Stage::Incoming,
+        Stage::Direct,
+        Stage::Shadows,
+        Stage::Lab,
+    ];
+
+    /// The name used on the command line and in settings files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Flat => "flat",
+            Stage::Incoming => "incoming",
+            Stage::Direct => "direct",
+            Stage::Shadows => "shadows",
+            Stage::Lab => "lab",
+            Stage::Path => "path",
+        }
+    }
+
+    /// The lab figure this stage reproduces with its preset switches (`None` for `path`, which
+    /// goes beyond the lab).
+    pub fn figure(self) -> Option<u32> {
+        match self {
+            Stage::Flat => Some(2),
+            Stage::Incoming => Some(3),
+            Stage::Direct => Some(5),
+            Stage::Shadows => Some(6),
+            Stage::Lab => Some(7),
+            Stage::Path => None,
+        }
+    }
+
+    /// What this stage computes with its preset switches, in the lab's terms and equation
+    /// numbers. `·` stands for the lab's element-wise product `∗` (a glyph the workbench's font
+    /// lacks). [`Shading::description`] says what is computed with the switches as they are.
+    pub fn equation(self) -> &'static str {
+        match self {
+            Stage::Flat => "ρ, the reflectance",
+            Stage::Incoming => "D, the incoming light (eq. 27)",
+            Stage::Direct => "ρ·D (eq. 28)",
+            Stage::Shadows => "ρ·D with shadows (eq. 28, §5.1)",
+            Stage::Lab => "ρ·(D + N) with shadows (eq. 30)",
+            Stage::Path => "ρ·D with shadows at every bounce, real indirect light for N",
+        }
+    }
+
+    /// The shadows and indirect switches as the lab's figure has them (`path`: both on).
+    pub fn preset_switches(self) -> (bool, bool) {
+        match self {
+            Stage::Flat | Stage::Incoming | Stage::Direct => (false, false),
+            Stage::Shadows => (true, false),
+            Stage::Lab | Stage::Path => (true, true),
+        }
+    }
+
+    /// Which integrator computes this stage.
+    pub fn integrator(self) -> Integrator {
+        match self {
+            Stage::Path => Integrator::Path,
+            _ => Integrator::Lab,
+        }
+    }
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Stage {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Stage::ALL
+            .into_iter()
+            .find(|stage| stage.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown stage '{s}' (expected flat, incoming, direct, shadows, lab or path)"
+                )
+            })
+    }
+}
+
+/// The two integrators (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Integrator {
+    /// The lab's stages, mirror and glass traced Whitted-style.
+    Lab,
+    /// Monte Carlo path tracing.
+    Path,
+}
+
+/// How deep the lab stages follow mirror and glass by default: enough to see through the glass
+/// block (in, out, and a few internal reflections).
+pub const DEFAULT_SPECULAR_DEPTH: u32 = 6;
+
+/// The deepest [`Shading::specular_depth`] allowed: a glass branch doubles the rays at every
+/// level, so 2¹² rays per pixel at the very most.
+pub const MAX_SPECULAR_DEPTH: u32 = 12;
+
+/// What to compute at a hit: the stage and its switches.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Shading {
+    pub stage: Stage,
+    /// Cast shadow rays (section 5.1).
+    pub shadows: bool,
+    /// Lab stages: add the constant indirect term N (section 5.2). `path`: follow bounces of
+    /// real indirect light (off: direct light only).
+    pub indirect: bool,
+    /// N, the constant indirect illumination, per colour channel (the lab's `indirectLight`).
+    pub indirect_light: Vec3,
+    /// `path`: the most diffuse bounces a path makes; `None` is unlimited, paths ending by
+    /// Russian roulette. 0 is direct light only.
+    pub bounces: Option<u32>,
+    /// Lab stages: how many mirror and glass hits in a row are followed before a branch is
+    /// given up (black).
+    pub specular_depth: u32,
+}
+
+impl Default for Shading {
+    fn default() -> Self {
+        Self::for_stage(Stage::Lab)
+    }
+}
+
+impl Shading {
+    /// The lab's constant indirect light, N = 0.5·(1, 1, 1).
+    pub const LAB_INDIRECT_LIGHT: Vec3 = Vec3::splat(0.5);
+
+    /// The stage with the switches its figure uses.
+    pub fn for_stage(stage: Stage) -> Self {
+        let (shadows, indirect) = stage.preset_switches();
+        Self {
+            stage,
+            shadows,
+            indirect,
+            indirect_light: Self::LAB_INDIRECT_LIGHT,
+            bounces: None,
+            specular_depth: DEFAULT_SPECULAR_DEPTH,
+        }
+    }
+
+    /// N if the indirect switch is on (and the stage is one of the lab's), else 0.
+    pub fn indirect_term(&self) -> Vec3 {
+        if self.indirect && self.stage != Stage::Path {
+            self.indirect_light
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// The most diffuse bounces a path makes (`path` stage): 0 with indirect off.
+    pub fn max_bounces(&self) -> u32 {
+        if self.indirect {
+            self.bounces.unwrap_or(u32::MAX)
+        } else {
+            0
+        }
+    }
+
+    /// What is computed with the switches as they are, in the lab's terms (`·` is its `∗`).
+    pub fn description(&self, materials: MaterialPreset) -> String {
+        let shadows = if self.shadows {
+            " with shadows (§5.1)"
+        } else {
+            ""
+        };
+        let mut text = match self.stage {
+            Stage::Flat => "ρ, the reflectance".to_owned(),
+            Stage::Incoming if self.indirect => format!("D + N (eq. 29){shadows}"),
+            Stage::Incoming => format!("D, the incoming light (eq. 27){shadows}"),
+            Stage::Direct | Stage::Shadows | Stage::Lab if self.indirect => {
+                format!("ρ·(D + N) (eq. 30){shadows}")
+            }
+            Stage::Direct | Stage::Shadows | Stage::Lab => format!("ρ·D (eq. 28){shadows}"),
+            Stage::Path => {
+                let bounces = match self.max_bounces() {
+                    0 => "no bounces: direct light only".to_owned(),
+                    u32::MAX => "real indirect light, bounces until Russian roulette ends the \
+                                 path"
+                        .to_owned(),
+                    1 => "real indirect light, 1 bounce".to_owned(),
+                    n => format!("real indirect light, up to {n} bounces"),
+                };
+                format!("π × radiance: ρ·D{shadows} at every diffuse hit; {bounces}")
+            }
+        };
+        if materials != MaterialPreset::None {
+            if self.stage == Stage::Path {
+                text.push_str("; mirror and glass sampled");
+            } else {
+                text.push_str(&format!(
+                    "; mirror and glass followed up to {} deep (Whitted)",
+                    self.specular_depth
+                ));
+            }
+        }
+        text
+    }
+}
+
+/// The terms of the lab's equations at one diffuse hit: the one place they are computed.
+///
+/// [`HitTerms::at`] evaluates D (equation 27) and makes the shadow ray (section 5.1); whoever
+/// traces the shadow ray records the answer in `blocked`; [`HitTerms::value`] combines them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HitTerms {
+    pub position: Vec3,
+    /// The normal the light is computed with: the lab's for the lab stages, turned to face
+    /// the ray for the path tracer (two-sided surfaces).
+    pub normal: Vec3,
+    /// ρ, the diffuse reflectance.
+    pub rho: Vec3,
+    /// D, the light arriving from the point light ignoring anything in between (equation 27).
+    pub d: Vec3,
+    /// The shadow ray to cast and its length, or `None` when none is needed (shadows off, no
+    /// light arriving, or the flat stage).
+    pub shadow_ray: Option<(Ray, f32)>,
+    /// Whether the shadow ray was blocked: the point is in shadow and D counts as 0.
+    pub blocked: bool,
+}
+
+impl HitTerms {
+    /// The terms at a diffuse hit. The flat stage needs only ρ: D is left 0 and no shadow ray
+    /// is made.
+    pub fn at(
+        light: &PointLight,
+        stage: Stage,
+        shadows: bool,
+        position: Vec3,
+        normal: Vec3,
+        rho: Vec3,
+    ) -> Self {
+        let mut terms = Self {
+            position,
+            normal,
+            rho,
+            d: Vec3::ZERO,
+            shadow_ray: None,
+            blocked: false,
+        };
+        if stage != Stage::Flat {
+            terms.d = direct_light(light, position, normal);
+            // A shadow ray only matters where there is light to block.
+            if shadows && terms.d != Vec3::ZERO {
+                terms.shadow_ray = shadow_ray(light, position, normal);
+            }
+        }
+        terms
+    }
+
+    /// D after shadows: 0 where the shadow ray was blocked.
+    pub fn d_after_shadows(&self) -> Vec3 {
+        if self.blocked { Vec3::ZERO } else { self.d }
+    }
+
+    /// The value of the hit (`n` is N, the constant indirect term, or 0):
+    ///
+    /// * flat: `ρ`
+    /// * incoming: `D + N` (equation 27, or T of equation 29)
+    /// * direct, shadows, lab, and the path tracer's direct term: `ρ ∗ (D + N)` (equation 30,
+    ///   which is equation 28 for N = 0)
+    pub fn value(&self, stage: Stage, n: Vec3) -> Vec3 {
+        let d = self.d_after_shadows();
+        match stage {
+            Stage::Flat => self.rho,
+            Stage::Incoming => d + n,
+            _ => self.rho * (d + n),
+        }
+    }
+}
+
+/// Traces the shadow rays of a batch of hit terms together and records which are blocked.
+pub fn cast_shadow_rays(scene: &Scene, terms: &mut [HitTerms]) {
+    for t in terms {
+        if let Some((ray, t_max)) = &t.shadow_ray {
+            t.blocked = scene.occluded(ray, *t_max);
+        }
+    }
+}
+
+/// Everything an integrator needs for one pass: the scene, its materials with the preset
+/// applied, the light and the shading switches.
+#[derive(Debug)]
+pub struct Tracer<'a> {
+    pub scene: &'a Scene,
+    pub materials: Cow<'a, [Material]>,
+    pub light: PointLight,
+    pub shading: Shading,
+    /// Whether every material is diffuse (the lab's box): no specular branches to follow.
+    all_diffuse: bool,
+}
+
+impl<'a> Tracer<'a> {
+    pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Self {
+        let materials = match settings.material_preset {
+            MaterialPreset::None => Cow::Borrowed(scene.materials.as_slice()),
+            preset => Cow::Owned(preset.apply(&scene.materials)),
+        };
+        let all_diffuse = materials.iter().all(Material::is_diffuse);
+        Self {
+            scene,
+            materials,
+            light: settings.light,
+            shading: settings.shading,
+            all_diffuse,
+        }
+    }
+
+    /// The material of triangle `index`.
+    #[inline]
+    pub fn material_of(&self, triangle_index: usize) -> &Material {
+        &self.materials[self.scene.triangles[triangle_index].material as usize]
+    }
+
+    /// Whether every material is diffuse.
+    pub fn all_diffuse(&self) -> bool {
+        self.all_diffuse
+    }
+
+    /// Whether the integrator draws random numbers (and so needs each ray's generator).
+    pub fn uses_random_numbers(&self) -> bool {
+        self.shading.stage.integrator() == Integrator::Path
+    }
+
+    /// The value of each ray, into `out`. `rngs` holds each ray's random stream (from
+    /// [`crate::sampling::pixel_sample`]); the lab stages draw nothing and accept an empty
+    /// slice.
+    pub fn trace(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
+        debug_assert_eq!(rays.len(), out.len());
+        match self.shading.stage.integrator() {
+            Integrator::Lab => lab::trace(self, rays, out),
+            Integrator::Path => {
+                assert_eq!(
+                    rngs.len(),
+                    rays.len(),
+                    "the path tracer needs a generator per ray"
+                );
+                path::trace(self, rays, rngs, out);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Camera;
+    use crate::scene::cornell_box;
+
+    #[test]
+    fn stages_parse_and_name_their_figures() {
+        for stage in Stage::ALL {
+            assert_eq!(stage.name().parse::<Stage>(), Ok(stage));
+        }
+        assert_eq!(
+            Stage::LAB.map(|s| s.figure().unwrap()),
+            [2, 3, 5, 6, 7],
+            "the lab's figures"
+        );
+        assert_eq!(Stage::Path.figure(), None);
+        assert!("phong".parse::<Stage>().unwrap_err().contains("phong"));
+        assert_eq!(Shading::default().stage, Stage::Lab);
+        assert!(Shading::default().shadows && Shading::default().indirect);
+        assert_eq!(Shading::default().indirect_term(), Vec3::splat(0.5));
+        // The path tracer replaces N by real bounces.
+        assert_eq!(Shading::for_stage(Stage::Path).indirect_term(), Vec3::ZERO);
+        assert_eq!(Shading::for_stage(Stage::Path).max_bounces(), u32::MAX);
+    }
+
+    #[test]
+    fn descriptions_follow_the_switches() {
+        let none = MaterialPreset::None;
+        let mut s = Shading::for_stage(Stage::Lab);
+        assert_eq!(
+            s.description(none),
+            "ρ·(D + N) (eq. 30) with shadows (§5.1)"
+        );
+        s.shadows = false;
+        s.indirect = false;
+        assert_eq!(s.description(none), "ρ·D (eq. 28)");
+        let mut p = Shading::for_stage(Stage::Path);
+        assert!(p.description(none).contains("Russian roulette"));
+        p.bounces = Some(2);
+        assert!(p.description(none).contains("up to 2 bounces"));
+        p.indirect = false;
+        assert!(p.description(none).contains("direct light only"));
+        assert!(
+            Shading::for_stage(Stage::Lab)
+                .description(MaterialPreset::Glass)
+                .contains("Whitted")
+        );
+    }
+
+    /// Hand-computed terms at the floor's centre (0, 1, 0) under the lab's light at
+    /// (0, −0.5, −0.7): r = (0, −1.5, −0.7), r² = 2.74, r̂·n̂ = 1.5/√2.74 = 0.906183, so
+    /// D = 14 · 0.906183 / (4π · 2.74) = 0.368454; green ρ = (0.15, 0.75, 0.15) gives
+    /// ρ·(D + N) = (0.130268, 0.651341, 0.130268).
+    #[test]
+    fn hit_terms_at_the_floor_centre() {
+        let light = PointLight::default();
+        let floor = Vec3::new(0.0, -1.0, 0.0);
+        let rho = Vec3::new(0.15, 0.75, 0.15);
+        let p = Vec3::new(0.0, 1.0, 0.0);
+        let t = HitTerms::at(&light, Stage::Lab, true, p, floor, rho);
+        assert!(
+            (t.d - Vec3::splat(0.368454)).abs().max_element() < 1e-6,
+            "{}",
+            t.d
+        );
+        assert!(t.shadow_ray.is_some());
+        let v = t.value(Stage::Lab, Vec3::splat(0.5));
+        assert!(
+            (v - Vec3::new(0.130268, 0.651341, 0.130268))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        let blocked = HitTerms { blocked: true, ..t };
+        assert_eq!(blocked.value(Stage::Lab, Vec3::splat(0.5)), rho * 0.5);
+        assert_eq!(blocked.value(Stage::Incoming, Vec3::ZERO), Vec3::ZERO);
+        // The flat stage computes no light at all.
+        let flat = HitTerms::at(&light, Stage::Flat, true, p, floor, rho);
+        assert_eq!((flat.d, flat.shadow_ray), (Vec3::ZERO, None));
+        assert_eq!(flat.value(Stage::Flat, Vec3::ZERO), rho);
+    }
+
+    /// One ray at a time gives bit for bit what a batch gives, in every stage, with and without
+    /// mirror and glass.
+    #[test]
+    fn one_ray_at_a_time_equals_the_batch() {
+        let scene = cornell_box();
+        let cam = Camera::default_for(61, 47);
+        let rays: Vec<Ray> = (0..47)
+            .flat_map(|y| (0..61).map(move |x| (x, y)))
+            .map(|(x, y)| cam.pixel_ray(x, y))
+            .collect();
+        for preset in [MaterialPreset::None, MaterialPreset::Both] {
+            for stage in Stage::ALL {
+                for shadows in [false, true] {
+                    let mut settings = RenderSettings::default();
+                    settings.shading = Shading::for_stage(stage);
+                    settings.shading.shadows = shadows;
+                    settings.material_preset = preset;
+                    let tracer = Tracer::new(&scene, &settings);
+                    let rng = |i: usize| Rng::for_pixel_sample(1, i as u32, 0, 0);
+                    let mut rngs: Vec<Rng> = (0..rays.len()).map(rng).collect();
+                    let mut out = vec![Vec3::NAN; rays.len()];
+                    tracer.trace(&rays, &mut rngs, &mut out);
+                    for (i, (ray, got)) in rays.iter().zip(&out).enumerate() {
+                        let mut one = [Vec3::NAN];
+                        tracer.trace(&[*ray], &mut [rng(i)], &mut one);
+                        assert_eq!(
+                            got.to_array().map(f32::to_bits),
+                            one[0].to_array().map(f32::to_bits),
+                            "{stage} {preset} pixel {i}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,483 @@
+//! Materials: how a surface scatters the light that reaches it.
+//!
+//! The lab models every surface as ideally diffuse with reflectance ρ (its figure 4, left) and
+//! lists specular materials among its extensions. raylab has three kinds, as pbrt splits them
+//! from the shapes that carry them:
+//!
+//! * [`MaterialKind::Diffuse`]: the lab's surface. Its BRDF is ρ/π.
+//! * [`MaterialKind::Mirror`]: an ideal mirror that reflects a `tint` of what it sees.
+//! * [`MaterialKind::Glass`]: a smooth dielectric (index of refraction `ior`, transmission
+//!   `tint`) that reflects and refracts by the exact Fresnel equations.
+//!
+//! Every quantity here is in raylab's image units, π × radiance (see [`crate::integrator`]).
+//! In those units a diffuse bounce sampled with pdf cos θ/π carries the weight ρ exactly:
+//! (ρ/π)·cos θ / (cos θ/π) = ρ.
+//!
+//! Both integrators use the same functions: the lab stages follow every specular branch
+//! (Whitted-style, [`Material::specular_branches`]); the path tracer picks one branch at random
+//! with the same weights ([`Material::sample`]).
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::sampling::{Rng, cosine_hemisphere, orthonormal_basis};
+
+/// How a surface scatters light.
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum MaterialKind {
+    /// The lab's surface: light reflected equally in every direction, by ρ.
+    #[default]
+    Diffuse,
+    /// An ideal mirror: the reflected ray carries `tint` of what it sees.
+    Mirror { tint: Vec3 },
+    /// Clear glass: exact Fresnel reflection and refraction at index of refraction `ior`
+    /// (outside is 1.0); refracted light is multiplied by `tint`.
+    Glass { ior: f32, tint: Vec3 },
+}
+
+/// A material: the lab's per-triangle `color` (its diffuse reflectance ρ) and its kind.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Material {
+    pub name: String,
+    /// ρ, the fraction of incoming light a diffuse surface reflects per colour channel (lab
+    /// section 5). Kept for specular kinds too, so switching a preset off restores the lab's
+    /// surface.
+    pub reflectance: Vec3,
+    pub kind: MaterialKind,
+}
+
+/// A direction to continue along and the weight it carries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scatter {
+    pub direction: Vec3,
+    pub weight: Vec3,
+}
+
+impl Material {
+    pub fn diffuse(name: impl Into<String>, reflectance: Vec3) -> Self {
+        Self {
+            name: name.into(),
+            reflectance,
+            kind: MaterialKind::Diffuse,
+        }
+    }
+
+    pub fn is_diffuse(&self) -> bool {
+        matches!(self.kind, MaterialKind::Diffuse)
+    }
+
+    /// The specular branches at a hit, for Whitted-style tracing: up to two directions, each
+    /// with its weight (a mirror: the reflection with its tint; glass: the reflection with
+    /// Fresnel's F and the refraction with (1 − F)·tint, or only the reflection past the
+    /// critical angle). Empty for a diffuse material.
+    ///
+    /// `direction` is the incoming ray's (unit) direction, `normal` the surface's geometric
+    /// normal (either side).
+    pub fn specular_branches(&self, direction: Vec3, normal: Vec3) -> Branches {
+        let mut out = Branches::default();
+        match self.kind {
+            MaterialKind::Diffuse => {}
+            MaterialKind::Mirror { tint } => out.push(reflect(direction, normal), tint),
+            MaterialKind::Glass { ior, tint } => {
+                let g = GlassHit::new(direction, normal, ior);
+                out.push(reflect(direction, normal), Vec3::splat(g.fresnel));
+                if let Some(refracted) = g.refracted {
+                    out.push(refracted, (1.0 - g.fresnel) * tint);
+                }
+            }
+        }
+        out
+    }
+
+    /// Samples the direction a path continues along after hitting this material, with the
+    /// weight of that sample (the BSDF times cos θ over the pdf, in π × radiance units):
+    ///
+    /// * diffuse: a cosine-weighted direction on the side the ray came from, weight ρ;
+    /// * mirror: the reflection, weight `tint`;
+    /// * glass: the reflection with probability F (Fresnel), else the refraction; weight 1 for
+    ///   the reflection and `tint` for the refraction, so the expected weight equals the
+    ///   Whitted branches' sum.
+    ///
+    /// Draws two numbers from `rng` for a diffuse material, one for glass, none for a mirror.
+    pub fn sample(&self, direction: Vec3, normal: Vec3, rng: &mut Rng) -> Scatter {
+        match self.kind {
+            MaterialKind::Diffuse => {
+                let facing = facing(normal, direction);
+                let (u1, u2) = (rng.next_f32(), rng.next_f32());
+                let local = cosine_hemisphere(u1, u2);
+                let (t, b) = orthonormal_basis(facing);
+                Scatter {
+                    direction: (t * local.x + b * local.y + facing * local.z).normalize(),
+                    weight: self.reflectance,
+                }
+            }
+            MaterialKind::Mirror { tint } => Scatter {
+                direction: reflect(direction, normal),
+                weight: tint,
+            },
+            MaterialKind::Glass { ior, tint } => {
+                let g = GlassHit::new(direction, normal, ior);
+                let u = rng.next_f32();
+                match g.refracted {
+                    Some(refracted) if u >= g.fresnel => Scatter {
+                        direction: refracted,
+                        weight: tint,
+                    },
+                    _ => Scatter {
+                        direction: reflect(direction, normal),
+                        weight: Vec3::ONE,
+                    },
+                }
+            }
+        }
+    }
+}
+
+/// Up to two weighted directions (see [`Material::specular_branches`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Branches {
+    len: usize,
+    items: [(Vec3, Vec3); 2],
+}
+
+impl Branches {
+    fn push(&mut self, direction: Vec3, weight: Vec3) {
+        self.items[self.len] = (direction, weight);
+        self.len += 1;
+    }
+
+    pub fn as_slice(&self) -> &[(Vec3, Vec3)] {
+        &self.items[..self.len]
+    }
+}
+
+/// The normal turned to face a ray coming along `direction` (surfaces are two-sided for
+/// bounces).
+pub fn facing(normal: Vec3, direction: Vec3) -> Vec3 {
+    if normal.dot(direction) > 0.0 {
+        -normal
+    } else {
+        normal
+    }
+}
+
+/// The mirror direction of `direction` about the plane with normal `normal` (either side):
+/// `d − 2 (d·n) n`. The angle to the normal is kept exactly up to rounding.
+pub fn reflect(direction: Vec3, normal: Vec3) -> Vec3 {
+    direction - 2.0 * direction.dot(normal) * normal
+}
+
+/// The fraction of unpolarised light a smooth dielectric interface reflects: the exact Fresnel
+/// equations (as pbrt's `FrDielectric`), the mean of the s- and p-polarised reflectances.
+///
+/// `cos_i` is the cosine of the angle of incidence (≥ 0), `eta` the ratio of the index on the
+/// far side to the index on the near side. Returns 1 past the critical angle (total internal
+/// reflection).
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular)
+}
+
+/// What happens where a ray meets glass.
+struct GlassHit {
+    fresnel: f32,
+    /// The refracted direction, or `None` past the critical angle.
+    refracted: Option<Vec3>,
+}
+
+impl GlassHit {
+    /// `normal` points out of the glass (the geometric normal): a ray against it enters.
+    fn new(direction: Vec3, normal: Vec3, ior: f32) -> Self {
+        let entering = direction.dot(normal) < 0.0;
+        let (n, eta) = if entering {
+            (normal, ior)
+        } else {
+            (-normal, 1.0 / ior)
+        };
+        let cos_i = -direction.dot(n);
+        let fresnel = fresnel_dielectric(cos_i, eta);
+        let refracted = (fresnel < 1.0).then(|| {
+            // Snell's law in vector form (pbrt's `Refract`), with the ratio of the indices
+            // near/far = 1/eta.
+            let cos_i = cos_i.clamp(0.0, 1.0);
+            let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+            let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+            (direction / eta + (cos_i / eta - cos_t) * n).normalize()
+        });
+        Self { fresnel, refracted }
+    }
+}
+
+/// Materials a scene can be given without editing it: the Cornell box's blocks turned mirror or
+/// glass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MaterialPreset {
+    /// The scene's own materials (the lab's diffuse box).
+    #[default]
+    None,
+    /// The tall blue block becomes an ideal mirror reflecting 0.9 in every channel.
+    Mirror,
+    /// The short red block becomes clear glass: index of refraction 1.5, no tint.
+    Glass,
+    /// Both.
+    Both,
+}
+
+/// The material name of the Cornell box's tall block, which the mirror presets change.
+pub const TALL_BLOCK: &str = "blue";
+/// The material name of the Cornell box's short block, which the glass presets change.
+pub const SHORT_BLOCK: &str = "red";
+
+/// The mirror of the presets.
+pub const PRESET_MIRROR: MaterialKind = MaterialKind::Mirror {
+    tint: Vec3::splat(0.9),
+};
+/// The glass of the presets.
+pub const PRESET_GLASS: MaterialKind = MaterialKind::Glass {
+    ior: 1.5,
+    tint: Vec3::ONE,
+};
+
+impl MaterialPreset {
+    pub const ALL: [MaterialPreset; 4] = [
+        MaterialPreset::None,
+        MaterialPreset::Mirror,
+        MaterialPreset::Glass,
+        MaterialPreset::Both,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialPreset::None => "none",
+            MaterialPreset::Mirror => "mirror",
+            MaterialPreset::Glass => "glass",
+            MaterialPreset::Both => "both",
+        }
+    }
+
+    /// The materials with the preset applied: by name, the tall block's (`blue`) becomes the
+    /// mirror, the short block's (`red`) the glass. Scenes without those names are unchanged.
+    pub fn apply(self, materials: &[Material]) -> Vec<Material> {
+        let mirror = matches!(self, MaterialPreset::Mirror | MaterialPreset::Both);
+        let glass = matches!(self, MaterialPreset::Glass | MaterialPreset::Both);
+        materials
+            .iter()
+            .map(|m| {
+                let mut m = m.clone();
+                if mirror && m.name == TALL_BLOCK {
+                    m.kind = PRESET_MIRROR;
+                } else if glass && m.name == SHORT_BLOCK {
+                    m.kind = PRESET_GLASS;
+                }
+                m
+            })
+            .collect()
+    }
+}
+
+impl fmt::Display for MaterialPreset {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for MaterialPreset {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        MaterialPreset::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| {
+                format!("unknown material preset '{s}' (expected none, mirror, glass or both)")
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn glass() -> Material {
+        Material {
+            name: "glass".into(),
+            reflectance: Vec3::ZERO,
+            kind: PRESET_GLASS,
+        }
+    }
+
+    /// The angle of reflection equals the angle of incidence, exactly for a 45° ray on an axis
+    /// plane: (1, −1, 0)/√2 on the floor (normal (0, −1, 0)) leaves as (1, 1, 0)/√2.
+    #[test]
+    fn mirror_reflection_angle_is_exact() {
+        let d = Vec3::new(1.0, 1.0, 0.0).normalize(); // going down (y points down)
+        let n = Vec3::new(0.0, -1.0, 0.0); // the floor faces up
+        let r = reflect(d, n);
+        assert_eq!(r, Vec3::new(d.x, -d.y, 0.0));
+        // Any plane: the cosines with the normal are equal and opposite, the length is kept.
+        let n = Vec3::new(0.3, -0.8, 0.52).normalize();
+        let d = Vec3::new(0.6, 0.7, -0.2).normalize();
+        let r = reflect(d, n);
+        assert!((r.dot(n) + d.dot(n)).abs() < 1e-6);
+        assert!((r.length() - 1.0).abs() < 1e-6);
+        // r lies in the plane of d and n: (d × n) · r = 0.
+        assert!(d.cross(n).dot(r).abs() < 1e-6);
+        let mirror = Material {
+            name: "m".into(),
+            reflectance: Vec3::ZERO,
+            kind: PRESET_MIRROR,
+        };
+        let s = mirror.sample(d, n, &mut Rng::new(1));
+        assert_eq!((s.direction, s.weight), (r, Vec3::splat(0.9)));
+    }
+
+    /// At normal incidence the reflectance is ((n − 1)/(n + 1))²: 0.04 for n = 1.5, from
+    /// either side.
+    #[test]
+    fn glass_at_normal_incidence_reflects_4_percent() {
+        assert!((fresnel_dielectric(1.0, 1.5) - 0.04).abs() < 1e-7);
+        assert!((fresnel_dielectric(1.0, 1.0 / 1.5) - 0.04).abs() < 1e-7);
+        let n = Vec3::new(0.0, 0.0, -1.0);
+        let b = glass().specular_branches(Vec3::Z, n);
+        let [(r_dir, r_w), (t_dir, t_w)] = b.as_slice() else {
+            panic!("two branches")
+        };
+        assert_eq!(*r_dir, -Vec3::Z);
+        assert!((r_w.x - 0.04).abs() < 1e-7);
+        assert!((*t_dir - Vec3::Z).length() < 1e-7, "straight through");
+        assert!((t_w.x - 0.96).abs() < 1e-7);
+    }
+
+    /// Brewster's angle, tan θ = n: the p-polarised reflectance vanishes, so F is half the
+    /// s-polarised one. At θ = atan 1.5 = 56.31°, cos θ_t = sin θ = 0.83205, and
+    /// r_s = (cos θ − n cos θ_t)/(cos θ + n cos θ_t) = (0.55470 − 1.24808)/(0.55470 + 1.24808)
+    /// = −0.38462, so F = r_s²/2 = 0.073964.
+    #[test]
+    fn fresnel_at_brewsters_angle_is_half_the_s_reflectance() {
+        let theta = 1.5f32.atan();
+        assert!((fresnel_dielectric(theta.cos(), 1.5) - 0.073964).abs() < 1e-5);
+    }
+
+    /// Inside glass of n = 1.5 the critical angle is asin(1/1.5) = 41.81°: past it everything
+    /// is reflected, just below it some light leaves, bent to nearly 90°.
+    #[test]
+    fn total_internal_reflection_past_the_critical_angle() {
+        let critical = (1.0f32 / 1.5).asin();
+        let outward = Vec3::Y; // a ray inside going +y meets a face whose normal is +y
+        let ray = |angle: f32| Vec3::new(angle.sin(), angle.cos(), 0.0);
+        for angle in [critical + 0.01, 1.2, 1.5] {
+            assert_eq!(fresnel_dielectric(angle.cos(), 1.0 / 1.5), 1.0);
+            let b = glass().specular_branches(ray(angle), outward);
+            assert_eq!(b.as_slice().len(), 1, "only the reflection");
+            assert_eq!(b.as_slice()[0].1, Vec3::ONE);
+        }
+        let b = glass().specular_branches(ray(critical - 0.01), outward);
+        assert_eq!(b.as_slice().len(), 2);
+        let (t, _) = b.as_slice()[1];
+        // Leaving the glass the ray bends away from the normal: sin θ_t = 1.5 sin θ_i.
+        let sin_t = t.x;
+        assert!((sin_t - 1.5 * (critical - 0.01).sin()).abs() < 1e-4, "{t}");
+        assert!(t.y > 0.0);
+    }
+
+    /// Snell's law when entering: sin θ_t = sin θ_i / 1.5.
+    #[test]
+    fn refraction_obeys_snells_law() {
+        let n = Vec3::new(0.0, -1.0, 0.0);
+        for angle in [0.1f32, 0.5, 1.0, 1.4] {
+            let d = Vec3::new(angle.sin(), angle.cos(), 0.0);
+            let b = glass().specular_branches(d, n);
+            let (t, _) = b.as_slice()[1];
+            assert!((t.x - angle.sin() / 1.5).abs() < 1e-6, "{angle}: {t}");
+            assert!(t.y > 0.0 && (t.length() - 1.0).abs() < 1e-6);
+        }
+    }
+
+    /// A white furnace for the BSDFs: every sample's weight is the tint or 1, and the mean
+    /// weight of many glass samples equals the Whitted branches' weights summed (with tint 1:
+    /// exactly 1), so glass and mirror neither create nor lose light beyond their tint.
+    #[test]
+    fn specular_materials_conserve_energy_up_to_their_tint() {
+        let mut rng = Rng::new(5);
+        let n = Vec3::new(0.0, -1.0, 0.0);
+        for angle in [0.0f32, 0.7, 1.3, 1.55] {
+            let d = Vec3::new(angle.sin(), angle.cos(), 0.0);
+            let branches = glass().specular_branches(d, n);
+            let total: Vec3 = branches.as_slice().iter().map(|(_, w)| *w).sum();
+            assert!((total - Vec3::ONE).abs().max_element() < 1e-6, "{total}");
+            let samples = 20_000;
+            let mut reflected = 0;
+            for _ in 0..samples {
+                let s = glass().sample(d, n, &mut rng);
+                assert_eq!(s.weight, Vec3::ONE);
+                if s.direction.y < 0.0 {
+                    reflected += 1;
+                }
+            }
+            // The share reflected estimates F: binomial, 4 standard deviations.
+            let f = branches.as_slice()[0].1.x;
+            let share = reflected as f32 / samples as f32;
+            let sd = (f * (1.0 - f) / samples as f32).sqrt();
+            assert!(
+                (share - f).abs() <= 4.0 * sd + 1e-6,
+                "{angle}: {share} vs {f}"
+            );
+        }
+        let tinted = Material {
+            name: "g".into(),
+            reflectance: Vec3::ZERO,
+            kind: MaterialKind::Glass {
+                ior: 1.5,
+                tint: Vec3::new(0.5, 1.0, 0.25),
+            },
+        };
+        let b = tinted.specular_branches(Vec3::Y, n);
+        let total: Vec3 = b.as_slice().iter().map(|(_, w)| *w).sum();
+        let expected = 0.04 + 0.96 * Vec3::new(0.5, 1.0, 0.25);
+        assert!((total - expected).abs().max_element() < 1e-6);
+    }
+
+    #[test]
+    fn diffuse_samples_leave_on_the_side_the_ray_came_from() {
+        let m = Material::diffuse("white", Vec3::splat(0.75));
+        let mut rng = Rng::new(9);
+        let n = Vec3::new(0.0, 0.0, -1.0);
+        for d in [Vec3::Z, -Vec3::Z] {
+            for _ in 0..1000 {
+                let s = m.sample(d, n, &mut rng);
+                assert!(s.direction.dot(d) < 0.0, "back towards the ray's side");
+                assert!((s.direction.length() - 1.0).abs() < 1e-5);
+                assert_eq!(s.weight, Vec3::splat(0.75));
+            }
+        }
+    }
+
+    #[test]
+    fn presets_change_the_blocks_by_name() {
+        let box_materials = crate::scene::cornell_box().materials;
+        assert_eq!(MaterialPreset::None.apply(&box_materials), box_materials);
+        let both = MaterialPreset::Both.apply(&box_materials);
+        let kind = |name: &str| both.iter().find(|m| m.name == name).unwrap().kind;
+        assert_eq!(kind("blue"), PRESET_MIRROR);
+        assert_eq!(kind("red"), PRESET_GLASS);
+        assert_eq!(kind("white"), MaterialKind::Diffuse);
+        let mirror = MaterialPreset::Mirror.apply(&box_materials);
+        assert_eq!(mirror.iter().filter(|m| !m.is_diffuse()).count(), 1);
+        for p in MaterialPreset::ALL {
+            assert_eq!(p.name().parse::<MaterialPreset>(), Ok(p));
+        }
+        assert!("gold".parse::<MaterialPreset>().is_err());
+    }
+}
