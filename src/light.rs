@@ -42,6 +42,7 @@ impl Default for PointLight {
 /// where `r` is the distance to the light and `r̂` the unit direction toward it. A point facing
 /// away from the light (or a zero normal) gets 0. For `r` below [`MIN_LIGHT_DISTANCE`] the
 /// light is treated as that far away and straight above the surface.
+#[inline]
 pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
     let to_light = light.position - position;
     let r2 = to_light.length_squared();
@@ -62,6 +63,7 @@ pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
 /// offset point lies in the plane of the neighbouring wall, which would otherwise block it at
 /// `t = 0`. It stops [`SHADOW_OFFSET`] short of the light, so a light touching a surface is not
 /// hidden by that surface.
+#[inline]
 pub fn shadow_ray(light: &PointLight, position: Vec3, normal: Vec3) -> Option<(Ray, f32)> {
     let side = if (light.position - position).dot(normal) >= 0.0 {
         1.0

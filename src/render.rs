@@ -48,7 +48,7 @@ pub fn trace_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, sam
 /// The camera ray of sample `sample` of pixel `(x, y)` (equation 24, jittered after sample 0)
 /// and, if the integrator draws random numbers, the generator it continues with.
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 fn camera_sample(
     tracer: &Tracer,
     settings: &RenderSettings,

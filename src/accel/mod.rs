@@ -253,7 +253,7 @@ impl Accel {
 
     /// The closest hit with `0 ≤ t < t_max`: the lowest index among hits at the same
     /// distance, exactly as the brute-force loop.
-    #[inline]
+    #[inline(always)]
     pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
         match (&self.structure, self.isa) {
             (Structure::BruteForce, _) => {
@@ -279,7 +279,7 @@ impl Accel {
     }
 
     /// Whether anything is hit with `0 ≤ t < t_max` (a shadow ray's any-hit query).
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> bool {
         match (&self.structure, self.isa) {
             (Structure::BruteForce, _) => intersect::occluded_brute_force(ray, triangles, t_max),

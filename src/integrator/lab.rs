@@ -12,6 +12,7 @@
 //! [`Material::specular_branches`]: crate::material::Material::specular_branches
 //! [`Shading::specular_depth`]: super::Shading::specular_depth
 
+use arrayvec::ArrayVec;
 use glam::Vec3;
 
 use super::{BATCH, HitTerms, Tracer, cast_shadow_rays};
@@ -19,99 +20,111 @@ use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::light::SHADOW_OFFSET;
 
-/// A ray to trace and where its value goes.
+/// Where a specular branch's value goes and what it is multiplied by.
 #[derive(Clone, Copy, Debug)]
-struct Item {
-    ray: Ray,
+struct Branch {
     /// Index of the output value (the camera ray) within the batch.
     pixel: u16,
-    /// What the value found is multiplied by: 1 for a camera ray, the product of the
-    /// specular weights along a branch.
+    /// The product of the specular weights along the branch.
     weight: Vec3,
-    /// Specular hits so far along this branch.
+    /// Specular hits so far along the branch.
     depth: u32,
+}
+
+/// The camera rays of a batch, or specular branches with where their values go.
+#[derive(Clone, Copy)]
+enum Wave<'a> {
+    /// Camera rays: ray `i` is pixel `i`, weight 1, depth 0.
+    Camera,
+    Branches(&'a [Branch]),
 }
 
 /// The value of every ray, into `out`.
 pub(super) fn trace(tracer: &Tracer, rays: &[Ray], out: &mut [Vec3]) {
-    let mut branches = Vec::new();
+    let (mut rays_next, mut branches_next) = (Vec::new(), Vec::new());
     for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
         out.fill(Vec3::ZERO);
-        let mut items = [Item {
-            ray: rays[0],
-            pixel: 0,
-            weight: Vec3::ONE,
-            depth: 0,
-        }; BATCH];
-        for (i, (item, ray)) in items.iter_mut().zip(rays).enumerate() {
-            item.ray = *ray;
-            item.pixel = i as u16;
-        }
-        wave(tracer, &items[..rays.len()], out, &mut branches);
+        let next = (&mut rays_next, &mut branches_next);
+        wave(tracer, rays, Wave::Camera, out, next);
         // Mirror and glass: trace the branches, wave after wave, until none is left.
-        while !branches.is_empty() {
-            let current = std::mem::take(&mut branches);
-            for chunk in current.chunks(BATCH) {
-                wave(tracer, chunk, out, &mut branches);
+        while !rays_next.is_empty() {
+            let rays = std::mem::take(&mut rays_next);
+            let branches = std::mem::take(&mut branches_next);
+            for (rays, branches) in rays.chunks(BATCH).zip(branches.chunks(BATCH)) {
+                let next = (&mut rays_next, &mut branches_next);
+                wave(tracer, rays, Wave::Branches(branches), out, next);
             }
         }
     }
 }
 
-/// One phase-batched step for up to [`BATCH`] items: closest hits, the lab's terms at the
+/// One phase-batched step for up to [`BATCH`] rays: closest hits, the lab's terms at the
 /// diffuse hits, their shadow rays, the sums into `out`; the specular hits' branches go to
-/// `branches`.
-fn wave(tracer: &Tracer, items: &[Item], out: &mut [Vec3], branches: &mut Vec<Item>) {
-    debug_assert!(items.len() <= BATCH);
+/// `next`.
+fn wave(
+    tracer: &Tracer,
+    rays: &[Ray],
+    wave: Wave,
+    out: &mut [Vec3],
+    next: (&mut Vec<Ray>, &mut Vec<Branch>),
+) {
+    debug_assert!(rays.len() <= BATCH);
     let scene = tracer.scene;
     let shading = &tracer.shading;
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
-    for (hit, item) in hits.iter_mut().zip(items) {
-        *hit = scene.closest_intersection(&item.ray, f32::INFINITY);
+    for (hit, ray) in hits.iter_mut().zip(rays) {
+        *hit = scene.closest_intersection(ray, f32::INFINITY);
     }
-    // The diffuse hits' terms, and which item each belongs to.
-    let mut terms = [HitTerms {
-        position: Vec3::ZERO,
-        normal: Vec3::ZERO,
-        rho: Vec3::ZERO,
-        d: Vec3::ZERO,
-        shadow_ray: None,
-        blocked: false,
-    }; BATCH];
-    let mut owner = [0u8; BATCH];
-    let mut n = 0;
-    for (i, (hit, item)) in hits.iter().zip(items).enumerate() {
+    // The diffuse hits' terms, and which ray each belongs to.
+    let mut terms: ArrayVec<HitTerms, BATCH> = ArrayVec::new();
+    let mut owner: ArrayVec<u8, BATCH> = ArrayVec::new();
+    for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
         let Some(hit) = hit else { continue };
         let material = tracer.material_of(hit.triangle_index);
         let normal = scene.triangles[hit.triangle_index].normal;
         if material.is_diffuse() {
-            terms[n] = HitTerms::at(
+            terms.push(HitTerms::at(
                 &tracer.light,
                 shading.stage,
                 shading.shadows,
                 hit.position,
                 normal,
                 material.reflectance,
-            );
-            owner[n] = i as u8;
-            n += 1;
-        } else if item.depth < shading.specular_depth {
-            let d = item.ray.direction;
+            ));
+            owner.push(i as u8);
+            continue;
+        }
+        let branch = match wave {
+            Wave::Camera => Branch {
+                pixel: i as u16,
+                weight: Vec3::ONE,
+                depth: 0,
+            },
+            Wave::Branches(b) => b[i],
+        };
+        if branch.depth < shading.specular_depth {
+            let d = ray.direction;
             for &(direction, weight) in material.specular_branches(d, normal).as_slice() {
-                branches.push(Item {
-                    ray: continue_ray(hit.position, normal, direction),
-                    pixel: item.pixel,
-                    weight: item.weight * weight,
-                    depth: item.depth + 1,
+                next.0.push(continue_ray(hit.position, normal, direction));
+                next.1.push(Branch {
+                    pixel: branch.pixel,
+                    weight: branch.weight * weight,
+                    depth: branch.depth + 1,
                 });
             }
         }
     }
-    cast_shadow_rays(scene, &mut terms[..n]);
+    cast_shadow_rays(scene, &mut terms);
     let indirect = shading.indirect_term();
-    for (t, &i) in terms[..n].iter().zip(&owner) {
-        let item = &items[i as usize];
-        out[item.pixel as usize] += item.weight * t.value(shading.stage, indirect);
+    for (t, &i) in terms.iter().zip(&owner) {
+        let value = t.value(shading.stage, indirect);
+        match wave {
+            Wave::Camera => out[i as usize] = value,
+            Wave::Branches(b) => {
+                let b = &b[i as usize];
+                out[b.pixel as usize] += b.weight * value;
+            }
+        }
     }
 }
 

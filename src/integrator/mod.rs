@@ -303,8 +303,19 @@ pub struct HitTerms {
 }
 
 impl HitTerms {
+    /// A placeholder, for arrays filled as hits come.
+    pub const NONE: HitTerms = HitTerms {
+        position: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        rho: Vec3::ZERO,
+        d: Vec3::ZERO,
+        shadow_ray: None,
+        blocked: false,
+    };
+
     /// The terms at a diffuse hit. The flat stage needs only ρ: D is left 0 and no shadow ray
     /// is made.
+    #[inline(always)]
     pub fn at(
         light: &PointLight,
         stage: Stage,
@@ -332,6 +343,7 @@ impl HitTerms {
     }
 
     /// D after shadows: 0 where the shadow ray was blocked.
+    #[inline]
     pub fn d_after_shadows(&self) -> Vec3 {
         if self.blocked { Vec3::ZERO } else { self.d }
     }
@@ -342,6 +354,7 @@ impl HitTerms {
     /// * incoming: `D + N` (equation 27, or T of equation 29)
     /// * direct, shadows, lab, and the path tracer's direct term: `ρ ∗ (D + N)` (equation 30,
     ///   which is equation 28 for N = 0)
+    #[inline(always)]
     pub fn value(&self, stage: Stage, n: Vec3) -> Vec3 {
         let d = self.d_after_shadows();
         match stage {

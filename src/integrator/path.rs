@@ -81,14 +81,7 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
     }
     let mut n_alive = rays.len();
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
-    let mut terms = [HitTerms {
-        position: Vec3::ZERO,
-        normal: Vec3::ZERO,
-        rho: Vec3::ZERO,
-        d: Vec3::ZERO,
-        shadow_ray: None,
-        blocked: false,
-    }; BATCH];
+    let mut terms = [HitTerms::NONE; BATCH];
     // For each term: the path it belongs to and the throughput it is seen with.
     let mut term_of = [(0u8, Vec3::ZERO); BATCH];
 

@@ -80,7 +80,7 @@ impl Scene {
     /// The closest hit along `ray` with `t < t_max` (the lab's `ClosestIntersection`).
     ///
     /// Equal to [`intersect::closest_intersection_brute_force`], the lowest index winning ties.
-    #[inline]
+    #[inline(always)]
     pub fn closest_intersection(&self, ray: &Ray, t_max: f32) -> Option<Intersection> {
         if !self.accel.built_for(self.triangles.len()) {
             return intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
@@ -96,7 +96,7 @@ impl Scene {
     }
 
     /// Whether anything lies along `ray` with `t < t_max` (a shadow ray's question).
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         if !self.accel.built_for(self.triangles.len()) {
             return intersect::occluded_brute_force(ray, &self.triangles, t_max);
