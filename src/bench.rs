@@ -8,7 +8,10 @@
 //! * `shadow_mrays_per_s`: any-hit queries of the shadow rays the `lab` stage casts from those
 //!   hits towards the light (the same rays as [`crate::light::in_shadow`] casts);
 //! * `lab_pass_ms`: one full [`render_pass`] of the `lab` stage (figure 7: primary rays,
-//!   shadow rays and shading).
+//!   shadow rays and shading);
+//! * with [`BenchConfig::path`]: `path_pass_ms` and `path_samples_per_s`, one full pass of the
+//!   `path` stage (unlimited bounces with Russian roulette: camera paths per second), each
+//!   timed pass a new sample index, so the paths differ from pass to pass.
 //!
 //! Every figure is the median over repeated passes, after a warm-up pass.
 
@@ -33,6 +36,8 @@ pub struct BenchConfig {
     pub height: u32,
     /// Timed passes per figure (the median is reported).
     pub passes: usize,
+    /// Also measure the path stage.
+    pub path: bool,
 }
 
 impl Default for BenchConfig {
@@ -41,6 +46,7 @@ impl Default for BenchConfig {
             width: 512,
             height: 512,
             passes: 15,
+            path: false,
         }
     }
 }
@@ -57,6 +63,12 @@ pub struct BenchReport {
     pub primary_mrays_per_s: f64,
     pub shadow_mrays_per_s: f64,
     pub lab_pass_ms: f64,
+    /// One pass of the path stage (with [`BenchConfig::path`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path_pass_ms: Option<f64>,
+    /// Camera paths per second of the path stage (with [`BenchConfig::path`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path_samples_per_s: Option<f64>,
 }
 
 /// The median of some durations, in milliseconds.
@@ -164,6 +176,20 @@ pub fn bench_scene(
         render_pass(scene, &settings, 0, &|| false).map_or(0, |image| image.pixels.len())
     });
     let mrays = |n: usize, ms: f64| if ms > 0.0 { n as f64 / ms / 1e3 } else { 0.0 };
+    let path_ms = config.path.then(|| {
+        let mut path = settings.clone();
+        path.shading = Shading::for_stage(Stage::Path);
+        let pass = |sample: u32| {
+            render_pass(scene, &path, sample, &|| false).map_or(0, |image| image.pixels.len())
+        };
+        std::hint::black_box(pass(1));
+        median_ms(
+            (0..passes)
+                .map(|i| time(|| std::hint::black_box(pass(2 + i as u32))).0)
+                .collect(),
+        )
+    });
+    let pixels = config.width as usize * config.height as usize;
     BenchReport {
         scene: name.to_string(),
         triangles: scene.triangles.len(),
@@ -174,6 +200,8 @@ pub fn bench_scene(
         primary_mrays_per_s: mrays(primary.len(), primary_ms),
         shadow_mrays_per_s: mrays(shadow.len(), shadow_ms),
         lab_pass_ms: lab_ms,
+        path_pass_ms: path_ms,
+        path_samples_per_s: path_ms.map(|ms| mrays(pixels, ms) * 1e6),
     }
 }
 
@@ -197,6 +225,7 @@ mod tests {
             width: 32,
             height: 32,
             passes: 3,
+            path: true,
         };
         let r = bench_scene("cornell", &scene, AccelKind::Auto, Isa::best(), &config);
         assert_eq!(
@@ -205,6 +234,9 @@ mod tests {
         );
         assert!(r.primary_mrays_per_s > 0.0 && r.shadow_mrays_per_s > 0.0);
         assert!(r.lab_pass_ms > 0.0 && r.build_ms >= 0.0);
+        let path_ms = r.path_pass_ms.unwrap();
+        let per_s = r.path_samples_per_s.unwrap();
+        assert!((per_s - 1024.0 / (path_ms / 1e3)).abs() < 1e-6 * per_s);
         let json = serde_json::to_value(&r).unwrap();
         for key in [
             "scene",
@@ -216,6 +248,8 @@ mod tests {
             "primary_mrays_per_s",
             "shadow_mrays_per_s",
             "lab_pass_ms",
+            "path_pass_ms",
+            "path_samples_per_s",
         ] {
             assert!(json.get(key).is_some(), "{key}");
         }

@@ -16,10 +16,11 @@ use glam::Vec3;
 use raylab::accel::{AccelKind, Isa};
 use raylab::bench::{BenchConfig, bench_scene};
 use raylab::film::OutputFormat;
+use raylab::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
 use raylab::render::render;
 use raylab::scene::SceneChoice;
 use raylab::settings::{MAX_IMAGE_SIDE, MAX_SAMPLES};
-use raylab::{Camera, RenderSettings, Shading, Stage};
+use raylab::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -70,6 +71,10 @@ pub struct BenchArgs {
     /// Print one JSON object per scene (one per line) instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// lab: the figures above; path: also one pass of the path stage (unlimited bounces), as
+    /// camera paths per second.
+    #[arg(long, default_value = "lab", value_parser = ["lab", "path"], value_name = "STAGE")]
+    pub stage: String,
 }
 
 #[derive(Debug, Args)]
@@ -84,7 +89,8 @@ pub struct RenderArgs {
         value_name = "FILE.json",
         conflicts_with_all = [
             "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw", "light",
-            "light_power", "indirect", "shadows", "samples", "seed",
+            "light_power", "indirect", "shadows", "samples", "seed", "bounces",
+            "material_preset", "specular_depth",
         ]
     )]
     pub settings: Option<PathBuf>,
@@ -99,9 +105,21 @@ pub struct RenderArgs {
     /// An OBJ file to stand in the Cornell box instead of a built-in scene.
     #[arg(long, value_name = "FILE")]
     pub obj: Option<PathBuf>,
-    /// Lab stage: flat (fig. 2), incoming (fig. 3), direct (fig. 5), shadows (fig. 6), lab (fig. 7).
+    /// Stage: flat (fig. 2), incoming (fig. 3), direct (fig. 5), shadows (fig. 6), lab (fig. 7),
+    /// or path (path tracing: real indirect light in place of N).
     #[arg(long, default_value = "lab", value_name = "STAGE")]
     pub stage: Stage,
+    /// Path stage: the most diffuse bounces per path, or "unlimited" (Russian roulette ends
+    /// paths); 0 is direct light only.
+    #[arg(long, default_value = "unlimited", value_parser = parse_bounces, value_name = "B|unlimited")]
+    pub bounces: Bounces,
+    /// Mirror and glass: none (the lab's diffuse box), mirror (the tall block is a mirror of
+    /// reflectance 0.9), glass (the short block is clear glass, index 1.5) or both.
+    #[arg(long, default_value = "none", value_name = "PRESET")]
+    pub material_preset: MaterialPreset,
+    /// Lab stages: how many mirror and glass hits in a row are followed (Whitted-style).
+    #[arg(long, default_value_t = DEFAULT_SPECULAR_DEPTH, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SPECULAR_DEPTH)), value_name = "D")]
+    pub specular_depth: u32,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "W")]
     pub width: u32,
@@ -140,6 +158,10 @@ pub struct RenderArgs {
     pub threads: Option<u16>,
 }
 
+/// The `--bounces` value: a cap, or unlimited.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounces(pub Option<u32>);
+
 /// The `--indirect` value: a constant N, or off.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Indirect {
@@ -177,7 +199,12 @@ impl RenderArgs {
         let mut settings = RenderSettings {
             scene: self.scene_choice(),
             camera,
-            shading: Shading::for_stage(self.stage),
+            shading: Shading {
+                bounces: self.bounces.0,
+                specular_depth: self.specular_depth,
+                ..Shading::for_stage(self.stage)
+            },
+            material_preset: self.material_preset,
             samples_per_pixel: self.samples,
             seed: self.seed,
             ..RenderSettings::default()
@@ -274,13 +301,17 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
 
     let c = &settings.camera;
     println!(
-        "rendered {} {}×{} (field of view {:.1}° × {:.1}°, {}, {} spp) in {:.1} ms on {} threads → {}",
+        "rendered {} {}×{} (field of view {:.1}° × {:.1}°, {}{}, {} spp) in {:.1} ms on {} threads → {}",
         choice,
         c.width,
         c.height,
         c.horizontal_fov_degrees(),
         c.vertical_fov_degrees(),
         settings.shading.stage,
+        match settings.material_preset {
+            MaterialPreset::None => String::new(),
+            preset => format!(", {preset} preset"),
+        },
         settings.samples_per_pixel,
         elapsed.as_secs_f64() * 1e3,
         pool.current_num_threads(),
@@ -310,12 +341,13 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         width: args.width,
         height: args.height,
         passes: args.passes as usize,
+        path: args.stage == "path",
     };
     // Written with `writeln!` so that a closed pipe (`raylab bench | head`) is an error, not a
     // panic.
     let mut out = std::io::stdout().lock();
     if !args.json {
-        writeln!(
+        write!(
             out,
             "{:<10} {:>9} {:>6} {:>6} {:>10} {:>12} {:>12} {:>10}",
             "scene",
@@ -327,6 +359,11 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             "shadow Mr/s",
             "lab ms"
         )?;
+        if config.path {
+            writeln!(out, " {:>10} {:>10}", "path ms", "Mpaths/s")?;
+        } else {
+            writeln!(out)?;
+        }
     }
     for choice in scenes {
         let report = pool.install(|| -> anyhow::Result<_> {
@@ -339,7 +376,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         if args.json {
             writeln!(out, "{}", serde_json::to_string(&r)?)?;
         } else {
-            writeln!(
+            write!(
                 out,
                 "{:<10} {:>9} {:>6} {:>6} {:>10.2} {:>12.1} {:>12.1} {:>10.2}",
                 r.scene,
@@ -351,6 +388,10 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
                 r.shadow_mrays_per_s,
                 r.lab_pass_ms
             )?;
+            match (r.path_pass_ms, r.path_samples_per_s) {
+                (Some(ms), Some(per_s)) => writeln!(out, " {ms:>10.2} {:>10.2}", per_s / 1e6)?,
+                _ => writeln!(out)?,
+            }
         }
     }
     if !args.json {
@@ -434,6 +475,18 @@ fn parse_on_off(s: &str) -> Result<bool, String> {
     }
 }
 
+fn parse_bounces(s: &str) -> Result<Bounces, String> {
+    if s == "unlimited" {
+        return Ok(Bounces(None));
+    }
+    match s.trim().parse::<u32>() {
+        Ok(n) => Ok(Bounces(Some(n))),
+        _ => Err(format!(
+            "'{s}' is neither a whole number of bounces nor unlimited"
+        )),
+    }
+}
+
 fn parse_indirect(s: &str) -> Result<Indirect, String> {
     if s == "off" {
         Ok(Indirect::Off)
@@ -470,6 +523,40 @@ mod tests {
         assert!(!s.shading.indirect && s.shading.shadows);
         assert_eq!(s.camera.position, Vec3::new(-0.5, 0.0, -2.0));
         assert_eq!(s.camera.yaw, -std::f32::consts::FRAC_PI_2);
+    }
+
+    #[test]
+    fn path_stage_bounces_and_presets() {
+        let s = args(&[
+            "--stage",
+            "path",
+            "--bounces",
+            "3",
+            "--material-preset",
+            "both",
+        ])
+        .settings();
+        assert_eq!(s.shading.stage, Stage::Path);
+        assert_eq!(s.shading.bounces, Some(3));
+        assert_eq!(s.material_preset, MaterialPreset::Both);
+        let s = args(&["--stage", "path"]).settings();
+        assert_eq!(
+            (s.shading.bounces, s.material_preset),
+            (None, MaterialPreset::None)
+        );
+        assert!(s.shading.shadows && s.shading.indirect);
+        let s = args(&["--material-preset", "glass", "--specular-depth", "2"]).settings();
+        assert_eq!(s.shading.specular_depth, 2);
+        for bad in [
+            &["--bounces", "-1"][..],
+            &["--bounces", "lots"],
+            &["--material-preset", "gold"],
+            &["--specular-depth", "13"],
+        ] {
+            let mut argv = vec!["raylab", "render", "--out", "x.png"];
+            argv.extend_from_slice(bad);
+            assert!(Cli::try_parse_from(&argv).is_err(), "{bad:?} accepted");
+        }
     }
 
     #[test]

@@ -94,6 +94,21 @@ pub fn cosine_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
     glam::Vec3::new(r * cos, r * sin, (1.0 - u1).max(0.0).sqrt())
 }
 
+/// [`cosine_hemisphere`]'s density without its sine and cosine: a point uniform in the unit
+/// disk by rejection from the square around it (π/4 of the tries are kept, so 2.5 numbers are
+/// drawn on average), lifted onto the hemisphere. The path tracer's diffuse bounces use it:
+/// it is faster, and exactly as cosine-distributed.
+pub fn cosine_hemisphere_by_rejection(rng: &mut Rng) -> glam::Vec3 {
+    loop {
+        let x = 2.0 * rng.next_f32() - 1.0;
+        let y = 2.0 * rng.next_f32() - 1.0;
+        let r2 = x * x + y * y;
+        if r2 < 1.0 {
+            return glam::Vec3::new(x, y, (1.0 - r2).sqrt());
+        }
+    }
+}
+
 /// A direction on the hemisphere around +z with constant density 1 / (2π).
 pub fn uniform_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
     let z = u1;
@@ -204,28 +219,34 @@ mod tests {
         assert!(t.is_finite() && b.is_finite());
     }
 
-    /// Cosine-weighted directions by χ²: cos θ = √(1 − u1) has P(cos θ ≤ c) = c², so the
-    /// 20 bins of c² = cos²θ are equally likely; φ's 20 bins too.
+    /// Cosine-weighted directions by χ², both ways of drawing them: with density cos θ/π,
+    /// P(cos θ ≤ c) = c², so the 20 bins of c² = cos²θ are equally likely; φ's 20 bins too.
     #[test]
     fn cosine_hemisphere_is_cosine_distributed_by_chi_squared() {
         let mut rng = Rng::new(77);
         let n = 100_000;
-        let (mut by_cos, mut by_phi) = ([0u32; 20], [0u32; 20]);
-        for _ in 0..n {
-            let d = cosine_hemisphere(rng.next_f32(), rng.next_f32());
-            assert!(d.z >= 0.0 && (d.length() - 1.0).abs() < 1e-5);
-            by_cos[((d.z * d.z) * 20.0).min(19.0) as usize] += 1;
-            let phi = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
-            by_phi[(phi / std::f32::consts::TAU * 20.0).min(19.0) as usize] += 1;
-        }
-        for bins in [by_cos, by_phi] {
-            let expected = n as f64 / 20.0;
-            let chi2: f64 = bins
-                .iter()
-                .map(|&o| (o as f64 - expected).powi(2) / expected)
-                .sum();
-            // 19 degrees of freedom: the 99.9% quantile is 43.8.
-            assert!(chi2 < 43.8, "chi² = {chi2}");
+        for rejection in [false, true] {
+            let (mut by_cos, mut by_phi) = ([0u32; 20], [0u32; 20]);
+            for _ in 0..n {
+                let d = if rejection {
+                    cosine_hemisphere_by_rejection(&mut rng)
+                } else {
+                    cosine_hemisphere(rng.next_f32(), rng.next_f32())
+                };
+                assert!(d.z >= 0.0 && (d.length() - 1.0).abs() < 1e-5);
+                by_cos[((d.z * d.z) * 20.0).min(19.0) as usize] += 1;
+                let phi = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
+                by_phi[(phi / std::f32::consts::TAU * 20.0).min(19.0) as usize] += 1;
+            }
+            for bins in [by_cos, by_phi] {
+                let expected = n as f64 / 20.0;
+                let chi2: f64 = bins
+                    .iter()
+                    .map(|&o| (o as f64 - expected).powi(2) / expected)
+                    .sum();
+                // 19 degrees of freedom: the 99.9% quantile is 43.8.
+                assert!(chi2 < 43.8, "chi² = {chi2} (rejection: {rejection})");
+            }
         }
     }
 

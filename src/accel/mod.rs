@@ -297,100 +297,216 @@ impl Accel {
     }
 }
 
-fn closest_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: `k` proves the CPU has AVX2 and FMA.
-        unsafe { closest_avx2_impl(k, s, ray, t_max) }
+impl Accel {
+    /// [`Accel::closest`] for many rays, `out[i]` for `rays[i]`: the same answers, with the
+    /// choice of structure and kernels made once for the batch instead of once per ray, and the
+    /// loop over the rays compiled with the kernels' instruction set.
+    pub fn closest_batch(
+        &self,
+        triangles: &[Triangle],
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [Option<Hit>],
+    ) {
+        debug_assert_eq!(rays.len(), out.len());
+        match (&self.structure, self.isa) {
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx512(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
+                unsafe {
+                    closest_batch_avx512(k, s, rays, t_max, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                closest_batch_avx512(k, s, rays, t_max, out)
+            }
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx2(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `k` proves the CPU has AVX2 and FMA.
+                unsafe {
+                    closest_batch_avx2(k, s, rays, t_max, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                closest_batch_avx2(k, s, rays, t_max, out)
+            }
+            _ => {
+                for (ray, hit) in rays.iter().zip(out) {
+                    *hit = self.closest(triangles, ray, t_max);
+                }
+            }
+        }
     }
+
+    /// [`Accel::occluded`] for many rays, each with its own `t_max`: `out[i]` for `rays[i]`,
+    /// the same answers, the choice of structure and kernels made once for the batch.
+    pub fn occluded_batch(&self, triangles: &[Triangle], rays: &[(Ray, f32)], out: &mut [bool]) {
+        debug_assert_eq!(rays.len(), out.len());
+        match (&self.structure, self.isa) {
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx512(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `closest_batch`.
+                unsafe {
+                    occluded_batch_avx512(k, s, rays, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                occluded_batch_avx512(k, s, rays, out)
+            }
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx2(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `closest_batch`.
+                unsafe {
+                    occluded_batch_avx2(k, s, rays, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                occluded_batch_avx2(k, s, rays, out)
+            }
+            _ => {
+                for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                    *blocked = self.occluded(triangles, ray, *t_max);
+                }
+            }
+        }
+    }
+}
+
+// The traversals compiled with the kernels' instruction set, so the kernels inline into them.
+// Each takes a batch: the structure is matched once, and a single query is a batch of one
+// (`closest_avx2` and friends), so each traversal is written once.
+
+#[cfg_attr(
+    target_arch = "x86_64",
+    target_feature(enable = "avx512f,avx512dq,avx2,fma")
+)]
+fn closest_batch_avx512(
+    k: Avx512,
+    s: &Structure,
+    rays: &[Ray],
+    t_max: f32,
+    out: &mut [Option<Hit>],
+) {
+    let rays_out = rays.iter().zip(out);
+    match s {
+        // The flat loop 16 wide; the tree with the AVX2 kernels, its large triangles 16 wide.
+        Structure::Flat(f) => {
+            for (ray, hit) in rays_out {
+                *hit = f.closest16(k, &RayK::for_triangles(ray), t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for (ray, hit) in rays_out {
+                let r = RayK::new(ray);
+                let best = b.big.closest16(k, &r, t_max);
+                *hit = b.tree.closest(k.avx2(), &r, t_max, best);
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+#[cfg_attr(
+    target_arch = "x86_64",
+    target_feature(enable = "avx512f,avx512dq,avx2,fma")
+)]
+fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
+    let rays_out = rays.iter().zip(out);
+    match s {
+        Structure::Flat(f) => {
+            for ((ray, t_max), blocked) in rays_out {
+                *blocked = f.occluded16(k, &RayK::new(ray), *t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for ((ray, t_max), blocked) in rays_out {
+                let r = RayK::new(ray);
+                *blocked = b.tree.occluded(k.avx2(), &r, *t_max) || b.big.occluded16(k, &r, *t_max);
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
+fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
+    let rays_out = rays.iter().zip(out);
+    match s {
+        Structure::Flat(f) => {
+            for (ray, hit) in rays_out {
+                *hit = f.closest(k, &RayK::for_triangles(ray), t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for (ray, hit) in rays_out {
+                let r = RayK::new(ray);
+                let best = b.big.closest(k, &r, t_max);
+                *hit = b.tree.closest(k, &r, t_max, best);
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
+fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
+    let rays_out = rays.iter().zip(out);
+    match s {
+        Structure::Flat(f) => {
+            for ((ray, t_max), blocked) in rays_out {
+                *blocked = f.occluded(k, &RayK::for_triangles(ray), *t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for ((ray, t_max), blocked) in rays_out {
+                let r = RayK::new(ray);
+                *blocked = b.tree.occluded(k, &r, *t_max) || b.big.occluded(k, &r, *t_max);
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+fn closest_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
+    let mut hit = [None];
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `k` proves the CPU has AVX2 and FMA.
+    unsafe {
+        closest_batch_avx2(k, s, std::slice::from_ref(ray), t_max, &mut hit)
+    };
     #[cfg(not(target_arch = "x86_64"))]
-    closest_avx2_impl(k, s, ray, t_max)
+    closest_batch_avx2(k, s, std::slice::from_ref(ray), t_max, &mut hit);
+    hit[0]
 }
 
 fn occluded_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
+    let mut blocked = [false];
     #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: `k` proves the CPU has AVX2 and FMA.
-        unsafe { occluded_avx2_impl(k, s, ray, t_max) }
-    }
+    // SAFETY: `k` proves the CPU has AVX2 and FMA.
+    unsafe {
+        occluded_batch_avx2(k, s, &[(*ray, t_max)], &mut blocked)
+    };
     #[cfg(not(target_arch = "x86_64"))]
-    occluded_avx2_impl(k, s, ray, t_max)
-}
-
-/// The traversals compiled with AVX2 enabled, so the kernels inline into them.
-#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
-fn closest_avx2_impl(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
-    match s {
-        Structure::Flat(f) => f.closest(k, &RayK::for_triangles(ray), t_max),
-        Structure::Bvh8(b) => {
-            let r = RayK::new(ray);
-            let best = b.big.closest(k, &r, t_max);
-            b.tree.closest(k, &r, t_max, best)
-        }
-        Structure::BruteForce | Structure::Bvh2(_) => None,
-    }
-}
-
-#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
-fn occluded_avx2_impl(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
-    match s {
-        Structure::Flat(f) => f.occluded(k, &RayK::for_triangles(ray), t_max),
-        Structure::Bvh8(b) => {
-            let r = RayK::new(ray);
-            b.tree.occluded(k, &r, t_max) || b.big.occluded(k, &r, t_max)
-        }
-        Structure::BruteForce | Structure::Bvh2(_) => false,
-    }
+    occluded_batch_avx2(k, s, &[(*ray, t_max)], &mut blocked);
+    blocked[0]
 }
 
 fn closest_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
+    let mut hit = [None];
     #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
-        unsafe { closest_avx512_impl(k, s, ray, t_max) }
-    }
+    // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
+    unsafe {
+        closest_batch_avx512(k, s, std::slice::from_ref(ray), t_max, &mut hit)
+    };
     #[cfg(not(target_arch = "x86_64"))]
-    closest_avx512_impl(k, s, ray, t_max)
+    closest_batch_avx512(k, s, std::slice::from_ref(ray), t_max, &mut hit);
+    hit[0]
 }
 
 fn occluded_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> bool {
+    let mut blocked = [false];
     #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: as above.
-        unsafe { occluded_avx512_impl(k, s, ray, t_max) }
-    }
+    // SAFETY: as above.
+    unsafe {
+        occluded_batch_avx512(k, s, &[(*ray, t_max)], &mut blocked)
+    };
     #[cfg(not(target_arch = "x86_64"))]
-    occluded_avx512_impl(k, s, ray, t_max)
-}
-
-/// The flat loop 16 wide; the tree with the AVX2 kernels, its large triangles 16 wide.
-#[cfg_attr(
-    target_arch = "x86_64",
-    target_feature(enable = "avx512f,avx512dq,avx2,fma")
-)]
-fn closest_avx512_impl(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
-    match s {
-        Structure::Flat(f) => f.closest16(k, &RayK::for_triangles(ray), t_max),
-        Structure::Bvh8(b) => {
-            let r = RayK::new(ray);
-            let best = b.big.closest16(k, &r, t_max);
-            b.tree.closest(k.avx2(), &r, t_max, best)
-        }
-        Structure::BruteForce | Structure::Bvh2(_) => None,
-    }
-}
-
-#[cfg_attr(
-    target_arch = "x86_64",
-    target_feature(enable = "avx512f,avx512dq,avx2,fma")
-)]
-fn occluded_avx512_impl(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> bool {
-    let r = RayK::new(ray);
-    match s {
-        Structure::Flat(f) => f.occluded16(k, &r, t_max),
-        Structure::Bvh8(b) => {
-            b.tree.occluded(k.avx2(), &r, t_max) || b.big.occluded16(k, &r, t_max)
-        }
-        Structure::BruteForce | Structure::Bvh2(_) => false,
-    }
+    occluded_batch_avx512(k, s, &[(*ray, t_max)], &mut blocked);
+    blocked[0]
 }

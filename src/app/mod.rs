@@ -32,6 +32,10 @@ use viewport::Viewport;
 /// The window title (scripts find the window by it).
 pub const TITLE: &str = "raylab";
 
+/// The least sample target the path stage gets when chosen: a path-traced image is noisy
+/// until about this many samples are averaged.
+pub const PATH_SAMPLE_TARGET: u32 = 1024;
+
 /// A UI action, handled in one place ([`WorkbenchApp::handle`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Command {
@@ -330,6 +334,7 @@ impl WorkbenchApp {
         self.stats.samples = frame.samples;
         self.stats.target = frame.target;
         self.stats.is_preview = frame.is_preview;
+        self.stats.noise = frame.noise;
         if !frame.is_preview {
             self.stats.full_pass = Some((frame.pass_ms, w, h));
             self.stats.mrays_per_s = Some(frame.mrays_per_s);
@@ -368,10 +373,25 @@ impl WorkbenchApp {
             }
             Command::LookAtBoxCentre => settings.camera.look_at(glam::Vec3::ZERO),
             Command::SetStage(stage) => {
+                // The figure's switches; N, the bounces and the specular depth stay as set.
+                let old = settings.shading;
                 settings.shading = Shading {
-                    indirect_light: settings.shading.indirect_light,
+                    indirect_light: old.indirect_light,
+                    bounces: old.bounces,
+                    specular_depth: old.specular_depth,
                     ..Shading::for_stage(stage)
                 };
+                if stage == Stage::Path && settings.samples_per_pixel < PATH_SAMPLE_TARGET {
+                    let from = settings.samples_per_pixel;
+                    settings.samples_per_pixel = PATH_SAMPLE_TARGET;
+                    self.set_status(
+                        StatusKind::Info,
+                        format!(
+                            "Path tracing: sample target raised from {from} to \
+                             {PATH_SAMPLE_TARGET} so the image converges (noise: see Stats)"
+                        ),
+                    );
+                }
             }
             Command::ResetToLabDefaults => {
                 *settings = persistence::lab_defaults();

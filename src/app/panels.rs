@@ -5,8 +5,9 @@
 //! find them by.
 
 use eframe::egui;
+use raylab::integrator::MAX_SPECULAR_DEPTH;
 use raylab::scene::SceneChoice;
-use raylab::{Camera, PointLight, RenderSettings, Shading, Stage};
+use raylab::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
 
 use super::Command;
 use super::persistence::WorkbenchState;
@@ -18,6 +19,8 @@ pub const RESOLUTION_PRESETS: [u32; 5] = [128, 256, 512, 768, 1024];
 pub const MAX_SIDE_UI: u32 = 4096;
 /// The largest sample target the panel offers.
 pub const MAX_SAMPLES_UI: u32 = 4096;
+/// The most path-tracing bounces the panel's slider offers (or unlimited).
+pub const MAX_BOUNCES_UI: u32 = 64;
 /// The most render threads the panel offers.
 pub const MAX_THREADS_UI: usize = 64;
 
@@ -81,7 +84,12 @@ pub fn controls_ui(
         egui::CollapsingHeader::new("Shading")
             .default_open(true)
             .show(ui, |ui| {
-                shading_ui(ui, &mut state.settings.shading, &mut commands)
+                shading_ui(
+                    ui,
+                    &mut state.settings,
+                    &mut state.limited_bounces,
+                    &mut commands,
+                )
             });
         egui::CollapsingHeader::new("Image")
             .default_open(true)
@@ -224,7 +232,39 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
     }
 }
 
-pub fn shading_ui(ui: &mut egui::Ui, shading: &mut Shading, commands: &mut Vec<Command>) {
+/// The materials preset's name in the selector.
+pub fn material_label(preset: MaterialPreset) -> &'static str {
+    match preset {
+        MaterialPreset::None => "Diffuse (the lab)",
+        MaterialPreset::Mirror => "Mirror tall block",
+        MaterialPreset::Glass => "Glass short block",
+        MaterialPreset::Both => "Mirror and glass",
+    }
+}
+
+/// What each materials preset does, for its hover text.
+fn material_hover(preset: MaterialPreset) -> &'static str {
+    match preset {
+        MaterialPreset::None => "Every surface diffuse, as in the lab",
+        MaterialPreset::Mirror => "The tall blue block becomes an ideal mirror reflecting 90 %",
+        MaterialPreset::Glass => {
+            "The short red block becomes clear glass (index of refraction 1.5)"
+        }
+        MaterialPreset::Both => "The tall block a mirror, the short block glass",
+    }
+}
+
+/// The stage, its switches, the path tracer's bounces and the materials. `limited_bounces` is
+/// the bounce count the "Bounces" slider remembers while "Unlimited bounces" is ticked.
+pub fn shading_ui(
+    ui: &mut egui::Ui,
+    settings: &mut RenderSettings,
+    limited_bounces: &mut u32,
+    commands: &mut Vec<Command>,
+) {
+    let materials = &mut settings.material_preset;
+    let shading = &mut settings.shading;
+    let path = shading.stage == Stage::Path;
     egui::ComboBox::new("stage", "Stage")
         .selected_text(stage_label(shading.stage))
         .show_ui(ui, |ui| {
@@ -239,17 +279,105 @@ pub fn shading_ui(ui: &mut egui::Ui, shading: &mut Shading, commands: &mut Vec<C
                 }
             }
         });
-    ui.label(format!("Computes {}", shading.stage.equation()));
-    ui.checkbox(&mut shading.shadows, "Shadows");
-    ui.checkbox(&mut shading.indirect, "Indirect light");
+    egui::ComboBox::new("materials", "Materials")
+        .selected_text(material_label(*materials))
+        .show_ui(ui, |ui| {
+            for preset in MaterialPreset::ALL {
+                ui.selectable_value(materials, preset, material_label(preset))
+                    .on_hover_text(material_hover(preset));
+            }
+        });
+    // What the switches compute, as they are now: the one text the library keeps true.
+    ui.horizontal_wrapped(|ui| {
+        ui.weak("Computes");
+        ui.label(shading.description(*materials));
+    });
+    ui.checkbox(&mut shading.shadows, "Shadows")
+        .on_hover_text("Cast a shadow ray from each hit to the light (section 5.1)");
+    let indirect_hover = if path {
+        "Follow bounces of real indirect light; off: direct light only"
+    } else {
+        "Add the lab's constant indirect light N (section 5.2)"
+    };
+    ui.checkbox(&mut shading.indirect, "Indirect light")
+        .on_hover_text(indirect_hover);
     let mut n = shading.indirect_light.x;
-    let response = ui.add_enabled(
-        shading.indirect,
-        egui::Slider::new(&mut n, 0.0..=1.0).text("Indirect N"),
-    );
+    let response = ui
+        .add_enabled(
+            shading.indirect && !path,
+            egui::Slider::new(&mut n, 0.0..=1.0).text("Indirect N"),
+        )
+        .on_hover_text("The lab's constant indirect light N, added to D at every hit")
+        .on_disabled_hover_text(if path {
+            "Not used by the path tracer: it computes the real indirect light instead, by \
+             following bounces"
+        } else {
+            "Tick \"Indirect light\" to add N"
+        });
     if response.changed() {
         shading.indirect_light = glam::Vec3::splat(n);
     }
+
+    // The path tracer's bounces.
+    let bounces_enabled = path && shading.indirect;
+    let bounces_off_why = if path {
+        "\"Indirect light\" is off: the path tracer computes direct light only"
+    } else {
+        "Used by the path tracing stage"
+    };
+    let mut unlimited = shading.bounces.is_none();
+    let response = ui
+        .add_enabled(
+            bounces_enabled,
+            egui::Checkbox::new(&mut unlimited, "Unlimited bounces"),
+        )
+        .on_hover_text("Paths bounce until Russian roulette ends them (unbiased)")
+        .on_disabled_hover_text(bounces_off_why);
+    if response.changed() {
+        shading.bounces = if unlimited {
+            // Remember the count for when the box is unticked again.
+            *limited_bounces = shading.bounces.unwrap_or(*limited_bounces);
+            None
+        } else {
+            Some(*limited_bounces)
+        };
+    }
+    let mut bounces = shading.bounces.unwrap_or(*limited_bounces);
+    let response = ui
+        .add_enabled(
+            bounces_enabled && shading.bounces.is_some(),
+            egui::Slider::new(&mut bounces, 0..=MAX_BOUNCES_UI)
+                .clamping(egui::SliderClamping::Edits)
+                .text("Bounces"),
+        )
+        .on_hover_text("The most diffuse bounces a path makes: 0 is direct light only")
+        .on_disabled_hover_text(if bounces_enabled {
+            "Untick \"Unlimited bounces\" to cap the bounces"
+        } else {
+            bounces_off_why
+        });
+    if response.changed() {
+        shading.bounces = Some(bounces);
+        *limited_bounces = bounces;
+    }
+
+    // The lab stages follow mirror and glass Whitted-style.
+    let whitted = !path && *materials != MaterialPreset::None;
+    ui.add_enabled(
+        whitted,
+        egui::Slider::new(&mut shading.specular_depth, 0..=MAX_SPECULAR_DEPTH)
+            .clamping(egui::SliderClamping::Edits)
+            .text("Specular depth"),
+    )
+    .on_hover_text(
+        "How many mirror and glass hits in a row are followed (Whitted-style) before a ray \
+         is given up as black",
+    )
+    .on_disabled_hover_text(if path {
+        "The path tracer follows mirror and glass along its paths instead"
+    } else {
+        "Choose a mirror or glass under Materials: only those are followed"
+    });
 }
 
 pub fn image_ui(ui: &mut egui::Ui, settings: &mut RenderSettings, threads: &mut usize) {

@@ -19,6 +19,9 @@ pub const STATE_VERSION: u32 = 1;
 /// jittered samples averaged up to this many (anti-aliased edges).
 pub const DEFAULT_SAMPLE_TARGET: u32 = 16;
 
+/// The bounce count offered when "Unlimited bounces" is first unticked.
+pub const DEFAULT_LIMITED_BOUNCES: u32 = 4;
+
 /// Everything the workbench persists.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -33,6 +36,9 @@ pub struct WorkbenchState {
     pub screenshot_folder: PathBuf,
     /// The path typed in the Scene panel's OBJ field.
     pub obj_path: String,
+    /// The path tracer's bounce count while "Unlimited bounces" is ticked, for when it is
+    /// unticked again.
+    pub limited_bounces: u32,
 }
 
 impl Default for WorkbenchState {
@@ -43,6 +49,7 @@ impl Default for WorkbenchState {
             render_threads: raylab::progressive::default_threads(),
             screenshot_folder: PathBuf::from("."),
             obj_path: String::new(),
+            limited_bounces: DEFAULT_LIMITED_BOUNCES,
         }
     }
 }
@@ -194,5 +201,56 @@ mod tests {
         assert_eq!(notice, None);
         assert_eq!(state.settings.light.position.x, 0.5);
         assert_eq!(state.settings.camera, raylab::Camera::default());
+    }
+
+    /// A file saved before the path tracer and the materials existed: no `bounces`,
+    /// `specular_depth`, `material_preset` or `limited_bounces`. It loads quietly, the new fields
+    /// at their defaults.
+    #[test]
+    fn a_file_from_before_the_path_tracer_still_loads() {
+        let old = r#"{
+          "version": 1,
+          "settings": {
+            "scene": "cornell",
+            "camera": {"position": [0.0, 0.0, -3.001], "yaw": 0.0, "pitch": 0.0,
+                       "focal_length": 256.0, "width": 256, "height": 256},
+            "light": {"position": [0.0, -0.5, -0.7], "power": [14.0, 14.0, 14.0]},
+            "shading": {"stage": "shadows", "shadows": true, "indirect": false,
+                        "indirect_light": [0.25, 0.25, 0.25]},
+            "samples_per_pixel": 16,
+            "seed": 0
+          },
+          "render_threads": 2,
+          "screenshot_folder": "/tmp/shots",
+          "obj_path": ""
+        }"#;
+        let (state, notice) = load(Some(&stored(old)));
+        assert_eq!(notice, None);
+        let shading = state.settings.shading;
+        assert_eq!(shading.stage, raylab::Stage::Shadows);
+        assert_eq!(shading.indirect_light, glam::Vec3::splat(0.25));
+        assert_eq!(shading.bounces, None);
+        assert_eq!(
+            shading.specular_depth,
+            raylab::integrator::DEFAULT_SPECULAR_DEPTH
+        );
+        assert_eq!(state.settings.material_preset, raylab::MaterialPreset::None);
+        assert_eq!(state.settings.camera.width, 256);
+        assert_eq!(state.limited_bounces, DEFAULT_LIMITED_BOUNCES);
+        assert_eq!(state.screenshot_folder, PathBuf::from("/tmp/shots"));
+    }
+
+    #[test]
+    fn the_path_stage_and_materials_round_trip() {
+        let mut state = WorkbenchState::default();
+        state.settings.shading = raylab::Shading::for_stage(raylab::Stage::Path);
+        state.settings.shading.bounces = Some(3);
+        state.settings.shading.specular_depth = 2;
+        state.settings.material_preset = raylab::MaterialPreset::Both;
+        state.settings.samples_per_pixel = 1024;
+        state.limited_bounces = 3;
+        let mut storage = MemoryStorage::default();
+        save(&mut storage, &state);
+        assert_eq!(load(Some(&storage)), (state, None));
     }
 }

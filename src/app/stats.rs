@@ -1,7 +1,15 @@
-//! The numbers shown under "Stats": pass time, UI frame time, ray throughput, samples and the
-//! time from a change to its first image on screen.
+//! The numbers shown under "Stats": pass time, UI frame time, ray throughput, samples, the
+//! estimated remaining noise and the time from a change to its first image on screen.
 
 use eframe::egui;
+use raylab::film::NoiseEstimate;
+
+/// What the noise figures mean, for their hover text.
+const NOISE_HOVER: &str = "The standard error of the accumulated mean, estimated from the spread \
+    of each pixel's samples: how far the image may still be from the converged one. \
+    \"Noise\" is that error for the whole image's mean value, relative to it; \
+    \"Pixels above 1 %\" counts the pixels whose own error is above 1 % of their value \
+    (visible grain). Both shrink as 1/√samples.";
 
 #[derive(Clone, Debug, Default)]
 pub struct Stats {
@@ -21,6 +29,20 @@ pub struct Stats {
     /// From the last change to its first image on screen: ms and UI frames.
     pub change_to_image: Option<(f64, u32)>,
     pub threads: usize,
+    /// The estimated remaining noise of the shown image (from 2 samples on).
+    pub noise: Option<NoiseEstimate>,
+}
+
+/// A fraction as a percentage with about two significant digits: "0.42 %", "12.5 %".
+pub fn percent(fraction: f64) -> String {
+    let p = fraction * 100.0;
+    let decimals = if p == 0.0 || p >= 10.0 {
+        1
+    } else {
+        // Two significant digits below 10 %, at most 4 decimals.
+        (1 - p.log10().floor() as i32).clamp(1, 4) as usize
+    };
+    format!("{p:.decimals$} %")
 }
 
 impl Stats {
@@ -41,7 +63,14 @@ impl Stats {
             format!("{}/{} spp", self.samples, self.target)
         };
         let frame = self.frame_cpu_ms.unwrap_or(self.ui_frame_ms);
-        format!("{pass} · UI {frame:.1} ms · {samples}")
+        match self.noise.filter(|_| !self.is_preview) {
+            Some(noise) => format!(
+                "{pass} · UI {frame:.1} ms · {samples} · noise ±{}, {} px > 1 %",
+                percent(noise.relative_error_of_mean),
+                percent(noise.share_of_pixels_above_1_percent)
+            ),
+            None => format!("{pass} · UI {frame:.1} ms · {samples}"),
+        }
     }
 
     pub fn stats_ui(&self, ui: &mut egui::Ui) {
@@ -72,6 +101,18 @@ impl Stats {
             format!("Samples: {} / {}", self.samples, self.target)
         };
         ui.label(&text);
+        if let Some(noise) = self.noise.filter(|_| !self.is_preview) {
+            ui.label(format!(
+                "Noise: ±{} of the image mean",
+                percent(noise.relative_error_of_mean)
+            ))
+            .on_hover_text(NOISE_HOVER);
+            ui.label(format!(
+                "Pixels above 1 %: {}",
+                percent(noise.share_of_pixels_above_1_percent)
+            ))
+            .on_hover_text(NOISE_HOVER);
+        }
         let fraction = if self.target == 0 {
             0.0
         } else {
@@ -84,5 +125,42 @@ impl Stats {
                 .animate(self.rendering()),
         )
         .on_hover_text("Progress toward the sample target");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentages_keep_about_two_significant_digits() {
+        assert_eq!(percent(0.0042), "0.42 %");
+        assert_eq!(percent(0.125), "12.5 %");
+        assert_eq!(percent(0.042), "4.2 %");
+        assert_eq!(percent(0.000_042), "0.0042 %");
+        assert_eq!(percent(0.0), "0.0 %");
+        assert_eq!(percent(1.0), "100.0 %");
+    }
+
+    #[test]
+    fn the_summary_shows_the_noise_once_there_is_one() {
+        let mut stats = Stats {
+            samples: 1,
+            target: 8,
+            ..Stats::default()
+        };
+        assert!(!stats.summary().contains("noise"));
+        stats.samples = 2;
+        stats.noise = Some(NoiseEstimate {
+            relative_error_of_mean: 0.0042,
+            share_of_pixels_above_1_percent: 0.5,
+        });
+        assert!(
+            stats
+                .summary()
+                .ends_with("2/8 spp · noise ±0.42 %, 50.0 % px > 1 %"),
+            "{}",
+            stats.summary()
+        );
     }
 }

@@ -10,12 +10,12 @@ use std::time::{Duration, Instant};
 use eframe::egui::{self, Key, Modifiers};
 use egui::accesskit::Role;
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable as _;
+use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use glam::Vec3;
 use raylab::light::{direct_light, in_shadow, shadow_ray};
 use raylab::render::render;
 use raylab::scene::{SceneChoice, cornell_box};
-use raylab::{Image, RenderSettings, Shading, Stage};
+use raylab::{Image, MaterialPreset, RenderSettings, Shading, Stage};
 
 use super::persistence::{WorkbenchState, lab_defaults};
 use super::*;
@@ -207,7 +207,13 @@ fn flat_stage_shows_only_the_seven_reflectances() {
     // Every stage is offered, named with its figure.
     h.get_by_role_and_label(Role::ComboBox, "Stage").click();
     h.run_steps(2);
-    for label in ["(figure 3)", "(figure 5)", "(figure 6)", "(figure 7)"] {
+    for label in [
+        "(figure 3)",
+        "(figure 5)",
+        "(figure 6)",
+        "(figure 7)",
+        "Path tracing (real light)",
+    ] {
         assert!(h.query_by_label_contains(label).is_some(), "{label}");
     }
 }
@@ -536,4 +542,174 @@ fn non_finite_values_never_reach_the_renderer() {
     }
     // Still rendering, and still the box.
     assert_eq!(shown(&h).image.width, before.image.width);
+}
+
+/// A tiny image, so the path tracer's samples take milliseconds.
+fn tiny_state() -> WorkbenchState {
+    let mut state = small_state();
+    state.settings.camera = state.settings.camera.with_resolution(32, 24);
+    state
+}
+
+/// Picks `label` in the combo box labelled `combo`.
+fn choose(h: &mut Harness<'_, WorkbenchApp>, combo: &str, label: &str) {
+    h.get_by_role_and_label(Role::ComboBox, combo).click();
+    h.run_steps(2);
+    h.get_by_label(label).click();
+    // One frame handles the click, the next shows its result.
+    h.run_steps(2);
+}
+
+/// Sets the sample target through its slider.
+fn set_target(h: &mut Harness<'_, WorkbenchApp>, target: u32) {
+    h.get_by_role_and_label(Role::Slider, "Sample target")
+        .set_value_accesskit(f64::from(target));
+    h.step();
+    assert_eq!(settings(h).samples_per_pixel, target);
+}
+
+#[test]
+fn the_path_stage_raises_the_sample_target_and_renders_what_the_library_renders() {
+    let mut h = harness(tiny_state());
+    choose(&mut h, "Stage", "Path tracing (real light)");
+    let s = settings(&h);
+    assert_eq!(s.shading.stage, Stage::Path);
+    assert!(s.samples_per_pixel >= PATH_SAMPLE_TARGET);
+    assert_eq!(s.samples_per_pixel, 1024);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Info);
+    assert!(text.contains("1024"), "{text}");
+    // The indirect N is not the path tracer's: its slider is disabled there.
+    assert!(
+        h.get_by_role_and_label(Role::Slider, "Indirect N")
+            .accesskit_node()
+            .is_disabled()
+    );
+    // Down to a few samples, to keep the test quick; the same image as the library's.
+    set_target(&mut h, 8);
+    settle(&mut h);
+    let frame = shown(&h);
+    assert_eq!(frame.settings.shading.stage, Stage::Path);
+    assert_eq!((frame.samples, frame.target), (8, 8));
+    assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
+    // Back to a lab stage: the target stays as it is.
+    choose(&mut h, "Stage", "Lab (figure 7)");
+    assert_eq!(settings(&h).samples_per_pixel, 8);
+    settle(&mut h);
+}
+
+#[test]
+fn the_mirror_preset_changes_the_image_as_the_library_renders_it() {
+    let mut h = harness(small_state());
+    let diffuse = shown(&h);
+    assert_eq!(diffuse.settings.material_preset, MaterialPreset::None);
+    choose(&mut h, "Materials", "Mirror tall block");
+    settle(&mut h);
+    let mirror = shown(&h);
+    assert_eq!(mirror.settings.material_preset, MaterialPreset::Mirror);
+    assert_eq!(*mirror.image, render(&cornell_box(), &mirror.settings));
+    let differing = (0..mirror.image.pixels.len())
+        .filter(|&i| changed(mirror.image.pixels[i], diffuse.image.pixels[i]))
+        .count();
+    assert!(differing > 300, "{differing}");
+    // The description says the mirror is followed, and how deep.
+    assert!(
+        h.query_by_label_contains("mirror and glass followed up to 6 deep")
+            .is_some()
+    );
+    // The specular depth slider works on it.
+    h.get_by_role_and_label(Role::Slider, "Specular depth")
+        .set_value_accesskit(0.0);
+    settle(&mut h);
+    let depth_0 = shown(&h);
+    assert_eq!(depth_0.settings.shading.specular_depth, 0);
+    assert_ne!(depth_0.image, mirror.image);
+    assert_eq!(*depth_0.image, render(&cornell_box(), &depth_0.settings));
+}
+
+#[test]
+fn the_description_follows_the_switches() {
+    let mut h = harness(small_state());
+    assert!(
+        h.query_by_label("ρ·(D + N) (eq. 30) with shadows (§5.1)")
+            .is_some()
+    );
+    h.get_by_role_and_label(Role::CheckBox, "Shadows").click();
+    h.run_steps(2);
+    assert!(h.query_by_label("ρ·(D + N) (eq. 30)").is_some());
+    h.get_by_role_and_label(Role::CheckBox, "Indirect light")
+        .click();
+    h.run_steps(2);
+    assert!(h.query_by_label("ρ·D (eq. 28)").is_some());
+    settle(&mut h);
+}
+
+#[test]
+fn the_path_stage_with_no_bounces_is_the_shadows_stage_bit_for_bit() {
+    let mut h = harness(tiny_state());
+    choose(&mut h, "Stage", "Path tracing (real light)");
+    set_target(&mut h, 4);
+    assert!(
+        h.get_by_role_and_label(Role::Slider, "Bounces")
+            .accesskit_node()
+            .is_disabled()
+    );
+    h.get_by_role_and_label(Role::CheckBox, "Unlimited bounces")
+        .click();
+    h.step();
+    assert!(settings(&h).shading.bounces.is_some());
+    h.get_by_role_and_label(Role::Slider, "Bounces")
+        .set_value_accesskit(0.0);
+    settle(&mut h);
+    let path = shown(&h);
+    assert_eq!(path.settings.shading.stage, Stage::Path);
+    assert_eq!(path.settings.shading.bounces, Some(0));
+    assert_eq!((path.samples, path.target), (4, 4));
+    assert!(
+        h.query_by_label_contains("no bounces: direct light only")
+            .is_some()
+    );
+    let mut shadows = path.settings.clone();
+    shadows.shading = Shading::for_stage(Stage::Shadows);
+    let bits = |image: &Image| -> Vec<[u32; 3]> {
+        image
+            .pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    };
+    assert_eq!(bits(&path.image), bits(&render(&cornell_box(), &shadows)));
+    // Ticking "Unlimited bounces" again brings back the real indirect light; unticking it
+    // remembers the 0.
+    h.get_by_role_and_label(Role::CheckBox, "Unlimited bounces")
+        .click();
+    h.step();
+    assert_eq!(settings(&h).shading.bounces, None);
+    h.get_by_role_and_label(Role::CheckBox, "Unlimited bounces")
+        .click();
+    h.step();
+    assert_eq!(settings(&h).shading.bounces, Some(0));
+    settle(&mut h);
+}
+
+#[test]
+fn the_stats_show_the_noise_of_a_path_traced_image() {
+    let mut h = harness(tiny_state());
+    // One sample: no spread to estimate the noise from yet.
+    assert!(h.query_by_label_contains("Noise:").is_none());
+    choose(&mut h, "Stage", "Path tracing (real light)");
+    set_target(&mut h, 4);
+    settle(&mut h);
+    assert!(shown(&h).samples >= 2);
+    let noise = h.state().stats.noise.expect("a noise estimate");
+    assert!(noise.relative_error_of_mean > 0.0);
+    let node = h
+        .query_by_label_contains("Noise: ±")
+        .expect("a Noise label in the Stats")
+        .accesskit_node();
+    let label = node.label().or_else(|| node.value()).unwrap_or_default();
+    assert!(label.ends_with("% of the image mean"), "{label}");
+    assert!(h.query_by_label_contains("Pixels above 1 %: ").is_some());
+    // And in the status bar's summary, which stays in view.
+    assert!(h.query_by_label_contains("noise ±").is_some());
 }

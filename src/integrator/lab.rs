@@ -72,9 +72,7 @@ fn wave(
     let scene = tracer.scene;
     let shading = &tracer.shading;
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
-    for (hit, ray) in hits.iter_mut().zip(rays) {
-        *hit = scene.closest_intersection(ray, f32::INFINITY);
-    }
+    scene.closest_intersections(rays, f32::INFINITY, &mut hits[..rays.len()]);
     // The diffuse hits' terms, and which ray each belongs to.
     let mut terms: ArrayVec<HitTerms, BATCH> = ArrayVec::new();
     let mut owner: ArrayVec<u8, BATCH> = ArrayVec::new();

@@ -365,12 +365,24 @@ impl HitTerms {
     }
 }
 
-/// Traces the shadow rays of a batch of hit terms together and records which are blocked.
+/// Traces the shadow rays of a batch of hit terms (at most [`BATCH`]) together and records
+/// which are blocked.
 pub fn cast_shadow_rays(scene: &Scene, terms: &mut [HitTerms]) {
-    for t in terms {
-        if let Some((ray, t_max)) = &t.shadow_ray {
-            t.blocked = scene.occluded(ray, *t_max);
+    debug_assert!(terms.len() <= BATCH);
+    let mut rays = [(Ray::new(Vec3::ZERO, Vec3::Z), 0.0); BATCH];
+    let mut owner = [0u8; BATCH];
+    let mut n = 0;
+    for (i, t) in terms.iter().enumerate() {
+        if let Some(ray) = t.shadow_ray {
+            rays[n] = ray;
+            owner[n] = i as u8;
+            n += 1;
         }
+    }
+    let mut blocked = [false; BATCH];
+    scene.occluded_many(&rays[..n], &mut blocked[..n]);
+    for (&i, &b) in owner[..n].iter().zip(&blocked[..n]) {
+        terms[i as usize].blocked = b;
     }
 }
 

@@ -81,15 +81,16 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
     }
     let mut n_alive = rays.len();
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
+    let mut rays_alive = [rays[0]; BATCH];
     let mut terms = [HitTerms::NONE; BATCH];
     // For each term: the path it belongs to and the throughput it is seen with.
     let mut term_of = [(0u8, Vec3::ZERO); BATCH];
 
     while n_alive > 0 {
-        for k in 0..n_alive {
-            let p = &paths[alive[k] as usize];
-            hits[k] = scene.closest_intersection(&p.ray, f32::INFINITY);
+        for (ray, &i) in rays_alive.iter_mut().zip(&alive[..n_alive]) {
+            *ray = paths[i as usize].ray;
         }
+        scene.closest_intersections(&rays_alive[..n_alive], f32::INFINITY, &mut hits[..n_alive]);
         let mut n_terms = 0;
         let mut still = 0;
         for k in 0..n_alive {

@@ -95,6 +95,48 @@ impl Scene {
         })
     }
 
+    /// [`Scene::closest_intersection`] for many rays at once: `out[i]` for `rays[i]`, the same
+    /// answers, faster (see [`Accel::closest_batch`]).
+    pub fn closest_intersections(
+        &self,
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [Option<Intersection>],
+    ) {
+        debug_assert_eq!(rays.len(), out.len());
+        if !self.accel.built_for(self.triangles.len()) {
+            for (ray, hit) in rays.iter().zip(out) {
+                *hit = intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
+            }
+            return;
+        }
+        let mut hits = [None; 64];
+        for (rays, out) in rays.chunks(64).zip(out.chunks_mut(64)) {
+            let hits = &mut hits[..rays.len()];
+            self.accel.closest_batch(&self.triangles, rays, t_max, hits);
+            for ((ray, hit), o) in rays.iter().zip(hits.iter()).zip(out) {
+                *o = hit.map(|hit| Intersection {
+                    position: ray.at(hit.t),
+                    distance: hit.t,
+                    triangle_index: hit.index as usize,
+                    u: hit.u,
+                    v: hit.v,
+                });
+            }
+        }
+    }
+
+    /// [`Scene::occluded`] for many shadow rays at once, each with its own `t_max`.
+    pub fn occluded_many(&self, rays: &[(Ray, f32)], out: &mut [bool]) {
+        if !self.accel.built_for(self.triangles.len()) {
+            for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                *blocked = intersect::occluded_brute_force(ray, &self.triangles, *t_max);
+            }
+            return;
+        }
+        self.accel.occluded_batch(&self.triangles, rays, out);
+    }
+
     /// Whether anything lies along `ray` with `t < t_max` (a shadow ray's question).
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
