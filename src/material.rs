@@ -77,6 +77,7 @@ impl Material {
     ///
     /// `direction` is the incoming ray's (unit) direction, `normal` the surface's geometric
     /// normal (either side).
+    #[inline(always)]
     pub fn specular_branches(&self, direction: Vec3, normal: Vec3) -> Branches {
         let mut out = Branches::default();
         match self.kind {
@@ -104,6 +105,7 @@ impl Material {
     ///   Whitted branches' sum.
     ///
     /// Draws one number from `rng` for glass, none for a mirror.
+    #[inline(always)]
     pub fn sample(&self, direction: Vec3, normal: Vec3, rng: &mut Rng) -> Scatter {
         match self.kind {
             MaterialKind::Diffuse => {
@@ -159,6 +161,7 @@ impl Branches {
 
 /// The normal turned to face a ray coming along `direction` (surfaces are two-sided for
 /// bounces).
+#[inline(always)]
 pub fn facing(normal: Vec3, direction: Vec3) -> Vec3 {
     if normal.dot(direction) > 0.0 {
         -normal
@@ -169,6 +172,7 @@ pub fn facing(normal: Vec3, direction: Vec3) -> Vec3 {
 
 /// The mirror direction of `direction` about the plane with normal `normal` (either side):
 /// `d − 2 (d·n) n`. The angle to the normal is kept exactly up to rounding.
+#[inline(always)]
 pub fn reflect(direction: Vec3, normal: Vec3) -> Vec3 {
     direction - 2.0 * direction.dot(normal) * normal
 }
@@ -179,6 +183,7 @@ pub fn reflect(direction: Vec3, normal: Vec3) -> Vec3 {
 /// `cos_i` is the cosine of the angle of incidence (≥ 0), `eta` the ratio of the index on the
 /// far side to the index on the near side. Returns 1 past the critical angle (total internal
 /// reflection).
+#[inline(always)]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     let cos_i = cos_i.clamp(0.0, 1.0);
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
@@ -200,6 +205,7 @@ struct GlassHit {
 
 impl GlassHit {
     /// `normal` points out of the glass (the geometric normal): a ray against it enters.
+    #[inline(always)]
     fn new(direction: Vec3, normal: Vec3, ior: f32) -> Self {
         let entering = direction.dot(normal) < 0.0;
         let (n, eta) = if entering {

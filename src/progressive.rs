@@ -8,7 +8,8 @@
 //! 2. the full resolution at sample 0 (the pixel centres: the lab's image),
 //! 3. further jittered passes, averaged in a [`Film`], up to `samples_per_pixel` (the target),
 //!
-//! and publishes a [`Frame`] after each pass. Then it sleeps on its channel (no CPU) until the
+//! and publishes a [`Frame`] after each pass, at most one every [`MIN_FRAME_INTERVAL`] after the
+//! first full-resolution one (the last always). Then it sleeps on its channel (no CPU) until the
 //! next submission.
 //!
 //! A submission makes the running pass stale: the pass's `cancelled` closure compares its
@@ -33,6 +34,10 @@ use crate::settings::{RenderSettings, SettingsError};
 
 /// The preview's size divisor: a 1024² image previews at 128².
 pub const PREVIEW_DIVISOR: u32 = 8;
+
+/// The shortest time between two accumulated frames shown (after the first): 25 a second, as
+/// smooth as the eye needs, while passes of a few milliseconds keep accumulating in between.
+pub const MIN_FRAME_INTERVAL: std::time::Duration = std::time::Duration::from_millis(40);
 
 /// Images narrower and shorter than this skip the preview: their first full pass is as quick.
 pub const PREVIEW_MIN_SIDE: u32 = 64;
@@ -422,11 +427,20 @@ impl Worker {
         }
 
         let mut film = Film::with_noise(width, height);
+        let mut published = Instant::now();
         for sample in 0..target {
             let Some((pass, pass_ms)) = self.pass(job, settings, sample) else {
                 return false;
             };
             film.add_pass(&pass);
+            // Short passes are not all shown: each frame shown costs the UI a repaint (and the
+            // mean, its display pixels and the noise estimate cost the worker), which takes
+            // from the render on a small machine. The first and the last always are.
+            let last = sample + 1 == target;
+            if sample > 0 && !last && published.elapsed() < MIN_FRAME_INTERVAL {
+                continue;
+            }
+            published = Instant::now();
             // The mean of one pass is the pass itself: skip the copy.
             let image = if sample == 0 { pass } else { film.resolve() };
             if stale() {

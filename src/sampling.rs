@@ -40,6 +40,7 @@ impl Rng {
         Self::new(mix64(seed ^ mix64(pixel)) ^ u64::from(sample).wrapping_mul(PCG_MULTIPLIER))
     }
 
+    #[inline(always)]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(PCG_MULTIPLIER).wrapping_add(PCG_INCREMENT);
@@ -50,6 +51,7 @@ impl Rng {
 
     /// Uniform in [0, 1): the top 24 bits, so every value is exactly representable and 1.0 is
     /// never returned.
+    #[inline(always)]
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
     }
@@ -98,6 +100,7 @@ pub fn cosine_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
 /// disk by rejection from the square around it (π/4 of the tries are kept, so 2.5 numbers are
 /// drawn on average), lifted onto the hemisphere. The path tracer's diffuse bounces use it:
 /// it is faster, and exactly as cosine-distributed.
+#[inline(always)]
 pub fn cosine_hemisphere_by_rejection(rng: &mut Rng) -> glam::Vec3 {
     loop {
         let x = 2.0 * rng.next_f32() - 1.0;
@@ -121,6 +124,7 @@ pub fn uniform_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
 /// Two unit vectors that make a right-handed orthonormal basis with the unit vector `n`
 /// (Duff et al., "Building an Orthonormal Basis, Revisited", 2017: no branch on a near-axis
 /// `n` apart from its sign).
+#[inline(always)]
 pub fn orthonormal_basis(n: glam::Vec3) -> (glam::Vec3, glam::Vec3) {
     let sign = 1.0f32.copysign(n.z);
     let a = -1.0 / (sign + n.z);

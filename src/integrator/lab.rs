@@ -40,6 +40,7 @@ enum Wave<'a> {
 }
 
 /// The value of every ray, into `out`.
+#[inline(always)]
 pub(super) fn trace(tracer: &Tracer, rays: &[Ray], out: &mut [Vec3]) {
     let (mut rays_next, mut branches_next) = (Vec::new(), Vec::new());
     for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
@@ -61,6 +62,7 @@ pub(super) fn trace(tracer: &Tracer, rays: &[Ray], out: &mut [Vec3]) {
 /// One phase-batched step for up to [`BATCH`] rays: closest hits, the lab's terms at the
 /// diffuse hits, their shadow rays, the sums into `out`; the specular hits' branches go to
 /// `next`.
+#[inline(always)]
 fn wave(
     tracer: &Tracer,
     rays: &[Ray],
@@ -128,6 +130,7 @@ fn wave(
 
 /// A ray leaving a surface point along `direction`, started [`SHADOW_OFFSET`] off the surface
 /// on the side it leaves by, so it cannot hit the surface it leaves.
+#[inline(always)]
 pub(crate) fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3) -> Ray {
     let side = if direction.dot(normal) >= 0.0 {
         1.0

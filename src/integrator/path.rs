@@ -52,6 +52,7 @@ struct PathState {
 }
 
 /// The value of every ray (π × radiance), into `out`.
+#[inline(always)]
 pub(super) fn trace(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
     for ((rays, rngs), out) in rays
         .chunks(BATCH)
@@ -62,10 +63,12 @@ pub(super) fn trace(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [
     }
 }
 
+#[inline(always)]
 fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
     let scene = tracer.scene;
     let shading = &tracer.shading;
     let max_bounces = shading.max_bounces();
+    let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
     out.fill(Vec3::ZERO);
     let mut paths = [PathState {
         ray: rays[0],
@@ -98,8 +101,9 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
             let Some(hit) = hits[k] else { continue };
             let path = &mut paths[i];
             let rng = &mut rngs[i];
-            let material = tracer.material_of(hit.triangle_index);
-            let geometric = scene.triangles[hit.triangle_index].normal;
+            let triangle = &triangles[hit.triangle_index];
+            let material = &materials[triangle.material as usize];
+            let geometric = triangle.normal;
             let incoming = path.ray.direction;
             if material.is_diffuse() {
                 let normal = facing(geometric, incoming);
@@ -130,7 +134,7 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
                 if rng.next_f32() >= survival {
                     continue;
                 }
-                path.beta /= survival;
+                path.beta *= survival.recip();
             }
             alive[still] = i as u8;
             still += 1;
