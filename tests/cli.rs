@@ -230,3 +230,53 @@ fn settings_from_a_json_file_reproduce_the_render() {
     assert!(!r.status.success());
     assert!(stderr(&r).contains("shot.json"), "{}", stderr(&r));
 }
+
+/// `--stage path --bounces 0` is the `shadows` stage (figure 6), bit for bit; with bounces the
+/// image is brighter (real indirect light), the same for the same seed, and a preset changes it.
+#[test]
+fn the_path_stage_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let path = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            "--out",
+            path.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "32",
+        ];
+        args.extend_from_slice(extra);
+        let out = raylab(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        image::open(&path).unwrap().to_rgb32f()
+    };
+    let shadows = render("shadows.exr", &["--stage", "shadows"]);
+    let direct_only = render("p0.exr", &["--stage", "path", "--bounces", "0"]);
+    assert_eq!(shadows.as_raw(), direct_only.as_raw());
+    let path = ["--stage", "path", "--samples", "4", "--seed", "3"];
+    let a = render("a.exr", &path);
+    let b = render("b.exr", &path);
+    assert_eq!(a.as_raw(), b.as_raw(), "same seed, same image");
+    let sum = |img: &image::Rgb32FImage| img.as_raw().iter().map(|&v| f64::from(v)).sum::<f64>();
+    assert!(sum(&a) > 1.2 * sum(&shadows), "indirect light adds");
+    let both = render(
+        "both.exr",
+        &[&path[..], &["--material-preset", "both"]].concat(),
+    );
+    assert_ne!(both.as_raw(), a.as_raw());
+    for bad in [
+        &["--material-preset", "gold"][..],
+        &["--bounces", "many"],
+        &["--stage", "photon"],
+    ] {
+        let mut args = vec!["render", "--out", "x.png"];
+        args.extend_from_slice(bad);
+        let out = raylab(&args);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}");
+        let err = stderr(&out);
+        assert_eq!(err.lines().count(), 1, "one line: {err}");
+        assert!(err.contains(bad[1]), "{err}");
+    }
+}

@@ -126,18 +126,22 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
             path.beta *= scatter.weight;
             path.ray = continue_ray(hit.position, geometric, scatter.direction);
             path.depth += 1;
-            if path.depth >= MAX_DEPTH || path.beta == Vec3::ZERO {
-                continue;
-            }
-            if path.depth >= ROULETTE_DEPTH {
-                let survival = path.beta.max_element().min(ROULETTE_MAX_SURVIVAL);
-                if rng.next_f32() >= survival {
-                    continue;
-                }
-                path.beta *= survival.recip();
-            }
+            // Russian roulette from ROULETTE_DEPTH on. Its number is drawn at every vertex,
+            // used or not, and the outcome is computed without branches: whether a path
+            // survives is a coin toss the processor cannot predict.
+            let u = rng.next_f32();
+            let roulette = path.depth >= ROULETTE_DEPTH;
+            let survival = if roulette {
+                path.beta.max_element().min(ROULETTE_MAX_SURVIVAL)
+            } else {
+                1.0
+            };
+            path.beta *= survival.recip();
+            // A path that lost all its throughput (a black surface) ends at the roulette, where
+            // its survival is 0; before it, it may go on a vertex or two adding nothing.
+            let keep = (path.depth < MAX_DEPTH) & (u < survival);
             alive[still] = i as u8;
-            still += 1;
+            still += usize::from(keep);
         }
         n_alive = still;
         cast_shadow_rays(scene, &mut terms[..n_terms]);
