@@ -277,7 +277,7 @@ impl Avx2 {
 }
 
 /// The AVX-512 kernels for 16-wide packets (the flat loop over a small scene). A value of this
-/// type exists only on a CPU with AVX-512 F and DQ (and AVX2 and FMA).
+/// type exists only on a CPU with AVX-512 F, DQ and VL (and AVX2 and FMA).
 #[derive(Clone, Copy, Debug)]
 pub struct Avx512 {
     avx2: Avx2,
@@ -290,6 +290,7 @@ impl Avx512 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx512vl")
         {
             return Some(Self { avx2 });
         }
