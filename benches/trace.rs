@@ -1,6 +1,7 @@
 //! `cargo bench`: per scene, the acceleration structure's build, closest hits of the default
-//! camera's primary rays, any-hit shadow rays, and one full pass of the lab stage (figure 7) —
-//! the figures `raylab bench` reports, measured by criterion. 512×512 on the default rayon pool
+//! camera's primary rays, any-hit shadow rays, one full pass of the lab stage (figure 7) and,
+//! for the Cornell box, of the path stage — the figures `raylab bench` reports, measured by
+//! criterion. 512×512 on the default rayon pool
 //! (all cores); set RAYON_NUM_THREADS=2 to match PERFORMANCE.md.
 //!
 //! `cargo bench -- cornell` runs one scene's group.
@@ -13,6 +14,7 @@ use raylab::accel::{Accel, AccelKind, Isa};
 use raylab::bench::{lab_settings, primary_rays, shadow_rays, trace_primary, trace_shadow};
 use raylab::render::render_pass;
 use raylab::scene::SceneChoice;
+use raylab::{Shading, Stage};
 
 fn scenes(c: &mut Criterion) {
     for choice in SceneChoice::BUILT_IN {
@@ -45,6 +47,18 @@ fn scenes(c: &mut Criterion) {
         group.bench_function("lab_pass", |b| {
             b.iter(|| render_pass(black_box(&scene), &settings, 0, &|| false))
         });
+        if choice == SceneChoice::Cornell {
+            // The path stage: camera paths per second (a new sample index each pass).
+            let mut path = settings.clone();
+            path.shading = Shading::for_stage(Stage::Path);
+            let mut sample = 0;
+            group.bench_function("path_pass", |b| {
+                b.iter(|| {
+                    sample += 1;
+                    render_pass(black_box(&scene), &path, sample, &|| false)
+                })
+            });
+        }
         group.finish();
     }
 }
