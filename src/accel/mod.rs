@@ -411,7 +411,8 @@ fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mu
     match s {
         Structure::Flat(f) => {
             for ((ray, t_max), blocked) in rays_out {
-                *blocked = f.occluded16(k, &RayK::new(ray), *t_max);
+                // No boxes: the ray needs no reciprocal direction.
+                *blocked = f.occluded16(k, &RayK::for_triangles(ray), *t_max);
             }
         }
         Structure::Bvh8(b) => {
