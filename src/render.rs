@@ -29,7 +29,7 @@ pub fn trace_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, sam
     let tracer = Tracer::new(scene, settings);
     let rotation = settings.camera.rotation();
     let mut ray = [Ray::new(Vec3::ZERO, Vec3::Z)];
-    let mut rng = [Rng::new(0)];
+    let mut rng = [Rng::UNUSED];
     camera_sample(
         &tracer,
         settings,

@@ -15,10 +15,9 @@
 use arrayvec::ArrayVec;
 use glam::Vec3;
 
-use super::{BATCH, HitTerms, Tracer, cast_shadow_rays};
+use super::{BATCH, HitTerms, Tracer, cast_shadow_rays, continue_ray};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::SHADOW_OFFSET;
 
 /// Where a specular branch's value goes and what it is multiplied by.
 #[derive(Clone, Copy, Debug)]
@@ -125,21 +124,6 @@ fn wave(
                 out[b.pixel as usize] += b.weight * value;
             }
         }
-    }
-}
-
-/// A ray leaving a surface point along `direction`, started [`SHADOW_OFFSET`] off the surface
-/// on the side it leaves by, so it cannot hit the surface it leaves.
-#[inline(always)]
-pub(crate) fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3) -> Ray {
-    let side = if direction.dot(normal) >= 0.0 {
-        1.0
-    } else {
-        -1.0
-    };
-    Ray {
-        origin: position + side * SHADOW_OFFSET * normal,
-        direction,
     }
 }
 

@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use crate::accel::Isa;
 use crate::accel::simd::{Avx2, Avx512};
 use crate::geometry::Ray;
-use crate::light::{PointLight, direct_light, shadow_ray};
+use crate::light::{PointLight, SHADOW_OFFSET, direct_light, shadow_ray};
 use crate::material::{Material, MaterialPreset};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -388,6 +388,21 @@ pub fn cast_shadow_rays(scene: &Scene, terms: &mut [HitTerms]) {
     }
 }
 
+/// A ray leaving a surface point along `direction`, started [`SHADOW_OFFSET`] off the surface
+/// on the side it leaves by, so it cannot hit the surface it leaves.
+#[inline(always)]
+pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3) -> Ray {
+    let side = if direction.dot(normal) >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    Ray {
+        origin: position + side * SHADOW_OFFSET * normal,
+        direction,
+    }
+}
+
 /// Everything an integrator needs for one pass: the scene, its materials with the preset
 /// applied, the light and the shading switches.
 #[derive(Debug)]
@@ -396,8 +411,6 @@ pub struct Tracer<'a> {
     pub materials: Cow<'a, [Material]>,
     pub light: PointLight,
     pub shading: Shading,
-    /// Whether every material is diffuse (the lab's box): no specular branches to follow.
-    all_diffuse: bool,
 }
 
 impl<'a> Tracer<'a> {
@@ -406,13 +419,11 @@ impl<'a> Tracer<'a> {
             MaterialPreset::None => Cow::Borrowed(scene.materials.as_slice()),
             preset => Cow::Owned(preset.apply(&scene.materials)),
         };
-        let all_diffuse = materials.iter().all(Material::is_diffuse);
         Self {
             scene,
             materials,
             light: settings.light,
             shading: settings.shading,
-            all_diffuse,
         }
     }
 
@@ -420,11 +431,6 @@ impl<'a> Tracer<'a> {
     #[inline]
     pub fn material_of(&self, triangle_index: usize) -> &Material {
         &self.materials[self.scene.triangles[triangle_index].material as usize]
-    }
-
-    /// Whether every material is diffuse.
-    pub fn all_diffuse(&self) -> bool {
-        self.all_diffuse
     }
 
     /// Whether the integrator draws random numbers (and so needs each ray's generator).
@@ -494,6 +500,7 @@ impl<'a> Tracer<'a> {
 mod tests {
     use super::*;
     use crate::Camera;
+    use crate::bench::primary_rays;
     use crate::scene::cornell_box;
 
     #[test]
@@ -579,11 +586,7 @@ mod tests {
     #[test]
     fn the_builds_for_the_cpu_equal_the_portable_one() {
         let scene = cornell_box();
-        let cam = Camera::default_for(40, 30);
-        let rays: Vec<Ray> = (0..30)
-            .flat_map(|y| (0..40).map(move |x| (x, y)))
-            .map(|(x, y)| cam.pixel_ray(x, y))
-            .collect();
+        let rays = primary_rays(&Camera::default_for(40, 30));
         for preset in MaterialPreset::ALL {
             for stage in Stage::ALL {
                 let mut settings = RenderSettings::default();
@@ -612,11 +615,7 @@ mod tests {
     #[test]
     fn one_ray_at_a_time_equals_the_batch() {
         let scene = cornell_box();
-        let cam = Camera::default_for(61, 47);
-        let rays: Vec<Ray> = (0..47)
-            .flat_map(|y| (0..61).map(move |x| (x, y)))
-            .map(|(x, y)| cam.pixel_ray(x, y))
-            .collect();
+        let rays = primary_rays(&Camera::default_for(61, 47));
         for preset in [MaterialPreset::None, MaterialPreset::Both] {
             for stage in Stage::ALL {
                 for shadows in [false, true] {

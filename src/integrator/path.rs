@@ -23,8 +23,7 @@
 
 use glam::Vec3;
 
-use super::lab::continue_ray;
-use super::{BATCH, HitTerms, Stage, Tracer, cast_shadow_rays};
+use super::{BATCH, HitTerms, Stage, Tracer, cast_shadow_rays, continue_ray};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::material::facing;

@@ -16,7 +16,7 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-use crate::accel::{Accel, AccelKind, Isa};
+use crate::accel::{Accel, AccelKind, Hit, Isa};
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{self, Intersection};
 pub use crate::material::{Material, MaterialKind};
@@ -86,13 +86,7 @@ impl Scene {
             return intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
         }
         let hit = self.accel.closest(&self.triangles, ray, t_max)?;
-        Some(Intersection {
-            position: ray.at(hit.t),
-            distance: hit.t,
-            triangle_index: hit.index as usize,
-            u: hit.u,
-            v: hit.v,
-        })
+        Some(intersection(ray, hit))
     }
 
     /// [`Scene::closest_intersection`] for many rays at once: `out[i]` for `rays[i]`, the same
@@ -115,13 +109,7 @@ impl Scene {
             let hits = &mut hits[..rays.len()];
             self.accel.closest_batch(&self.triangles, rays, t_max, hits);
             for ((ray, hit), o) in rays.iter().zip(hits.iter()).zip(out) {
-                *o = hit.map(|hit| Intersection {
-                    position: ray.at(hit.t),
-                    distance: hit.t,
-                    triangle_index: hit.index as usize,
-                    u: hit.u,
-                    v: hit.v,
-                });
+                *o = hit.map(|hit| intersection(ray, hit));
             }
         }
     }
@@ -144,6 +132,18 @@ impl Scene {
             return intersect::occluded_brute_force(ray, &self.triangles, t_max);
         }
         self.accel.occluded(&self.triangles, ray, t_max)
+    }
+}
+
+/// The intersection an acceleration structure's hit stands for along `ray`.
+#[inline(always)]
+fn intersection(ray: &Ray, hit: Hit) -> Intersection {
+    Intersection {
+        position: ray.at(hit.t),
+        distance: hit.t,
+        triangle_index: hit.index as usize,
+        u: hit.u,
+        v: hit.v,
     }
 }
 
