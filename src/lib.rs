@@ -21,6 +21,7 @@
 pub mod accel;
 pub mod bench;
 pub mod camera;
+pub mod display;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
@@ -32,6 +33,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod settings;
+pub mod texture;
 
 pub use camera::Camera;
 pub use film::Image;

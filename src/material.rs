@@ -23,6 +23,7 @@ use std::str::FromStr;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use crate::texture::Texture;
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, orthonormal_basis};
 
 /// How a surface scatters light.
@@ -48,6 +49,10 @@ pub struct Material {
     /// surface.
     pub reflectance: Vec3,
     pub kind: MaterialKind,
+    /// A texture for ρ (diffuse surfaces only): where set, ρ at a hit is the texture's value at
+    /// the hit's texture coordinates, not `reflectance`.
+    #[serde(skip)]
+    pub texture: Option<Texture>,
 }
 
 /// A direction to continue along and the weight it carries.
@@ -63,6 +68,7 @@ impl Material {
             name: name.into(),
             reflectance,
             kind: MaterialKind::Diffuse,
+            texture: None,
         }
     }
 
@@ -323,6 +329,7 @@ mod tests {
             name: "glass".into(),
             reflectance: Vec3::ZERO,
             kind: PRESET_GLASS,
+            texture: None,
         }
     }
 
@@ -450,6 +457,7 @@ mod tests {
                 ior: 1.5,
                 tint: Vec3::new(0.5, 1.0, 0.25),
             },
+            texture: None,
         };
         let b = tinted.specular_branches(Vec3::Y, n);
         let total: Vec3 = b.as_slice().iter().map(|(_, w)| *w).sum();

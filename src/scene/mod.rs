@@ -16,6 +16,8 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
+use glam::{Vec2, Vec3};
+
 use crate::accel::{Accel, AccelKind, Hit, Isa};
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{self, Intersection};
@@ -31,6 +33,13 @@ pub use crate::material::{Material, MaterialKind};
 pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
+    /// Per triangle, the normals at its three vertices that smooth shading interpolates
+    /// ([`Scene::shading_normal`]), or `None` for a flat triangle (the lab's box). Empty when no
+    /// triangle has them; else one entry per triangle.
+    pub vertex_normals: Vec<Option<[Vec3; 3]>>,
+    /// Per triangle, the texture coordinates of its three vertices ([`Scene::uv`]), or `None`.
+    /// Empty when no triangle has them; else one entry per triangle.
+    pub uvs: Vec<Option<[Vec2; 3]>>,
     accel: Accel,
 }
 
@@ -58,13 +67,60 @@ impl Scene {
         Self {
             triangles,
             materials,
+            vertex_normals: Vec::new(),
+            uvs: Vec::new(),
             accel,
         }
     }
 
+    /// The same scene with per-vertex normals and texture coordinates (each empty, or one
+    /// entry per triangle). They do not change the acceleration structure.
+    pub fn with_surface(
+        mut self,
+        vertex_normals: Vec<Option<[Vec3; 3]>>,
+        uvs: Vec<Option<[Vec2; 3]>>,
+    ) -> Self {
+        let n = self.triangles.len();
+        assert!(vertex_normals.is_empty() || vertex_normals.len() == n);
+        assert!(uvs.is_empty() || uvs.len() == n);
+        self.vertex_normals = vertex_normals;
+        self.uvs = uvs;
+        self
+    }
+
     /// The same geometry with another acceleration structure.
     pub fn rebuilt(self, kind: AccelKind, isa: Isa) -> Self {
-        Self::with_accel(self.triangles, self.materials, kind, isa)
+        let (normals, uvs) = (self.vertex_normals, self.uvs);
+        Self::with_accel(self.triangles, self.materials, kind, isa).with_surface(normals, uvs)
+    }
+
+    /// The normal to shade with at barycentric `(u, v)` of triangle `index`: the vertex normals
+    /// interpolated, `normalize((1 − u − v)·n₀ + u·n₁ + v·n₂)` (smooth shading), when `smooth`
+    /// and the triangle has them; else the triangle's own normal, exactly (the lab's flat
+    /// shading).
+    #[inline(always)]
+    pub fn shading_normal(&self, index: usize, u: f32, v: f32, smooth: bool) -> Vec3 {
+        let flat = self.triangles[index].normal;
+        if !smooth {
+            return flat;
+        }
+        match self.vertex_normals.get(index) {
+            Some(Some([n0, n1, n2])) => {
+                let n = (1.0 - u - v) * *n0 + u * *n1 + v * *n2;
+                n.try_normalize().unwrap_or(flat)
+            }
+            _ => flat,
+        }
+    }
+
+    /// The texture coordinates at barycentric `(u, v)` of triangle `index`, interpolated from
+    /// its vertices', or `None` where it has none.
+    #[inline(always)]
+    pub fn uv(&self, index: usize, u: f32, v: f32) -> Option<Vec2> {
+        match self.uvs.get(index) {
+            Some(Some([t0, t1, t2])) => Some((1.0 - u - v) * *t0 + u * *t1 + v * *t2),
+            _ => None,
+        }
     }
 
     /// The acceleration structure.
