@@ -22,9 +22,10 @@ use serde::Serialize;
 
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::Ray;
-use crate::integrator::HitTerms;
+use crate::integrator::{HitTerms, Surface};
 use crate::light::PointLight;
 use crate::render::render_pass;
+use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use crate::{Camera, Shading, Stage};
@@ -116,8 +117,14 @@ pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(R
         .filter_map(|ray| {
             let hit = scene.closest_intersection(ray, f32::INFINITY)?;
             let normal = scene.triangles[hit.triangle_index].normal;
-            let rho = scene.material_of(hit.triangle_index).reflectance;
-            HitTerms::at(light, Stage::Lab, true, hit.position, normal, rho).shadow_ray
+            let surface = Surface {
+                position: hit.position,
+                normal,
+                geometric: normal,
+                rho: scene.material_of(hit.triangle_index).reflectance,
+            };
+            let mut rng = Rng::UNUSED;
+            HitTerms::at(light, Stage::Lab, true, surface, &mut rng).shadow_ray
         })
         .collect()
 }

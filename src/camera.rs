@@ -26,6 +26,12 @@ pub struct Camera {
     pub width: u32,
     /// Image height `H` in pixels.
     pub height: u32,
+    /// Radius of the thin lens's aperture, in scene units; 0 is the lab's pinhole (everything
+    /// sharp). Depth of field, one of the lab's extensions.
+    pub aperture: f32,
+    /// Distance from the lens to the plane in focus, along the view direction, in scene units.
+    /// Only matters with an aperture above 0.
+    pub focus_distance: f32,
 }
 
 impl Default for Camera {
@@ -45,8 +51,13 @@ impl Camera {
             focal_length: width as f32,
             width,
             height,
+            aperture: 0.0,
+            focus_distance: Self::DEFAULT_FOCUS_DISTANCE,
         }
     }
+
+    /// The focus distance by default: the default camera to the box's centre, 3.001.
+    pub const DEFAULT_FOCUS_DISTANCE: f32 = 3.001;
 
     /// The rotation `R` whose columns are right, down and forward (lab section 4):
     /// `R = R_y(yaw) · R_x(pitch)`.
@@ -84,6 +95,35 @@ impl Camera {
             self.focal_length,
         );
         Ray::new(self.position, *rotation * d)
+    }
+
+    /// The ray of a thin lens through the image-plane point `(px, py)` and the lens point
+    /// `lens` (on the unit disk, scaled by [`Camera::aperture`]).
+    ///
+    /// Every lens point's ray for `(px, py)` passes through the same point of the plane in focus,
+    /// the point the pinhole ray reaches at depth [`Camera::focus_distance`] along the view
+    /// direction: points on that plane are sharp. A point at depth z is seen through the lens
+    /// point ℓ (camera coordinates, scene units) at image position `f·x/z + f·ℓ·(1/F − 1/z)`
+    /// (F the focus distance, f the focal length in pixels), so its image spreads over a disk
+    /// of radius `f · aperture · |1/F − 1/z|` pixels: the circle of confusion.
+    #[inline]
+    pub fn lens_ray_rotated(&self, rotation: &Mat3, px: f32, py: f32, lens: glam::Vec2) -> Ray {
+        let d = Vec3::new(
+            px - self.width as f32 / 2.0,
+            py - self.height as f32 / 2.0,
+            self.focal_length,
+        );
+        let focus = d * (self.focus_distance / self.focal_length);
+        let on_lens = Vec3::new(self.aperture * lens.x, self.aperture * lens.y, 0.0);
+        Ray::new(
+            self.position + *rotation * on_lens,
+            *rotation * (focus - on_lens),
+        )
+    }
+
+    /// The depth of a point along the view direction: its distance from the plane of the lens.
+    pub fn depth_of(&self, point: Vec3) -> f32 {
+        (point - self.position).dot(self.forward())
     }
 
     /// The ray through the centre of pixel `(x, y)`.
@@ -216,5 +256,74 @@ mod tests {
         let small = cam.with_resolution(128, 96);
         assert_eq!(small.focal_length, 128.0);
         assert!((small.horizontal_fov_degrees() - cam.horizontal_fov_degrees()).abs() < 1e-4);
+    }
+
+    /// A point at the focus distance is sharp: the rays of every lens point through a pixel
+    /// meet at one point of the focus plane, and so its image does not spread.
+    #[test]
+    fn the_focus_plane_is_sharp() {
+        let mut cam = Camera::default_for(256, 256);
+        cam.yaw = 0.2;
+        cam.aperture = 0.1;
+        cam.focus_distance = 2.5;
+        let r = cam.rotation();
+        let (px, py) = (60.3, 190.7);
+        let pinhole = cam.primary_ray_rotated(&r, px, py);
+        // Where the pinhole ray reaches depth 2.5.
+        let target = pinhole.at(2.5 / pinhole.direction.dot(cam.forward()));
+        for lens in [
+            glam::Vec2::new(1.0, 0.0),
+            glam::Vec2::new(-0.6, 0.8),
+            glam::Vec2::new(0.0, -1.0),
+            glam::Vec2::new(0.3, 0.2),
+        ] {
+            let ray = cam.lens_ray_rotated(&r, px, py, lens);
+            let t = (target - ray.origin).dot(ray.direction);
+            let miss = (ray.at(t) - target).length();
+            // Well under a pixel at that depth (a pixel is 2.5/256 ≈ 0.01 wide there).
+            assert!(miss < 1e-5, "{lens}: {miss}");
+        }
+        // Aperture 0 is the pinhole ray.
+        cam.aperture = 0.0;
+        let r0 = cam.lens_ray_rotated(&r, px, py, glam::Vec2::new(1.0, 0.0));
+        assert!((r0.direction - pinhole.direction).length() < 1e-6);
+        assert_eq!(r0.origin, pinhole.origin);
+    }
+
+    /// A point away from the focus plane spreads over the circle of confusion. Derivation (lens
+    /// in the plane z = 0 of camera space, focal length f in pixels, focus distance F, lens
+    /// point ℓ): the ray from ℓ through pixel position p (camera-space image point
+    /// (p, f)) passes through p·F/f on the focus plane, so at depth z it is at
+    /// ℓ + (p·F/f − ℓ)·z/F. It meets the point X (at depth z) when
+    /// p = f·X/z + f·ℓ·(1/F − 1/z): the image of X moves by f·ℓ·(1/F − 1/z) as ℓ goes around
+    /// the lens, a disk of radius f·A·|1/F − 1/z| pixels. Here f = 256, A = 0.05, F = 2,
+    /// z = 4: 256 · 0.05 · (0.5 − 0.25) = 3.2 pixels.
+    #[test]
+    fn a_far_point_spreads_over_the_circle_of_confusion() {
+        let mut cam = Camera::default_for(256, 256);
+        cam.position = Vec3::ZERO;
+        cam.aperture = 0.05;
+        cam.focus_distance = 2.0;
+        let r = cam.rotation();
+        let point = Vec3::new(0.3, -0.2, 4.0);
+        // The pixel position where the pinhole sees it.
+        let (px, py) = (128.0 + 256.0 * 0.3 / 4.0, 128.0 - 256.0 * 0.2 / 4.0);
+        // Each lens point's ray through that pixel misses the point at its depth by
+        // ℓ·(z/F − 1) = 0.05 scene units; at depth 4 a pixel is 4/256 wide, so by 3.2 pixels:
+        // the circle of confusion's radius, whichever way round the lens.
+        let mut largest = 0.0f32;
+        for k in 0..64 {
+            let angle = k as f32 / 64.0 * std::f32::consts::TAU;
+            let lens = glam::Vec2::new(angle.cos(), angle.sin());
+            let ray = cam.lens_ray_rotated(&r, px, py, lens);
+            let t = (4.0 - ray.origin.z) / ray.direction.z;
+            let miss_in_pixels = (ray.at(t) - point).length() * (256.0 / 4.0);
+            assert!(
+                (miss_in_pixels - 3.2).abs() < 1e-3,
+                "{lens}: {miss_in_pixels}"
+            );
+            largest = largest.max(miss_in_pixels);
+        }
+        assert!((largest - 3.2).abs() < 1e-3, "{largest}");
     }
 }

@@ -15,11 +15,13 @@ use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
 use raylab::accel::{AccelKind, Isa};
 use raylab::bench::{BenchConfig, bench_scene};
+use raylab::display::{Display, DisplayTransform};
 use raylab::film::OutputFormat;
 use raylab::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
+use raylab::material::TexturePreset;
 use raylab::render::render;
 use raylab::scene::SceneChoice;
-use raylab::settings::{MAX_IMAGE_SIDE, MAX_SAMPLES};
+use raylab::settings::{MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_SAMPLES};
 use raylab::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 #[derive(Debug, Parser)]
@@ -90,7 +92,8 @@ pub struct RenderArgs {
         conflicts_with_all = [
             "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw", "light",
             "light_power", "indirect", "shadows", "samples", "seed", "bounces",
-            "material_preset", "specular_depth",
+            "material_preset", "specular_depth", "texture_preset", "smooth", "light_radius",
+            "light_colour", "aperture", "focus_distance", "display", "exposure",
         ]
     )]
     pub settings: Option<PathBuf>,
@@ -117,6 +120,13 @@ pub struct RenderArgs {
     /// reflectance 0.9), glass (the short block is clear glass, index 1.5) or both.
     #[arg(long, default_value = "none", value_name = "PRESET")]
     pub material_preset: MaterialPreset,
+    /// Textures: none (the lab's plain colours), checker-floor (a checkerboard floor),
+    /// grid-walls (grid lines on the walls and ceiling) or both.
+    #[arg(long, default_value = "none", value_name = "PRESET")]
+    pub texture_preset: TexturePreset,
+    /// Smooth shading of models (interpolated vertex normals); the box stays flat either way.
+    #[arg(long, default_value = "on", value_parser = parse_on_off, value_name = "on|off")]
+    pub smooth: bool,
     /// Lab stages: how many mirror and glass hits in a row are followed (Whitted-style).
     #[arg(long, default_value_t = DEFAULT_SPECULAR_DEPTH, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SPECULAR_DEPTH)), value_name = "D")]
     pub specular_depth: u32,
@@ -138,9 +148,29 @@ pub struct RenderArgs {
     /// Light position [default: 0,-0.5,-0.7].
     #[arg(long, value_parser = parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub light: Option<Vec3>,
-    /// Light power in watts per colour channel [default: 14].
+    /// Light power in watts [default: 14]; each channel gets the power times the colour.
     #[arg(long, value_parser = parse_non_negative, value_name = "P", allow_hyphen_values = true)]
     pub light_power: Option<f32>,
+    /// Light colour, each channel ≥ 0 [default: 1,1,1, white].
+    #[arg(long, value_parser = parse_colour, value_name = "R,G,B", allow_hyphen_values = true)]
+    pub light_colour: Option<Vec3>,
+    /// Light radius: a sphere of the same power, for soft shadows; 0 is the lab's point light.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_non_negative, value_name = "R", allow_hyphen_values = true)]
+    pub light_radius: f32,
+    /// Lens aperture radius, for depth of field; 0 is the lab's pinhole (all sharp).
+    #[arg(long, default_value_t = 0.0, value_parser = parse_non_negative, value_name = "A", allow_hyphen_values = true)]
+    pub aperture: f32,
+    /// Distance to the plane in focus, along the view direction [default: 3.001, the box's
+    /// centre from the default camera].
+    #[arg(long, value_parser = parse_positive, value_name = "D", allow_hyphen_values = true)]
+    pub focus_distance: Option<f32>,
+    /// Display transform for PNG output: lab (clamp, no gamma: the lab's figures), srgb, or
+    /// filmic (ACES fit, highlights roll off). EXR output is linear whatever it is.
+    #[arg(long, default_value = "lab", value_name = "lab|srgb|filmic")]
+    pub display: DisplayTransform,
+    /// Exposure in stops, before the display transform (PNG only): +1 doubles every value.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_exposure, value_name = "EV", allow_hyphen_values = true)]
+    pub exposure: f32,
     /// Constant indirect light N, or "off" [default: 0.5 for the lab stage, off for the others].
     #[arg(long, value_parser = parse_indirect, value_name = "N|off", allow_hyphen_values = true)]
     pub indirect: Option<Indirect>,
@@ -196,15 +226,25 @@ impl RenderArgs {
             camera.position = p;
         }
         camera.yaw = self.yaw.to_radians();
+        camera.aperture = self.aperture;
+        if let Some(d) = self.focus_distance {
+            camera.focus_distance = d;
+        }
         let mut settings = RenderSettings {
             scene: self.scene_choice(),
             camera,
             shading: Shading {
                 bounces: self.bounces.0,
                 specular_depth: self.specular_depth,
+                smooth: self.smooth,
                 ..Shading::for_stage(self.stage)
             },
             material_preset: self.material_preset,
+            texture_preset: self.texture_preset,
+            display: Display {
+                transform: self.display,
+                exposure: self.exposure,
+            },
             samples_per_pixel: self.samples,
             seed: self.seed,
             ..RenderSettings::default()
@@ -213,8 +253,12 @@ impl RenderArgs {
             settings.light.position = p;
         }
         if let Some(p) = self.light_power {
-            settings.light.power = Vec3::splat(p);
+            settings.light.power = p;
         }
+        if let Some(c) = self.light_colour {
+            settings.light.colour = c;
+        }
+        settings.light.radius = self.light_radius;
         if let Some(shadows) = self.shadows {
             settings.shading.shadows = shadows;
         }
@@ -465,6 +509,26 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
         parse_finite(y)?,
         parse_finite(z)?,
     ))
+}
+
+fn parse_colour(s: &str) -> Result<Vec3, String> {
+    let c = parse_vec3(s)?;
+    if c.min_element() >= 0.0 {
+        Ok(c)
+    } else {
+        Err(format!("{s}: each channel must be ≥ 0"))
+    }
+}
+
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    let x = parse_finite(s)?;
+    if x.abs() <= MAX_EXPOSURE {
+        Ok(x)
+    } else {
+        Err(format!(
+            "{s} must be between -{MAX_EXPOSURE} and {MAX_EXPOSURE} stops"
+        ))
+    }
 }
 
 fn parse_on_off(s: &str) -> Result<bool, String> {

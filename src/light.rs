@@ -6,6 +6,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::Ray;
+use crate::sampling::{orthonormal_basis, uniform_cone};
 use crate::scene::Scene;
 
 /// Distances below this (in scene units) count as this far when dividing by `4πr²`: a light
@@ -16,20 +17,116 @@ pub const MIN_LIGHT_DISTANCE: f32 = 1e-3;
 /// hit point can't make the surface shadow itself ("shadow acne"), far below a pixel's size.
 pub const SHADOW_OFFSET: f32 = 1e-4;
 
+/// The lab's light: a point at `position` sending `power` watts equally in all directions, in
+/// the colour `colour` (so `power · colour` per channel, the lab's `lightColor = 14·(1, 1, 1)`).
+///
+/// With a `radius` above 0 it is a sphere of that radius, emitting the same total power
+/// uniformly from its surface (soft shadows, one of the lab's extensions); the sphere is not
+/// drawn, only its light is seen. Radius 0 is the lab's point light.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(from = "LightFields")]
 pub struct PointLight {
     pub position: Vec3,
-    /// Emitted power per colour channel, in watts (the lab's `lightColor`).
-    pub power: Vec3,
+    /// Total emitted power P, in watts.
+    pub power: f32,
+    /// The light's colour: the power per channel is `power · colour`.
+    pub colour: Vec3,
+    /// Radius of the emitting sphere in scene units; 0 is the lab's point light.
+    pub radius: f32,
 }
 
 impl Default for PointLight {
-    /// The lab's light: at (0, −0.5, −0.7) with power 14·(1, 1, 1) W.
+    /// The lab's light: at (0, −0.5, −0.7), 14 W, white, a point.
     fn default() -> Self {
         Self {
             position: Vec3::new(0.0, -0.5, -0.7),
-            power: Vec3::splat(14.0),
+            power: 14.0,
+            colour: Vec3::ONE,
+            radius: 0.0,
+        }
+    }
+}
+
+impl PointLight {
+    /// The power per colour channel, `P · colour`, in watts: the lab's `lightColor`.
+    #[inline(always)]
+    pub fn channel_power(&self) -> Vec3 {
+        self.colour * self.power
+    }
+
+    /// A point of the light for a shadow ray from `position`: the centre for the point light,
+    /// else a point of the sphere's near side, in a direction drawn uniformly from the cone the
+    /// sphere fills as seen from `position` (`u1`, `u2` uniform in [0, 1)). The share of such
+    /// points a surface point sees unblocked estimates the fraction of the light it sees. Seen
+    /// from inside the sphere, the centre.
+    pub fn sample_point(&self, position: Vec3, u1: f32, u2: f32) -> Vec3 {
+        let to_centre = self.position - position;
+        let d2 = to_centre.length_squared();
+        let r2 = self.radius * self.radius;
+        if !(d2 > r2) {
+            return self.position;
+        }
+        let d = d2.sqrt();
+        let axis = to_centre / d;
+        let sin2_max = r2 / d2;
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        let local = uniform_cone(u1, u2, cos_max);
+        let (t1, t2) = orthonormal_basis(axis);
+        let direction = local.x * t1 + local.y * t2 + local.z * axis;
+        // The nearer crossing of the sphere along `direction`.
+        let cos = local.z;
+        let sin2 = (1.0 - cos * cos).max(0.0);
+        let t = d * cos - (r2 - d2 * sin2).max(0.0).sqrt();
+        position + t * direction
+    }
+}
+
+/// What a settings file may hold for the light: `power` as watts (`14`) or, as files written
+/// before the light had a colour, as watts per channel (`[14, 14, 14]`), which is read as the
+/// largest channel's power and the colour it makes.
+#[derive(Deserialize)]
+#[serde(default)]
+struct LightFields {
+    position: Vec3,
+    power: PowerField,
+    colour: Option<Vec3>,
+    radius: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum PowerField {
+    Watts(f32),
+    PerChannel(Vec3),
+}
+
+impl Default for LightFields {
+    fn default() -> Self {
+        let light = PointLight::default();
+        Self {
+            position: light.position,
+            power: PowerField::Watts(light.power),
+            colour: None,
+            radius: light.radius,
+        }
+    }
+}
+
+impl From<LightFields> for PointLight {
+    fn from(f: LightFields) -> Self {
+        let (power, colour) = match f.power {
+            PowerField::Watts(p) => (p, f.colour.unwrap_or(Vec3::ONE)),
+            PowerField::PerChannel(v) => {
+                let p = v.max_element();
+                let from_channels = if p > 0.0 { v / p } else { Vec3::ONE };
+                (p, f.colour.unwrap_or(from_channels))
+            }
+        };
+        Self {
+            position: f.position,
+            power,
+            colour,
+            radius: f.radius,
         }
     }
 }
@@ -52,7 +149,7 @@ pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
     } else {
         (r2, (to_light / r2.sqrt()).dot(normal))
     };
-    light.power * cos.max(0.0) / (4.0 * PI * r2)
+    light.channel_power() * cos.max(0.0) / (4.0 * PI * r2)
 }
 
 /// The shadow ray from a surface point toward the light, and the distance to stop at (lab
@@ -65,13 +162,19 @@ pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
 /// hidden by that surface.
 #[inline]
 pub fn shadow_ray(light: &PointLight, position: Vec3, normal: Vec3) -> Option<(Ray, f32)> {
-    let side = if (light.position - position).dot(normal) >= 0.0 {
+    shadow_ray_to(light.position, position, normal)
+}
+
+/// [`shadow_ray`] toward any point `target` of the light (see [`PointLight::sample_point`]).
+#[inline]
+pub fn shadow_ray_to(target: Vec3, position: Vec3, normal: Vec3) -> Option<(Ray, f32)> {
+    let side = if (target - position).dot(normal) >= 0.0 {
         1.0
     } else {
         -1.0
     };
     let lifted = position + side * SHADOW_OFFSET * normal;
-    let to_light = light.position - lifted;
+    let to_light = target - lifted;
     let distance = to_light.length();
     if !(distance > 3.0 * SHADOW_OFFSET) {
         // The light is at the surface, or a coordinate is not finite.
@@ -106,7 +209,8 @@ mod tests {
         // r = 2, r̂·n̂ = 1, D = 4π·1 / (4π·2²) = 0.25.
         let light = PointLight {
             position: Vec3::ZERO,
-            power: Vec3::splat(4.0 * PI),
+            power: 4.0 * PI,
+            ..PointLight::default()
         };
         let d = direct_light(&light, Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
         assert!(close(d, Vec3::splat(0.25), 1e-7), "{d}");
@@ -156,7 +260,7 @@ mod tests {
     fn light_on_the_surface_is_finite() {
         let light = PointLight {
             position: Vec3::new(0.0, 1.0, 0.0),
-            power: Vec3::splat(14.0),
+            ..PointLight::default()
         };
         let n = Vec3::new(0.0, -1.0, 0.0);
         for p in [Vec3::new(0.0, 1.0, 0.0), Vec3::new(1e-9, 1.0, 0.0)] {
@@ -208,5 +312,125 @@ mod tests {
         assert!(!in_shadow(&scene, &light, Vec3::new(0.0, 1.0, -0.8), n));
         // The unshadowed D at p is positive: shadows, not orientation, make it dark.
         assert!(direct_light(&light, p, n).x > 0.0);
+    }
+
+    /// Points sampled on a spherical light lie on its surface, on the side facing the surface
+    /// point; radius 0 gives the centre, the lab's point light.
+    #[test]
+    fn sampled_points_lie_on_the_near_side_of_the_sphere() {
+        let mut light = PointLight::default();
+        let p = Vec3::new(0.3, 1.0, 0.2);
+        assert_eq!(light.sample_point(p, 0.4, 0.9), light.position);
+        light.radius = 0.2;
+        let mut rng = crate::sampling::Rng::new(5);
+        for _ in 0..1000 {
+            let q = light.sample_point(p, rng.next_f32(), rng.next_f32());
+            assert!(((q - light.position).length() - 0.2).abs() < 1e-5, "{q}");
+            // The near side: the sphere's normal at q faces p.
+            assert!((q - light.position).dot(p - q) >= -1e-5, "{q}");
+        }
+        // Inside the sphere: the centre.
+        assert_eq!(
+            light.sample_point(light.position + 0.1 * Vec3::X, 0.5, 0.5),
+            light.position
+        );
+    }
+
+    /// The share of a spherical light seen past a straight edge converges to the analytic
+    /// fraction.
+    ///
+    /// The surface point is at the origin, the light's centre at (0, 0, 2) with radius 0.5, so
+    /// it fills the cone of half-angle α = asin(0.5/2) = 14.4775° around +z. A wall in the plane
+    /// z = 1 covers x > h. A direction ω = (sin θ cos φ, sin θ sin φ, cos θ) crosses that plane at
+    /// x = tan θ cos φ, so it is blocked when cos φ > h / tan θ = tan β / tan θ, where β = atan h
+    /// is the angle between the light's centre and the wall's edge. At polar angle θ > β the
+    /// blocked azimuths span 2·acos(tan β / tan θ); the cone's directions are sampled uniformly
+    /// in solid angle, so the blocked fraction is
+    ///
+    /// `∫_β^α 2·acos(tan β / tan θ) sin θ dθ / (2π (1 − cos α))`
+    ///
+    /// and the fraction seen is one minus that. For h = 0 (the edge straight at the centre)
+    /// acos(0) = π/2 and the fraction is exactly 1/2. The integral is evaluated here by
+    /// Simpson's rule.
+    #[test]
+    fn the_fraction_of_a_sphere_seen_past_an_edge_matches_the_analytic_one() {
+        let light = PointLight {
+            position: Vec3::new(0.0, 0.0, 2.0),
+            radius: 0.5,
+            ..PointLight::default()
+        };
+        let alpha = (0.5f64 / 2.0).asin();
+        let analytic_seen = |h: f64| {
+            let beta = h.atan();
+            let n = 2000;
+            let step = (alpha - beta) / n as f64;
+            let f = |theta: f64| {
+                let ratio = (beta.tan() / theta.tan()).min(1.0);
+                2.0 * ratio.acos() * theta.sin()
+            };
+            let mut sum = f(beta) + f(alpha);
+            for i in 1..n {
+                let w = if i % 2 == 1 { 4.0 } else { 2.0 };
+                sum += w * f(beta + i as f64 * step);
+            }
+            let blocked = sum * step / 3.0 / (2.0 * std::f64::consts::PI * (1.0 - alpha.cos()));
+            1.0 - blocked
+        };
+        assert!((analytic_seen(0.0) - 0.5).abs() < 1e-9);
+        let p = Vec3::ZERO;
+        let n = Vec3::Z;
+        for h in [0.0f32, 0.1, -0.15] {
+            let wall = crate::geometry::Triangle::new(
+                Vec3::new(h, -20.0, 1.0),
+                Vec3::new(h, 20.0, 1.0),
+                Vec3::new(40.0, 0.0, 1.0),
+                0,
+            );
+            let scene = Scene::new(
+                vec![wall],
+                vec![crate::Material::diffuse("wall", Vec3::ONE)],
+            );
+            let mut rng = crate::sampling::Rng::new(11);
+            let samples = 100_000;
+            let mut seen = 0;
+            for _ in 0..samples {
+                let q = light.sample_point(p, rng.next_f32(), rng.next_f32());
+                let (ray, t_max) = shadow_ray_to(q, p, n).unwrap();
+                if !scene.occluded(&ray, t_max) {
+                    seen += 1;
+                }
+            }
+            let share = seen as f64 / samples as f64;
+            // A negative h: the wall covers the centre; the analytic formula by symmetry.
+            let expected = if h >= 0.0 {
+                analytic_seen(h as f64)
+            } else {
+                1.0 - analytic_seen(-h as f64)
+            };
+            let sd = (expected * (1.0 - expected) / samples as f64).sqrt();
+            assert!(
+                (share - expected).abs() < 4.0 * sd,
+                "h = {h}: seen {share}, analytic {expected}"
+            );
+            assert!(share > 0.05 && share < 0.95, "a real penumbra: {share}");
+        }
+    }
+
+    #[test]
+    fn old_settings_with_power_per_channel_still_load() {
+        let old: PointLight =
+            serde_json::from_str(r#"{"position": [0, 0, 0], "power": [14, 7, 0]}"#).unwrap();
+        assert_eq!(old.power, 14.0);
+        assert_eq!(old.colour, Vec3::new(1.0, 0.5, 0.0));
+        assert_eq!(old.channel_power(), Vec3::new(14.0, 7.0, 0.0));
+        let new: PointLight =
+            serde_json::from_str(r#"{"power": 20, "colour": [1, 0.5, 0.25], "radius": 0.1}"#)
+                .unwrap();
+        assert_eq!(new.position, PointLight::default().position);
+        assert_eq!(new.channel_power(), Vec3::new(20.0, 10.0, 5.0));
+        assert_eq!(new.radius, 0.1);
+        let round: PointLight =
+            serde_json::from_str(&serde_json::to_string(&new).unwrap()).unwrap();
+        assert_eq!(round, new);
     }
 }

@@ -23,8 +23,8 @@ use std::str::FromStr;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::texture::Texture;
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, orthonormal_basis};
+use crate::texture::Texture;
 
 /// How a surface scatters light.
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
@@ -69,6 +69,16 @@ impl Material {
             reflectance,
             kind: MaterialKind::Diffuse,
             texture: None,
+        }
+    }
+
+    /// ρ at a hit with texture coordinates `uv`: the texture's value where there is one, else
+    /// the constant reflectance (exactly, for the lab's box).
+    #[inline(always)]
+    pub fn reflectance_at(&self, uv: impl FnOnce() -> glam::Vec2) -> Vec3 {
+        match &self.texture {
+            None => self.reflectance,
+            Some(texture) => texture.eval(uv()),
         }
     }
 
@@ -320,6 +330,96 @@ impl FromStr for MaterialPreset {
     }
 }
 
+/// Textures for the Cornell box's surfaces, beside the scene's own (a textured model keeps its
+/// texture whatever the preset).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TexturePreset {
+    /// No textures but the scene's own (the lab's box).
+    #[default]
+    None,
+    /// The green floor becomes a checkerboard of its green and a light grey, squares 0.25 a
+    /// side (8 across the floor).
+    CheckerFloor,
+    /// The room's four walls and ceiling get a grid of darker lines every 0.25.
+    GridWalls,
+    /// Both.
+    Both,
+}
+
+/// The Cornell box's floor material, which the checkerboard presets texture.
+pub const FLOOR: &str = "green";
+/// The Cornell box's walls and ceiling, which the grid presets texture.
+pub const WALLS: [&str; 4] = ["purple", "yellow", "cyan", "white"];
+
+/// Texture cells per unit of scene length in the presets: 0.25 a side.
+pub const PRESET_TEXTURE_SCALE: f32 = 4.0;
+
+impl TexturePreset {
+    pub const ALL: [TexturePreset; 4] = [
+        TexturePreset::None,
+        TexturePreset::CheckerFloor,
+        TexturePreset::GridWalls,
+        TexturePreset::Both,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TexturePreset::None => "none",
+            TexturePreset::CheckerFloor => "checker-floor",
+            TexturePreset::GridWalls => "grid-walls",
+            TexturePreset::Both => "both",
+        }
+    }
+
+    /// The materials with this preset's textures (the box's surfaces are found by name).
+    pub fn apply(self, materials: &[Material]) -> Vec<Material> {
+        let checker = matches!(self, TexturePreset::CheckerFloor | TexturePreset::Both);
+        let grid = matches!(self, TexturePreset::GridWalls | TexturePreset::Both);
+        materials
+            .iter()
+            .map(|m| {
+                let mut m = m.clone();
+                if checker && m.name == FLOOR {
+                    m.texture = Some(Texture::Checker {
+                        scale: PRESET_TEXTURE_SCALE,
+                        colours: [m.reflectance, Vec3::splat(0.8)],
+                    });
+                } else if grid && WALLS.contains(&m.name.as_str()) {
+                    m.texture = Some(Texture::Grid {
+                        scale: PRESET_TEXTURE_SCALE,
+                        line_width: 0.06,
+                        background: m.reflectance,
+                        line: 0.25 * m.reflectance,
+                    });
+                }
+                m
+            })
+            .collect()
+    }
+}
+
+impl fmt::Display for TexturePreset {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for TexturePreset {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        TexturePreset::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown texture preset '{s}' (expected none, checker-floor, grid-walls or both)"
+                )
+            })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -353,6 +453,7 @@ mod tests {
             name: "m".into(),
             reflectance: Vec3::ZERO,
             kind: PRESET_MIRROR,
+            texture: None,
         };
         let s = mirror.sample(d, n, &mut Rng::new(1));
         assert_eq!((s.direction, s.weight), (r, Vec3::splat(0.9)));

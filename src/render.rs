@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use crate::film::{Film, Image};
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, Tracer};
-use crate::sampling::{Rng, pixel_offset, pixel_sample};
+use crate::sampling::{Rng, concentric_disk, pixel_offset, pixel_sample};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 
@@ -45,8 +45,9 @@ pub fn trace_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, sam
     out[0]
 }
 
-/// The camera ray of sample `sample` of pixel `(x, y)` (equation 24, jittered after sample 0)
-/// and, if the integrator draws random numbers, the generator it continues with.
+/// The camera ray of sample `sample` of pixel `(x, y)` (equation 24, jittered after sample 0;
+/// through a point of the lens when the camera has an aperture) and, if anything draws random
+/// numbers, the generator the integrator continues with.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn camera_sample(
@@ -66,9 +67,15 @@ fn camera_sample(
     } else {
         pixel_offset(settings.seed, x, y, sample)
     };
-    *ray = settings
-        .camera
-        .primary_ray_rotated(rotation, x as f32 + dx, y as f32 + dy);
+    let camera = &settings.camera;
+    let (px, py) = (x as f32 + dx, y as f32 + dy);
+    *ray = if camera.aperture > 0.0 {
+        // Depth of field: a point of the lens, from the sample's own stream.
+        let lens = concentric_disk(rng.next_f32(), rng.next_f32());
+        camera.lens_ray_rotated(rotation, px, py, lens)
+    } else {
+        camera.primary_ray_rotated(rotation, px, py)
+    };
 }
 
 /// One sample per pixel (sample index `sample`) of the whole image, or [`Cancelled`] if

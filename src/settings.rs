@@ -8,13 +8,17 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
+use crate::display::Display;
 use crate::integrator::{MAX_SPECULAR_DEPTH, Shading};
 use crate::light::PointLight;
-use crate::material::MaterialPreset;
+use crate::material::{MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
 
 /// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+/// The largest exposure, either way, in stops.
+pub const MAX_EXPOSURE: f32 = 20.0;
 
 /// The most samples per pixel a render may ask for.
 pub const MAX_SAMPLES: u32 = 1 << 16;
@@ -30,6 +34,11 @@ pub struct RenderSettings {
     pub shading: Shading,
     /// Mirror and glass for the Cornell box's blocks (none: the lab's diffuse box).
     pub material_preset: MaterialPreset,
+    /// Textures for the Cornell box's floor and walls (none: the lab's plain colours).
+    pub texture_preset: TexturePreset,
+    /// How linear values are shown and written to PNG (the lab's clamp by default). Changing
+    /// it never re-traces: the renderer ignores it.
+    pub display: Display,
     /// Samples per pixel to accumulate; 1 traces each pixel's centre (the lab's image), more
     /// jitter inside the pixel and average (anti-aliasing).
     pub samples_per_pixel: u32,
@@ -46,6 +55,8 @@ impl Default for RenderSettings {
             light: PointLight::default(),
             shading: Shading::default(),
             material_preset: MaterialPreset::None,
+            texture_preset: TexturePreset::None,
+            display: Display::default(),
             samples_per_pixel: 1,
             seed: 0,
         }
@@ -76,9 +87,34 @@ impl RenderSettings {
             return Err(err("focal length", c.focal_length, "must be > 0"));
         }
         check_vec("light position", self.light.position)?;
-        check_vec("light power", self.light.power)?;
-        if self.light.power.min_element() < 0.0 {
-            return Err(err("light power", self.light.power, "must be ≥ 0"));
+        check_finite("aperture", c.aperture)?;
+        if c.aperture < 0.0 {
+            return Err(err("aperture", c.aperture, "must be ≥ 0"));
+        }
+        check_finite("focus distance", c.focus_distance)?;
+        if c.focus_distance <= 0.0 {
+            return Err(err("focus distance", c.focus_distance, "must be > 0"));
+        }
+        let light = &self.light;
+        check_finite("light power", light.power)?;
+        if light.power < 0.0 {
+            return Err(err("light power", light.power, "must be ≥ 0"));
+        }
+        check_vec("light colour", light.colour)?;
+        if light.colour.min_element() < 0.0 {
+            return Err(err("light colour", light.colour, "must be ≥ 0"));
+        }
+        check_finite("light radius", light.radius)?;
+        if light.radius < 0.0 {
+            return Err(err("light radius", light.radius, "must be ≥ 0"));
+        }
+        check_finite("exposure", self.display.exposure)?;
+        if self.display.exposure.abs() > MAX_EXPOSURE {
+            return Err(err(
+                "exposure",
+                self.display.exposure,
+                "must be between −20 and 20 stops",
+            ));
         }
         check_vec("indirect light", self.shading.indirect_light)?;
         if self.shading.indirect_light.min_element() < 0.0 {
@@ -143,7 +179,7 @@ mod tests {
         let partial: RenderSettings =
             serde_json::from_str(r#"{"light": {"position": [0.5, 0.0, 0.0]}}"#).unwrap();
         assert_eq!(partial.light.position, Vec3::new(0.5, 0.0, 0.0));
-        assert_eq!(partial.light.power, Vec3::splat(14.0));
+        assert_eq!(partial.light.channel_power(), Vec3::splat(14.0));
         assert_eq!(partial.camera, Camera::default());
     }
 

@@ -94,7 +94,7 @@ fn a_closed_furnace_converges_to_its_analytic_value() {
         let mut s = settings(Stage::Path, 8);
         s.light = PointLight {
             position: Vec3::ZERO,
-            power: Vec3::splat(14.0),
+            ..PointLight::default()
         };
         let tracer = Tracer::new(&scene, &s);
         let mut rng = Rng::new(99);

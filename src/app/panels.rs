@@ -221,14 +221,14 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
     position_slider(ui, &mut light.position.y, -1.0..=1.0, "Light y");
     position_slider(ui, &mut light.position.z, -1.0..=1.0, "Light z");
     // The lab's light is white: one power for the three channels.
-    let mut power = light.power.x;
+    let mut power = light.power;
     let response = ui.add(
         egui::Slider::new(&mut power, 0.0..=100.0)
             .suffix(" W")
             .text("Light power"),
     );
     if response.changed() {
-        light.power = glam::Vec3::splat(power);
+        light.power = power;
     }
 }
 

@@ -18,6 +18,7 @@ use glam::Vec3;
 use super::{BATCH, HitTerms, Tracer, cast_shadow_rays, continue_ray};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
+use crate::sampling::Rng;
 
 /// Where a specular branch's value goes and what it is multiplied by.
 #[derive(Clone, Copy, Debug)]
@@ -40,19 +41,24 @@ enum Wave<'a> {
 
 /// The value of every ray, into `out`.
 #[inline(always)]
-pub(super) fn trace(tracer: &Tracer, rays: &[Ray], out: &mut [Vec3]) {
+pub(super) fn trace(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
     let (mut rays_next, mut branches_next) = (Vec::new(), Vec::new());
-    for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+    for (c, (rays, out)) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)).enumerate() {
         out.fill(Vec3::ZERO);
+        // Each camera ray's generator (its branches draw from it too); none if nothing is
+        // random.
+        let start = (c * BATCH).min(rngs.len());
+        let end = (start + BATCH).min(rngs.len());
+        let rngs = &mut rngs[start..end];
         let next = (&mut rays_next, &mut branches_next);
-        wave(tracer, rays, Wave::Camera, out, next);
+        wave(tracer, rays, Wave::Camera, rngs, out, next);
         // Mirror and glass: trace the branches, wave after wave, until none is left.
         while !rays_next.is_empty() {
             let rays = std::mem::take(&mut rays_next);
             let branches = std::mem::take(&mut branches_next);
             for (rays, branches) in rays.chunks(BATCH).zip(branches.chunks(BATCH)) {
                 let next = (&mut rays_next, &mut branches_next);
-                wave(tracer, rays, Wave::Branches(branches), out, next);
+                wave(tracer, rays, Wave::Branches(branches), rngs, out, next);
             }
         }
     }
@@ -66,6 +72,7 @@ fn wave(
     tracer: &Tracer,
     rays: &[Ray],
     wave: Wave,
+    rngs: &mut [Rng],
     out: &mut [Vec3],
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
 ) {
@@ -81,14 +88,20 @@ fn wave(
         let Some(hit) = hit else { continue };
         let material = tracer.material_of(hit.triangle_index);
         let normal = scene.triangles[hit.triangle_index].normal;
+        let pixel = match wave {
+            Wave::Camera => i,
+            Wave::Branches(b) => b[i].pixel as usize,
+        };
         if material.is_diffuse() {
+            let mut unused = Rng::UNUSED;
+            let rng = rngs.get_mut(pixel).unwrap_or(&mut unused);
+            let surface = tracer.surface(hit, material);
             terms.push(HitTerms::at(
                 &tracer.light,
                 shading.stage,
                 shading.shadows,
-                hit.position,
-                normal,
-                material.reflectance,
+                surface,
+                rng,
             ));
             owner.push(i as u8);
             continue;

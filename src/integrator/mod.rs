@@ -33,11 +33,13 @@ use serde::{Deserialize, Serialize};
 use crate::accel::Isa;
 use crate::accel::simd::{Avx2, Avx512};
 use crate::geometry::Ray;
-use crate::light::{PointLight, SHADOW_OFFSET, direct_light, shadow_ray};
-use crate::material::{Material, MaterialPreset};
+use crate::intersect::Intersection;
+use crate::light::{PointLight, SHADOW_OFFSET, direct_light, shadow_ray_to};
+use crate::material::{Material, MaterialPreset, TexturePreset};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
+use crate::texture::planar_uv;
 
 /// How many rays the integrators take through each phase together. Phases (all closest hits,
 /// then the light at every hit, then all shadow rays, then the sums) are loops of independent
@@ -199,6 +201,9 @@ pub struct Shading {
     /// Lab stages: how many mirror and glass hits in a row are followed before a branch is
     /// given up (black).
     pub specular_depth: u32,
+    /// Smooth shading: light models with their vertex normals interpolated across each
+    /// triangle (the box has none and stays flat, the lab's look). Off: every triangle flat.
+    pub smooth: bool,
 }
 
 impl Default for Shading {
@@ -221,6 +226,7 @@ impl Shading {
             indirect_light: Self::LAB_INDIRECT_LIGHT,
             bounces: None,
             specular_depth: DEFAULT_SPECULAR_DEPTH,
+            smooth: true,
         }
     }
 
@@ -283,6 +289,21 @@ impl Shading {
     }
 }
 
+/// A diffuse hit as the light sees it, before any light is computed ([`Tracer::surface`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    pub position: Vec3,
+    /// The normal the light is computed with: the triangle's own (flat shading, the lab's) or
+    /// the interpolated vertex normals (smooth shading).
+    pub normal: Vec3,
+    /// The triangle's own normal. It decides which side of the surface is lit and which side
+    /// shadow rays leave from: a smooth normal only changes how much light arrives, never lets
+    /// light through a surface.
+    pub geometric: Vec3,
+    /// ρ, the diffuse reflectance: the material's, or its texture's value at the hit.
+    pub rho: Vec3,
+}
+
 /// The terms of the lab's equations at one diffuse hit: the one place they are computed.
 ///
 /// [`HitTerms::at`] evaluates D (equation 27) and makes the shadow ray (section 5.1); whoever
@@ -317,15 +338,27 @@ impl HitTerms {
 
     /// The terms at a diffuse hit. The flat stage needs only ρ: D is left 0 and no shadow ray
     /// is made.
+    ///
+    /// D is equation 27 with the light's centre. A spherical light (radius above 0) gives a
+    /// point of the sphere an unoccluded point sees exactly the same irradiance as its centre
+    /// would; what changes is how much of it is hidden, so the shadow ray goes to a point of
+    /// the sphere drawn from `rng` ([`PointLight::sample_point`]): averaged over samples, D is
+    /// multiplied by the fraction of the light seen (soft shadows). The point light draws
+    /// nothing.
     #[inline(always)]
     pub fn at(
         light: &PointLight,
         stage: Stage,
         shadows: bool,
-        position: Vec3,
-        normal: Vec3,
-        rho: Vec3,
+        surface: Surface,
+        rng: &mut Rng,
     ) -> Self {
+        let Surface {
+            position,
+            normal,
+            geometric,
+            rho,
+        } = surface;
         let mut terms = Self {
             position,
             normal,
@@ -336,9 +369,18 @@ impl HitTerms {
         };
         if stage != Stage::Flat {
             terms.d = direct_light(light, position, normal);
+            // With a smooth normal, the surface itself still decides which side is lit.
+            if normal != geometric && (light.position - position).dot(geometric) <= 0.0 {
+                terms.d = Vec3::ZERO;
+            }
             // A shadow ray only matters where there is light to block.
             if shadows && terms.d != Vec3::ZERO {
-                terms.shadow_ray = shadow_ray(light, position, normal);
+                let target = if light.radius > 0.0 {
+                    light.sample_point(position, rng.next_f32(), rng.next_f32())
+                } else {
+                    light.position
+                };
+                terms.shadow_ray = shadow_ray_to(target, position, geometric);
             }
         }
         terms
@@ -411,19 +453,49 @@ pub struct Tracer<'a> {
     pub materials: Cow<'a, [Material]>,
     pub light: PointLight,
     pub shading: Shading,
+    /// Whether anything draws random numbers: the path tracer, a spherical light's soft
+    /// shadows, a thin lens's aperture.
+    random: bool,
 }
 
 impl<'a> Tracer<'a> {
     pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Self {
-        let materials = match settings.material_preset {
+        let mut materials = match settings.material_preset {
             MaterialPreset::None => Cow::Borrowed(scene.materials.as_slice()),
             preset => Cow::Owned(preset.apply(&scene.materials)),
         };
+        if settings.texture_preset != TexturePreset::None {
+            materials = Cow::Owned(settings.texture_preset.apply(&materials));
+        }
+        let random = settings.shading.stage.integrator() == Integrator::Path
+            || settings.light.radius > 0.0
+            || settings.camera.aperture > 0.0;
         Self {
             scene,
             materials,
             light: settings.light,
             shading: settings.shading,
+            random,
+        }
+    }
+
+    /// The surface at a diffuse hit: its shading normal (smooth or flat, as the switch and the
+    /// mesh say), its own normal, and ρ (textured: at the mesh's texture coordinates, or at a
+    /// planar projection of the hit for surfaces without them, such as the box's walls).
+    #[inline(always)]
+    pub fn surface(&self, hit: &Intersection, material: &Material) -> Surface {
+        let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
+        let scene = self.scene;
+        let geometric = scene.triangles[index].normal;
+        Surface {
+            position: hit.position,
+            normal: scene.shading_normal(index, u, v, self.shading.smooth),
+            geometric,
+            rho: material.reflectance_at(|| {
+                scene
+                    .uv(index, u, v)
+                    .unwrap_or_else(|| planar_uv(hit.position, geometric))
+            }),
         }
     }
 
@@ -435,12 +507,12 @@ impl<'a> Tracer<'a> {
 
     /// Whether the integrator draws random numbers (and so needs each ray's generator).
     pub fn uses_random_numbers(&self) -> bool {
-        self.shading.stage.integrator() == Integrator::Path
+        self.random
     }
 
     /// The value of each ray, into `out`. `rngs` holds each ray's random stream (from
-    /// [`crate::sampling::pixel_sample`]); the lab stages draw nothing and accept an empty
-    /// slice.
+    /// [`crate::sampling::pixel_sample`]); where nothing is random
+    /// ([`Tracer::uses_random_numbers`] is false) it may be empty.
     ///
     /// On a CPU with AVX2 and FMA, or AVX-512 (where the scene's kernels use them), the same
     /// code is compiled for that instruction set: the results are the same bit for bit (Rust never
@@ -483,7 +555,7 @@ impl<'a> Tracer<'a> {
     #[inline(always)]
     pub fn trace_portable(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         match self.shading.stage.integrator() {
-            Integrator::Lab => lab::trace(self, rays, out),
+            Integrator::Lab => lab::trace(self, rays, rngs, out),
             Integrator::Path => {
                 assert_eq!(
                     rngs.len(),
@@ -557,7 +629,14 @@ mod tests {
         let floor = Vec3::new(0.0, -1.0, 0.0);
         let rho = Vec3::new(0.15, 0.75, 0.15);
         let p = Vec3::new(0.0, 1.0, 0.0);
-        let t = HitTerms::at(&light, Stage::Lab, true, p, floor, rho);
+        let surface = Surface {
+            position: p,
+            normal: floor,
+            geometric: floor,
+            rho,
+        };
+        let mut rng = Rng::UNUSED;
+        let t = HitTerms::at(&light, Stage::Lab, true, surface, &mut rng);
         assert!(
             (t.d - Vec3::splat(0.368454)).abs().max_element() < 1e-6,
             "{}",
@@ -575,7 +654,7 @@ mod tests {
         assert_eq!(blocked.value(Stage::Lab, Vec3::splat(0.5)), rho * 0.5);
         assert_eq!(blocked.value(Stage::Incoming, Vec3::ZERO), Vec3::ZERO);
         // The flat stage computes no light at all.
-        let flat = HitTerms::at(&light, Stage::Flat, true, p, floor, rho);
+        let flat = HitTerms::at(&light, Stage::Flat, true, surface, &mut rng);
         assert_eq!((flat.d, flat.shadow_ray), (Vec3::ZERO, None));
         assert_eq!(flat.value(Stage::Flat, Vec3::ZERO), rho);
     }

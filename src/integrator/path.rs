@@ -105,15 +105,15 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
             let geometric = triangle.normal;
             let incoming = path.ray.direction;
             if material.is_diffuse() {
-                let normal = facing(geometric, incoming);
-                terms[n_terms] = HitTerms::at(
-                    &tracer.light,
-                    Stage::Path,
-                    shading.shadows,
-                    hit.position,
-                    normal,
-                    material.reflectance,
-                );
+                // Two-sided: both normals turned to face the arriving ray.
+                let mut surface = tracer.surface(&hit, material);
+                let turned = facing(geometric, incoming);
+                if turned != geometric {
+                    surface.geometric = turned;
+                    surface.normal = -surface.normal;
+                }
+                terms[n_terms] =
+                    HitTerms::at(&tracer.light, Stage::Path, shading.shadows, surface, rng);
                 term_of[n_terms] = (i as u8, path.beta);
                 n_terms += 1;
                 if path.bounces >= max_bounces {
