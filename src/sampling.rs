@@ -326,7 +326,7 @@ mod tests {
             }
         }
         // Binomial, p = 1/2: standard deviation 158 of 100,000; 4σ.
-        assert!((inner as i32 - n / 2).abs() < 632, "{inner}");
+        assert!((inner - n / 2).abs() < 632, "{inner}");
         // cos θmax = 1 is a single direction, +z.
         assert_eq!(uniform_cone(0.3, 0.7, 1.0), glam::Vec3::Z);
     }
@@ -352,6 +352,6 @@ mod tests {
             }
         }
         // Binomial, p = 1/4: standard deviation 137 of 100,000; 4σ.
-        assert!((inner as i32 - n / 4).abs() < 548, "{inner}");
+        assert!((inner - n / 4).abs() < 548, "{inner}");
     }
 }
