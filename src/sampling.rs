@@ -261,7 +261,7 @@ mod tests {
     #[test]
     fn cosine_hemisphere_is_cosine_distributed_by_chi_squared() {
         let mut rng = Rng::new(77);
-        let n = 100_000;
+        let n: i32 = 100_000;
         for rejection in [false, true] {
             let (mut by_cos, mut by_phi) = ([0u32; 20], [0u32; 20]);
             for _ in 0..n {
@@ -293,7 +293,7 @@ mod tests {
     #[test]
     fn next_f32_is_uniform_by_chi_squared() {
         let mut rng = Rng::new(2024);
-        let n = 100_000;
+        let n: i32 = 100_000;
         let mut bins = [0u32; 20];
         for _ in 0..n {
             let x = rng.next_f32();
@@ -315,8 +315,8 @@ mod tests {
     fn cone_samples_fill_the_cone_evenly() {
         let cos_max = 30f32.to_radians().cos();
         let mut rng = Rng::new(9);
-        let n = 100_000;
-        let mut inner = 0;
+        let n: i32 = 100_000;
+        let mut inner: i32 = 0;
         for _ in 0..n {
             let d = uniform_cone(rng.next_f32(), rng.next_f32(), cos_max);
             assert!((d.length() - 1.0).abs() < 1e-5);
@@ -342,8 +342,8 @@ mod tests {
         let top = concentric_disk(0.5, 1.0);
         assert!((top - glam::Vec2::Y).length() < 1e-6, "{top}");
         let mut rng = Rng::new(3);
-        let n = 100_000;
-        let mut inner = 0;
+        let n: i32 = 100_000;
+        let mut inner: i32 = 0;
         for _ in 0..n {
             let p = concentric_disk(rng.next_f32(), rng.next_f32());
             assert!(p.length() <= 1.0 + 1e-6);
