@@ -300,6 +300,32 @@ impl WorkbenchApp {
         }
     }
 
+    /// "Click to focus": sets the focus distance to the depth of what the clicked point of the
+    /// image shows (`at`: a fraction of the image's width and height).
+    fn focus_at(&mut self, at: egui::Vec2) {
+        let settings = &mut self.state.settings;
+        let camera = &settings.camera;
+        let (px, py) = (at.x * camera.width as f32, at.y * camera.height as f32);
+        match raylab::render::focus_depth(&self.scene, settings, px, py) {
+            Some(depth) => {
+                settings.camera.focus_distance = depth;
+                let hint = if settings.camera.aperture > 0.0 {
+                    ""
+                } else {
+                    " (set an aperture above 0 to see depth of field)"
+                };
+                self.set_status(
+                    StatusKind::Info,
+                    format!("Focus distance {depth:.3}: the clicked point is sharp{hint}"),
+                );
+            }
+            None => self.set_status(
+                StatusKind::Notice,
+                "Nothing there to focus on: the clicked pixel sees no surface",
+            ),
+        }
+    }
+
     /// Takes the newest finished frame, if any, and shows it.
     fn receive_frames(&mut self, ctx: &egui::Context) {
         let Some(controller) = &self.controller else {
@@ -575,6 +601,11 @@ impl eframe::App for WorkbenchApp {
                 ui.memory_mut(|m| m.surrender_focus(id));
             }
             input::pointer(&pointer, &mut self.state.settings.camera);
+            if self.state.focus_mode
+                && let Some(at) = pointer.clicked_at
+            {
+                self.focus_at(at);
+            }
         });
         for command in commands {
             self.handle(command, &ctx);

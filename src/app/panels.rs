@@ -5,7 +5,9 @@
 //! find them by.
 
 use eframe::egui;
+use raylab::display::{Display, DisplayTransform};
 use raylab::integrator::MAX_SPECULAR_DEPTH;
+use raylab::material::TexturePreset;
 use raylab::scene::SceneChoice;
 use raylab::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
 
@@ -21,6 +23,12 @@ pub const MAX_SIDE_UI: u32 = 4096;
 pub const MAX_SAMPLES_UI: u32 = 4096;
 /// The most path-tracing bounces the panel's slider offers (or unlimited).
 pub const MAX_BOUNCES_UI: u32 = 64;
+/// The largest lens aperture radius the slider offers, in scene units.
+pub const MAX_APERTURE_UI: f32 = 0.3;
+/// The largest light radius the slider offers, in scene units.
+pub const MAX_LIGHT_RADIUS_UI: f32 = 0.5;
+/// The exposure slider's range either way, in stops.
+pub const MAX_EXPOSURE_UI: f32 = 10.0;
 /// The most render threads the panel offers.
 pub const MAX_THREADS_UI: usize = 64;
 
@@ -76,7 +84,8 @@ pub fn controls_ui(
         egui::CollapsingHeader::new("Camera")
             .default_open(true)
             .show(ui, |ui| {
-                camera_ui(ui, &mut state.settings.camera, &mut commands)
+                camera_ui(ui, &mut state.settings.camera, &mut commands);
+                lens_ui(ui, &mut state.settings.camera, &mut state.focus_mode);
             });
         egui::CollapsingHeader::new("Light")
             .default_open(true)
@@ -96,6 +105,9 @@ pub fn controls_ui(
             .show(ui, |ui| {
                 image_ui(ui, &mut state.settings, &mut state.render_threads)
             });
+        egui::CollapsingHeader::new("Display")
+            .default_open(true)
+            .show(ui, |ui| display_ui(ui, &mut state.settings.display));
         egui::CollapsingHeader::new("Stats")
             .default_open(true)
             .show(ui, |ui| stats.stats_ui(ui));
@@ -216,20 +228,100 @@ fn degrees_slider(
     }
 }
 
+/// The thin lens: aperture and focus (depth of field).
+pub fn lens_ui(ui: &mut egui::Ui, camera: &mut Camera, focus_mode: &mut bool) {
+    ui.add(
+        egui::Slider::new(&mut camera.aperture, 0.0..=MAX_APERTURE_UI)
+            .clamping(egui::SliderClamping::Edits)
+            .max_decimals(3)
+            .text("Aperture"),
+    )
+    .on_hover_text(
+        "Radius of the lens, in scene units (the box is 2 wide): 0 is the lab's pinhole, \
+         everything sharp; larger blurs what is off the focus distance",
+    );
+    ui.add_enabled(
+        camera.aperture > 0.0,
+        egui::Slider::new(&mut camera.focus_distance, 0.1..=10.0)
+            .logarithmic(true)
+            .clamping(egui::SliderClamping::Edits)
+            .max_decimals(3)
+            .text("Focus distance"),
+    )
+    .on_hover_text("Distance along the view direction to the plane that is sharp")
+    .on_disabled_hover_text("Set an aperture above 0 for depth of field");
+    ui.checkbox(focus_mode, "Click to focus")
+        .on_hover_text("A click on the image sets the focus distance to that pixel's depth");
+}
+
 pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
     position_slider(ui, &mut light.position.x, -1.0..=1.0, "Light x");
     position_slider(ui, &mut light.position.y, -1.0..=1.0, "Light y");
     position_slider(ui, &mut light.position.z, -1.0..=1.0, "Light z");
-    // The lab's light is white: one power for the three channels.
-    let mut power = light.power;
-    let response = ui.add(
-        egui::Slider::new(&mut power, 0.0..=100.0)
+    ui.add(
+        egui::Slider::new(&mut light.power, 0.0..=100.0)
             .suffix(" W")
             .text("Light power"),
+    )
+    .on_hover_text("The total power P; each channel gets P times the colour");
+    ui.horizontal(|ui| {
+        let mut rgb = light.colour.to_array();
+        let label = ui.label("Light colour");
+        let response = egui::color_picker::color_edit_button_rgb(ui, &mut rgb)
+            .labelled_by(label.id)
+            .on_hover_text("The light's colour (the lab's is white, 1, 1, 1)");
+        if response.changed() {
+            light.colour = glam::Vec3::from_array(rgb);
+        }
+        if light.colour != glam::Vec3::ONE && ui.small_button("White").clicked() {
+            light.colour = glam::Vec3::ONE;
+        }
+    });
+    ui.add(
+        egui::Slider::new(&mut light.radius, 0.0..=MAX_LIGHT_RADIUS_UI)
+            .clamping(egui::SliderClamping::Edits)
+            .max_decimals(3)
+            .text("Light radius"),
+    )
+    .on_hover_text(
+        "0 is the lab's point light (hard shadows); above 0 a sphere of the same power, whose \
+         shadows are soft: each sample sees a point of it, and the samples average to the \
+         fraction of the light a point sees",
     );
-    if response.changed() {
-        light.power = power;
+}
+
+/// The display transform's name in the selector.
+pub fn display_label(transform: DisplayTransform) -> &'static str {
+    match transform {
+        DisplayTransform::Lab => "Lab (clamp, no gamma)",
+        DisplayTransform::Srgb => "sRGB",
+        DisplayTransform::Filmic => "Filmic (ACES fit)",
     }
+}
+
+/// How the image is shown: changing it never re-traces.
+pub fn display_ui(ui: &mut egui::Ui, display: &mut Display) {
+    egui::ComboBox::new("display", "Display")
+        .selected_text(display_label(display.transform))
+        .show_ui(ui, |ui| {
+            for t in DisplayTransform::ALL {
+                ui.selectable_value(&mut display.transform, t, display_label(t));
+            }
+        })
+        .response
+        .on_hover_text(
+            "How linear values become screen pixels (and PNG screenshots). Lab: clamped to \
+             [0, 1], no gamma, the lab's figures. sRGB: the standard encoding. Filmic: \
+             highlights roll off instead of clipping.",
+        );
+    ui.add(
+        egui::Slider::new(&mut display.exposure, -MAX_EXPOSURE_UI..=MAX_EXPOSURE_UI)
+            .clamping(egui::SliderClamping::Edits)
+            .max_decimals(2)
+            .suffix(" EV")
+            .text("Exposure"),
+    )
+    .on_hover_text("Stops: +1 doubles every value before the display curve");
 }
 
 /// The materials preset's name in the selector.
@@ -239,6 +331,16 @@ pub fn material_label(preset: MaterialPreset) -> &'static str {
         MaterialPreset::Mirror => "Mirror tall block",
         MaterialPreset::Glass => "Glass short block",
         MaterialPreset::Both => "Mirror and glass",
+    }
+}
+
+/// The texture preset's name in the selector.
+pub fn texture_label(preset: TexturePreset) -> &'static str {
+    match preset {
+        TexturePreset::None => "None (the lab)",
+        TexturePreset::CheckerFloor => "Checkerboard floor",
+        TexturePreset::GridWalls => "Grid on the walls",
+        TexturePreset::Both => "Checkerboard and grid",
     }
 }
 
@@ -263,6 +365,7 @@ pub fn shading_ui(
     commands: &mut Vec<Command>,
 ) {
     let materials = &mut settings.material_preset;
+    let textures = &mut settings.texture_preset;
     let shading = &mut settings.shading;
     let path = shading.stage == Stage::Path;
     egui::ComboBox::new("stage", "Stage")
@@ -287,6 +390,22 @@ pub fn shading_ui(
                     .on_hover_text(material_hover(preset));
             }
         });
+    egui::ComboBox::new("textures", "Textures")
+        .selected_text(texture_label(*textures))
+        .show_ui(ui, |ui| {
+            for preset in TexturePreset::ALL {
+                ui.selectable_value(textures, preset, texture_label(preset));
+            }
+        })
+        .response
+        .on_hover_text(
+            "Textures for the box: ρ read from a checkerboard or a grid at each hit (a textured \
+             model keeps its own)",
+        );
+    ui.checkbox(&mut shading.smooth, "Smooth shading").on_hover_text(
+        "Light models with their vertex normals interpolated across each triangle; the box is \
+         flat either way (the lab's look). Off: every triangle flat (faceted).",
+    );
     // What the switches compute, as they are now: the one text the library keeps true.
     ui.horizontal_wrapped(|ui| {
         ui.weak("Computes");

@@ -39,6 +39,8 @@ pub struct WorkbenchState {
     /// The path tracer's bounce count while "Unlimited bounces" is ticked, for when it is
     /// unticked again.
     pub limited_bounces: u32,
+    /// "Click to focus": a click on the image sets the focus distance.
+    pub focus_mode: bool,
 }
 
 impl Default for WorkbenchState {
@@ -50,6 +52,7 @@ impl Default for WorkbenchState {
             screenshot_folder: PathBuf::from("."),
             obj_path: String::new(),
             limited_bounces: DEFAULT_LIMITED_BOUNCES,
+            focus_mode: false,
         }
     }
 }

@@ -20,6 +20,9 @@ pub struct ViewportInput {
     pub scroll_y: f32,
     /// The image was clicked or a drag started on it.
     pub pressed: bool,
+    /// Where the image was clicked (not dragged), as a fraction of its width and height from
+    /// its top-left corner.
+    pub clicked_at: Option<egui::Vec2>,
 }
 
 #[derive(Default)]
@@ -92,6 +95,12 @@ impl Viewport {
             },
             scroll_y,
             pressed: response.clicked() || response.drag_started(),
+            clicked_at: response
+                .clicked()
+                .then(|| response.interact_pointer_pos())
+                .flatten()
+                .filter(|p| rect.contains(*p))
+                .map(|p| (p - rect.min) / rect.size()),
         }
     }
 }
