@@ -205,15 +205,18 @@ mod tests {
         assert!(changed > 50 && changed < one.pixels.len() / 5, "{changed}");
     }
 
-    /// The centre of the default view sees the back wall (z = 1) straight ahead of the camera
-    /// at z = −3.001: depth 4.001. A point seen off-centre has its depth along the view
-    /// direction, not its distance.
+    /// Above the blocks, the default view sees the back wall (z = 1): depth 4.001 from the
+    /// camera at z = −3.001, whatever the point's distance (the depth is along the view
+    /// direction). The image point (32, 14) of a 64 × 48 view, f = 64, looks 10/64 up: it
+    /// meets the back wall at y = −4.001·10/64 = −0.625, above both blocks.
     #[test]
     fn focus_depth_is_the_hit_depth_along_the_view() {
         let scene = cornell_box();
         let s = small();
-        let centre = focus_depth(&scene, &s, 32.0, 24.0).unwrap();
-        assert!((centre - 4.001).abs() < 1e-5, "{centre}");
+        let wall = focus_depth(&scene, &s, 32.0, 14.0).unwrap();
+        assert!((wall - 4.001).abs() < 1e-5, "{wall}");
+        let off_centre = focus_depth(&scene, &s, 40.0, 10.0).unwrap();
+        assert!((off_centre - 4.001).abs() < 1e-5, "{off_centre}");
         // The top-left corner sees the left wall or the ceiling, nearer than the back wall.
         let corner = focus_depth(&scene, &s, 0.5, 0.5).unwrap();
         assert!(corner < 4.001, "{corner}");

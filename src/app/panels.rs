@@ -402,10 +402,11 @@ pub fn shading_ui(
             "Textures for the box: ρ read from a checkerboard or a grid at each hit (a textured \
              model keeps its own)",
         );
-    ui.checkbox(&mut shading.smooth, "Smooth shading").on_hover_text(
-        "Light models with their vertex normals interpolated across each triangle; the box is \
+    ui.checkbox(&mut shading.smooth, "Smooth shading")
+        .on_hover_text(
+            "Light models with their vertex normals interpolated across each triangle; the box is \
          flat either way (the lab's look). Off: every triangle flat (faceted).",
-    );
+        );
     // What the switches compute, as they are now: the one text the library keeps true.
     ui.horizontal_wrapped(|ui| {
         ui.weak("Computes");
