@@ -123,7 +123,7 @@ fn a_soft_shadow_lies_between_umbra_and_full_light() {
         } else {
             1.0
         };
-        if share > 0.05 && share < 0.95 && (hard_share < 0.02 || hard_share > 0.98) {
+        if share > 0.05 && share < 0.95 && !(0.02..=0.98).contains(&hard_share) {
             // Strictly between where the hard shadow is all or nothing: the penumbra. It must
             // be near the hard shadow's edge. Its width on a surface is the light's diameter
             // times (occluder to surface) / (light to occluder): at most 0.3 · 1.5 / 0.6 =
