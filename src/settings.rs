@@ -73,6 +73,14 @@ pub struct SettingsError {
 }
 
 impl RenderSettings {
+    /// Whether `other` renders the same linear image: equal but perhaps for the display
+    /// transform and exposure, which change only how the image is shown.
+    pub fn renders_like(&self, other: &RenderSettings) -> bool {
+        let mut same_display = self.clone();
+        same_display.display = other.display;
+        same_display == *other
+    }
+
     /// Checks every value before a render: sizes in 1..=16384, finite numbers, a positive focal
     /// length, non-negative light power and indirect light, 1..=65536 samples.
     pub fn validate(&self) -> Result<(), SettingsError> {
@@ -181,6 +189,17 @@ mod tests {
         assert_eq!(partial.light.position, Vec3::new(0.5, 0.0, 0.0));
         assert_eq!(partial.light.channel_power(), Vec3::splat(14.0));
         assert_eq!(partial.camera, Camera::default());
+    }
+
+    #[test]
+    fn the_display_does_not_change_the_render() {
+        let a = RenderSettings::default();
+        let mut b = a.clone();
+        b.display.exposure = 2.0;
+        b.display.transform = crate::display::DisplayTransform::Filmic;
+        assert!(a.renders_like(&b) && b.renders_like(&a));
+        b.light.radius = 0.1;
+        assert!(!a.renders_like(&b));
     }
 
     #[test]

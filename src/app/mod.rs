@@ -285,9 +285,15 @@ impl WorkbenchApp {
         if self.state.render_threads != controller.threads() {
             restarted = Some(controller.set_threads(self.state.render_threads));
         }
-        if self.submitted.as_ref() != Some(&self.state.settings) {
-            self.submitted = Some(self.state.settings.clone());
-            restarted = Some(controller.submit(&self.scene, &self.state.settings));
+        // The display transform and exposure only change how the image is shown: the
+        // controller re-displays what it has, without tracing again.
+        if controller.display() != self.state.settings.display {
+            controller.set_display(self.state.settings.display);
+        }
+        let settings = &self.state.settings;
+        if !self.submitted.as_ref().is_some_and(|s| s.renders_like(settings)) {
+            self.submitted = Some(settings.clone());
+            restarted = Some(controller.submit(&self.scene, settings));
         }
         match restarted {
             Some(Ok(generation)) => {
@@ -448,6 +454,8 @@ impl WorkbenchApp {
         };
         let mut settings = full.settings.clone();
         settings.samples_per_pixel = full.samples;
+        // The display in force now, which the screenshot's PNG is shown through.
+        settings.display = self.state.settings.display;
         let request = screenshot::Request {
             folder: self.state.screenshot_folder.clone(),
             image: Arc::clone(&full.image),
@@ -554,7 +562,9 @@ impl WorkbenchApp {
     #[cfg(test)]
     pub fn is_settled(&self) -> bool {
         let generation = self.controller.as_ref().map_or(0, Controller::generation);
-        self.submitted.as_ref() == Some(&self.state.settings)
+        self.submitted
+            .as_ref()
+            .is_some_and(|s| s.renders_like(&self.state.settings))
             && self
                 .shown
                 .as_ref()

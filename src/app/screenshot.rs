@@ -63,7 +63,7 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
     }
     let png_bytes = request
         .image
-        .encode(OutputFormat::Png)
+        .encode_with(OutputFormat::Png, &request.settings.display)
         .context("could not encode the screenshot as PNG")?;
     let base = base_name(&request.time);
     let (png_path, png_file, json_path, json_file) = reserve(folder, &base)?;

@@ -713,3 +713,98 @@ fn the_stats_show_the_noise_of_a_path_traced_image() {
     // And in the status bar's summary, which stays in view.
     assert!(h.query_by_label_contains("noise ±").is_some());
 }
+
+#[test]
+fn the_extensions_controls_are_found_by_label_and_render_what_the_library_renders() {
+    let mut h = harness(small_state());
+    for label in ["Aperture", "Light radius", "Exposure", "Light power"] {
+        h.get_by_role_and_label(Role::Slider, label);
+    }
+    for label in ["Smooth shading", "Click to focus"] {
+        h.get_by_role_and_label(Role::CheckBox, label);
+    }
+    h.get_by_label("Textures");
+    h.get_by_label("Display");
+    h.get_by_label("Light colour");
+
+    h.get_by_role_and_label(Role::Slider, "Light radius")
+        .set_value_accesskit(0.2);
+    h.get_by_role_and_label(Role::Slider, "Aperture")
+        .set_value_accesskit(0.05);
+    h.get_by_role_and_label(Role::CheckBox, "Smooth shading").click();
+    settle(&mut h);
+    let s = settings(&h);
+    assert_eq!(s.light.radius, 0.2);
+    assert_eq!(s.camera.aperture, 0.05);
+    assert!(!s.shading.smooth);
+    let frame = shown(&h);
+    assert_eq!(frame.settings, s);
+    assert_eq!(*frame.image, render(&cornell_box(), &s));
+}
+
+/// The display transform and exposure change only what is shown: the accumulation goes on
+/// (the same job, its sample count still growing) and the texture is the linear image through
+/// the new display.
+#[test]
+fn changing_the_display_never_restarts_the_accumulation() {
+    let mut state = small_state();
+    state.settings.samples_per_pixel = 3000;
+    let mut h = Harness::builder()
+        .with_size([1400.0, 1400.0])
+        .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
+    let start = Instant::now();
+    // Wait for some samples, well before the target.
+    while h.state().shown.as_ref().is_none_or(|s| s.samples < 3) {
+        assert!(start.elapsed() < DEADLINE);
+        std::thread::sleep(Duration::from_millis(2));
+        h.step();
+    }
+    let generation = h.state().submitted_generation;
+    let samples_before = shown(&h).samples;
+    h.get_by_role_and_label(Role::Slider, "Exposure")
+        .set_value_accesskit(1.0);
+    let mut seen = Vec::new();
+    while !h.state().is_settled() {
+        assert!(start.elapsed() < DEADLINE, "did not finish");
+        std::thread::sleep(Duration::from_millis(2));
+        h.step();
+        seen.push(shown(&h).samples);
+    }
+    assert_eq!(h.state().submitted_generation, generation, "a new job was started");
+    assert!(seen.iter().all(|&n| n >= samples_before), "{samples_before} then {seen:?}");
+    assert!(seen.windows(2).all(|w| w[0] <= w[1]), "the count went back: {seen:?}");
+    let frame = shown(&h);
+    assert_eq!(frame.samples, 3000);
+    let display = settings(&h).display;
+    assert_eq!(display.exposure, 1.0);
+    assert_eq!(
+        h.state().viewport.rgba().unwrap(),
+        display.to_rgba8(&frame.image),
+        "the texture is the image through the new exposure"
+    );
+}
+
+/// "Click to focus": a click on the image sets the focus distance to the depth of the surface
+/// under the pointer, as `render::focus_depth` computes it.
+#[test]
+fn click_to_focus_sets_the_focus_distance() {
+    let mut h = harness(small_state());
+    h.get_by_role_and_label(Role::CheckBox, "Click to focus")
+        .click();
+    h.step();
+    let rect = h.state().viewport.shown_rect().unwrap();
+    // A point on the back wall, above the blocks (as in render::focus_depth's test).
+    let at = egui::vec2(0.5, 0.3);
+    let pos = rect.min + at * rect.size();
+    h.drag_at(pos);
+    h.step();
+    h.drop_at(pos);
+    h.step();
+    let s = settings(&h);
+    let (px, py) = (at.x * 128.0, at.y * 96.0);
+    let expected = raylab::render::focus_depth(&cornell_box(), &s, px, py).unwrap();
+    assert!((s.camera.focus_distance - expected).abs() < 0.02, "{} vs {expected}", s.camera.focus_distance);
+    assert!((s.camera.focus_distance - 4.001).abs() < 1e-3);
+    assert!(status(&h).0.contains("Focus distance"), "{}", status(&h).0);
+    settle(&mut h);
+}

@@ -30,6 +30,8 @@ pub struct Viewport {
     texture: Option<egui::TextureHandle>,
     pixels: Option<Arc<egui::ColorImage>>,
     options: egui::TextureOptions,
+    /// Where the image was drawn last, in points.
+    shown_rect: Option<egui::Rect>,
 }
 
 impl Viewport {
@@ -49,6 +51,20 @@ impl Viewport {
         self.pixels = Some(image);
     }
 
+    /// The shown image's pixels as uploaded (8-bit RGBA after the display transform).
+    #[cfg(test)]
+    pub fn rgba(&self) -> Option<Vec<u8>> {
+        self.pixels
+            .as_ref()
+            .map(|p| p.pixels.iter().flat_map(|c| c.to_array()).collect())
+    }
+
+    /// Where the image was drawn last, in points.
+    #[cfg(test)]
+    pub fn shown_rect(&self) -> Option<egui::Rect> {
+        self.shown_rect
+    }
+
     /// The shown image's size in pixels.
     #[cfg(test)]
     pub fn image_size(&self) -> Option<[usize; 2]> {
@@ -65,6 +81,7 @@ impl Viewport {
         };
         let size = egui::vec2(pixels.size[0] as f32, pixels.size[1] as f32);
         let rect = fit_rect(available, size);
+        self.shown_rect = Some(rect);
 
         // Pick the filter for the scale it is shown at; re-upload only when that changes.
         let scale = rect.width() * ui.ctx().pixels_per_point() / size.x.max(1.0);
