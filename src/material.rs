@@ -23,8 +23,8 @@ use std::str::FromStr;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::texture::Texture;
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, orthonormal_basis};
+use crate::texture::Texture;
 
 /// How a surface scatters light.
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
@@ -353,6 +353,7 @@ mod tests {
             name: "m".into(),
             reflectance: Vec3::ZERO,
             kind: PRESET_MIRROR,
+            texture: None,
         };
         let s = mirror.sample(d, n, &mut Rng::new(1));
         assert_eq!((s.direction, s.weight), (r, Vec3::splat(0.9)));
