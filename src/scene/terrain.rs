@@ -1,6 +1,7 @@
 //! A fractal terrain in the box (the lab's "fractals" extension): a heightfield of fractional
 //! Brownian motion — octaves of value noise, each twice as fine and half as high as the last —
-//! covering the floor, deterministic from a seed.
+//! covering the floor, deterministic from a seed. Its triangles carry smooth normals taken
+//! from the grid ([`terrain_surface`]), so the hills shade as hills rather than as facets.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -92,32 +93,119 @@ fn fbm(spec: &TerrainSpec, x: f32, z: f32) -> f32 {
 /// The terrain's triangles over the floor (x, z in [−1, 1], floor at y = 1, heights upward,
 /// i.e. towards −y), normals facing up.
 pub fn terrain_triangles(spec: &TerrainSpec, material: u32) -> Vec<Triangle> {
-    let n = spec.grid.max(1) as usize;
-    let coord = |i: usize| -1.0 + 2.0 * i as f32 / n as f32;
-    let heights: Vec<f32> = (0..=n)
-        .into_par_iter()
-        .flat_map_iter(|j| {
-            (0..=n).map(move |i| 1.0 - spec.height * height_at(spec, coord(i), coord(j)))
-        })
-        .collect();
-    let point = |i: usize, j: usize| Vec3::new(coord(i), heights[j * (n + 1) + i], coord(j));
-    (0..n)
-        .into_par_iter()
-        .flat_map_iter(|j| {
-            (0..n).flat_map(move |i| {
-                let (a, b) = (point(i, j), point(i + 1, j));
-                let (c, d) = (point(i, j + 1), point(i + 1, j + 1));
-                // Ordered so that the lab's normal e2 × e1 points up (−y).
-                [
-                    Triangle::new(a, c, b, material),
-                    Triangle::new(b, c, d, material),
-                ]
-            })
-        })
-        .collect()
+    Heightfield::new(spec).triangles(material).collect()
 }
 
-/// The Cornell box with the blocks replaced by a terrain covering the floor.
+/// [`terrain_triangles`] and, per triangle, the smooth normals at its corners (in its vertex
+/// order): the surface's normal at each grid vertex, from central differences of the heights.
+pub fn terrain_surface(spec: &TerrainSpec, material: u32) -> (Vec<Triangle>, Vec<[Vec3; 3]>) {
+    let field = Heightfield::new(spec);
+    let normals = field.vertex_normals();
+    (
+        field.triangles(material).collect(),
+        field.corner_normals(&normals).collect(),
+    )
+}
+
+/// Scene heights (y) at the vertices of a square grid of `n` × `n` quads over x, z in [−1, 1].
+struct Heightfield {
+    n: usize,
+    /// Row by row (z), `n + 1` per row (x).
+    heights: Vec<f32>,
+}
+
+impl Heightfield {
+    /// The terrain of `spec`.
+    fn new(spec: &TerrainSpec) -> Self {
+        Self::from_fn(spec.grid.max(1) as usize, |x, z| {
+            1.0 - spec.height * height_at(spec, x, z)
+        })
+    }
+
+    /// Heights `y(x, z)` sampled on `n` × `n` quads.
+    fn from_fn(n: usize, y: impl Fn(f32, f32) -> f32 + Sync) -> Self {
+        let heights = (0..=n)
+            .into_par_iter()
+            .flat_map_iter(|j| {
+                let y = &y;
+                (0..=n).map(move |i| y(coord(n, i), coord(n, j)))
+            })
+            .collect();
+        Self { n, heights }
+    }
+
+    fn point(&self, i: usize, j: usize) -> Vec3 {
+        let n = self.n;
+        Vec3::new(coord(n, i), self.heights[j * (n + 1) + i], coord(n, j))
+    }
+
+    /// The unit normal at grid vertex (i, j), facing up like the triangles. The surface is
+    /// y = Y(x, z), so (∂Y/∂x, −1, ∂Y/∂z) is normal to it and points to −y; the slopes are
+    /// central differences of the neighbouring heights (one-sided at the edges). Exact for a
+    /// plane, and smooth across the triangles, whose face normals jump from one to the next.
+    fn normal(&self, i: usize, j: usize) -> Vec3 {
+        let n = self.n;
+        let (i0, i1) = (i.saturating_sub(1), (i + 1).min(n));
+        let (j0, j1) = (j.saturating_sub(1), (j + 1).min(n));
+        let h = |i: usize, j: usize| self.heights[j * (n + 1) + i];
+        let dx = (h(i1, j) - h(i0, j)) / (coord(n, i1) - coord(n, i0));
+        let dz = (h(i, j1) - h(i, j0)) / (coord(n, j1) - coord(n, j0));
+        Vec3::new(dx, -1.0, dz).normalize()
+    }
+
+    /// [`Heightfield::normal`] at every grid vertex, in the order of `heights`.
+    fn vertex_normals(&self) -> Vec<Vec3> {
+        let n = self.n;
+        (0..=n)
+            .into_par_iter()
+            .flat_map_iter(|j| (0..=n).map(move |i| self.normal(i, j)))
+            .collect()
+    }
+
+    /// Two triangles per quad, quads row by row.
+    fn triangles(&self, material: u32) -> impl ParallelIterator<Item = Triangle> + '_ {
+        self.quads().flat_map_iter(move |(i, j)| {
+            let (a, b) = (self.point(i, j), self.point(i + 1, j));
+            let (c, d) = (self.point(i, j + 1), self.point(i + 1, j + 1));
+            // Ordered so that the lab's normal e2 × e1 points up (−y).
+            [
+                Triangle::new(a, c, b, material),
+                Triangle::new(b, c, d, material),
+            ]
+        })
+    }
+
+    /// The corners' normals of [`Heightfield::triangles`], in the same order, from
+    /// [`Heightfield::vertex_normals`].
+    fn corner_normals<'a>(
+        &'a self,
+        normals: &'a [Vec3],
+    ) -> impl ParallelIterator<Item = [Vec3; 3]> + 'a {
+        let n = self.n;
+        self.quads().flat_map_iter(move |(i, j)| {
+            let at = |i: usize, j: usize| normals[j * (n + 1) + i];
+            let (a, b) = (at(i, j), at(i + 1, j));
+            let (c, d) = (at(i, j + 1), at(i + 1, j + 1));
+            [[a, c, b], [b, c, d]]
+        })
+    }
+
+    /// The quads (i, j), row by row; rows in parallel.
+    fn quads(&self) -> impl ParallelIterator<Item = (usize, usize)> {
+        let n = self.n;
+        (0..n)
+            .into_par_iter()
+            .flat_map_iter(move |j| (0..n).map(move |i| (i, j)))
+    }
+}
+
+/// The x or z of grid line `i` of `n` quads over [−1, 1].
+fn coord(n: usize, i: usize) -> f32 {
+    -1.0 + 2.0 * i as f32 / n as f32
+}
+
+/// The Cornell box with the blocks replaced by a terrain covering the floor, shaded smoothly
+/// (the room's walls stay flat).
 pub fn terrain_scene(spec: &TerrainSpec) -> Scene {
     let scene = cornell_box();
     let mut materials = scene.materials;
@@ -125,8 +213,11 @@ pub fn terrain_scene(spec: &TerrainSpec) -> Scene {
     let material = (materials.len() - 1) as u32;
     // The room is the first ten triangles; the blocks would stick out of the ground.
     let mut triangles = scene.triangles[..10].to_vec();
-    triangles.extend(terrain_triangles(spec, material));
-    Scene::new(triangles, materials)
+    let field = Heightfield::new(spec);
+    triangles.par_extend(field.triangles(material));
+    let mut normals = vec![None; 10];
+    normals.par_extend(field.corner_normals(&field.vertex_normals()).map(Some));
+    Scene::new(triangles, materials).with_surface(normals, Vec::new())
 }
 
 #[cfg(test)]
@@ -162,5 +253,106 @@ mod tests {
     fn the_default_has_about_a_million_triangles() {
         let n = TerrainSpec::default().grid as usize;
         assert!((2 * n * n).abs_diff(1_000_000) < 1_000);
+    }
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).abs().max_element() < 1e-6
+    }
+
+    #[test]
+    fn a_flat_terrain_shades_with_its_face_normal() {
+        let spec = TerrainSpec {
+            grid: 6,
+            height: 0.0,
+            ..TerrainSpec::default()
+        };
+        let scene = terrain_scene(&spec);
+        assert_eq!(scene.triangles.len(), 10 + 2 * 6 * 6);
+        assert!(scene.uvs.is_empty());
+        for (i, t) in scene.triangles.iter().enumerate() {
+            if i < 10 {
+                assert_eq!(scene.vertex_normals[i], None, "the room stays flat");
+                continue;
+            }
+            assert!(close(t.normal, Vec3::NEG_Y), "{}", t.normal);
+            assert_eq!(scene.vertex_normals[i], Some([Vec3::NEG_Y; 3]));
+            for (u, v) in [(0.0, 0.0), (0.5, 0.5), (0.1, 0.7)] {
+                assert!(close(scene.shading_normal(i, u, v, true), Vec3::NEG_Y));
+            }
+        }
+    }
+
+    #[test]
+    fn on_a_sloped_plane_every_normal_is_the_planes() {
+        // Heights a·(x + 1) + b·(z + 1) above the floor: y = 1 − a·(x + 1) − b·(z + 1), so
+        // ∂y/∂x = −a, ∂y/∂z = −b and the upward normal is (−a, −1, −b)/√(1 + a² + b²).
+        // a = 0.5, b = 0: (−0.5, −1, 0)/√1.25 = (−0.4472136, −0.8944272, 0).
+        // a = 0.5, b = 0.25: (−0.5, −1, −0.25)/√1.3125 = (−0.4364358, −0.8728716, −0.2182179).
+        for (a, b, expected) in [
+            (0.5, 0.0, Vec3::new(-0.447_213_6, -0.894_427_2, 0.0)),
+            (
+                0.5,
+                0.25,
+                Vec3::new(-0.436_435_8, -0.872_871_6, -0.218_217_9),
+            ),
+        ] {
+            let field = Heightfield::from_fn(8, |x, z| 1.0 - a * (x + 1.0) - b * (z + 1.0));
+            let normals = field.vertex_normals();
+            assert_eq!(normals.len(), 9 * 9);
+            for n in &normals {
+                assert!(close(*n, expected), "{n} against {expected}");
+            }
+            // The faces agree, so smooth shading looks exactly like flat shading here.
+            let triangles: Vec<Triangle> = field.triangles(0).collect();
+            let corners: Vec<[Vec3; 3]> = field.corner_normals(&normals).collect();
+            assert_eq!(triangles.len(), corners.len());
+            for (t, c) in triangles.iter().zip(&corners) {
+                assert!(close(t.normal, expected), "{}", t.normal);
+                assert!(c.iter().all(|n| close(*n, expected)));
+            }
+        }
+    }
+
+    #[test]
+    fn corner_normals_belong_to_their_corners() {
+        // A bump y = 1 − (x² + z²)/4 (a paraboloid): the normal at (x, z) is (−x/2, −1, −z/2)
+        // normalised, and central differences are exact for a quadratic away from the edges.
+        let field = Heightfield::from_fn(4, |x, z| 1.0 - 0.25 * (x * x + z * z));
+        let normals = field.vertex_normals();
+        let triangles: Vec<Triangle> = field.triangles(0).collect();
+        let corners: Vec<[Vec3; 3]> = field.corner_normals(&normals).collect();
+        for (t, c) in triangles.iter().zip(&corners) {
+            for (p, n) in [t.v0, t.v1, t.v2].into_iter().zip(c) {
+                if p.x.abs() < 1.0 && p.z.abs() < 1.0 {
+                    let expected = Vec3::new(-0.5 * p.x, -1.0, -0.5 * p.z).normalize();
+                    assert!(close(*n, expected), "{n} at {p}");
+                }
+                assert!(
+                    n.dot(t.normal) > 0.9,
+                    "faces the face's way: {n} {}",
+                    t.normal
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_surface_matches_the_triangles() {
+        let spec = TerrainSpec {
+            grid: 30,
+            ..TerrainSpec::default()
+        };
+        let scene = terrain_scene(&spec);
+        let material = scene.triangles[10].material;
+        let (triangles, normals) = terrain_surface(&spec, material);
+        assert!(triangles == terrain_triangles(&spec, material));
+        assert_eq!(normals.len(), triangles.len());
+        assert!(scene.triangles[10..] == triangles[..]);
+        for (i, n) in normals.iter().enumerate() {
+            assert_eq!(scene.vertex_normals[10 + i], Some(*n));
+            for m in n {
+                assert!(m.y < 0.0 && (m.length() - 1.0).abs() < 1e-6, "{m}");
+            }
+        }
     }
 }
