@@ -17,7 +17,10 @@ use raylab::scene::SceneChoice;
 use raylab::{Shading, Stage};
 
 fn scenes(c: &mut Criterion) {
-    for choice in SceneChoice::BUILT_IN {
+    for choice in SceneChoice::BUILT_IN
+        .into_iter()
+        .filter(|c| *c != SceneChoice::TexturedTeapot)
+    {
         let Ok(scene) = choice.load() else {
             eprintln!("could not load {choice}");
             continue;

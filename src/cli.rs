@@ -97,7 +97,7 @@ pub struct RenderArgs {
         ]
     )]
     pub settings: Option<PathBuf>,
-    /// Scene: cornell, bunny, teapot or terrain.
+    /// Scene: cornell, bunny, teapot, textured-teapot or terrain.
     #[arg(
         long,
         default_value = "cornell",
@@ -373,7 +373,11 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
     let scenes: Vec<SceneChoice> = match (&args.obj, &args.scene) {
         (Some(path), _) => vec![SceneChoice::Obj(path.clone())],
         (None, Some(choice)) => vec![choice.clone()],
-        (None, None) => SceneChoice::BUILT_IN.to_vec(),
+        // The textured teapot is the teapot's geometry again: not measured twice.
+        (None, None) => SceneChoice::BUILT_IN
+            .into_iter()
+            .filter(|c| *c != SceneChoice::TexturedTeapot)
+            .collect(),
     };
     let isa = Isa::by_name(&args.isa).with_context(|| {
         format!(

@@ -159,6 +159,7 @@ pub fn scene_label(choice: &SceneChoice) -> String {
         SceneChoice::Cornell => "Cornell box (the lab)".to_owned(),
         SceneChoice::Bunny => "Stanford bunny".to_owned(),
         SceneChoice::Teapot => "Utah teapot".to_owned(),
+        SceneChoice::TexturedTeapot => "Textured teapot (porcelain)".to_owned(),
         SceneChoice::Terrain => "Fractal terrain (1M triangles)".to_owned(),
         SceneChoice::Obj(_) => format!("OBJ: {choice}"),
     }

@@ -215,6 +215,10 @@ pub enum SceneChoice {
     Bunny,
     /// The Utah teapot (992 triangles) standing in the box.
     Teapot,
+    /// The Utah teapot with texture coordinates and a blue-and-white porcelain texture
+    /// (assets/models/teapot-textured.obj), smooth-shaded.
+    #[serde(rename = "textured-teapot")]
+    TexturedTeapot,
     /// A fractal terrain of about a million triangles covering the box's floor.
     Terrain,
     /// Any OBJ file, standing in the box.
@@ -223,10 +227,11 @@ pub enum SceneChoice {
 
 impl SceneChoice {
     /// The built-in scenes, by name.
-    pub const BUILT_IN: [SceneChoice; 4] = [
+    pub const BUILT_IN: [SceneChoice; 5] = [
         SceneChoice::Cornell,
         SceneChoice::Bunny,
         SceneChoice::Teapot,
+        SceneChoice::TexturedTeapot,
         SceneChoice::Terrain,
     ];
 
@@ -236,6 +241,7 @@ impl SceneChoice {
             SceneChoice::Cornell => "cornell".into(),
             SceneChoice::Bunny => "bunny".into(),
             SceneChoice::Teapot => "teapot".into(),
+            SceneChoice::TexturedTeapot => "textured-teapot".into(),
             SceneChoice::Terrain => "terrain".into(),
             SceneChoice::Obj(path) => path.file_name().map_or_else(
                 || path.display().to_string(),
@@ -260,6 +266,17 @@ impl SceneChoice {
                 let mesh = obj::builtin(obj::TEAPOT_OBJ, "teapot")?;
                 Ok(obj::model_in_box(&mesh, &obj::Placement::TEAPOT, "teapot"))
             }
+            SceneChoice::TexturedTeapot => {
+                // The built-in texture decodes (a unit test checks it): no warnings to show.
+                let (scene, _warnings) = obj::builtin_textured(
+                    obj::TEXTURED_TEAPOT_OBJ,
+                    obj::TEXTURED_TEAPOT_MTL,
+                    obj::TEXTURED_TEAPOT_PNG,
+                    "textured-teapot",
+                    &obj::Placement::TEAPOT,
+                )?;
+                Ok(scene)
+            }
             SceneChoice::Terrain => Ok(terrain::terrain_scene(&terrain::TerrainSpec::default())),
             SceneChoice::Obj(path) => obj::obj_scene(path),
         }
@@ -281,7 +298,10 @@ impl FromStr for SceneChoice {
             .into_iter()
             .find(|c| c.name() == s)
             .ok_or_else(|| {
-                format!("unknown scene '{s}' (expected cornell, bunny, teapot or terrain)")
+                format!(
+                    "unknown scene '{s}' (expected cornell, bunny, teapot, textured-teapot or \
+                     terrain)"
+                )
             })
     }
 }

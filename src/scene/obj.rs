@@ -39,6 +39,13 @@ pub const TEAPOT_OBJ: &str = include_str!("../../assets/models/teapot.obj");
 /// cube's 90°, the teapot's lid on its body — turn by more, and stay sharp.
 pub const CREASE_ANGLE_DEGREES: f32 = 60.0;
 
+/// The Utah teapot with texture coordinates (made by scripts/assets/make_textured_teapot.py).
+pub const TEXTURED_TEAPOT_OBJ: &str = include_str!("../../assets/models/teapot-textured.obj");
+/// Its material library, naming the texture.
+pub const TEXTURED_TEAPOT_MTL: &str = include_str!("../../assets/models/teapot-textured.mtl");
+/// Its porcelain texture.
+pub const TEXTURED_TEAPOT_PNG: &[u8] = include_bytes!("../../assets/models/teapot-porcelain.png");
+
 /// A triangle mesh as read from a file, in the file's coordinates.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
