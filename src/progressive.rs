@@ -19,6 +19,13 @@
 //! [`Controller::take_frame`], which never waits; a notify callback (the app's
 //! `request_repaint`) tells it when there is something to take.
 //!
+//! The [`Display`] (exposure and curve) is not part of a job: the film stays linear, and each
+//! frame is converted to 8 bits with the display in force when it is published
+//! ([`Controller::set_display`]). A change never restarts accumulation or re-traces: a running
+//! job notices it at its next pass boundary and publishes then, whatever the frame interval; an
+//! idle worker is woken and publishes its last frame again (same generation, samples and linear
+//! image), converted anew.
+//!
 //! Nothing here knows about egui. The same settings always give the same image.
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -27,6 +34,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
+use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, render_pass};
 use crate::scene::Scene;
@@ -51,15 +59,18 @@ pub struct Frame {
     pub settings: RenderSettings,
     /// The image in linear floats: the preview, or the mean of `samples` full passes.
     pub image: Arc<Image>,
-    /// The same image through the lab's display transform, as 8-bit RGBA.
+    /// The same image through `display`, as 8-bit RGBA.
     pub rgba: Vec<u8>,
+    /// The display `rgba` was converted with (the one in force when the frame was published).
+    pub display: Display,
     /// Full-resolution passes averaged so far (0 for a preview).
     pub samples: u32,
     /// The sample target, `settings.samples_per_pixel`.
     pub target: u32,
     /// Whether this is the coarse preview.
     pub is_preview: bool,
-    /// Time spent tracing this pass, in milliseconds.
+    /// Time spent tracing this pass, in milliseconds (a frame published again for a new display
+    /// keeps its pass's figures: nothing was traced).
     pub pass_ms: f64,
     /// Primary rays per second of this pass, in millions.
     pub mrays_per_s: f64,
@@ -70,7 +81,8 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// Whether the sample target is reached: no more frames will come for this generation.
+    /// Whether the sample target is reached: no more passes will come for this generation (a
+    /// display change may still publish the frame again, converted anew).
     pub fn is_final(&self) -> bool {
         !self.is_preview && self.samples >= self.target
     }
@@ -101,6 +113,8 @@ enum Message {
         generation: u64,
         threads: usize,
     },
+    /// The display changed: if idle, publish the last frame again with it.
+    Display,
     Quit,
 }
 
@@ -117,6 +131,10 @@ struct Shared {
     abandoned_jobs: AtomicU64,
     /// A problem the worker met (the thread pool could not be rebuilt), until the UI takes it.
     error: Mutex<Option<String>>,
+    /// The display frames are converted with; read by the worker at every pass boundary.
+    display: Mutex<Display>,
+    /// Passes traced so far (previews included), for [`Controller::passes_traced`].
+    passes: AtomicU64,
     notify: Notify,
 }
 
@@ -124,6 +142,16 @@ impl Shared {
     fn current(&self) -> u64 {
         self.generation.load(Ordering::SeqCst)
     }
+
+    fn display(&self) -> Display {
+        *self.display.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+/// Whether a frame converted with `a` looks like one converted with `b`: compared by bits, so
+/// a NaN exposure equals itself and cannot make the worker publish at every pass.
+fn same_display(a: &Display, b: &Display) -> bool {
+    a.transform == b.transform && a.exposure.to_bits() == b.exposure.to_bits()
 }
 
 /// The progressive renderer: see the module docs.
@@ -146,6 +174,8 @@ impl Controller {
             done_changed: Condvar::new(),
             abandoned_jobs: AtomicU64::new(0),
             error: Mutex::new(None),
+            display: Mutex::new(Display::default()),
+            passes: AtomicU64::new(0),
             notify,
         });
         let (sender, receiver) = mpsc::channel();
@@ -190,6 +220,39 @@ impl Controller {
             generation,
             threads,
         })
+    }
+
+    /// Sets the display frames are converted with, from the next frame on: a running job shows
+    /// it after its current pass, an idle one publishes its last frame again with it. Nothing is
+    /// re-traced and the generation stays; setting the display in force does nothing.
+    ///
+    /// Never blocks on the renderer: the display's lock is only ever held to copy it.
+    pub fn set_display(&self, display: Display) {
+        {
+            let mut current = self
+                .shared
+                .display
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner);
+            if same_display(&current, &display) {
+                return;
+            }
+            *current = display;
+        }
+        // Stored before the message is sent, so the worker sees it when it wakes. A stopped
+        // worker shows nothing anyway.
+        let _ = self.sender.send(Message::Display);
+    }
+
+    /// The display in force.
+    pub fn display(&self) -> Display {
+        self.shared.display()
+    }
+
+    /// Passes traced since the controller started, previews included: a display change adds
+    /// none.
+    pub fn passes_traced(&self) -> u64 {
+        self.shared.passes.load(Ordering::SeqCst)
     }
 
     /// The number of render threads asked for.
@@ -318,6 +381,9 @@ struct Worker {
     pool: rayon::ThreadPool,
     /// The newest job, kept so a thread change can restart it.
     job: Option<Job>,
+    /// The last frame published, without its `rgba` (the linear image is shared with the UI's
+    /// copy through the `Arc`), so a display change can publish it again without tracing.
+    last: Option<Frame>,
 }
 
 impl Worker {
@@ -327,6 +393,7 @@ impl Worker {
             receiver,
             pool,
             job: None,
+            last: None,
         }
     }
 
@@ -336,6 +403,7 @@ impl Worker {
         while let Ok(first) = self.receiver.recv() {
             let mut pending = Some(first);
             let mut run = false;
+            let mut redisplay = false;
             while let Some(message) = pending.take() {
                 match message {
                     Message::Quit => return,
@@ -366,6 +434,7 @@ impl Worker {
                             self.mark_done(generation);
                         }
                     }
+                    Message::Display => redisplay = true,
                 }
                 pending = match self.receiver.try_recv() {
                     Ok(m) => Some(m),
@@ -373,14 +442,37 @@ impl Worker {
                     Err(TryRecvError::Disconnected) => return,
                 };
             }
-            if run && let Some(job) = &self.job {
-                if self.render_job(job) {
+            // A job to render shows the display in force anyway.
+            if run && let Some(job) = self.job.take() {
+                if self.render_job(&job) {
                     self.mark_done(job.generation);
                 } else {
                     self.shared.abandoned_jobs.fetch_add(1, Ordering::SeqCst);
                 }
+                self.job = Some(job);
+            } else if redisplay {
+                self.redisplay();
             }
         }
+    }
+
+    /// Publishes the last frame again with the display in force, if it was shown with another.
+    /// Its generation, samples, linear image and timings stay: nothing is traced. If a newer
+    /// submission has come since, `publish` refuses it (that job will show the new display).
+    fn redisplay(&mut self) {
+        let display = self.shared.display();
+        let Some(last) = &self.last else {
+            return;
+        };
+        if same_display(&last.display, &display) {
+            return;
+        }
+        let frame = Frame {
+            rgba: self.pool.install(|| display.to_rgba8(&last.image)),
+            display,
+            ..last.clone()
+        };
+        self.publish(frame);
     }
 
     fn rebuild_pool(&mut self, threads: usize) {
@@ -406,8 +498,8 @@ impl Worker {
 
     /// Renders the job's preview and passes up to its target. Returns `false` if a newer job
     /// made it stale on the way.
-    fn render_job(&self, job: &Job) -> bool {
-        let shared = &self.shared;
+    fn render_job(&mut self, job: &Job) -> bool {
+        let shared = Arc::clone(&self.shared);
         let stale = || shared.current() != job.generation;
         let settings = &job.settings;
         let target = settings.samples_per_pixel.max(1);
@@ -421,7 +513,7 @@ impl Worker {
             };
             let rays = u64::from(w) * u64::from(h);
             let frame = self.frame(job, image, 0, true, pass_ms, rays, None);
-            if !self.publish(frame) {
+            if !self.publish_and_keep(frame) {
                 return false;
             }
         }
@@ -435,9 +527,14 @@ impl Worker {
             film.add_pass(&pass);
             // Short passes are not all shown: each frame shown costs the UI a repaint (and the
             // mean, its display pixels and the noise estimate cost the worker), which takes
-            // from the render on a small machine. The first and the last always are.
+            // from the render on a small machine. The first and the last always are, and the
+            // first after a display change, so the change shows within one pass.
             let last = sample + 1 == target;
-            if sample > 0 && !last && published.elapsed() < MIN_FRAME_INTERVAL {
+            if sample > 0
+                && !last
+                && published.elapsed() < MIN_FRAME_INTERVAL
+                && !self.display_changed()
+            {
                 continue;
             }
             published = Instant::now();
@@ -449,11 +546,18 @@ impl Worker {
             let rays = u64::from(width) * u64::from(height);
             let noise = film.noise();
             let frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise);
-            if !self.publish(frame) {
+            if !self.publish_and_keep(frame) {
                 return false;
             }
         }
         true
+    }
+
+    /// Whether the display in force differs from the last frame's.
+    fn display_changed(&self) -> bool {
+        self.last
+            .as_ref()
+            .is_some_and(|last| !same_display(&last.display, &self.shared.display()))
     }
 
     /// One pass, or `None` if the job went stale.
@@ -468,7 +572,10 @@ impl Worker {
             .pool
             .install(|| render_pass(&job.scene, settings, sample, &cancelled));
         match result {
-            Ok(image) => Some((image, start.elapsed().as_secs_f64() * 1e3)),
+            Ok(image) => {
+                self.shared.passes.fetch_add(1, Ordering::SeqCst);
+                Some((image, start.elapsed().as_secs_f64() * 1e3))
+            }
             Err(Cancelled) => None,
         }
     }
@@ -484,12 +591,14 @@ impl Worker {
         rays: u64,
         noise: Option<NoiseEstimate>,
     ) -> Frame {
-        let rgba = image.to_rgba8();
+        let display = self.shared.display();
+        let rgba = self.pool.install(|| display.to_rgba8(&image));
         Frame {
             generation: job.generation,
             settings: job.settings.clone(),
             image: Arc::new(image),
             rgba,
+            display,
             samples,
             target: job.settings.samples_per_pixel.max(1),
             is_preview,
@@ -502,6 +611,20 @@ impl Worker {
             since_submit_ms: job.submitted.elapsed().as_secs_f64() * 1e3,
             noise,
         }
+    }
+
+    /// [`Worker::publish`], remembering the frame (without its pixels) for a display change.
+    fn publish_and_keep(&mut self, mut kept: Frame) -> bool {
+        // Cloned without its pixels: they may be tens of megabytes.
+        let rgba = std::mem::take(&mut kept.rgba);
+        let published = self.publish(Frame {
+            rgba,
+            ..kept.clone()
+        });
+        if published {
+            self.last = Some(kept);
+        }
+        published
     }
 
     /// Puts the frame in the slot unless its generation is stale; returns whether it did.
@@ -530,6 +653,7 @@ mod tests {
     use std::time::Duration;
 
     use super::*;
+    use crate::display::DisplayTransform;
     use crate::render::render;
     use crate::scene::cornell_box;
 
@@ -705,6 +829,133 @@ mod tests {
             Err(ControllerError::Invalid(_))
         ));
         assert_eq!(controller.generation(), 0);
+    }
+
+    /// The next frame published, waiting for it.
+    fn next_frame(controller: &Controller) -> Frame {
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            if let Some(frame) = controller.take_frame() {
+                return frame;
+            }
+            assert!(Instant::now() < deadline, "no frame within {TIMEOUT:?}");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    const BRIGHTER: Display = Display {
+        transform: DisplayTransform::Lab,
+        exposure: 1.0,
+    };
+
+    #[test]
+    fn a_display_change_when_idle_publishes_the_last_frame_again() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let g = controller.submit(&scene, &small(32, 32, 3)).unwrap();
+        let before = last_frame(&controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        assert_eq!(before.display, Display::default());
+        assert_eq!(before.rgba, before.image.to_rgba8());
+        // Three passes, no preview (32 < 64).
+        assert_eq!(controller.passes_traced(), 3);
+
+        controller.set_display(BRIGHTER);
+        assert_eq!(controller.display(), BRIGHTER);
+        let after = next_frame(&controller);
+        assert_eq!((after.generation, after.samples, after.target), (g, 3, 3));
+        assert!(after.is_final());
+        assert_eq!(after.display, BRIGHTER);
+        assert_eq!(after.rgba, BRIGHTER.to_rgba8(&after.image));
+        assert_ne!(after.rgba, before.rgba);
+        // Nothing traced: the same linear image, the same pass, no pass added.
+        assert!(Arc::ptr_eq(&after.image, &before.image));
+        assert_eq!(after.pass_ms, before.pass_ms);
+        assert_eq!(controller.passes_traced(), 3);
+        assert_eq!(controller.generation(), g);
+
+        // The display in force again: nothing to show.
+        controller.set_display(BRIGHTER);
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.passes_traced(), 3);
+    }
+
+    #[test]
+    fn a_display_change_while_accumulating_does_not_restart() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let settings = small(128, 128, 200);
+        let g = controller.submit(&scene, &settings).unwrap();
+        // Into its accumulation, a few samples in.
+        let at_change = loop {
+            let frame = next_frame(&controller);
+            if frame.samples >= 3 {
+                break frame;
+            }
+        };
+        assert!(!at_change.is_final(), "the job finished before the change");
+        let passes = controller.passes_traced();
+        let srgb = Display {
+            transform: DisplayTransform::Srgb,
+            exposure: 0.5,
+        };
+        controller.set_display(srgb);
+
+        let mut frames = vec![at_change];
+        while !frames.last().unwrap().is_final() {
+            frames.push(next_frame(&controller));
+        }
+        // One job throughout, its samples only growing: never back to a preview or to 1.
+        assert!(frames.iter().all(|f| f.generation == g && !f.is_preview));
+        assert!(frames.windows(2).all(|w| w[0].samples <= w[1].samples));
+        assert_eq!(controller.abandoned_jobs(), 0);
+        assert_eq!(controller.passes_traced(), 201, "a preview and 200 passes");
+        // The change showed after the pass under way then (the preview counts as a pass, so
+        // `passes` passes make `passes − 1` samples), not up to 40 ms of passes later.
+        let first = frames.iter().find(|f| f.display == srgb).unwrap();
+        assert!(
+            first.samples <= passes as u32 + 1,
+            "{} {passes}",
+            first.samples
+        );
+        let last = frames.last().unwrap();
+        assert_eq!((last.samples, last.display), (200, srgb));
+        assert_eq!(last.rgba, srgb.to_rgba8(&last.image));
+    }
+
+    #[test]
+    fn a_submission_after_a_display_change_renders_with_it() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        // Nothing rendered yet: nothing to publish again, but the display is kept.
+        let filmic = Display {
+            transform: DisplayTransform::Filmic,
+            exposure: -0.5,
+        };
+        controller.set_display(filmic);
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.passes_traced(), 0);
+
+        let settings = small(40, 30, 2);
+        let g = controller.submit(&scene, &settings).unwrap();
+        let frame = last_frame(&controller, g);
+        assert_eq!(frame.display, filmic);
+        assert_eq!(frame.rgba, filmic.to_rgba8(&frame.image));
+        // The linear image is the same as with any display.
+        assert_eq!(*frame.image, render(&scene, &settings));
+
+        // A change, then at once a new job: the job shows the new display.
+        controller.set_display(BRIGHTER);
+        let other = small(40, 30, 1);
+        let g = controller.submit(&scene, &other).unwrap();
+        let frame = last_frame(&controller, g);
+        assert_eq!((frame.generation, frame.display), (g, BRIGHTER));
+        assert_eq!(frame.rgba, BRIGHTER.to_rgba8(&frame.image));
+        assert!(controller.wait_idle(TIMEOUT));
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none(), "no stale frame after it");
     }
 
     #[test]
