@@ -341,7 +341,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let image = pool.install(|| render(&scene, &settings));
     let elapsed = start.elapsed();
-    image.save(&args.out)?;
+    image.save_with(&args.out, &settings.display)?;
 
     let c = &settings.camera;
     println!(

@@ -291,7 +291,11 @@ impl WorkbenchApp {
             controller.set_display(self.state.settings.display);
         }
         let settings = &self.state.settings;
-        if !self.submitted.as_ref().is_some_and(|s| s.renders_like(settings)) {
+        if !self
+            .submitted
+            .as_ref()
+            .is_some_and(|s| s.renders_like(settings))
+        {
             self.submitted = Some(settings.clone());
             restarted = Some(controller.submit(&self.scene, settings));
         }

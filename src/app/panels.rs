@@ -302,7 +302,7 @@ pub fn display_label(transform: DisplayTransform) -> &'static str {
 
 /// How the image is shown: changing it never re-traces.
 pub fn display_ui(ui: &mut egui::Ui, display: &mut Display) {
-    egui::ComboBox::new("display", "Display")
+    egui::ComboBox::new("display", "Display transform")
         .selected_text(display_label(display.transform))
         .show_ui(ui, |ui| {
             for t in DisplayTransform::ALL {

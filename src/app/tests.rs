@@ -724,14 +724,15 @@ fn the_extensions_controls_are_found_by_label_and_render_what_the_library_render
         h.get_by_role_and_label(Role::CheckBox, label);
     }
     h.get_by_label("Textures");
-    h.get_by_label("Display");
+    h.get_by_label("Display transform");
     h.get_by_label("Light colour");
 
     h.get_by_role_and_label(Role::Slider, "Light radius")
         .set_value_accesskit(0.2);
     h.get_by_role_and_label(Role::Slider, "Aperture")
         .set_value_accesskit(0.05);
-    h.get_by_role_and_label(Role::CheckBox, "Smooth shading").click();
+    h.get_by_role_and_label(Role::CheckBox, "Smooth shading")
+        .click();
     settle(&mut h);
     let s = settings(&h);
     assert_eq!(s.light.radius, 0.2);
@@ -770,9 +771,19 @@ fn changing_the_display_never_restarts_the_accumulation() {
         h.step();
         seen.push(shown(&h).samples);
     }
-    assert_eq!(h.state().submitted_generation, generation, "a new job was started");
-    assert!(seen.iter().all(|&n| n >= samples_before), "{samples_before} then {seen:?}");
-    assert!(seen.windows(2).all(|w| w[0] <= w[1]), "the count went back: {seen:?}");
+    assert_eq!(
+        h.state().submitted_generation,
+        generation,
+        "a new job was started"
+    );
+    assert!(
+        seen.iter().all(|&n| n >= samples_before),
+        "{samples_before} then {seen:?}"
+    );
+    assert!(
+        seen.windows(2).all(|w| w[0] <= w[1]),
+        "the count went back: {seen:?}"
+    );
     let frame = shown(&h);
     assert_eq!(frame.samples, 3000);
     let display = settings(&h).display;
@@ -803,7 +814,11 @@ fn click_to_focus_sets_the_focus_distance() {
     let s = settings(&h);
     let (px, py) = (at.x * 128.0, at.y * 96.0);
     let expected = raylab::render::focus_depth(&cornell_box(), &s, px, py).unwrap();
-    assert!((s.camera.focus_distance - expected).abs() < 0.02, "{} vs {expected}", s.camera.focus_distance);
+    assert!(
+        (s.camera.focus_distance - expected).abs() < 0.02,
+        "{} vs {expected}",
+        s.camera.focus_distance
+    );
     assert!((s.camera.focus_distance - 4.001).abs() < 1e-3);
     assert!(status(&h).0.contains("Focus distance"), "{}", status(&h).0);
     settle(&mut h);
