@@ -125,7 +125,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "none", value_name = "PRESET")]
     pub texture_preset: TexturePreset,
     /// Smooth shading of models (interpolated vertex normals); the box stays flat either way.
-    #[arg(long, default_value = "on", value_parser = parse_on_off, value_name = "on|off")]
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
     pub smooth: bool,
     /// Lab stages: how many mirror and glass hits in a row are followed (Whitted-style).
     #[arg(long, default_value_t = DEFAULT_SPECULAR_DEPTH, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SPECULAR_DEPTH)), value_name = "D")]
