@@ -280,3 +280,87 @@ fn the_path_stage_on_the_command_line() {
         assert!(err.contains(bad[1]), "{err}");
     }
 }
+
+/// The lab's extensions on the command line: `--display` and `--exposure` change the PNG as
+/// the display transform says and leave the EXR linear; the light, lens, texture and shading
+/// flags reach the render (each changes the image), and bad values are refused.
+#[test]
+fn the_extensions_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| -> std::path::PathBuf {
+        let path = dir.path().join(name);
+        let mut args = vec!["render", "--out", path.to_str().unwrap(), "--width", "48"];
+        args.extend_from_slice(&["--height", "48"]);
+        args.extend_from_slice(extra);
+        let out = raylab(&args);
+        assert!(out.status.success(), "{extra:?}: {}", stderr(&out));
+        path
+    };
+    let exr = |p: &Path| image::open(p).unwrap().to_rgb32f().into_raw();
+    let png = |p: &Path| image::open(p).unwrap().to_rgb8().into_raw();
+
+    // Exposure +1 doubles each linear value before the lab's clamp: 255·min(2x, 1), rounded.
+    let linear = exr(&run("lab.exr", &[]));
+    let brighter = png(&run("plus1.png", &["--exposure", "1"]));
+    for (x, p) in linear.iter().zip(&brighter) {
+        assert_eq!(*p, ((2.0 * x).clamp(0.0, 1.0) * 255.0).round() as u8);
+    }
+    // sRGB lifts the mid-tones; the EXR stays linear whatever the display.
+    let lab = png(&run("lab.png", &[]));
+    let srgb = png(&run("srgb.png", &["--display", "srgb"]));
+    assert!(srgb.iter().zip(&lab).all(|(s, l)| s >= l));
+    assert!(srgb.iter().zip(&lab).filter(|(s, l)| s > l).count() > 1000);
+    assert_eq!(
+        exr(&run(
+            "srgb.exr",
+            &["--display", "filmic", "--exposure", "3"]
+        )),
+        linear
+    );
+
+    for (name, extra) in [
+        ("colour.exr", &["--light-colour", "1,0.5,0.25"][..]),
+        (
+            "radius.exr",
+            &["--light-radius", "0.2", "--samples", "4"][..],
+        ),
+        (
+            "lens.exr",
+            &[
+                "--aperture",
+                "0.1",
+                "--focus-distance",
+                "2",
+                "--samples",
+                "4",
+            ][..],
+        ),
+        ("texture.exr", &["--texture-preset", "checker-floor"][..]),
+    ] {
+        assert_ne!(exr(&run(name, extra)), linear, "{name}");
+    }
+    // Smooth shading changes a model, never the box.
+    let bunny = exr(&run("bunny.exr", &["--scene", "bunny"]));
+    let flat = exr(&run("flat.exr", &["--scene", "bunny", "--smooth", "off"]));
+    assert_ne!(bunny, flat);
+    assert_eq!(exr(&run("box-flat.exr", &["--smooth", "off"])), linear);
+
+    let out_path = dir.path().join("refused.png");
+    for bad in [
+        &["--light-colour", "1,-1,0"][..],
+        &["--light-radius", "-0.1"][..],
+        &["--aperture", "nan"][..],
+        &["--focus-distance", "0"][..],
+        &["--exposure", "50"][..],
+        &["--display", "gamma"][..],
+        &["--texture-preset", "marble"][..],
+        &["--smooth", "yes"][..],
+    ] {
+        let mut args = vec!["render", "--out", out_path.to_str().unwrap()];
+        args.extend_from_slice(bad);
+        let out = raylab(&args);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}");
+        assert_eq!(stderr(&out).lines().count(), 1, "{bad:?}: {}", stderr(&out));
+        assert!(!out_path.exists());
+    }
+}
