@@ -25,7 +25,6 @@ use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Surface};
 use crate::light::PointLight;
 use crate::render::render_pass;
-use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use crate::{Camera, Shading, Stage};
@@ -123,8 +122,7 @@ pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(R
                 geometric: normal,
                 rho: scene.material_of(hit.triangle_index).reflectance,
             };
-            let mut rng = Rng::UNUSED;
-            HitTerms::at(light, Stage::Lab, true, surface, &mut rng).shadow_ray
+            HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
         })
         .collect()
 }

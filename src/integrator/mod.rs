@@ -342,16 +342,18 @@ impl HitTerms {
     /// D is equation 27 with the light's centre. A spherical light (radius above 0) gives a
     /// point of the sphere an unoccluded point sees exactly the same irradiance as its centre
     /// would; what changes is how much of it is hidden, so the shadow ray goes to a point of
-    /// the sphere drawn from `rng` ([`PointLight::sample_point`]): averaged over samples, D is
-    /// multiplied by the fraction of the light seen (soft shadows). The point light draws
-    /// nothing.
+    /// the sphere, `light_point(position)` ([`light_point`]): averaged over samples, D is
+    /// multiplied by the fraction of the light seen (soft shadows). It is called only when a
+    /// shadow ray is cast. For the lab's point light it returns the light's position and draws
+    /// nothing; the lab stages pass that alone, so their loop carries no random numbers (with
+    /// them it ran half as slow again: PERFORMANCE.md).
     #[inline(always)]
     pub fn at(
         light: &PointLight,
         stage: Stage,
         shadows: bool,
         surface: Surface,
-        rng: &mut Rng,
+        light_point: impl FnOnce(Vec3) -> Vec3,
     ) -> Self {
         let Surface {
             position,
@@ -375,12 +377,7 @@ impl HitTerms {
             }
             // A shadow ray only matters where there is light to block.
             if shadows && terms.d != Vec3::ZERO {
-                let target = if light.radius > 0.0 {
-                    light.sample_point(position, rng.next_f32(), rng.next_f32())
-                } else {
-                    light.position
-                };
-                terms.shadow_ray = shadow_ray_to(target, position, geometric);
+                terms.shadow_ray = shadow_ray_to(light_point(position), position, geometric);
             }
         }
         terms
@@ -406,6 +403,17 @@ impl HitTerms {
             Stage::Incoming => d + n,
             _ => self.rho * (d + n),
         }
+    }
+}
+
+/// The point of the light a shadow ray from `position` goes to: the centre of the lab's point
+/// light, or a point of a spherical light drawn from `rng` ([`PointLight::sample_point`]).
+#[inline(always)]
+pub fn light_point(light: &PointLight, position: Vec3, rng: &mut Rng) -> Vec3 {
+    if light.radius > 0.0 {
+        light.sample_point(position, rng.next_f32(), rng.next_f32())
+    } else {
+        light.position
     }
 }
 
@@ -456,6 +464,8 @@ pub struct Tracer<'a> {
     /// Whether anything draws random numbers: the path tracer, a spherical light's soft
     /// shadows, a thin lens's aperture.
     random: bool,
+    /// No texture and no smooth normal anywhere: every surface is the lab's (flat, constant ρ).
+    plain: bool,
 }
 
 impl<'a> Tracer<'a> {
@@ -470,12 +480,15 @@ impl<'a> Tracer<'a> {
         let random = settings.shading.stage.integrator() == Integrator::Path
             || settings.light.radius > 0.0
             || settings.camera.aperture > 0.0;
+        let plain = materials.iter().all(|m| m.texture.is_none())
+            && (scene.vertex_normals.is_empty() || !settings.shading.smooth);
         Self {
             scene,
             materials,
             light: settings.light,
             shading: settings.shading,
             random,
+            plain,
         }
     }
 
@@ -487,6 +500,16 @@ impl<'a> Tracer<'a> {
         let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
         let scene = self.scene;
         let geometric = scene.triangles[index].normal;
+        if self.plain {
+            // The same values as below (flat normal, constant ρ) without asking per hit:
+            // 2–3 % of the lab pass (PERFORMANCE.md).
+            return Surface {
+                position: hit.position,
+                normal: geometric,
+                geometric,
+                rho: material.reflectance,
+            };
+        }
         Surface {
             position: hit.position,
             normal: scene.shading_normal(index, u, v, self.shading.smooth),
@@ -555,7 +578,13 @@ impl<'a> Tracer<'a> {
     #[inline(always)]
     pub fn trace_portable(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         match self.shading.stage.integrator() {
-            Integrator::Lab => lab::trace(self, rays, rngs, out),
+            Integrator::Lab => {
+                assert!(
+                    !self.random || rngs.len() == rays.len(),
+                    "soft shadows and the lens need a generator per ray"
+                );
+                lab::trace(self, rays, rngs, out);
+            }
             Integrator::Path => {
                 assert_eq!(
                     rngs.len(),
@@ -635,8 +664,7 @@ mod tests {
             geometric: floor,
             rho,
         };
-        let mut rng = Rng::UNUSED;
-        let t = HitTerms::at(&light, Stage::Lab, true, surface, &mut rng);
+        let t = HitTerms::at(&light, Stage::Lab, true, surface, |_| light.position);
         assert!(
             (t.d - Vec3::splat(0.368454)).abs().max_element() < 1e-6,
             "{}",
@@ -654,7 +682,7 @@ mod tests {
         assert_eq!(blocked.value(Stage::Lab, Vec3::splat(0.5)), rho * 0.5);
         assert_eq!(blocked.value(Stage::Incoming, Vec3::ZERO), Vec3::ZERO);
         // The flat stage computes no light at all.
-        let flat = HitTerms::at(&light, Stage::Flat, true, surface, &mut rng);
+        let flat = HitTerms::at(&light, Stage::Flat, true, surface, |_| light.position);
         assert_eq!((flat.d, flat.shadow_ray), (Vec3::ZERO, None));
         assert_eq!(flat.value(Stage::Flat, Vec3::ZERO), rho);
     }

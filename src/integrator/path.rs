@@ -23,7 +23,7 @@
 
 use glam::Vec3;
 
-use super::{BATCH, HitTerms, Stage, Tracer, cast_shadow_rays, continue_ray};
+use super::{BATCH, HitTerms, Stage, Tracer, cast_shadow_rays, continue_ray, light_point};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::material::facing;
@@ -113,7 +113,9 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
                     surface.normal = -surface.normal;
                 }
                 terms[n_terms] =
-                    HitTerms::at(&tracer.light, Stage::Path, shading.shadows, surface, rng);
+                    HitTerms::at(&tracer.light, Stage::Path, shading.shadows, surface, |p| {
+                        light_point(&tracer.light, p, rng)
+                    });
                 term_of[n_terms] = (i as u8, path.beta);
                 n_terms += 1;
                 if path.bounces >= max_bounces {
