@@ -121,6 +121,36 @@ impl Camera {
         )
     }
 
+    /// Where the point `p` appears in the image, in pixels from the top-left corner (the
+    /// inverse of [`Camera::primary_ray`]: `(f·x/z + W/2, f·y/z + H/2)` for `p` at `(x, y, z)` in
+    /// camera coordinates, `R⁻¹·(p − position)`), and its depth z; `None` when it is behind the
+    /// camera or in its plane. The point may lie outside the image. The workbench draws the
+    /// light where this says.
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32, f32)> {
+        let q = self.rotation().transpose() * (p - self.position);
+        if !(q.z > 1e-6) || !q.is_finite() {
+            return None;
+        }
+        let f = self.focal_length;
+        Some((
+            f * q.x / q.z + self.width as f32 / 2.0,
+            f * q.y / q.z + self.height as f32 / 2.0,
+            q.z,
+        ))
+    }
+
+    /// The point at depth `depth` that appears at image position `(px, py)`: the inverse of
+    /// [`Camera::project`]. Dragging the light's marker moves the light with it at its depth.
+    pub fn unproject(&self, px: f32, py: f32, depth: f32) -> Vec3 {
+        let f = self.focal_length;
+        let q = Vec3::new(
+            (px - self.width as f32 / 2.0) * depth / f,
+            (py - self.height as f32 / 2.0) * depth / f,
+            depth,
+        );
+        self.position + self.rotation() * q
+    }
+
     /// The depth of a point along the view direction: its distance from the plane of the lens.
     pub fn depth_of(&self, point: Vec3) -> f32 {
         (point - self.position).dot(self.forward())
@@ -325,5 +355,33 @@ mod tests {
             largest = largest.max(miss_in_pixels);
         }
         assert!((largest - 3.2).abs() < 1e-3, "{largest}");
+    }
+
+    /// The lab's light (0, −0.5, −0.7) seen by the default 512² camera at (0, 0, −3.001): depth
+    /// z = 2.301, so it appears at (256 + 512·0/2.301, 256 + 512·(−0.5)/2.301) =
+    /// (256, 256 − 256/2.301) = (256, 144.744). Unprojecting that point at that depth gives the light back; a point
+    /// behind the camera has no image.
+    #[test]
+    fn project_and_unproject_are_inverse() {
+        let cam = Camera::default();
+        let light = Vec3::new(0.0, -0.5, -0.7);
+        let (px, py, z) = cam.project(light).unwrap();
+        assert!(
+            (px - 256.0).abs() < 1e-4 && (py - 144.744).abs() < 1e-3,
+            "{px} {py}"
+        );
+        assert!((z - 2.301).abs() < 1e-5);
+        assert!((cam.unproject(px, py, z) - light).length() < 1e-5);
+        assert_eq!(cam.project(Vec3::new(0.0, 0.0, -4.0)), None);
+        // Turned and pitched, a pixel's own ray passes through what it projects to.
+        let mut turned = cam;
+        turned.yaw = 0.4;
+        turned.pitch = -0.2;
+        let p = Vec3::new(0.3, 0.2, 0.5);
+        let (px, py, z) = turned.project(p).unwrap();
+        let ray = turned.primary_ray(px, py);
+        let t = (p - ray.origin).length();
+        assert!((ray.at(t) - p).length() < 1e-4);
+        assert!((turned.unproject(px, py, z) - p).length() < 1e-4);
     }
 }

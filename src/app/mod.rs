@@ -46,6 +46,8 @@ pub enum Command {
     ResetToLabDefaults,
     SaveScreenshot,
     ToggleHelp,
+    /// Go to step `n` of the lab walk-through (`None`: leave it).
+    WalkTo(Option<usize>),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +62,18 @@ pub enum StatusKind {
 pub struct Status {
     pub text: String,
     pub kind: StatusKind,
+    /// For an error whose condition can go away: what to check, so the message goes when the
+    /// condition does.
+    pub cause: Option<Cause>,
+}
+
+/// A condition an error reports, checked every frame ([`WorkbenchApp::clear_fixed_error`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Cause {
+    /// The settings could not be rendered.
+    InvalidSettings,
+    /// The screenshot folder did not exist.
+    MissingFolder(std::path::PathBuf),
 }
 
 /// The frame on screen, without its display pixels (those went to the texture).
@@ -101,6 +115,8 @@ pub struct WorkbenchApp {
     /// A screenshot was asked for before the full-resolution image was ready.
     screenshot_wanted: bool,
     screenshots_saving: Vec<Receiver<Result<screenshot::Saved, String>>>,
+    /// While the light's marker is dragged: the light's depth when the drag started.
+    dragging_light: Option<f32>,
     /// When the newest job was submitted, and UI frames since.
     change: Option<(Instant, u32)>,
     log_frames: bool,
@@ -112,6 +128,17 @@ struct SceneLoad {
     choice: SceneChoice,
     started: Instant,
     result: Receiver<Result<Scene, String>>,
+}
+
+/// Where the light appears in the image, as a fraction of its width and height, or `None` when
+/// it is behind the camera (the viewport also hides it off the image).
+pub fn light_marker(settings: &RenderSettings) -> Option<egui::Vec2> {
+    let camera = &settings.camera;
+    let (px, py, _) = camera.project(settings.light.position)?;
+    Some(egui::vec2(
+        px / camera.width as f32,
+        py / camera.height as f32,
+    ))
 }
 
 /// Opens the workbench window; returns when it is closed.
@@ -156,10 +183,12 @@ impl WorkbenchApp {
             (Some(text), _) => Some(Status {
                 text,
                 kind: StatusKind::Error,
+                cause: None,
             }),
             (None, Some(text)) => Some(Status {
                 text,
                 kind: StatusKind::Notice,
+                cause: None,
             }),
             (None, None) => None,
         };
@@ -179,6 +208,7 @@ impl WorkbenchApp {
             show_help: false,
             screenshot_wanted: false,
             screenshots_saving: Vec::new(),
+            dragging_light: None,
             change: None,
             log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
             started: Instant::now(),
@@ -189,7 +219,30 @@ impl WorkbenchApp {
         self.status = Some(Status {
             text: text.into(),
             kind,
+            cause: None,
         });
+    }
+
+    /// An error that goes away by itself once `cause` no longer holds.
+    fn set_error(&mut self, cause: Cause, text: impl Into<String>) {
+        self.status = Some(Status {
+            text: text.into(),
+            kind: StatusKind::Error,
+            cause: Some(cause),
+        });
+    }
+
+    /// Takes down an error whose condition is fixed: a stale red line would send the user
+    /// looking for a problem that is gone.
+    fn clear_fixed_error(&mut self) {
+        let fixed = match self.status.as_ref().and_then(|s| s.cause.as_ref()) {
+            Some(Cause::InvalidSettings) => self.state.settings.validate().is_ok(),
+            Some(Cause::MissingFolder(_)) => self.state.screenshot_folder.is_dir(),
+            None => false,
+        };
+        if fixed {
+            self.status = None;
+        }
     }
 
     /// Starts loading the scene the settings ask for, unless it is loaded or on its way.
@@ -305,8 +358,33 @@ impl WorkbenchApp {
                 self.change = Some((Instant::now(), 0));
                 self.stats.threads = controller.threads();
             }
-            Some(Err(e)) => self.set_status(StatusKind::Error, format!("Not rendered: {e}")),
+            Some(Err(e)) => self.set_error(Cause::InvalidSettings, format!("Not rendered: {e}")),
             None => {}
+        }
+    }
+
+    /// A drag that starts on the light's marker moves the light in the image plane, at the
+    /// depth it had when the drag started; any other drag turns the camera.
+    fn drag_light_or_camera(&mut self, pointer: &viewport::ViewportInput) {
+        let settings = &mut self.state.settings;
+        if pointer.drag_started_on_marker {
+            self.dragging_light = settings
+                .camera
+                .project(settings.light.position)
+                .map(|(_, _, depth)| depth);
+        }
+        match self.dragging_light {
+            Some(depth) if pointer.dragging => {
+                if let Some(at) = pointer.pointer_at {
+                    let camera = &settings.camera;
+                    let (px, py) = (at.x * camera.width as f32, at.y * camera.height as f32);
+                    settings.light.position = camera.unproject(px, py, depth);
+                }
+            }
+            _ => {
+                self.dragging_light = None;
+                input::pointer(pointer, &mut settings.camera);
+            }
         }
     }
 
@@ -447,6 +525,13 @@ impl WorkbenchApp {
                 }
             }
             Command::ToggleHelp => self.show_help = !self.show_help,
+            Command::WalkTo(step) => {
+                let step = step.filter(|&n| n < raylab::walkthrough::STEPS.len());
+                self.state.walk_step = step;
+                if let Some(n) = step {
+                    raylab::walkthrough::STEPS[n].apply(&mut self.state.settings);
+                }
+            }
         }
     }
 
@@ -506,10 +591,29 @@ impl WorkbenchApp {
             match result {
                 Ok(saved) => {
                     let shown = std::fs::canonicalize(&saved.png).unwrap_or(saved.png);
+                    let (kind, early) = if saved.samples < saved.target {
+                        (
+                            StatusKind::Notice,
+                            format!(
+                                " at {}/{} samples, before the target: save again when the \
+                                 progress bar is full for the converged image",
+                                saved.samples, saved.target
+                            ),
+                        )
+                    } else {
+                        (StatusKind::Info, String::new())
+                    };
                     self.set_status(
-                        StatusKind::Info,
-                        format!("Saved {} (settings beside it as .json)", shown.display()),
+                        kind,
+                        format!(
+                            "Saved {}{early} (settings beside it as .json)",
+                            shown.display()
+                        ),
                     );
+                }
+                Err(e) if !self.state.screenshot_folder.is_dir() => {
+                    let folder = self.state.screenshot_folder.clone();
+                    self.set_error(Cause::MissingFolder(folder), e);
                 }
                 Err(e) => self.set_status(StatusKind::Error, e),
             }
@@ -590,6 +694,7 @@ impl eframe::App for WorkbenchApp {
         self.receive_scene();
         self.receive_frames(&ctx);
         self.receive_screenshots();
+        self.clear_fixed_error();
 
         let mut commands = input::keys(&ctx, &mut self.state.settings);
 
@@ -607,14 +712,15 @@ impl eframe::App for WorkbenchApp {
                 ));
             });
         egui::CentralPanel::default_margins().show(ui, |ui| {
-            let pointer = self.viewport.viewport_ui(ui);
+            let marker = light_marker(&self.state.settings);
+            let pointer = self.viewport.viewport_ui(ui, marker);
             if pointer.pressed
                 && let Some(id) = ui.memory(|m| m.focused())
             {
                 // Clicking the image gives the keys back to the camera and light.
                 ui.memory_mut(|m| m.surrender_focus(id));
             }
-            input::pointer(&pointer, &mut self.state.settings.camera);
+            self.drag_light_or_camera(&pointer);
             if self.state.focus_mode
                 && let Some(at) = pointer.clicked_at
             {

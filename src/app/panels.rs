@@ -74,8 +74,13 @@ pub fn controls_ui(
             commands.push(Command::ToggleHelp);
         }
     });
+    // The key figures stay in view however far the panel is scrolled.
+    stats.key_figures_ui(ui);
     ui.separator();
     egui::ScrollArea::vertical().show(ui, |ui| {
+        egui::CollapsingHeader::new("Lab walk-through")
+            .default_open(state.walk_step.is_some())
+            .show(ui, |ui| walkthrough_ui(ui, state.walk_step, &mut commands));
         egui::CollapsingHeader::new("Scene")
             .default_open(true)
             .show(ui, |ui| {
@@ -90,6 +95,9 @@ pub fn controls_ui(
         egui::CollapsingHeader::new("Light")
             .default_open(true)
             .show(ui, |ui| light_ui(ui, &mut state.settings.light));
+        egui::CollapsingHeader::new("Map")
+            .default_open(true)
+            .show(ui, |ui| map_ui(ui, &state.settings));
         egui::CollapsingHeader::new("Shading")
             .default_open(true)
             .show(ui, |ui| {
@@ -125,29 +133,33 @@ pub fn scene_ui(
     obj_path: &mut String,
     loading: Option<&SceneChoice>,
 ) {
-    egui::ComboBox::new("scene", "Scene")
-        .selected_text(scene_label(scene))
-        .show_ui(ui, |ui| {
-            for choice in SceneChoice::BUILT_IN {
-                let label = scene_label(&choice);
-                if ui.selectable_label(*scene == choice, label).clicked() {
-                    *scene = choice;
+    ui.horizontal(|ui| {
+        egui::ComboBox::new("scene", "Scene")
+            .selected_text(scene_label(scene))
+            .show_ui(ui, |ui| {
+                for choice in SceneChoice::BUILT_IN {
+                    let label = scene_label(&choice);
+                    if ui.selectable_label(*scene == choice, label).clicked() {
+                        *scene = choice;
+                    }
                 }
-            }
-        });
-    if let Some(choice) = loading {
-        // On a line of its own, so the panel does not widen while it shows.
-        ui.horizontal(|ui| {
-            ui.spinner();
-            ui.label(format!("Loading {choice}..."));
-        });
-    }
+            });
+        if let Some(choice) = loading {
+            // In the selector's row, so nothing below moves while a scene loads (the status
+            // line says what is loading).
+            ui.spinner().on_hover_text(format!("Loading {choice}..."));
+        }
+    });
     ui.horizontal(|ui| {
         let label = ui.label("OBJ file");
-        ui.add(egui::TextEdit::singleline(obj_path).desired_width(160.0))
+        let field = ui
+            .add(egui::TextEdit::singleline(obj_path).desired_width(160.0))
             .labelled_by(label.id)
-            .on_hover_text("A path to any .obj file: it stands on the box's floor");
-        if ui.button("Load OBJ").clicked() && !obj_path.trim().is_empty() {
+            .on_hover_text(
+                "A path to any .obj file: it stands on the box's floor (Enter loads it)",
+            );
+        let entered = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+        if (ui.button("Load OBJ").clicked() || entered) && !obj_path.trim().is_empty() {
             *scene = SceneChoice::Obj(obj_path.trim().into());
         }
     });
@@ -205,8 +217,19 @@ fn position_slider(
     ui.add(
         egui::Slider::new(value, range)
             .clamping(egui::SliderClamping::Edits)
+            .custom_formatter(|v, _| fixed(v, 2))
             .text(label),
     );
+}
+
+/// `v` with `decimals` decimals, never "-0.00": a value that rounds to zero shows as zero
+/// whatever its sign.
+pub fn fixed(v: f64, decimals: usize) -> String {
+    let text = format!("{v:.decimals$}");
+    match text.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
+        _ => text,
+    }
 }
 
 /// A slider in degrees over an angle stored in radians; the value changes only when the
@@ -221,7 +244,7 @@ fn degrees_slider(
     let response = ui.add(
         egui::Slider::new(&mut degrees, range)
             .suffix("°")
-            .max_decimals(1)
+            .custom_formatter(|v, _| fixed(v, 1))
             .text(label),
     );
     if response.changed() {
@@ -289,6 +312,112 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
          shadows are soft: each sample sees a point of it, and the samples average to the \
          fraction of the light a point sees",
     );
+}
+
+/// The lab walk-through: the current step's explanation and equation, Previous / Next.
+pub fn walkthrough_ui(ui: &mut egui::Ui, step: Option<usize>, commands: &mut Vec<Command>) {
+    use raylab::walkthrough::STEPS;
+    let Some(n) = step.filter(|&n| n < STEPS.len()) else {
+        ui.label(
+            "Step through the lab's figures 2, 3, 5, 6 and 7, then the extensions, each with \
+             what it computes. Your camera and light stay as they are.",
+        );
+        if ui.button("Start the walk-through").clicked() {
+            commands.push(Command::WalkTo(Some(0)));
+        }
+        return;
+    };
+    let s = &STEPS[n];
+    ui.strong(format!("Step {} of {}: {}", n + 1, STEPS.len(), s.title));
+    ui.label(egui::RichText::new(s.equation).monospace());
+    ui.label(s.text);
+    ui.horizontal(|ui| {
+        if ui
+            .add_enabled(n > 0, egui::Button::new("Previous"))
+            .clicked()
+        {
+            commands.push(Command::WalkTo(Some(n - 1)));
+        }
+        if ui
+            .add_enabled(n + 1 < STEPS.len(), egui::Button::new("Next"))
+            .clicked()
+        {
+            commands.push(Command::WalkTo(Some(n + 1)));
+        }
+        if ui.button("Leave").clicked() {
+            commands.push(Command::WalkTo(None));
+        }
+    });
+}
+
+/// The map's size in points.
+const MAP_SIZE: f32 = 180.0;
+
+/// A top view of the box: the camera with its field of view, and the light. x runs right and z
+/// (the camera's forward at yaw 0) up, as seen from above; the box is the square |x|, |z| ≤ 1.
+pub fn map_ui(ui: &mut egui::Ui, settings: &RenderSettings) {
+    let camera = &settings.camera;
+    let light = settings.light.position;
+    // Fit the box, the camera and the light, with a margin, keeping the scale equal.
+    let (mut lo, mut hi) = (egui::vec2(-1.0, -1.0), egui::vec2(1.0, 1.0));
+    for p in [camera.position, light] {
+        if p.is_finite() {
+            lo = lo.min(egui::vec2(p.x, p.z));
+            hi = hi.max(egui::vec2(p.x, p.z));
+        }
+    }
+    let centre = (lo + hi) / 2.0;
+    let extent = (hi - lo).max_elem().min(50.0) + 0.6;
+    let (response, painter) =
+        ui.allocate_painter(egui::vec2(MAP_SIZE, MAP_SIZE), egui::Sense::hover());
+    let rect = response.rect;
+    let scale = MAP_SIZE / extent;
+    let to_screen = |x: f32, z: f32| {
+        rect.center() + egui::vec2((x - centre.x) * scale, -(z - centre.y) * scale)
+    };
+    let visuals = ui.visuals();
+    painter.rect_filled(rect, 2.0, visuals.extreme_bg_color);
+    let wall = egui::Stroke::new(1.5, visuals.text_color());
+    let corners =
+        [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, z)| to_screen(x, z));
+    // The box's front (z = −1) is open: three walls.
+    painter.line_segment([corners[1], corners[2]], wall);
+    painter.line_segment([corners[2], corners[3]], wall);
+    painter.line_segment([corners[3], corners[0]], wall);
+    painter.line_segment(
+        [corners[0], corners[1]],
+        egui::Stroke::new(1.0, visuals.weak_text_color()),
+    );
+    // The camera: its position and the edges of its horizontal field of view.
+    let eye = to_screen(camera.position.x, camera.position.z);
+    let half = (camera.width as f32 / 2.0 / camera.focal_length).atan();
+    let reach = 1.0;
+    for a in [camera.yaw - half, camera.yaw + half] {
+        let (s, c) = a.sin_cos();
+        let end = to_screen(camera.position.x + reach * s, camera.position.z + reach * c);
+        painter.line_segment(
+            [eye, end],
+            egui::Stroke::new(1.0, egui::Color32::LIGHT_BLUE),
+        );
+    }
+    painter.circle_filled(eye, 4.0, egui::Color32::LIGHT_BLUE);
+    painter.circle(
+        to_screen(light.x, light.z),
+        5.0,
+        egui::Color32::from_rgb(255, 220, 60),
+        egui::Stroke::new(1.0, egui::Color32::from_gray(30)),
+    );
+    response.on_hover_text(format!(
+        "Top view: x →, z ↑. Camera at ({:.2}, {:.2}, {:.2}), yaw {:.0}°; light at ({:.2}, \
+         {:.2}, {:.2}). The box's open front is the faint side.",
+        camera.position.x,
+        camera.position.y,
+        camera.position.z,
+        camera.yaw.to_degrees(),
+        light.x,
+        light.y,
+        light.z
+    ));
 }
 
 /// The display transform's name in the selector.

@@ -41,6 +41,8 @@ pub struct WorkbenchState {
     pub limited_bounces: u32,
     /// "Click to focus": a click on the image sets the focus distance.
     pub focus_mode: bool,
+    /// The lab walk-through's current step, if it is open.
+    pub walk_step: Option<usize>,
 }
 
 impl Default for WorkbenchState {
@@ -53,6 +55,7 @@ impl Default for WorkbenchState {
             obj_path: String::new(),
             limited_bounces: DEFAULT_LIMITED_BOUNCES,
             focus_mode: false,
+            walk_step: None,
         }
     }
 }

@@ -19,6 +19,9 @@ use serde::{Deserialize, Serialize};
 pub struct Saved {
     pub png: PathBuf,
     pub json: PathBuf,
+    /// The samples the image had averaged, and the target it was heading for.
+    pub samples: u32,
+    pub target: u32,
 }
 
 /// The `.json` written beside each screenshot.
@@ -90,6 +93,8 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
     Ok(Saved {
         png: png_path,
         json: json_path,
+        samples: request.settings.samples_per_pixel,
+        target: request.sample_target,
     })
 }
 

@@ -73,6 +73,35 @@ impl Stats {
         }
     }
 
+    /// The figures a user watches, in two lines pinned above the scrolled panel: the pass time,
+    /// the samples and the progress toward the target.
+    pub fn key_figures_ui(&self, ui: &mut egui::Ui) {
+        let pass = self
+            .full_pass
+            .map_or_else(|| "-".to_owned(), |(ms, _, _)| format!("{ms:.1} ms"));
+        let samples = if self.is_preview {
+            "preview".to_owned()
+        } else {
+            format!("{} / {} samples", self.samples, self.target)
+        };
+        ui.label(format!("Pass {pass} · {samples}"))
+            .on_hover_text("The last full-resolution pass, and the samples averaged so far");
+        ui.add(
+            egui::ProgressBar::new(self.progress())
+                .desired_height(6.0)
+                .animate(false),
+        );
+    }
+
+    /// The share of the sample target reached.
+    pub fn progress(&self) -> f32 {
+        if self.target == 0 {
+            0.0
+        } else {
+            self.samples as f32 / self.target as f32
+        }
+    }
+
     pub fn stats_ui(&self, ui: &mut egui::Ui) {
         match self.full_pass {
             Some((ms, w, h)) => ui.label(format!("Last full pass: {ms:.1} ms ({w} × {h})")),
@@ -113,11 +142,7 @@ impl Stats {
             ))
             .on_hover_text(NOISE_HOVER);
         }
-        let fraction = if self.target == 0 {
-            0.0
-        } else {
-            self.samples as f32 / self.target as f32
-        };
+        let fraction = self.progress();
         // No animation once done: an animated bar would keep the app repainting.
         ui.add(
             egui::ProgressBar::new(fraction)

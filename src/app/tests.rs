@@ -305,6 +305,10 @@ fn screenshot_into_a_missing_folder_shows_an_error_and_the_app_goes_on() {
     h.get_by_role_and_label(Role::CheckBox, "Shadows").click();
     settle(&mut h);
     assert!(!shown(&h).settings.shading.shadows);
+    // Once the folder exists the red line goes: the problem is fixed.
+    std::fs::create_dir(dir.path().join("missing")).unwrap();
+    h.step();
+    assert!(h.state().status.is_none(), "{:?}", h.state().status);
 }
 
 #[test]
@@ -822,4 +826,133 @@ fn click_to_focus_sets_the_focus_distance() {
     assert!((s.camera.focus_distance - 4.001).abs() < 1e-3);
     assert!(status(&h).0.contains("Focus distance"), "{}", status(&h).0);
     settle(&mut h);
+}
+
+/// The light is drawn where the camera sees it; dragging its marker moves the light in the
+/// image plane at its depth (the camera does not turn), and it lands where the pointer is.
+#[test]
+fn dragging_the_light_marker_moves_the_light() {
+    let mut h = harness(small_state());
+    let s0 = settings(&h);
+    let rect = h.state().viewport.shown_rect().unwrap();
+    let marker = light_marker(&s0).unwrap();
+    let start = rect.min + marker * rect.size();
+    let to = start + egui::vec2(30.0, 10.0);
+    h.drag_at(start);
+    h.step();
+    for k in 1..=5 {
+        h.hover_at(start + (to - start) * (k as f32 / 5.0));
+        h.step();
+    }
+    h.drop_at(to);
+    h.step();
+    let s1 = settings(&h);
+    assert_eq!(s1.camera, s0.camera, "the camera must not turn");
+    assert!(
+        s1.light.position.x > s0.light.position.x + 0.05,
+        "{}",
+        s1.light.position
+    );
+    // At the same depth, under the pointer.
+    let (_, _, z0) = s0.camera.project(s0.light.position).unwrap();
+    let (px, py, z1) = s1.camera.project(s1.light.position).unwrap();
+    assert!((z1 - z0).abs() < 1e-4);
+    let landed = rect.min + egui::vec2(px / 128.0, py / 96.0) * rect.size();
+    assert!(landed.distance(to) < 1.0, "{landed:?} vs {to:?}");
+    settle(&mut h);
+    // Behind the camera the light has no marker.
+    let mut behind = s1.clone();
+    behind.light.position.z = behind.camera.position.z - 1.0;
+    assert_eq!(light_marker(&behind), None);
+}
+
+/// The walk-through steps through the lab's figures in order, each rendering exactly its stage,
+/// and leaves the user's camera and light alone.
+#[test]
+fn the_walkthrough_steps_through_the_figures() {
+    let mut state = small_state();
+    state.settings.camera.position.x = 0.1;
+    state.settings.light.position.x = 0.3;
+    let mut h = harness(state);
+    let user = settings(&h);
+    h.get_by_label("Lab walk-through").click();
+    h.step();
+    h.get_by_role_and_label(Role::Button, "Start the walk-through")
+        .click();
+    settle(&mut h);
+    assert!(h.query_by_label_contains("Step 1 of 9").is_some());
+    assert_eq!(settings(&h).shading.stage, Stage::Flat);
+    for stage in [Stage::Incoming, Stage::Direct, Stage::Shadows, Stage::Lab] {
+        h.get_by_role_and_label(Role::Button, "Next").click();
+        settle(&mut h);
+        let s = settings(&h);
+        assert_eq!(s.shading, Shading::for_stage(stage));
+        assert_eq!(
+            (s.camera, s.light.position),
+            (user.camera, user.light.position)
+        );
+        assert_eq!(*shown(&h).image, render(&cornell_box(), &s));
+    }
+    assert!(h.query_by_label_contains("figure 7").is_some());
+    h.get_by_role_and_label(Role::Button, "Previous").click();
+    settle(&mut h);
+    assert_eq!(settings(&h).shading.stage, Stage::Shadows);
+    h.get_by_role_and_label(Role::Button, "Leave").click();
+    h.step();
+    assert_eq!(h.state().state.walk_step, None);
+    settle(&mut h);
+}
+
+/// A screenshot saved before the sample target says at how many samples it was taken.
+#[test]
+fn a_screenshot_before_the_target_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut state = small_state();
+    state.screenshot_folder = dir.path().to_owned();
+    state.settings.samples_per_pixel = 4000;
+    let mut h = Harness::builder()
+        .with_size([1400.0, 1400.0])
+        .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
+    let start = Instant::now();
+    while h.state().last_full.as_ref().is_none_or(|s| s.samples < 2) {
+        assert!(start.elapsed() < DEADLINE);
+        std::thread::sleep(Duration::from_millis(2));
+        h.step();
+    }
+    h.get_by_role_and_label(Role::Button, "Save screenshot")
+        .click();
+    while pngs_in(dir.path()).is_empty() || !h.state().screenshots_saving.is_empty() {
+        assert!(start.elapsed() < DEADLINE);
+        std::thread::sleep(Duration::from_millis(2));
+        h.step();
+    }
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Notice, "{text}");
+    assert!(text.contains("/4000 samples"), "{text}");
+}
+
+/// Enter in the OBJ field loads the file, as the button does.
+#[test]
+fn enter_in_the_obj_field_loads_it() {
+    let mut h = harness(small_state());
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models/teapot.obj");
+    h.get_by_role_and_label(Role::TextInput, "OBJ file").focus();
+    h.step();
+    h.get_by_role_and_label(Role::TextInput, "OBJ file")
+        .type_text(path);
+    h.step();
+    h.key_press(Key::Enter);
+    h.step();
+    assert_eq!(settings(&h).scene, SceneChoice::Obj(path.into()));
+    settle(&mut h);
+}
+
+#[test]
+fn values_that_round_to_zero_show_without_a_sign() {
+    use super::panels::fixed;
+    assert_eq!(fixed(-0.0, 2), "0.00");
+    assert_eq!(fixed(-0.001, 2), "0.00");
+    assert_eq!(fixed(-0.04, 1), "0.0");
+    assert_eq!(fixed(-0.05, 2), "-0.05");
+    assert_eq!(fixed(1.234, 1), "1.2");
 }

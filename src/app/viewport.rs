@@ -23,7 +23,17 @@ pub struct ViewportInput {
     /// Where the image was clicked (not dragged), as a fraction of its width and height from
     /// its top-left corner.
     pub clicked_at: Option<egui::Vec2>,
+    /// Where the pointer is over the image (or dragging from it), as such a fraction.
+    pub pointer_at: Option<egui::Vec2>,
+    /// A drag started this frame on the light's marker.
+    pub drag_started_on_marker: bool,
+    /// A drag on the image is going on.
+    pub dragging: bool,
 }
+
+/// The light's marker radius, in points; a drag starting this close to it moves the light.
+pub const MARKER_RADIUS: f32 = 7.0;
+const MARKER_GRAB_RADIUS: f32 = 12.0;
 
 #[derive(Default)]
 pub struct Viewport {
@@ -71,8 +81,10 @@ impl Viewport {
         self.pixels.as_ref().map(|p| p.size)
     }
 
-    /// Draws the image fitted into the available space and reports pointer input on it.
-    pub fn viewport_ui(&mut self, ui: &mut egui::Ui) -> ViewportInput {
+    /// Draws the image fitted into the available space, and the light's marker at `marker` (a
+    /// fraction of the image's width and height) when it is on the image; reports pointer input
+    /// on it.
+    pub fn viewport_ui(&mut self, ui: &mut egui::Ui, marker: Option<egui::Vec2>) -> ViewportInput {
         let available = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(available, egui::Sense::click_and_drag());
         let (Some(texture), Some(pixels)) = (&mut self.texture, &self.pixels) else {
@@ -99,6 +111,22 @@ impl Viewport {
         ui.painter()
             .image(texture.id(), rect, uv, egui::Color32::WHITE);
 
+        let to_fraction = |p: egui::Pos2| (p - rect.min) / rect.size();
+        let marker_pos = marker
+            .filter(|m| (0.0..=1.0).contains(&m.x) && (0.0..=1.0).contains(&m.y))
+            .map(|m| rect.min + m * rect.size());
+        if let Some(pos) = marker_pos {
+            draw_light_marker(ui.painter(), pos);
+        }
+        let drag_started_on_marker = response.drag_started()
+            && marker_pos
+                .zip(response.interact_pointer_pos())
+                .is_some_and(|(m, p)| m.distance(p) <= MARKER_GRAB_RADIUS);
+        let pointer_at = response
+            .interact_pointer_pos()
+            .or_else(|| response.hover_pos())
+            .map(to_fraction);
+
         let scroll_y = if response.hovered() {
             ui.input(|i| i.smooth_scroll_delta.y)
         } else {
@@ -117,9 +145,35 @@ impl Viewport {
                 .then(|| response.interact_pointer_pos())
                 .flatten()
                 .filter(|p| rect.contains(*p))
-                .map(|p| (p - rect.min) / rect.size()),
+                .map(to_fraction),
+            pointer_at,
+            drag_started_on_marker,
+            dragging: response.dragged(),
         }
     }
+}
+
+/// The light where the camera sees it: a small sun, yellow with a dark rim so it shows on light
+/// and dark walls alike.
+fn draw_light_marker(painter: &egui::Painter, pos: egui::Pos2) {
+    let rim = egui::Stroke::new(1.5, egui::Color32::from_gray(30));
+    for k in 0..8 {
+        let a = k as f32 * std::f32::consts::FRAC_PI_4;
+        let d = egui::vec2(a.cos(), a.sin());
+        painter.line_segment(
+            [
+                pos + d * (MARKER_RADIUS + 2.0),
+                pos + d * (MARKER_RADIUS + 5.0),
+            ],
+            egui::Stroke::new(2.0, egui::Color32::from_rgb(255, 210, 40)),
+        );
+    }
+    painter.circle(
+        pos,
+        MARKER_RADIUS,
+        egui::Color32::from_rgb(255, 220, 60),
+        rim,
+    );
 }
 
 /// The largest rect of `image`'s aspect that fits in `available`, centred.
