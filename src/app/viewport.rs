@@ -118,9 +118,12 @@ impl Viewport {
         if let Some(pos) = marker_pos {
             draw_light_marker(ui.painter(), pos);
         }
+        // Where the button went down, not where the pointer is when the move counts as a
+        // drag (a few points further on).
+        let press = ui.input(|i| i.pointer.press_origin());
         let drag_started_on_marker = response.drag_started()
             && marker_pos
-                .zip(response.interact_pointer_pos())
+                .zip(press)
                 .is_some_and(|(m, p)| m.distance(p) <= MARKER_GRAB_RADIUS);
         let pointer_at = response
             .interact_pointer_pos()
