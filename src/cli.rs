@@ -1,5 +1,5 @@
-//! The command line: `raylab render` writes an image, `raylab bench` measures the tracer;
-//! with no command, `raylab` starts the workbench.
+//! The command line: `raylab render` writes an image, `raylab inspect` explains one pixel of
+//! it, `raylab bench` measures the tracer; with no command, `raylab` starts the workbench.
 //!
 //! A thin layer over the library: arguments become a [`RenderSettings`], which is validated,
 //! rendered and saved. Every bad value ends the program with one line naming it and a non-zero
@@ -17,6 +17,7 @@ use raylab::accel::{AccelKind, Isa};
 use raylab::bench::{BenchConfig, bench_scene};
 use raylab::display::{Display, DisplayTransform};
 use raylab::film::OutputFormat;
+use raylab::inspect::{InspectError, inspect_pixel};
 use raylab::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
 use raylab::material::TexturePreset;
 use raylab::render::render;
@@ -39,6 +40,9 @@ pub struct Cli {
 pub enum Command {
     /// Render an image of the scene to a PNG or EXR file (defaults: the lab's figure 7, 512×512).
     Render(RenderArgs),
+    /// Explain one pixel of the render: each step of its computation beside the lab equation
+    /// it evaluates, with the numbers (sample 0: the pixel's centre).
+    Inspect(InspectArgs),
     /// Measure the tracer per scene: BVH build time, Mrays/s of primary and shadow rays, and
     /// the milliseconds of one lab pass (medians over repeated passes).
     Bench(BenchArgs),
@@ -84,8 +88,33 @@ pub struct RenderArgs {
     /// Output file: .png (the lab's display: clamped, no gamma) or .exr (linear floats).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub options: RenderOptions,
+}
+
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// The pixel to explain, from the top-left corner: 0 ≤ X < width, 0 ≤ Y < height.
+    #[arg(long, value_parser = parse_pixel, value_name = "X,Y", allow_hyphen_values = true)]
+    pub pixel: Pixel,
+    /// Print one JSON object (every value the tracer computed) instead of the explanation.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub options: RenderOptions,
+}
+
+/// The `--pixel` value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pixel(pub u32, pub u32);
+
+/// What determines an image, shared by `render` and `inspect` (which explains a pixel of the
+/// very image `render` would write with the same options).
+#[derive(Debug, Args)]
+pub struct RenderOptions {
     /// Take every setting from a JSON file: a workbench screenshot's .json (which reproduces the
-    /// screenshot exactly) or a bare settings object. Only --out and --threads combine with it.
+    /// screenshot exactly) or a bare settings object. Only --out, --pixel, --json and --threads
+    /// combine with it.
     #[arg(
         long,
         value_name = "FILE.json",
@@ -199,7 +228,7 @@ pub enum Indirect {
     Constant(f32),
 }
 
-impl RenderArgs {
+impl RenderOptions {
     /// The scene these arguments choose.
     pub fn scene_choice(&self) -> SceneChoice {
         match &self.obj {
@@ -297,13 +326,13 @@ pub fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
-            let text = e.render().to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: bad arguments"));
+            eprintln!("{}", one_line(&e.render().to_string()));
             return ExitCode::from(2);
         }
     };
     let result = match cli.command {
         Some(Command::Render(args)) => run_render(&args),
+        Some(Command::Inspect(args)) => run_inspect(&args),
         Some(Command::Bench(args)) => run_bench(&args),
         None => crate::start_workbench(),
     };
@@ -311,9 +340,31 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            // A pixel outside the image is a bad argument, as clap's refusals are.
+            let bad_argument = e
+                .downcast_ref::<InspectError>()
+                .is_some_and(|e| matches!(e, InspectError::OutsideImage { .. }));
+            if bad_argument {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
+}
+
+/// clap's message as one line: its first, with what it lists after a colon ("the following
+/// required arguments were not provided: --pixel <X,Y>").
+fn one_line(text: &str) -> String {
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let first = lines.next().unwrap_or("error: bad arguments");
+    if !first.ends_with(':') {
+        return first.to_owned();
+    }
+    let listed: Vec<&str> = lines
+        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .collect();
+    format!("{first} {}", listed.join(", "))
 }
 
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
@@ -328,10 +379,10 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let settings = args.resolve_settings()?;
+    let settings = args.options.resolve_settings()?;
     settings.validate()?;
     let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-render-{i}"));
-    if let Some(n) = args.threads {
+    if let Some(n) = args.options.threads {
         pool = pool.num_threads(n.into());
     }
     let pool = pool.build().context("could not start the render threads")?;
@@ -361,6 +412,39 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         pool.current_num_threads(),
         args.out.display()
     );
+    Ok(())
+}
+
+fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
+    let settings = args.options.resolve_settings()?;
+    settings.validate()?;
+    let Pixel(x, y) = args.pixel;
+    let (width, height) = (settings.camera.width, settings.camera.height);
+    // Refused before the scene is loaded (a large model takes a while).
+    if x >= width || y >= height {
+        return Err(anyhow::Error::new(InspectError::OutsideImage {
+            x,
+            y,
+            width,
+            height,
+        })
+        .context(format!("--pixel {x},{y}")));
+    }
+    let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-inspect-{i}"));
+    if let Some(n) = args.options.threads {
+        pool = pool.num_threads(n.into());
+    }
+    let pool = pool.build().context("could not start the threads")?;
+    let scene = pool.install(|| settings.scene.load())?;
+    let inspection =
+        inspect_pixel(&scene, &settings, x, y).with_context(|| format!("--pixel {x},{y}"))?;
+    // Written with `write!` so that a closed pipe is an error, not a panic.
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        writeln!(out, "{}", serde_json::to_string(&inspection)?)?;
+    } else {
+        write!(out, "{}", inspection.to_text())?;
+    }
     Ok(())
 }
 
@@ -543,6 +627,18 @@ fn parse_on_off(s: &str) -> Result<bool, String> {
     }
 }
 
+fn parse_pixel(s: &str) -> Result<Pixel, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let bad = || format!("'{s}' is not a pixel X,Y (two whole numbers ≥ 0)");
+    let [x, y] = parts[..] else {
+        return Err(bad());
+    };
+    match (x.trim().parse::<u32>(), y.trim().parse::<u32>()) {
+        (Ok(x), Ok(y)) => Ok(Pixel(x, y)),
+        _ => Err(bad()),
+    }
+}
+
 fn parse_bounces(s: &str) -> Result<Bounces, String> {
     if s == "unlimited" {
         return Ok(Bounces(None));
@@ -567,11 +663,11 @@ fn parse_indirect(s: &str) -> Result<Indirect, String> {
 mod tests {
     use super::*;
 
-    fn args(extra: &[&str]) -> RenderArgs {
+    fn args(extra: &[&str]) -> RenderOptions {
         let mut argv = vec!["raylab", "render", "--out", "x.png"];
         argv.extend_from_slice(extra);
         match Cli::try_parse_from(argv).unwrap().command {
-            Some(Command::Render(a)) => a,
+            Some(Command::Render(a)) => a.options,
             _ => panic!("not render"),
         }
     }
@@ -688,6 +784,53 @@ mod tests {
         ] {
             assert!(parse(bad).is_err(), "{bad:?} accepted");
         }
+    }
+
+    #[test]
+    fn inspect_takes_the_render_options() {
+        let parse = |extra: &[&str]| {
+            let mut argv = vec!["raylab", "inspect"];
+            argv.extend_from_slice(extra);
+            match Cli::try_parse_from(argv).map(|c| c.command) {
+                Ok(Some(Command::Inspect(a))) => Ok(a),
+                Ok(_) => panic!("not inspect"),
+                Err(e) => Err(e),
+            }
+        };
+        let a = parse(&["--pixel", "3,4", "--stage", "direct", "--json"]).unwrap();
+        assert_eq!((a.pixel, a.json), (Pixel(3, 4), true));
+        let render = args(&["--stage", "direct"]).settings();
+        assert_eq!(a.options.settings(), render);
+        assert!(!parse(&["--pixel", " 7 , 0 "]).unwrap().json);
+        // --settings takes everything but the pixel, the output form and the threads.
+        let file = ["--pixel", "1,1", "--settings", "x.json"];
+        assert!(parse(&[&file[..], &["--json", "--threads", "2"]].concat()).is_ok());
+        for bad in [
+            &[&file[..], &["--width", "8"]].concat()[..],
+            &["--pixel", "1"],
+            &["--pixel", "a,b"],
+            &["--pixel", "1,2,3"],
+            &["--pixel", "-1,0"],
+            &["--pixel", "1,1", "--out", "x.png"],
+            &["--json"],
+        ] {
+            assert!(parse(bad).is_err(), "{bad:?} accepted");
+        }
+    }
+
+    #[test]
+    fn clap_messages_become_one_line() {
+        let text = "error: the following required arguments were not provided:\n  \
+                    --pixel <X,Y>\n\nUsage: raylab inspect --pixel <X,Y>\n\nFor more \
+                    information, try '--help'.\n";
+        assert_eq!(
+            one_line(text),
+            "error: the following required arguments were not provided: --pixel <X,Y>"
+        );
+        assert_eq!(
+            one_line("error: unexpected argument '-q' found\n\nUsage: raylab"),
+            "error: unexpected argument '-q' found"
+        );
     }
 
     #[test]

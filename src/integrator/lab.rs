@@ -15,7 +15,7 @@
 use arrayvec::ArrayVec;
 use glam::Vec3;
 
-use super::{BATCH, HitTerms, Tracer, cast_shadow_rays, continue_ray, light_point};
+use super::{BATCH, HitTerms, Recorder, Tracer, cast_shadow_rays, continue_ray, light_point};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::sampling::Rng;
@@ -39,9 +39,15 @@ enum Wave<'a> {
     Branches(&'a [Branch]),
 }
 
-/// The value of every ray, into `out`.
+/// The value of every ray, into `out`; each step told to `rec` ([`Recorder`]).
 #[inline(always)]
-pub(super) fn trace(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
+pub(super) fn trace<R: Recorder>(
+    tracer: &Tracer,
+    rays: &[Ray],
+    rngs: &mut [Rng],
+    out: &mut [Vec3],
+    rec: &mut R,
+) {
     let (mut rays_next, mut branches_next) = (Vec::new(), Vec::new());
     for (c, (rays, out)) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)).enumerate() {
         out.fill(Vec3::ZERO);
@@ -51,14 +57,14 @@ pub(super) fn trace(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [
         let end = (start + BATCH).min(rngs.len());
         let rngs = &mut rngs[start..end];
         let next = (&mut rays_next, &mut branches_next);
-        wave_for_light(tracer, rays, Wave::Camera, rngs, out, next);
+        wave_for_light(tracer, rays, Wave::Camera, rngs, out, next, rec);
         // Mirror and glass: trace the branches, wave after wave, until none is left.
         while !rays_next.is_empty() {
             let rays = std::mem::take(&mut rays_next);
             let branches = std::mem::take(&mut branches_next);
             for (rays, branches) in rays.chunks(BATCH).zip(branches.chunks(BATCH)) {
                 let next = (&mut rays_next, &mut branches_next);
-                wave_for_light(tracer, rays, Wave::Branches(branches), rngs, out, next);
+                wave_for_light(tracer, rays, Wave::Branches(branches), rngs, out, next, rec);
             }
         }
     }
@@ -67,32 +73,34 @@ pub(super) fn trace(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [
 /// [`wave`] for the scene's light: compiled apart for the lab's point light, whose loop then
 /// carries no random numbers at all (with them the lab pass took half as long again).
 #[inline(always)]
-fn wave_for_light(
+fn wave_for_light<R: Recorder>(
     tracer: &Tracer,
     rays: &[Ray],
     wave_kind: Wave,
     rngs: &mut [Rng],
     out: &mut [Vec3],
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
+    rec: &mut R,
 ) {
     if tracer.light.radius > 0.0 {
-        wave::<true>(tracer, rays, wave_kind, rngs, out, next);
+        wave::<true, R>(tracer, rays, wave_kind, rngs, out, next, rec);
     } else {
-        wave::<false>(tracer, rays, wave_kind, rngs, out, next);
+        wave::<false, R>(tracer, rays, wave_kind, rngs, out, next, rec);
     }
 }
 
 /// One phase-batched step for up to [`BATCH`] rays: closest hits, the lab's terms at the
 /// diffuse hits, their shadow rays, the sums into `out`; the specular hits' branches go to
-/// `next`.
+/// `next`. Each step is told to `rec` (nothing is, for `()`).
 #[inline(always)]
-fn wave<const SPHERE_LIGHT: bool>(
+fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     tracer: &Tracer,
     rays: &[Ray],
     wave: Wave,
     rngs: &mut [Rng],
     out: &mut [Vec3],
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
+    rec: &mut R,
 ) {
     debug_assert!(rays.len() <= BATCH);
     let scene = tracer.scene;
@@ -103,6 +111,13 @@ fn wave<const SPHERE_LIGHT: bool>(
     let mut terms: ArrayVec<HitTerms, BATCH> = ArrayVec::new();
     let mut owner: ArrayVec<u8, BATCH> = ArrayVec::new();
     for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
+        if R::ENABLED {
+            let (weight, depth) = match wave {
+                Wave::Camera => (Vec3::ONE, 0),
+                Wave::Branches(b) => (b[i].weight, b[i].depth),
+            };
+            rec.closest_hit(ray, hit.as_ref(), weight, depth);
+        }
         let Some(hit) = hit else { continue };
         let material = tracer.material_of(hit.triangle_index);
         let normal = scene.triangles[hit.triangle_index].normal;
@@ -139,7 +154,11 @@ fn wave<const SPHERE_LIGHT: bool>(
         };
         if branch.depth < shading.specular_depth {
             let d = ray.direction;
-            for &(direction, weight) in material.specular_branches(d, normal).as_slice() {
+            let branches = material.specular_branches(d, normal);
+            if R::ENABLED {
+                rec.specular_hit(hit, branch.weight, branch.depth, branches.as_slice());
+            }
+            for &(direction, weight) in branches.as_slice() {
                 next.0.push(continue_ray(hit.position, normal, direction));
                 next.1.push(Branch {
                     pixel: branch.pixel,
@@ -147,6 +166,8 @@ fn wave<const SPHERE_LIGHT: bool>(
                     depth: branch.depth + 1,
                 });
             }
+        } else if R::ENABLED {
+            rec.specular_hit(hit, branch.weight, branch.depth, &[]);
         }
     }
     cast_shadow_rays(scene, &mut terms);
@@ -154,9 +175,17 @@ fn wave<const SPHERE_LIGHT: bool>(
     for (t, &i) in terms.iter().zip(&owner) {
         let value = t.value(shading.stage, indirect);
         match wave {
-            Wave::Camera => out[i as usize] = value,
+            Wave::Camera => {
+                if R::ENABLED {
+                    rec.shaded(t, indirect, value, Vec3::ONE);
+                }
+                out[i as usize] = value;
+            }
             Wave::Branches(b) => {
                 let b = &b[i as usize];
+                if R::ENABLED {
+                    rec.shaded(t, indirect, value, b.weight);
+                }
                 out[b.pixel as usize] += b.weight * value;
             }
         }

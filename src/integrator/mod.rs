@@ -19,6 +19,12 @@
 //! the shadow rays of a whole batch together and records whether each was blocked, and
 //! [`HitTerms::value`] combines ρ, D and N as equations 28–30 say. The one-ray path
 //! ([`Tracer::trace`] with one ray) is the batched path with a batch of one.
+//!
+//! **Watching a pixel.** Both integrators are generic over a [`Recorder`], told each step as it
+//! happens (every closest hit, every mirror or glass branch, every hit's terms once its shadow
+//! ray is answered, every path vertex's scattering). The renderer passes `()`, which records
+//! nothing and compiles away; the pixel inspector ([`crate::inspect`]) passes a recording, so
+//! what it explains is what the renderer computed, not a second copy of the formulas.
 
 pub mod lab;
 pub mod path;
@@ -35,7 +41,7 @@ use crate::accel::simd::{Avx2, Avx512};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::light::{PointLight, SHADOW_OFFSET, direct_light, shadow_ray_to};
-use crate::material::{Material, MaterialPreset, TexturePreset};
+use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -406,6 +412,66 @@ impl HitTerms {
     }
 }
 
+/// Told each step of a ray's computation, as the integrators take it: what the pixel inspector
+/// ([`crate::inspect`]) records to explain a pixel with the very values the renderer used.
+///
+/// Normal rendering passes `()`: its hooks are empty and [`Recorder::ENABLED`] is false, and
+/// every hook is called inside `if R::ENABLED`, so the hooks and the work of preparing their
+/// arguments vanish when the integrators are monomorphised for `()` (`raylab bench`'s lab pass
+/// measured no slower with them).
+///
+/// The order of the calls is the integrators' order: in a wave of rays (lab) or a step of the
+/// paths (path), [`Recorder::closest_hit`] for each ray, with [`Recorder::specular_hit`] or
+/// [`Recorder::scattered`] right after a hit's own; then [`Recorder::shaded`] for the diffuse
+/// hits of that wave, in the order of their `closest_hit` calls.
+pub trait Recorder {
+    /// Whether anything is recorded; the hooks are called only when it is true.
+    const ENABLED: bool;
+
+    /// A ray's closest hit, or `None` when the ray leaves the scene. `weight` is what its
+    /// value is multiplied by (1 for a camera ray; the product of the specular weights along a
+    /// Whitted branch; a path's throughput β); `depth` counts the mirror and glass hits before
+    /// it (lab) or the path's vertices before it (path).
+    fn closest_hit(&mut self, ray: &Ray, hit: Option<&Intersection>, weight: Vec3, depth: u32);
+
+    /// Lab stages: a mirror or glass hit and the branches it spawns, each (direction, weight)
+    /// ([`Material::specular_branches`]); empty when [`Shading::specular_depth`] is reached and
+    /// the branch is given up (black). `weight` and `depth` are the arriving ray's.
+    fn specular_hit(
+        &mut self,
+        hit: &Intersection,
+        weight: Vec3,
+        depth: u32,
+        branches: &[(Vec3, Vec3)],
+    );
+
+    /// A diffuse hit's terms, its shadow ray answered (`terms.blocked`); `n` is the N it was
+    /// valued with, `value` = [`HitTerms::value`], and the pixel gets `weight · value`.
+    fn shaded(&mut self, terms: &HitTerms, n: Vec3, value: Vec3, weight: Vec3);
+
+    /// Path stage: where the path goes from its latest hit ([`Material::sample`]), Russian
+    /// roulette's survival probability (1 before [`path::ROULETTE_DEPTH`]), β after both, and
+    /// whether the path goes on. Not called when the bounce cap ends the path at that hit.
+    fn scattered(&mut self, scatter: &Scatter, survival: f32, beta: Vec3, survives: bool);
+}
+
+/// Normal rendering: records nothing, costs nothing.
+impl Recorder for () {
+    const ENABLED: bool = false;
+
+    #[inline(always)]
+    fn closest_hit(&mut self, _: &Ray, _: Option<&Intersection>, _: Vec3, _: u32) {}
+
+    #[inline(always)]
+    fn specular_hit(&mut self, _: &Intersection, _: Vec3, _: u32, _: &[(Vec3, Vec3)]) {}
+
+    #[inline(always)]
+    fn shaded(&mut self, _: &HitTerms, _: Vec3, _: Vec3, _: Vec3) {}
+
+    #[inline(always)]
+    fn scattered(&mut self, _: &Scatter, _: f32, _: Vec3, _: bool) {}
+}
+
 /// The point of the light a shadow ray from `position` goes to: the centre of the lab's point
 /// light, or a point of a spherical light drawn from `rng` ([`PointLight::sample_point`]).
 #[inline(always)]
@@ -577,13 +643,26 @@ impl<'a> Tracer<'a> {
     /// [`Tracer::trace`] for any CPU; inlined into the AVX2 version.
     #[inline(always)]
     pub fn trace_portable(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
+        self.trace_recorded(rays, rngs, out, &mut ());
+    }
+
+    /// [`Tracer::trace_portable`], telling `recorder` every step (see [`Recorder`]): what the
+    /// pixel inspector runs. With `()` it is `trace_portable` itself.
+    #[inline(always)]
+    pub fn trace_recorded<R: Recorder>(
+        &self,
+        rays: &[Ray],
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        recorder: &mut R,
+    ) {
         match self.shading.stage.integrator() {
             Integrator::Lab => {
                 assert!(
                     !self.random || rngs.len() == rays.len(),
                     "soft shadows and the lens need a generator per ray"
                 );
-                lab::trace(self, rays, rngs, out);
+                lab::trace(self, rays, rngs, out, recorder);
             }
             Integrator::Path => {
                 assert_eq!(
@@ -591,7 +670,7 @@ impl<'a> Tracer<'a> {
                     rays.len(),
                     "the path tracer needs a generator per ray"
                 );
-                path::trace(self, rays, rngs, out);
+                path::trace(self, rays, rngs, out, recorder);
             }
         }
     }

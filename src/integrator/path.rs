@@ -23,7 +23,9 @@
 
 use glam::Vec3;
 
-use super::{BATCH, HitTerms, Stage, Tracer, cast_shadow_rays, continue_ray, light_point};
+use super::{
+    BATCH, HitTerms, Recorder, Stage, Tracer, cast_shadow_rays, continue_ray, light_point,
+};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::material::facing;
@@ -50,20 +52,32 @@ struct PathState {
     depth: u32,
 }
 
-/// The value of every ray (π × radiance), into `out`.
+/// The value of every ray (π × radiance), into `out`; each step told to `rec` ([`Recorder`]).
 #[inline(always)]
-pub(super) fn trace(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
+pub(super) fn trace<R: Recorder>(
+    tracer: &Tracer,
+    rays: &[Ray],
+    rngs: &mut [Rng],
+    out: &mut [Vec3],
+    rec: &mut R,
+) {
     for ((rays, rngs), out) in rays
         .chunks(BATCH)
         .zip(rngs.chunks_mut(BATCH))
         .zip(out.chunks_mut(BATCH))
     {
-        batch(tracer, rays, rngs, out);
+        batch(tracer, rays, rngs, out, rec);
     }
 }
 
 #[inline(always)]
-fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
+fn batch<R: Recorder>(
+    tracer: &Tracer,
+    rays: &[Ray],
+    rngs: &mut [Rng],
+    out: &mut [Vec3],
+    rec: &mut R,
+) {
     let scene = tracer.scene;
     let shading = &tracer.shading;
     let max_bounces = shading.max_bounces();
@@ -97,6 +111,10 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         let mut still = 0;
         for k in 0..n_alive {
             let i = alive[k] as usize;
+            if R::ENABLED {
+                let path = &paths[i];
+                rec.closest_hit(&path.ray, hits[k].as_ref(), path.beta, path.depth);
+            }
             let Some(hit) = hits[k] else { continue };
             let path = &mut paths[i];
             let rng = &mut rngs[i];
@@ -141,13 +159,20 @@ fn batch(tracer: &Tracer, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
             // A path that lost all its throughput (a black surface) ends at the roulette, where
             // its survival is 0; before it, it may go on a vertex or two adding nothing.
             let keep = (path.depth < MAX_DEPTH) & (u < survival);
+            if R::ENABLED {
+                rec.scattered(&scatter, survival, path.beta, keep);
+            }
             alive[still] = i as u8;
             still += usize::from(keep);
         }
         n_alive = still;
         cast_shadow_rays(scene, &mut terms[..n_terms]);
         for (t, &(i, beta)) in terms[..n_terms].iter().zip(&term_of) {
-            out[i as usize] += beta * t.value(Stage::Path, Vec3::ZERO);
+            let value = t.value(Stage::Path, Vec3::ZERO);
+            if R::ENABLED {
+                rec.shaded(t, Vec3::ZERO, value, beta);
+            }
+            out[i as usize] += beta * value;
         }
     }
 }
