@@ -36,7 +36,7 @@ use crate::integrator::{HitTerms, Recorder, Stage, Tracer, path};
 use crate::intersect::Intersection;
 use crate::light::{MIN_LIGHT_DISTANCE, PointLight};
 use crate::material::{Material, MaterialKind, Scatter};
-use crate::sampling::{Rng, concentric_disk, pixel_offset, pixel_sample};
+use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsError};
 
@@ -307,32 +307,22 @@ pub fn inspect_pixel(
     ))
 }
 
-/// Sample 0's camera ray and generator, as [`crate::render::trace_pixel`] makes them: the
-/// pixel's centre (sample 0 is never jittered), through a point of the lens drawn from the
-/// sample's stream when the camera has an aperture (equation 24 otherwise).
+/// Sample 0's camera ray and generator, made by the renderer's own
+/// [`crate::render::camera_sample`]: the pixel's centre (sample 0 is never jittered), through a
+/// point of the lens drawn from the sample's stream when the camera has an aperture.
 fn camera_sample_0(
     tracer: &Tracer,
     settings: &RenderSettings,
     x: u32,
     y: u32,
 ) -> (Ray, Rng, [f32; 2], Option<Vec2>) {
-    const SAMPLE: u32 = 0;
-    let (offset, mut rng) = if tracer.uses_random_numbers() {
-        pixel_sample(settings.seed, x, y, SAMPLE)
-    } else {
-        (pixel_offset(settings.seed, x, y, SAMPLE), Rng::UNUSED)
-    };
-    let camera = &settings.camera;
-    let rotation = camera.rotation();
-    let (px, py) = (x as f32 + offset.0, y as f32 + offset.1);
-    if camera.aperture > 0.0 {
-        let lens = concentric_disk(rng.next_f32(), rng.next_f32());
-        let ray = camera.lens_ray_rotated(&rotation, px, py, lens);
-        (ray, rng, [px, py], Some(lens))
-    } else {
-        let ray = camera.primary_ray_rotated(&rotation, px, py);
-        (ray, rng, [px, py], None)
-    }
+    let mut ray = Ray::new(Vec3::ZERO, Vec3::Z);
+    let mut rng = Rng::UNUSED;
+    let rotation = settings.camera.rotation();
+    let ((px, py), lens) = crate::render::camera_sample(
+        tracer, settings, &rotation, x, y, 0, &mut ray, &mut rng,
+    );
+    (ray, rng, [px, py], lens)
 }
 
 /// A step the integrator took, as told to [`Recording`].

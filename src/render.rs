@@ -48,9 +48,12 @@ pub fn trace_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, sam
 /// The camera ray of sample `sample` of pixel `(x, y)` (equation 24, jittered after sample 0;
 /// through a point of the lens when the camera has an aperture) and, if anything draws random
 /// numbers, the generator the integrator continues with.
+///
+/// Returns the image point the ray goes through and the lens point, if any (the pixel
+/// inspector shows them).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn camera_sample(
+pub(crate) fn camera_sample(
     tracer: &Tracer,
     settings: &RenderSettings,
     rotation: &Mat3,
@@ -59,7 +62,7 @@ fn camera_sample(
     sample: u32,
     ray: &mut Ray,
     rng: &mut Rng,
-) {
+) -> ((f32, f32), Option<glam::Vec2>) {
     let (dx, dy) = if tracer.uses_random_numbers() {
         let (offset, stream) = pixel_sample(settings.seed, x, y, sample);
         *rng = stream;
@@ -69,13 +72,15 @@ fn camera_sample(
     };
     let camera = &settings.camera;
     let (px, py) = (x as f32 + dx, y as f32 + dy);
-    *ray = if camera.aperture > 0.0 {
+    if camera.aperture > 0.0 {
         // Depth of field: a point of the lens, from the sample's own stream.
         let lens = concentric_disk(rng.next_f32(), rng.next_f32());
-        camera.lens_ray_rotated(rotation, px, py, lens)
+        *ray = camera.lens_ray_rotated(rotation, px, py, lens);
+        ((px, py), Some(lens))
     } else {
-        camera.primary_ray_rotated(rotation, px, py)
-    };
+        *ray = camera.primary_ray_rotated(rotation, px, py);
+        ((px, py), None)
+    }
 }
 
 /// The depth (distance along the view direction, [`crate::Camera::depth_of`]) of what the
