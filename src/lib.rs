@@ -34,6 +34,7 @@ pub mod sampling;
 pub mod scene;
 pub mod settings;
 pub mod texture;
+pub mod view;
 
 pub use camera::Camera;
 pub use film::Image;
