@@ -215,6 +215,12 @@ pub struct RenderOptions {
     /// Render threads [default: one per core].
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024), value_name = "N")]
     pub threads: Option<u16>,
+    /// Write a debug view instead of the shaded image: normals, depth, barycentric, triangle,
+    /// bvh-cost, shadow, or variance (of each pixel's mean; needs --samples 2 or more). Its
+    /// legend is printed after the summary. Views are saved with the lab's display whatever
+    /// --display says, so their colours are the legend's. Combines with --settings.
+    #[arg(long, default_value = "shaded", value_name = "VIEW")]
+    pub view: raylab::view::View,
 }
 
 /// The `--bounces` value: a cap, or unlimited.
@@ -381,6 +387,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let settings = args.options.resolve_settings()?;
     settings.validate()?;
+    if args.view == raylab::view::View::Variance && settings.samples_per_pixel < 2 {
+        anyhow::bail!(
+            "the variance view needs 2 or more samples per pixel (--samples 2 or more): it \
+             measures the spread between a pixel's samples"
+        );
+    }
     let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-render-{i}"));
     if let Some(n) = args.options.threads {
         pool = pool.num_threads(n.into());
@@ -390,9 +402,20 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let choice = &settings.scene;
     let scene = pool.install(|| choice.load())?;
     let start = Instant::now();
-    let image = pool.install(|| render(&scene, &settings));
+    let (image, display, legend) = match args.view {
+        raylab::view::View::Shaded => (
+            pool.install(|| render(&scene, &settings)),
+            settings.display,
+            None,
+        ),
+        view => {
+            let v =
+                pool.install(|| raylab::view::render_view(&scene, &settings, view, &|| false))?;
+            (v.image, Display::default(), Some(v.legend))
+        }
+    };
     let elapsed = start.elapsed();
-    image.save_with(&args.out, &settings.display)?;
+    image.save_with(&args.out, &display)?;
 
     let c = &settings.camera;
     println!(
@@ -412,6 +435,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         pool.current_num_threads(),
         args.out.display()
     );
+    if let Some(legend) = legend {
+        println!("{} view:", legend.title);
+        for line in &legend.lines {
+            println!("  {line}");
+        }
+    }
     Ok(())
 }
 

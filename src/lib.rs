@@ -35,6 +35,7 @@ pub mod sampling;
 pub mod scene;
 pub mod settings;
 pub mod texture;
+pub mod view;
 pub mod walkthrough;
 
 pub use camera::Camera;

@@ -16,7 +16,7 @@ use glam::Vec3;
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{EDGE_TOLERANCE, intersect_triangle};
 
-use super::Hit;
+use super::{Hit, TraversalCost};
 
 /// Bins per axis of the SAH build.
 const BINS: usize = 16;
@@ -266,10 +266,28 @@ impl Bvh {
     ///
     /// The readable reference: nearer child first, boxes beyond the best hit skipped.
     pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
-        let root = self.nodes.first()?;
+        self.closest_counting(triangles, ray, t_max).0
+    }
+
+    /// [`Bvh::closest`] and what it cost: the interior nodes visited (each tests its two
+    /// children's boxes; the root's own box test is not counted) and the triangles tested.
+    /// One traversal serves both, so the counts are those of the reference itself.
+    pub fn closest_counting(
+        &self,
+        triangles: &[Triangle],
+        ray: &Ray,
+        t_max: f32,
+    ) -> (Option<Hit>, TraversalCost) {
+        let mut cost = TraversalCost::default();
+        let Some(root) = self.nodes.first() else {
+            return (None, cost);
+        };
         let rb = RayBoxData::new(ray);
         let mut best: Option<Hit> = None;
-        let mut stack = vec![(0usize, rb.hit(&root.bounds, t_max * BOX_T_SLACK)?)];
+        let Some(t_root) = rb.hit(&root.bounds, t_max * BOX_T_SLACK) else {
+            return (None, cost);
+        };
+        let mut stack = vec![(0usize, t_root)];
         while let Some((index, t_near)) = stack.pop() {
             let limit = best.map_or(t_max, |h| h.t);
             if t_near > limit * BOX_T_SLACK {
@@ -277,6 +295,7 @@ impl Bvh {
             }
             let node = &self.nodes[index];
             if node.is_leaf() {
+                cost.triangles += node.count;
                 for &i in self.leaf_indices(node) {
                     // Candidates at the best distance too: the lower index wins a tie.
                     let limit = best.map_or(t_max, |h| h.t.next_up());
@@ -288,6 +307,7 @@ impl Bvh {
                 }
                 continue;
             }
+            cost.nodes += 1;
             let hits = self
                 .children(index)
                 .map(|c| (c, rb.hit(&self.nodes[c].bounds, limit * BOX_T_SLACK)));
@@ -306,7 +326,7 @@ impl Bvh {
                 _ => {}
             }
         }
-        best
+        (best, cost)
     }
 
     /// Whether any triangle is hit with `0 ≤ t < t_max`; stops at the first hit.

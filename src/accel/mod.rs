@@ -67,6 +67,29 @@ pub struct Hit {
     pub v: f32,
 }
 
+/// The work one closest-hit query did ([`Accel::closest_counting`]): what the workbench's
+/// BVH-cost view shows per pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct TraversalCost {
+    /// Interior nodes visited: each tests the boxes of all its children at once (eight for the
+    /// wide BVH, two for the binary one). Leaves are not counted here but by their triangles.
+    pub nodes: u32,
+    /// Triangles tested: the real triangles of every leaf packet tested, not the packets'
+    /// empty lanes (see [`wide::Bvh8::closest_counting`]); every triangle for the flat loop
+    /// and the brute-force loop.
+    pub triangles: u32,
+}
+
+impl TraversalCost {
+    /// Nodes plus triangles, unweighted: the one number the cost view maps to colour. Plain
+    /// counts can be checked by hand on a small tree; weighting them (the build's SAH takes a
+    /// node visit as about three triangle tests, 1 against 0.35) would be a model of the time,
+    /// not a count of the work.
+    pub fn total(self) -> u32 {
+        self.nodes + self.triangles
+    }
+}
+
 /// Which structure to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum AccelKind {
@@ -275,6 +298,65 @@ impl Accel {
             }
             (s, Isa::Avx512(k)) => closest_avx512(k, s, ray, t_max),
             (s, Isa::Avx2(k)) => closest_avx2(k, s, ray, t_max),
+        }
+    }
+
+    /// [`Accel::closest`] and what it cost ([`TraversalCost`]), counted by the traversal this
+    /// structure really runs, not estimated:
+    ///
+    /// * the brute-force and flat loops test every triangle for every ray (the Cornell box:
+    ///   30 whatever the ray), no nodes; the hit is [`Accel::closest`]'s own;
+    /// * the binary BVH counts in its one (reference) traversal;
+    /// * the 8-wide BVH tests its few large triangles first, exactly as the fast path does
+    ///   (with the same kernels), then walks the tree with [`wide::Bvh8::closest_counting`]: the
+    ///   fast traversal's loop with counters, in the same order and with the same kernels, so the
+    ///   same culling. It is slower than [`Accel::closest`] (not compiled for the instruction
+    ///   set, a heap stack): for views and teaching, not for rendering.
+    ///
+    /// The hit equals [`Accel::closest`]'s bit for bit (tests/views.rs checks it on 100,000
+    /// rays per scene and kernel set), which is what makes the counts those of the real
+    /// traversal.
+    pub fn closest_counting(
+        &self,
+        triangles: &[Triangle],
+        ray: &Ray,
+        t_max: f32,
+    ) -> (Option<Hit>, TraversalCost) {
+        let every = |n: u32| TraversalCost {
+            nodes: 0,
+            triangles: n,
+        };
+        match (&self.structure, self.isa) {
+            (Structure::BruteForce, _) => (
+                self.closest(triangles, ray, t_max),
+                every(triangles.len() as u32),
+            ),
+            (Structure::Flat(f), _) => (
+                self.closest(triangles, ray, t_max),
+                every(f.triangle_count()),
+            ),
+            (Structure::Bvh2(b), _) => b.closest_counting(triangles, ray, t_max),
+            (Structure::Bvh8(b), isa) => {
+                let r = RayK::new(ray);
+                let mut cost = every(b.big.triangle_count());
+                let hit = match isa {
+                    Isa::Scalar => {
+                        let best = b.big.closest(Scalar, &r, t_max);
+                        b.tree.closest_counting(Scalar, &r, t_max, best, &mut cost)
+                    }
+                    Isa::Avx2(k) => {
+                        let best = b.big.closest(k, &r, t_max);
+                        b.tree.closest_counting(k, &r, t_max, best, &mut cost)
+                    }
+                    Isa::Avx512(k) => {
+                        // As the fast path: the large triangles 16 wide, the tree with AVX2.
+                        let best = b.big.closest16(k, &r, t_max);
+                        b.tree
+                            .closest_counting(k.avx2(), &r, t_max, best, &mut cost)
+                    }
+                };
+                (hit, cost)
+            }
         }
     }
 
@@ -510,4 +592,120 @@ fn occluded_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> bool {
     #[cfg(not(target_arch = "x86_64"))]
     occluded_batch_avx512(k, s, &[(*ray, t_max)], &mut blocked);
     blocked[0]
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    /// Two layers of eight small triangles, one behind the other: triangle `i` of layer `z` has
+    /// corners (i, 0, z), (i + ½, 0, z), (i, ½, z); indices 0–7 at z = 0, 8–15 at z = 1.
+    ///
+    /// The tree, by hand. Root (16): splitting the layers apart costs 2 · 8 · 3.75 = 60 (each
+    /// layer's box is 7.5 × 0.5, flat), splitting in x at best 2 · 8 · 5.75 = 92 (four columns
+    /// each side, 1 deep): the layers. A layer (8): two leaves of four cost 1 + 0.35 · (2 · 4 ·
+    /// 1.75)/3.75 = 2.31 against a leaf's 0.35 · 8 = 2.8: split. Four: 1 + 0.35 · (2 · 2 ·
+    /// 0.75)/1.75 = 1.6 against 1.4: a leaf. So the binary tree is root → two layers → two
+    /// leaves each, and the 8-wide one a single node whose four children are the leaves
+    /// {0–3}, {4–7}, {8–11}, {12–15}. No triangle is large (each 0.25 of the scene's 11.75).
+    fn layers() -> Vec<Triangle> {
+        let mut out = Vec::new();
+        for z in [0.0, 1.0] {
+            for i in 0..8 {
+                let x = i as f32;
+                out.push(Triangle::new(
+                    Vec3::new(x, 0.0, z),
+                    Vec3::new(x + 0.5, 0.0, z),
+                    Vec3::new(x, 0.5, z),
+                    0,
+                ));
+            }
+        }
+        out
+    }
+
+    fn cost(nodes: u32, triangles: u32) -> TraversalCost {
+        TraversalCost { nodes, triangles }
+    }
+
+    #[test]
+    fn the_layers_tree_is_as_worked_out_by_hand() {
+        let triangles = layers();
+        let accel = Accel::build(&triangles, AccelKind::Bvh8, Isa::Scalar);
+        let Structure::Bvh8(b) = &accel.structure else {
+            panic!("not a wide BVH");
+        };
+        assert_eq!(b.big.triangle_count(), 0);
+        assert_eq!(b.tree.nodes.len(), 1);
+        let mut leaves: Vec<Vec<u32>> = b
+            .tree
+            .packets
+            .iter()
+            .map(|p| p.index.iter().copied().filter(|&i| i != u32::MAX).collect())
+            .collect();
+        leaves.sort();
+        let want: Vec<Vec<u32>> = (0..4).map(|l| (4 * l..4 * l + 4).collect()).collect();
+        assert_eq!(leaves, want);
+    }
+
+    /// Rays along z through the layers, counted by hand on the tree above (every kernel set):
+    ///
+    /// * through triangle 5 at (5.1, 0.1): the root node (1) enters the leaves {4–7} (t ≈ 1)
+    ///   and {12–15} (t ≈ 2); the nearer is tested (4 triangles), hits 5 at t = 1, and the
+    ///   farther is then skipped (it starts beyond the hit): 1 node, 4 triangles;
+    /// * the same from behind: hits 13, skips {4–7}: 1 + 4;
+    /// * at (5.4, 0.4), inside both leaves' boxes but between the triangles (triangle i covers
+    ///   x ∈ [i, i + 0.1] at y = 0.4): both leaves tested, nothing hit: 1 + 8;
+    /// * at (5.1, 2), beside everything: the root's boxes only: 1 + 0;
+    /// * along x in the plane z = 0: enters the two front leaves, parallel to every triangle
+    ///   (no hit): 1 + 8.
+    #[test]
+    fn counts_equal_the_hand_count() {
+        let triangles = layers();
+        let along_z =
+            |x: f32, y: f32, z: f32, dz: f32| Ray::new(Vec3::new(x, y, z), Vec3::new(0.0, 0.0, dz));
+        let cases = [
+            (along_z(5.1, 0.1, -1.0, 1.0), Some(5), cost(1, 4)),
+            (along_z(5.1, 0.1, 2.0, -1.0), Some(13), cost(1, 4)),
+            (along_z(5.4, 0.4, -1.0, 1.0), None, cost(1, 8)),
+            (along_z(5.1, 2.0, -1.0, 1.0), None, cost(1, 0)),
+            (
+                Ray::new(Vec3::new(-1.0, 0.1, 0.0), Vec3::X),
+                None,
+                cost(1, 8),
+            ),
+        ];
+        for isa in Isa::available() {
+            let accel = Accel::build(&triangles, AccelKind::Bvh8, isa);
+            for (ray, index, want) in &cases {
+                let (hit, got) = accel.closest_counting(&triangles, ray, f32::INFINITY);
+                assert_eq!(hit.map(|h| h.index), *index, "{} {ray:?}", isa.name());
+                assert_eq!(hit, accel.closest(&triangles, ray, f32::INFINITY));
+                assert_eq!(got, *want, "{} {ray:?}", isa.name());
+                if let Some(h) = hit {
+                    assert_eq!(h.t, 1.0);
+                }
+            }
+        }
+        // The binary tree for the first ray: the root (1), the front layer (2: the back layer
+        // is pushed, then skipped), its leaf {4–7}.
+        let bvh2 = Accel::build(&triangles, AccelKind::Bvh2, Isa::Scalar);
+        assert_eq!(
+            bvh2.closest_counting(&triangles, &cases[0].0, f32::INFINITY)
+                .1,
+            cost(2, 4)
+        );
+        // The flat and brute-force loops test all sixteen, whatever the ray.
+        for kind in [AccelKind::Flat, AccelKind::BruteForce] {
+            let accel = Accel::build(&triangles, kind, Isa::best());
+            for (ray, _, _) in &cases {
+                assert_eq!(
+                    accel.closest_counting(&triangles, ray, f32::INFINITY).1,
+                    cost(0, 16)
+                );
+            }
+        }
+    }
 }

@@ -11,9 +11,9 @@
 
 use crate::geometry::Triangle;
 
-use super::Hit;
 use super::bvh::{BOX_T_SLACK, Bvh};
 use super::simd::{Avx512, Kernels, LANES, Node8, Packet8, Packet16, RayK};
+use super::{Hit, TraversalCost};
 
 pub const LEAF: u32 = 1 << 31;
 pub const EMPTY: u32 = u32::MAX;
@@ -72,6 +72,12 @@ impl Flat {
         }
     }
 
+    /// How many triangles the list holds: what every closest-hit query tests (the loop skips
+    /// none, whatever it has found).
+    pub fn triangle_count(&self) -> u32 {
+        self.packets.iter().map(|p| real_triangles(&p.index)).sum()
+    }
+
     /// [`Flat::closest`] on 16-wide packets with the AVX-512 kernels.
     #[inline(always)]
     pub fn closest16(&self, k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
@@ -121,6 +127,11 @@ impl Flat {
     pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
         self.packets.iter().any(|p| k.any(p, r, t_max))
     }
+}
+
+/// How many of a packet's lanes hold a triangle (the others are [`Packet8::EMPTY`]'s padding).
+pub fn real_triangles(index: &[u32]) -> u32 {
+    index.iter().filter(|&&i| i != u32::MAX).count() as u32
 }
 
 /// An 8-wide BVH.
@@ -291,6 +302,98 @@ impl Bvh8 {
                 }
             }
             // Next: the nearest pending child that may still hold a closer hit.
+            loop {
+                if sp == 0 {
+                    break 'traversal;
+                }
+                sp -= 1;
+                let (next, t_near) = stack[sp];
+                if t_near <= best_t * BOX_T_SLACK {
+                    item = next;
+                    break;
+                }
+            }
+        }
+        (best_i != u32::MAX).then_some(Hit {
+            index: best_i,
+            t: best_t,
+            u: best_uv.0,
+            v: best_uv.1,
+        })
+    }
+
+    /// [`Bvh8::closest`], counting its work into `cost`: the same loop, line for line, with
+    /// the same kernels `k` (so the same box culling, bit for bit), plus two counters. It is
+    /// kept apart so that the fast traversal stays exactly as measured (PERFORMANCE.md); the
+    /// tests check that both return the same hit on every ray.
+    ///
+    /// What is counted, and why:
+    /// * a node each time a wide node's eight child boxes are tested (one kernel call; the
+    ///   empty slots are not counted apart, the kernel tests them in the same instruction);
+    /// * the real triangles of each leaf packet tested: a leaf of 3 triangles counts 3, though
+    ///   the 8-lane kernel computes all 8 lanes. That is the work the tree's shape decides
+    ///   (a leaf with fewer triangles is cheaper in the SAH's eyes), where lanes would only
+    ///   measure the packet width.
+    ///
+    /// Children whose boxes are skipped when popped (beyond the best hit) are not counted:
+    /// the fast traversal never opens them.
+    pub fn closest_counting<K: Kernels>(
+        &self,
+        k: K,
+        r: &RayK,
+        t_max: f32,
+        best: Option<Hit>,
+        cost: &mut TraversalCost,
+    ) -> Option<Hit> {
+        if self.root == EMPTY {
+            return best;
+        }
+        let mut stack = vec![(0u32, 0f32); self.max_stack];
+        let (mut best_t, mut best_i, mut best_uv) = best
+            .map_or((t_max, u32::MAX, (0.0, 0.0)), |h| {
+                (h.t, h.index, (h.u, h.v))
+            });
+        let mut sp = 0;
+        let mut item = self.root;
+        'traversal: loop {
+            if item & LEAF != 0 {
+                let p = &self.packets[(item & !LEAF) as usize];
+                cost.triangles += real_triangles(&p.index);
+                let limit = if best_i == u32::MAX {
+                    t_max
+                } else {
+                    best_t.next_up()
+                };
+                if let Some(h) = k.nearest(p, r, limit) {
+                    let i = p.index[h.lane];
+                    if h.t < best_t || i < best_i {
+                        best_t = h.t;
+                        best_i = i;
+                        best_uv = (h.u, h.v);
+                    }
+                }
+            } else {
+                let node = &self.nodes[item as usize];
+                cost.nodes += 1;
+                let (mut mask, t) = k.boxes(node, r, best_t * BOX_T_SLACK);
+                if mask != 0 && mask & (mask - 1) == 0 {
+                    item = node.child[mask.trailing_zeros() as usize];
+                    continue;
+                }
+                let base = sp;
+                while mask != 0 {
+                    let slot = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let entry = (node.child[slot], t[slot]);
+                    let mut j = sp;
+                    while j > base && stack[j - 1].1 < entry.1 {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
+                    }
+                    stack[j] = entry;
+                    sp += 1;
+                }
+            }
             loop {
                 if sp == 0 {
                     break 'traversal;
