@@ -7,6 +7,7 @@
 //! any change to the [`Controller`], which renders on its own threads. The UI thread only polls
 //! for finished frames and never waits on the renderer.
 
+mod compare;
 mod input;
 mod panels;
 mod persistence;
@@ -48,6 +49,10 @@ pub enum Command {
     ToggleHelp,
     /// Go to step `n` of the lab walk-through (`None`: leave it).
     WalkTo(Option<usize>),
+    /// Compare A/B: freeze the current settings and scene as A ([`compare`]).
+    FreezeA,
+    /// Compare A/B: drop A and its renderer.
+    StopComparing,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,6 +126,8 @@ pub struct WorkbenchApp {
     change: Option<(Instant, u32)>,
     log_frames: bool,
     started: Instant,
+    /// Compare A/B: the frozen A and its renderer, while comparing ([`compare`]).
+    compare: Option<compare::Compare>,
 }
 
 /// A scene being loaded off the UI thread.
@@ -212,6 +219,7 @@ impl WorkbenchApp {
             change: None,
             log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
             started: Instant::now(),
+            compare: None,
         }
     }
 
@@ -532,6 +540,8 @@ impl WorkbenchApp {
                     raylab::walkthrough::STEPS[n].apply(&mut self.state.settings);
                 }
             }
+            Command::FreezeA => self.freeze_a(ctx),
+            Command::StopComparing => self.compare = None,
         }
     }
 
@@ -680,6 +690,10 @@ impl WorkbenchApp {
             && !self.screenshot_wanted
             && self.screenshots_saving.is_empty()
             && self.scene_loading.is_none()
+            && self
+                .compare
+                .as_ref()
+                .is_none_or(compare::Compare::is_settled)
     }
 }
 
@@ -693,6 +707,7 @@ impl eframe::App for WorkbenchApp {
         }
         self.receive_scene();
         self.receive_frames(&ctx);
+        self.receive_compare(&ctx);
         self.receive_screenshots();
         self.clear_fixed_error();
 
@@ -709,18 +724,22 @@ impl eframe::App for WorkbenchApp {
                     &mut self.state,
                     &self.stats,
                     loading,
+                    self.compare.as_mut(),
                 ));
             });
         egui::CentralPanel::default_margins().show(ui, |ui| {
             let marker = light_marker(&self.state.settings);
-            let pointer = self.viewport.viewport_ui(ui, marker);
+            let pointer = self.viewport.viewport_ui(ui, marker, self.compare.as_mut());
             if pointer.pressed
                 && let Some(id) = ui.memory(|m| m.focused())
             {
                 // Clicking the image gives the keys back to the camera and light.
                 ui.memory_mut(|m| m.surrender_focus(id));
             }
-            self.drag_light_or_camera(&pointer);
+            // A drag on the A/B divider moves only the divider.
+            if !pointer.on_divider {
+                self.drag_light_or_camera(&pointer);
+            }
             if self.state.focus_mode
                 && let Some(at) = pointer.clicked_at
             {

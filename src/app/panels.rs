@@ -54,6 +54,7 @@ pub fn controls_ui(
     state: &mut WorkbenchState,
     stats: &Stats,
     loading: Option<&SceneChoice>,
+    mut compare: Option<&mut super::compare::Compare>,
 ) -> Vec<Command> {
     let mut commands = Vec::new();
     ui.horizontal_wrapped(|ui| {
@@ -116,9 +117,20 @@ pub fn controls_ui(
         egui::CollapsingHeader::new("Display")
             .default_open(true)
             .show(ui, |ui| display_ui(ui, &mut state.settings.display));
+        egui::CollapsingHeader::new("Compare A/B")
+            .default_open(true)
+            .show(ui, |ui| {
+                let compare = compare.as_deref_mut();
+                super::compare::compare_ui(ui, compare, &state.settings, &mut commands)
+            });
         egui::CollapsingHeader::new("Stats")
             .default_open(true)
-            .show(ui, |ui| stats.stats_ui(ui));
+            .show(ui, |ui| {
+                stats.stats_ui(ui);
+                if let Some(compare) = compare.as_deref() {
+                    compare.stats_ui(ui, stats);
+                }
+            });
         egui::CollapsingHeader::new("Screenshot")
             .default_open(true)
             .show(ui, |ui| screenshot_ui(ui, &mut state.screenshot_folder));

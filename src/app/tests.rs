@@ -956,3 +956,245 @@ fn values_that_round_to_zero_show_without_a_sign() {
     assert_eq!(fixed(-0.05, 2), "-0.05");
     assert_eq!(fixed(1.234, 1), "1.2");
 }
+
+// Compare A/B.
+
+/// The comparison in progress.
+fn comparing<'a>(h: &'a Harness<'_, WorkbenchApp>) -> &'a compare::Compare {
+    h.state().compare.as_ref().expect("comparing")
+}
+
+/// A's final frame on screen.
+fn a_frame(h: &Harness<'_, WorkbenchApp>) -> compare::SideFrame {
+    comparing(h).a().cloned().expect("A is shown")
+}
+
+/// Clicks "Freeze as A" and waits for both sides to finish.
+fn freeze_a(h: &mut Harness<'_, WorkbenchApp>) {
+    h.get_by_role_and_label(Role::Button, "Freeze as A").click();
+    settle(h);
+    assert!(h.state().compare.is_some(), "{:?}", h.state().status);
+}
+
+fn tick_difference(h: &mut Harness<'_, WorkbenchApp>) {
+    h.get_by_role_and_label(Role::CheckBox, "Difference |A − B|")
+        .click();
+    settle(h);
+    assert!(comparing(h).difference);
+}
+
+/// Frozen with nothing changed, A and B are one image: the wipe has no seam and the difference
+/// is zero everywhere.
+#[test]
+fn compare_with_nothing_changed_shows_no_seam_and_no_difference() {
+    let mut state = small_state();
+    state.settings.samples_per_pixel = 3;
+    let mut h = harness(state);
+    freeze_a(&mut h);
+    let (a, b) = (a_frame(&h), shown(&h));
+    assert!(a.is_final() && b.is_final());
+    assert_eq!(comparing(&h).settings(), &b.settings);
+    assert_eq!(a.image, b.image);
+    // The pixels uploaded for either side of the divider are the same.
+    let a_rgba = comparing(&h).a_rgba().expect("A's texture");
+    assert_eq!(Some(a_rgba), h.state().viewport.rgba());
+    assert!(h.query_by_label("A and B: identical settings").is_some());
+    // Both sides' figures in the Stats; the status bar still sums up B.
+    for side in ["A: pass ", "B: pass "] {
+        let node = h
+            .query_by_label_contains(side)
+            .unwrap_or_else(|| panic!("no {side} line"))
+            .accesskit_node();
+        let text = node.label().or_else(|| node.value()).unwrap_or_default();
+        assert!(text.ends_with(" ms · 3/3 samples"), "{text}");
+    }
+    assert!(h.query_by_label_contains("3/3 spp").is_some());
+    // A has B's threads.
+    assert_eq!(
+        comparing(&h).threads(),
+        h.state().controller.as_ref().unwrap().threads()
+    );
+
+    tick_difference(&mut h);
+    let compare = comparing(&h);
+    let diff = compare.difference_shown().expect("a difference");
+    assert_eq!(diff.max, 0.0);
+    assert!(diff.image.pixels.iter().all(|p| *p == Vec3::ZERO));
+    let rgba = compare.difference_rgba().unwrap();
+    assert!(rgba.chunks(4).all(|p| p == [0, 0, 0, 255]));
+    assert!(h.query_by_label("A and B are identical").is_some());
+}
+
+/// Shadows off for B: each side is exactly the library's render of its settings, and the
+/// difference is nonzero exactly where the two renders differ.
+#[test]
+fn compare_shadows_off_for_b_differs_exactly_where_the_renders_do() {
+    let mut h = harness(small_state());
+    freeze_a(&mut h);
+    h.get_by_role_and_label(Role::CheckBox, "Shadows").click();
+    tick_difference(&mut h);
+    let scene = cornell_box();
+    let a_settings = comparing(&h).settings().clone();
+    let (a, b) = (a_frame(&h), shown(&h));
+    assert!(a_settings.shading.shadows && !b.settings.shading.shadows);
+    let a_render = render(&scene, &a_settings);
+    let b_render = render(&scene, &b.settings);
+    assert_eq!(*a.image, a_render);
+    assert_eq!(*b.image, b_render);
+    assert!(h.query_by_label("A and B differ in: shadows").is_some());
+    // A keeps its own texture, B's is the live one.
+    assert_eq!(
+        comparing(&h).a_rgba().unwrap(),
+        a_settings.display.to_rgba8(&a_render)
+    );
+    assert_eq!(
+        h.state().viewport.rgba().unwrap(),
+        b.settings.display.to_rgba8(&b_render)
+    );
+
+    let diff = comparing(&h).difference_shown().expect("a difference");
+    let mut differing = 0;
+    for (i, d) in diff.image.pixels.iter().enumerate() {
+        let renders_differ = a_render.pixels[i] != b_render.pixels[i];
+        assert_eq!(*d != Vec3::ZERO, renders_differ, "pixel {i}");
+        assert_eq!(*d, (a_render.pixels[i] - b_render.pixels[i]).abs());
+        differing += usize::from(renders_differ);
+    }
+    assert!(differing > 200, "{differing}");
+    let max = diff
+        .image
+        .pixels
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0, f32::max);
+    assert_eq!(diff.max, max);
+    assert!(max > 0.0);
+    let scale = format!("white = |A − B| ≥ {}", compare::significant(max, 3));
+    assert!(h.query_by_label(&scale).is_some(), "{scale}");
+    // The brightest difference is white in the image shown.
+    let rgba = comparing(&h).difference_rgba().unwrap();
+    assert!(rgba.contains(&255) && rgba.chunks(4).any(|p| p[..3] == [0, 0, 0]));
+}
+
+/// A drag from the divider moves it (not the camera); a drag elsewhere still turns the camera,
+/// and the light's marker still moves the light.
+#[test]
+fn compare_divider_drags_and_elsewhere_the_camera_turns() {
+    let mut h = harness(small_state());
+    freeze_a(&mut h);
+    h.step();
+    let rect = h.state().viewport.shown_rect().unwrap();
+    assert_eq!(comparing(&h).divider, 0.5);
+    let s0 = settings(&h);
+    let drag = |h: &mut Harness<'_, WorkbenchApp>, from: egui::Pos2, to: egui::Pos2| {
+        h.drag_at(from);
+        h.step();
+        for k in 1..=5 {
+            h.hover_at(from + (to - from) * (k as f32 / 5.0));
+            h.step();
+        }
+        h.drop_at(to);
+        h.step();
+    };
+    // Low on the divider, away from the light's marker (near the top of the image).
+    let on_divider = egui::pos2(rect.center().x + 4.0, rect.bottom() - 10.0);
+    let marker = rect.min + light_marker(&s0).unwrap() * rect.size();
+    assert!(marker.distance(on_divider) > 50.0);
+    drag(
+        &mut h,
+        on_divider,
+        egui::pos2(rect.left() + 0.25 * rect.width(), rect.bottom() - 40.0),
+    );
+    let divider = comparing(&h).divider;
+    assert!((divider - 0.25).abs() < 0.01, "{divider}");
+    assert_eq!(
+        settings(&h),
+        s0,
+        "the divider's drag moved the camera or light"
+    );
+
+    // Elsewhere, the camera turns and the divider stays.
+    let elsewhere = egui::pos2(rect.left() + 0.7 * rect.width(), rect.center().y);
+    drag(&mut h, elsewhere, elsewhere + egui::vec2(40.0, 0.0));
+    let s1 = settings(&h);
+    assert!(
+        s1.camera.yaw > s0.camera.yaw,
+        "{} {}",
+        s1.camera.yaw,
+        s0.camera.yaw
+    );
+    assert_eq!(comparing(&h).divider, divider);
+    settle(&mut h);
+
+    // The light's marker, even on the divider, moves the light.
+    comparing_mut(&mut h).divider = light_marker(&s1).unwrap().x;
+    h.step();
+    let rect = h.state().viewport.shown_rect().unwrap();
+    let marker = rect.min + light_marker(&s1).unwrap() * rect.size();
+    drag(&mut h, marker, marker + egui::vec2(30.0, 10.0));
+    let s2 = settings(&h);
+    assert_eq!(s2.camera, s1.camera);
+    assert!(s2.light.position.x > s1.light.position.x + 0.05);
+    assert_eq!(comparing(&h).divider, light_marker(&s1).unwrap().x);
+    settle(&mut h);
+}
+
+fn comparing_mut<'a>(h: &'a mut Harness<'_, WorkbenchApp>) -> &'a mut compare::Compare {
+    h.state_mut().compare.as_mut().expect("comparing")
+}
+
+/// "Stop comparing" drops A and its renderer; the live image goes on.
+#[test]
+fn stop_comparing_drops_a_and_its_controller() {
+    let mut h = harness(small_state());
+    freeze_a(&mut h);
+    h.get_by_role_and_label(Role::Button, "Stop comparing")
+        .click();
+    h.step();
+    assert!(h.state().compare.is_none());
+    h.step();
+    assert!(h.query_by_label("Difference |A − B|").is_none());
+    assert!(h.query_by_label_contains("A: pass").is_none());
+    h.get_by_role_and_label(Role::CheckBox, "Shadows").click();
+    settle(&mut h);
+    assert!(!shown(&h).settings.shading.shadows);
+}
+
+/// A and B at different resolutions: both drawn fitted into one rect, and the difference
+/// explains why there is none.
+#[test]
+fn compare_at_different_resolutions_says_the_difference_needs_one() {
+    let mut h = harness(small_state());
+    freeze_a(&mut h);
+    h.get_by_role_and_label(Role::SpinButton, "Width")
+        .set_value_accesskit(64.0);
+    tick_difference(&mut h);
+    assert_eq!(shown(&h).image.width, 64);
+    assert_eq!(a_frame(&h).image.width, 128);
+    assert!(comparing(&h).difference_shown().is_none());
+    assert!(
+        h.query_by_label_contains("Difference needs the same resolution")
+            .is_some()
+    );
+    assert!(h.query_by_label_contains("differ in: resolution").is_some());
+}
+
+/// "Lab vs sRGB display": A keeps the display it was frozen with, B shows the live one; the
+/// linear images are the same, so the difference says so.
+#[test]
+fn compare_keeps_as_display_while_bs_changes() {
+    let mut h = harness(small_state());
+    freeze_a(&mut h);
+    h.get_by_role_and_label(Role::Slider, "Exposure")
+        .set_value_accesskit(1.0);
+    tick_difference(&mut h);
+    let (a, b) = (a_frame(&h), shown(&h));
+    assert_eq!(a.image, b.image);
+    let frozen = comparing(&h).settings().display;
+    let live = settings(&h).display;
+    assert_eq!((frozen.exposure, live.exposure), (0.0, 1.0));
+    assert_eq!(comparing(&h).a_rgba().unwrap(), frozen.to_rgba8(&a.image));
+    assert_eq!(h.state().viewport.rgba().unwrap(), live.to_rgba8(&b.image));
+    assert!(h.query_by_label("A and B differ in: exposure").is_some());
+    assert!(h.query_by_label("A and B are identical").is_some());
+}

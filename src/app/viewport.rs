@@ -8,8 +8,10 @@ use std::sync::Arc;
 
 use eframe::egui;
 
+use super::compare::Compare;
+
 /// Magnification from which pixels are shown as blocks (nearest filtering).
-const NEAREST_FROM_SCALE: f32 = 2.0;
+pub const NEAREST_FROM_SCALE: f32 = 2.0;
 
 /// What the pointer did on the image this frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -29,6 +31,8 @@ pub struct ViewportInput {
     pub drag_started_on_marker: bool,
     /// A drag on the image is going on.
     pub dragging: bool,
+    /// Compare A/B: the drag is the divider's, not the camera's or the light's.
+    pub on_divider: bool,
 }
 
 /// The light's marker radius, in points; a drag starting this close to it moves the light.
@@ -84,7 +88,12 @@ impl Viewport {
     /// Draws the image fitted into the available space, and the light's marker at `marker` (a
     /// fraction of the image's width and height) when it is on the image; reports pointer input
     /// on it.
-    pub fn viewport_ui(&mut self, ui: &mut egui::Ui, marker: Option<egui::Vec2>) -> ViewportInput {
+    pub fn viewport_ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        marker: Option<egui::Vec2>,
+        mut compare: Option<&mut Compare>,
+    ) -> ViewportInput {
         let available = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(available, egui::Sense::click_and_drag());
         let (Some(texture), Some(pixels)) = (&mut self.texture, &self.pixels) else {
@@ -107,9 +116,14 @@ impl Viewport {
             texture.set(Arc::clone(pixels), wanted);
         }
 
-        let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
-        ui.painter()
-            .image(texture.id(), rect, uv, egui::Color32::WHITE);
+        // While comparing, the A/B wipe (or |A − B|) stands in for the one image.
+        if let Some(compare) = compare.as_deref_mut() {
+            compare.paint(ui, rect, texture.id());
+        } else {
+            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+            ui.painter()
+                .image(texture.id(), rect, uv, egui::Color32::WHITE);
+        }
 
         let to_fraction = |p: egui::Pos2| (p - rect.min) / rect.size();
         let marker_pos = marker
@@ -125,6 +139,8 @@ impl Viewport {
             && marker_pos
                 .zip(press)
                 .is_some_and(|(m, p)| m.distance(p) <= MARKER_GRAB_RADIUS);
+        let on_divider =
+            compare.is_some_and(|c| c.divider_input(ui, &response, rect, drag_started_on_marker));
         let pointer_at = response
             .interact_pointer_pos()
             .or_else(|| response.hover_pos())
@@ -152,6 +168,7 @@ impl Viewport {
             pointer_at,
             drag_started_on_marker,
             dragging: response.dragged(),
+            on_divider,
         }
     }
 }
