@@ -88,6 +88,12 @@ pub struct RenderArgs {
     /// Output file: .png (the lab's display: clamped, no gamma) or .exr (linear floats).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    /// Write a debug view instead of the shaded image: normals, depth, barycentric, triangle,
+    /// bvh-cost, shadow, or variance (of each pixel's mean; needs --samples 2 or more). Its
+    /// legend is printed after the summary. Views are saved with the lab's display whatever
+    /// --display says, so their colours are the legend's. Combines with --settings.
+    #[arg(long, default_value = "shaded", value_name = "VIEW")]
+    pub view: raylab::view::View,
     #[command(flatten)]
     pub options: RenderOptions,
 }
@@ -215,12 +221,6 @@ pub struct RenderOptions {
     /// Render threads [default: one per core].
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024), value_name = "N")]
     pub threads: Option<u16>,
-    /// Write a debug view instead of the shaded image: normals, depth, barycentric, triangle,
-    /// bvh-cost, shadow, or variance (of each pixel's mean; needs --samples 2 or more). Its
-    /// legend is printed after the summary. Views are saved with the lab's display whatever
-    /// --display says, so their colours are the legend's. Combines with --settings.
-    #[arg(long, default_value = "shaded", value_name = "VIEW")]
-    pub view: raylab::view::View,
 }
 
 /// The `--bounces` value: a cap, or unlimited.

@@ -319,9 +319,8 @@ fn camera_sample_0(
     let mut ray = Ray::new(Vec3::ZERO, Vec3::Z);
     let mut rng = Rng::UNUSED;
     let rotation = settings.camera.rotation();
-    let ((px, py), lens) = crate::render::camera_sample(
-        tracer, settings, &rotation, x, y, 0, &mut ray, &mut rng,
-    );
+    let ((px, py), lens) =
+        crate::render::camera_sample(tracer, settings, &rotation, x, y, 0, &mut ray, &mut rng);
     (ray, rng, [px, py], lens)
 }
 
