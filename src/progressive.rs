@@ -39,6 +39,7 @@ use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, render_pass};
 use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsError};
+use crate::view::{Legend, View, render_view};
 
 /// The preview's size divisor: a 1024² image previews at 128².
 pub const PREVIEW_DIVISOR: u32 = 8;
@@ -78,6 +79,9 @@ pub struct Frame {
     pub since_submit_ms: f64,
     /// The estimated remaining noise of the accumulated image (from 2 samples on).
     pub noise: Option<NoiseEstimate>,
+    /// For a debug view (`settings.view`), what its colours mean; its pixels are shown with the
+    /// lab's display whatever the display in force, so they match the legend.
+    pub legend: Option<Legend>,
 }
 
 impl Frame {
@@ -467,8 +471,14 @@ impl Worker {
         if same_display(&last.display, &display) {
             return;
         }
+        // A debug view keeps the lab's display: its colours are its legend's.
+        let shown_with = if last.legend.is_some() {
+            Display::default()
+        } else {
+            display
+        };
         let frame = Frame {
-            rgba: self.pool.install(|| display.to_rgba8(&last.image)),
+            rgba: self.pool.install(|| shown_with.to_rgba8(&last.image)),
             display,
             ..last.clone()
         };
@@ -505,6 +515,26 @@ impl Worker {
         let target = settings.samples_per_pixel.max(1);
         let (width, height) = (settings.camera.width, settings.camera.height);
 
+        if settings.view.is_traced() {
+            // A debug view: one ray per pixel centre, once.
+            let start = Instant::now();
+            let cancelled = || shared.current() != job.generation;
+            let result = self
+                .pool
+                .install(|| render_view(&job.scene, settings, settings.view, &cancelled));
+            let Ok(view) = result else {
+                return false;
+            };
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            let rays = u64::from(width) * u64::from(height);
+            let mut frame = self.frame(job, view.image, target, false, ms, rays, None);
+            frame.legend = Some(view.legend);
+            frame.rgba = self
+                .pool
+                .install(|| Display::default().to_rgba8(&frame.image));
+            return self.publish_and_keep(frame);
+        }
+
         if let Some((w, h)) = preview_size(width, height) {
             let mut preview = settings.clone();
             preview.camera = settings.camera.with_resolution(w, h);
@@ -538,14 +568,30 @@ impl Worker {
                 continue;
             }
             published = Instant::now();
+            // The variance view: each pixel's variance of the mean, once there are two samples.
+            let variance = if settings.view == View::Variance {
+                film.variance_image()
+            } else {
+                None
+            };
             // The mean of one pass is the pass itself: skip the copy.
-            let image = if sample == 0 { pass } else { film.resolve() };
+            let (image, legend) = match variance {
+                Some((image, legend)) => (image, Some(legend)),
+                None if sample == 0 => (pass, None),
+                None => (film.resolve(), None),
+            };
             if stale() {
                 return false;
             }
             let rays = u64::from(width) * u64::from(height);
             let noise = film.noise();
-            let frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise);
+            let mut frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise);
+            if legend.is_some() {
+                frame.rgba = self
+                    .pool
+                    .install(|| Display::default().to_rgba8(&frame.image));
+                frame.legend = legend;
+            }
             if !self.publish_and_keep(frame) {
                 return false;
             }
@@ -610,6 +656,7 @@ impl Worker {
             },
             since_submit_ms: job.submitted.elapsed().as_secs_f64() * 1e3,
             noise,
+            legend: None,
         }
     }
 

@@ -13,6 +13,7 @@ use crate::integrator::{MAX_SPECULAR_DEPTH, Shading};
 use crate::light::PointLight;
 use crate::material::{MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
+use crate::view::View;
 
 /// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
@@ -39,6 +40,10 @@ pub struct RenderSettings {
     /// How linear values are shown and written to PNG (the lab's clamp by default). Changing
     /// it never re-traces: the renderer ignores it.
     pub display: Display,
+    /// What the workbench shows: the shaded image (the default) or a debug view of the same
+    /// scene and camera ([`crate::view`]). `render` ignores it; the command line's `--view`
+    /// chooses.
+    pub view: View,
     /// Samples per pixel to accumulate; 1 traces each pixel's centre (the lab's image), more
     /// jitter inside the pixel and average (anti-aliasing).
     pub samples_per_pixel: u32,
@@ -57,6 +62,7 @@ impl Default for RenderSettings {
             material_preset: MaterialPreset::None,
             texture_preset: TexturePreset::None,
             display: Display::default(),
+            view: View::Shaded,
             samples_per_pixel: 1,
             seed: 0,
         }

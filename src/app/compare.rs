@@ -597,6 +597,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
         material_preset,
         texture_preset,
         display,
+        view,
         samples_per_pixel,
         seed,
     } = a;
@@ -635,6 +636,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     differ("seed", *seed != b.seed);
     differ("display", display.transform != b.display.transform);
     differ("exposure", display.exposure != b.display.exposure);
+    differ("view", *view != b.view);
     out
 }
 

@@ -46,6 +46,11 @@ pub const HELP: &[(&str, &str)] = &[
         "turn the camera (left/right: yaw, up/down: pitch)",
     ),
     ("Wheel on the image", "zoom (focal length)"),
+    (
+        "I",
+        "inspect pixels on / off: a click pins a pixel, its equations show on the right",
+    ),
+    ("Shift + arrows", "move the inspected pixel by one"),
     ("Ctrl+S", "save a screenshot"),
     ("F1", "show / hide this help"),
     (
@@ -68,6 +73,27 @@ pub fn keys(ctx: &egui::Context, settings: &mut RenderSettings) -> Vec<Command> 
         }
     });
     if text_focused {
+        return commands;
+    }
+    // Shift with the arrows moves the inspector's pinned pixel, not the camera; I toggles the
+    // inspector.
+    let (pixel_step, inspect) = ctx.input(|i| {
+        let n = |key| i.num_presses(key) as i32;
+        let step = if i.modifiers.shift_only() {
+            [
+                n(Key::ArrowRight) - n(Key::ArrowLeft),
+                n(Key::ArrowDown) - n(Key::ArrowUp),
+            ]
+        } else {
+            [0, 0]
+        };
+        (step, i.modifiers.is_none() && i.key_pressed(Key::I))
+    });
+    if inspect {
+        commands.push(Command::ToggleInspector);
+    }
+    if pixel_step != [0, 0] {
+        commands.push(Command::MovePinned(pixel_step));
         return commands;
     }
     let (presses, modifiers) = ctx.input(|i| {

@@ -22,6 +22,7 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Instant;
 
 use eframe::egui;
+use raylab::inspect::Inspection;
 use raylab::progressive::{Controller, Frame};
 use raylab::scene::{Scene, SceneChoice, cornell_box};
 use raylab::{Camera, Image, RenderSettings, Shading, Stage};
@@ -49,6 +50,10 @@ pub enum Command {
     ToggleHelp,
     /// Go to step `n` of the lab walk-through (`None`: leave it).
     WalkTo(Option<usize>),
+    /// Inspect pixels on or off.
+    ToggleInspector,
+    /// Move the inspected pixel by (dx, dy).
+    MovePinned([i32; 2]),
     /// Compare A/B: freeze the current settings and scene as A ([`compare`]).
     FreezeA,
     /// Compare A/B: drop A and its renderer.
@@ -120,6 +125,8 @@ pub struct WorkbenchApp {
     /// A screenshot was asked for before the full-resolution image was ready.
     screenshot_wanted: bool,
     screenshots_saving: Vec<Receiver<Result<screenshot::Saved, String>>>,
+    /// The inspector's last result: the settings and pixel it is for.
+    inspection: Option<(RenderSettings, [u32; 2], Result<Inspection, String>)>,
     /// While the light's marker is dragged: the light's depth when the drag started.
     dragging_light: Option<f32>,
     /// When the newest job was submitted, and UI frames since.
@@ -216,6 +223,7 @@ impl WorkbenchApp {
             screenshot_wanted: false,
             screenshots_saving: Vec::new(),
             dragging_light: None,
+            inspection: None,
             change: None,
             log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
             started: Instant::now(),
@@ -396,6 +404,80 @@ impl WorkbenchApp {
         }
     }
 
+    /// Inspect mode: pins the clicked pixel (`at`: a fraction of the image's width and height).
+    fn pin_at(&mut self, at: egui::Vec2) {
+        let camera = &self.state.settings.camera;
+        let x = ((at.x * camera.width as f32) as u32).min(camera.width - 1);
+        let y = ((at.y * camera.height as f32) as u32).min(camera.height - 1);
+        self.state.pinned = Some([x, y]);
+    }
+
+    /// The inspection of the pinned pixel with the settings in force, recomputed only when
+    /// either changes (one ray's worth of work, recorded step by step).
+    fn inspection(&mut self) -> Option<&Result<Inspection, String>> {
+        let pixel = self.state.pinned?;
+        if !self.state.inspect_mode || self.state.settings.scene != self.scene_choice {
+            return None;
+        }
+        let fresh = self
+            .inspection
+            .as_ref()
+            .is_some_and(|(s, p, _)| *p == pixel && *s == self.state.settings);
+        if !fresh {
+            let result = raylab::inspect::inspect_pixel(
+                &self.scene,
+                &self.state.settings,
+                pixel[0],
+                pixel[1],
+            )
+            .map_err(|e| e.to_string());
+            self.inspection = Some((self.state.settings.clone(), pixel, result));
+        }
+        self.inspection.as_ref().map(|(_, _, r)| r)
+    }
+
+    /// The inspector: the pinned pixel's lines, each beside the lab equation it evaluates.
+    fn inspector_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(result) = self.inspection() else {
+            ui.label("Click a pixel of the image to see how its value is computed.");
+            return;
+        };
+        let inspection = match result {
+            Ok(i) => i.clone(),
+            Err(e) => {
+                ui.colored_label(ui.visuals().error_fg_color, e.clone());
+                return;
+            }
+        };
+        let lines = inspection.lines();
+        ui.horizontal(|ui| {
+            if ui
+                .button("Copy as text")
+                .on_hover_text("The lines below, for a report or a question")
+                .clicked()
+            {
+                ui.ctx().copy_text(inspection.to_text());
+                self.set_status(StatusKind::Info, "Copied the inspector's lines");
+            }
+            if ui.button("Unpin").clicked() {
+                self.state.pinned = None;
+            }
+        });
+        ui.weak("Shift + arrows move the pixel by one.");
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            egui::Grid::new("inspector-lines")
+                .num_columns(2)
+                .striped(true)
+                .show(ui, |ui| {
+                    for line in &lines {
+                        ui.weak(&line.equation);
+                        ui.add(egui::Label::new(&line.text).wrap());
+                        ui.end_row();
+                    }
+                });
+        });
+    }
+
     /// "Click to focus": sets the focus distance to the depth of what the clicked point of the
     /// image shows (`at`: a fraction of the image's width and height).
     fn focus_at(&mut self, at: egui::Vec2) {
@@ -457,6 +539,7 @@ impl WorkbenchApp {
         self.stats.target = frame.target;
         self.stats.is_preview = frame.is_preview;
         self.stats.noise = frame.noise;
+        self.stats.legend = frame.legend.clone();
         if !frame.is_preview {
             self.stats.full_pass = Some((frame.pass_ms, w, h));
             self.stats.mrays_per_s = Some(frame.mrays_per_s);
@@ -533,6 +616,20 @@ impl WorkbenchApp {
                 }
             }
             Command::ToggleHelp => self.show_help = !self.show_help,
+            Command::ToggleInspector => {
+                self.state.inspect_mode = !self.state.inspect_mode;
+                if self.state.inspect_mode {
+                    self.state.focus_mode = false;
+                }
+            }
+            Command::MovePinned([dx, dy]) => {
+                if let Some([x, y]) = self.state.pinned {
+                    let camera = &self.state.settings.camera;
+                    let x = (i64::from(x) + i64::from(dx)).clamp(0, i64::from(camera.width) - 1);
+                    let y = (i64::from(y) + i64::from(dy)).clamp(0, i64::from(camera.height) - 1);
+                    self.state.pinned = Some([x as u32, y as u32]);
+                }
+            }
             Command::WalkTo(step) => {
                 let step = step.filter(|&n| n < raylab::walkthrough::STEPS.len());
                 self.state.walk_step = step;
@@ -727,7 +824,32 @@ impl eframe::App for WorkbenchApp {
                     self.compare.as_mut(),
                 ));
             });
+        if self.state.inspect_mode {
+            egui::Panel::right("inspector")
+                .resizable(true)
+                .default_size(420.0)
+                .show(ui, |ui| {
+                    let title = match self.state.pinned {
+                        Some([x, y]) => format!("Inspector: pixel ({x}, {y})"),
+                        None => "Inspector".to_owned(),
+                    };
+                    ui.heading(title);
+                    self.inspector_ui(ui);
+                });
+        }
         egui::CentralPanel::default_margins().show(ui, |ui| {
+            self.viewport.pinned =
+                self.state
+                    .pinned
+                    .filter(|_| self.state.inspect_mode)
+                    .map(|[x, y]| {
+                        let c = &self.state.settings.camera;
+                        let (w, h) = (c.width as f32, c.height as f32);
+                        egui::Rect::from_min_size(
+                            egui::pos2(x as f32 / w, y as f32 / h),
+                            egui::vec2(1.0 / w, 1.0 / h),
+                        )
+                    });
             let marker = light_marker(&self.state.settings);
             let pointer = self.viewport.viewport_ui(ui, marker, self.compare.as_mut());
             if pointer.pressed
@@ -740,10 +862,12 @@ impl eframe::App for WorkbenchApp {
             if !pointer.on_divider {
                 self.drag_light_or_camera(&pointer);
             }
-            if self.state.focus_mode
-                && let Some(at) = pointer.clicked_at
-            {
-                self.focus_at(at);
+            if let Some(at) = pointer.clicked_at {
+                if self.state.inspect_mode {
+                    self.pin_at(at);
+                } else if self.state.focus_mode {
+                    self.focus_at(at);
+                }
             }
         });
         for command in commands {

@@ -9,6 +9,7 @@ use raylab::display::{Display, DisplayTransform};
 use raylab::integrator::MAX_SPECULAR_DEPTH;
 use raylab::material::TexturePreset;
 use raylab::scene::SceneChoice;
+use raylab::view::{Legend, View};
 use raylab::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
 
 use super::Command;
@@ -79,6 +80,19 @@ pub fn controls_ui(
     stats.key_figures_ui(ui);
     ui.separator();
     egui::ScrollArea::vertical().show(ui, |ui| {
+        ui.horizontal(|ui| {
+            let mut inspect = state.inspect_mode;
+            if ui
+                .checkbox(&mut inspect, "Inspect pixels")
+                .on_hover_text(
+                    "I: a click on the image pins a pixel; the panel on the right shows, line by \
+                     line, the lab's equations that give it its value",
+                )
+                .changed()
+            {
+                commands.push(Command::ToggleInspector);
+            }
+        });
         egui::CollapsingHeader::new("Lab walk-through")
             .default_open(state.walk_step.is_some())
             .show(ui, |ui| walkthrough_ui(ui, state.walk_step, &mut commands));
@@ -106,6 +120,7 @@ pub fn controls_ui(
                     ui,
                     &mut state.settings,
                     &mut state.limited_bounces,
+                    stats.legend.as_ref(),
                     &mut commands,
                 )
             });
@@ -476,6 +491,48 @@ pub fn material_label(preset: MaterialPreset) -> &'static str {
     }
 }
 
+/// The view's name in the selector.
+pub fn view_label(view: View) -> &'static str {
+    match view {
+        View::Shaded => "Shaded (the stage)",
+        View::Normals => "Normals",
+        View::Depth => "Depth t",
+        View::Barycentric => "Barycentric u, v",
+        View::Triangle => "Triangle id",
+        View::BvhCost => "BVH cost",
+        View::Shadow => "Shadow rays",
+        View::Variance => "Variance",
+    }
+}
+
+/// The view selector and, for a debug view, its legend: what the colours mean and their range.
+fn view_ui(ui: &mut egui::Ui, view: &mut View, legend: Option<&Legend>) {
+    egui::ComboBox::new("view", "View")
+        .selected_text(view_label(*view))
+        .show_ui(ui, |ui| {
+            for v in View::ALL {
+                ui.selectable_value(view, v, view_label(v))
+                    .on_hover_text(v.description());
+            }
+        })
+        .response
+        .on_hover_text("What the image shows: the stage's shaded image, or a debug view traced from the same camera");
+    if *view == View::Shaded {
+        return;
+    }
+    egui::Frame::group(ui.style()).show(ui, |ui| match legend {
+        Some(legend) => {
+            ui.strong(&legend.title);
+            for line in &legend.lines {
+                ui.label(line);
+            }
+        }
+        None => {
+            ui.weak(view.description());
+        }
+    });
+}
+
 /// The texture preset's name in the selector.
 pub fn texture_label(preset: TexturePreset) -> &'static str {
     match preset {
@@ -504,8 +561,10 @@ pub fn shading_ui(
     ui: &mut egui::Ui,
     settings: &mut RenderSettings,
     limited_bounces: &mut u32,
+    legend: Option<&Legend>,
     commands: &mut Vec<Command>,
 ) {
+    let view = &mut settings.view;
     let materials = &mut settings.material_preset;
     let textures = &mut settings.texture_preset;
     let shading = &mut settings.shading;
@@ -524,6 +583,7 @@ pub fn shading_ui(
                 }
             }
         });
+    view_ui(ui, view, legend);
     egui::ComboBox::new("materials", "Materials")
         .selected_text(material_label(*materials))
         .show_ui(ui, |ui| {

@@ -43,6 +43,10 @@ pub struct WorkbenchState {
     pub focus_mode: bool,
     /// The lab walk-through's current step, if it is open.
     pub walk_step: Option<usize>,
+    /// Inspect pixels: a click on the image pins a pixel, the inspector explains it.
+    pub inspect_mode: bool,
+    /// The inspected pixel.
+    pub pinned: Option<[u32; 2]>,
 }
 
 impl Default for WorkbenchState {
@@ -56,6 +60,8 @@ impl Default for WorkbenchState {
             limited_bounces: DEFAULT_LIMITED_BOUNCES,
             focus_mode: false,
             walk_step: None,
+            inspect_mode: false,
+            pinned: None,
         }
     }
 }

@@ -31,6 +31,8 @@ pub struct Stats {
     pub threads: usize,
     /// The estimated remaining noise of the shown image (from 2 samples on).
     pub noise: Option<NoiseEstimate>,
+    /// What the shown debug view's colours mean (none for the shaded image).
+    pub legend: Option<raylab::view::Legend>,
 }
 
 /// A fraction as a percentage with about two significant digits: "0.42 %", "12.5 %".

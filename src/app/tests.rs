@@ -33,7 +33,7 @@ fn small_state() -> WorkbenchState {
 
 fn harness(state: WorkbenchState) -> Harness<'static, WorkbenchApp> {
     let mut h = Harness::builder()
-        .with_size([1400.0, 1400.0])
+        .with_size([1400.0, 2400.0])
         .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
     settle(&mut h);
     h
@@ -455,7 +455,7 @@ fn a_corrupt_settings_file_shows_a_notice_and_starts_on_the_defaults() {
     // Small, so the test is quick; the notice is what matters here.
     state.settings.camera = state.settings.camera.with_resolution(64, 48);
     let mut h = Harness::builder()
-        .with_size([1400.0, 1400.0])
+        .with_size([1400.0, 2400.0])
         .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, notice));
     settle(&mut h);
     assert_eq!(status(&h).1, StatusKind::Notice);
@@ -755,7 +755,7 @@ fn changing_the_display_never_restarts_the_accumulation() {
     let mut state = small_state();
     state.settings.samples_per_pixel = 3000;
     let mut h = Harness::builder()
-        .with_size([1400.0, 1400.0])
+        .with_size([1400.0, 2400.0])
         .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
     let start = Instant::now();
     // Wait for some samples, well before the target.
@@ -911,7 +911,7 @@ fn a_screenshot_before_the_target_says_so() {
     state.screenshot_folder = dir.path().to_owned();
     state.settings.samples_per_pixel = 4000;
     let mut h = Harness::builder()
-        .with_size([1400.0, 1400.0])
+        .with_size([1400.0, 2400.0])
         .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
     let start = Instant::now();
     while h.state().last_full.as_ref().is_none_or(|s| s.samples < 2) {
@@ -1197,4 +1197,74 @@ fn compare_keeps_as_display_while_bs_changes() {
     assert_eq!(h.state().viewport.rgba().unwrap(), live.to_rgba8(&b.image));
     assert!(h.query_by_label("A and B differ in: exposure").is_some());
     assert!(h.query_by_label("A and B are identical").is_some());
+}
+
+/// The inspector: I turns it on, a click pins a pixel, its R line is the pixel's displayed value
+/// (one sample: the image is sample 0), Shift + arrows move the pixel, and it is outlined.
+#[test]
+fn the_inspector_explains_a_clicked_pixel() {
+    let mut h = harness(small_state());
+    h.key_press(Key::I);
+    // The inspector's panel takes its place beside the image over a frame or two.
+    h.run_steps(3);
+    assert!(h.state().state.inspect_mode);
+    let rect = h.state().viewport.shown_rect().unwrap();
+    // The centre of pixel (40, 70): the floor, lit.
+    let at = egui::vec2(40.5 / 128.0, 70.5 / 96.0);
+    let pos = rect.min + at * rect.size();
+    h.drag_at(pos);
+    h.step();
+    h.drop_at(pos);
+    h.run_steps(2);
+    assert_eq!(h.state().state.pinned, Some([40, 70]));
+    assert!(
+        h.query_by_label_contains("Inspector: pixel (40, 70)")
+            .is_some()
+    );
+    assert!(
+        h.query_by_label_contains("D = P·max(r̂·n̂, 0)/(4πr²)")
+            .is_some()
+    );
+    assert!(h.query_by_label_contains("R = ρ·(D + N)").is_some());
+    let s = settings(&h);
+    let inspection = raylab::inspect::inspect_pixel(&cornell_box(), &s, 40, 70).unwrap();
+    assert_eq!(inspection.r, shown(&h).image.get(40, 70));
+    assert_eq!(
+        h.state().viewport.pinned.map(|r| r.min),
+        Some(egui::pos2(40.0 / 128.0, 70.0 / 96.0))
+    );
+    // Shift + Right moves it by one pixel and leaves the camera alone.
+    h.key_press_modifiers(Modifiers::SHIFT, Key::ArrowRight);
+    h.step();
+    assert_eq!(h.state().state.pinned, Some([41, 70]));
+    assert_eq!(settings(&h).camera, s.camera);
+    h.get_by_role_and_label(Role::Button, "Copy as text");
+    h.get_by_role_and_label(Role::Button, "Unpin").click();
+    h.step();
+    assert_eq!(h.state().state.pinned, None);
+    settle(&mut h);
+}
+
+/// A debug view comes from the tracer, with its legend beside it: the depth view shows what
+/// `view::render_view` computes, and its legend gives the range of t.
+#[test]
+fn the_view_selector_shows_a_debug_view_with_its_legend() {
+    let mut h = harness(small_state());
+    choose(&mut h, "View", "Depth t");
+    settle(&mut h);
+    let s = settings(&h);
+    assert_eq!(s.view, raylab::view::View::Depth);
+    let expected = raylab::view::render_view(&cornell_box(), &s, s.view, &|| false).unwrap();
+    assert_eq!(*shown(&h).image, expected.image);
+    assert_eq!(h.state().stats.legend.as_ref(), Some(&expected.legend));
+    assert!(h.query_by_label_contains(&expected.legend.title).is_some());
+    // The texture shows the view through the lab's display, whatever the display in force.
+    assert_eq!(
+        h.state().viewport.rgba().unwrap(),
+        raylab::display::Display::default().to_rgba8(&expected.image)
+    );
+    choose(&mut h, "View", "Shaded (the stage)");
+    settle(&mut h);
+    assert_eq!(*shown(&h).image, render(&cornell_box(), &settings(&h)));
+    assert_eq!(h.state().stats.legend, None);
 }

@@ -46,6 +46,9 @@ pub struct Viewport {
     options: egui::TextureOptions,
     /// Where the image was drawn last, in points.
     shown_rect: Option<egui::Rect>,
+    /// The inspector's pinned pixel, as a fraction of the image (set by the app each frame):
+    /// outlined on the image.
+    pub pinned: Option<egui::Rect>,
 }
 
 impl Viewport {
@@ -131,6 +134,26 @@ impl Viewport {
             .map(|m| rect.min + m * rect.size());
         if let Some(pos) = marker_pos {
             draw_light_marker(ui.painter(), pos);
+        }
+        if let Some(pinned) = self.pinned {
+            // The pixel's own square (at least a few points wide), in two contrasting strokes.
+            let min = rect.min + pinned.min.to_vec2() * rect.size();
+            let size = (pinned.size() * rect.size()).max(egui::vec2(5.0, 5.0));
+            let square =
+                egui::Rect::from_center_size(min + pinned.size() * rect.size() / 2.0, size);
+            let painter = ui.painter();
+            painter.rect_stroke(
+                square.expand(1.0),
+                0.0,
+                egui::Stroke::new(1.0, egui::Color32::BLACK),
+                egui::StrokeKind::Outside,
+            );
+            painter.rect_stroke(
+                square,
+                0.0,
+                egui::Stroke::new(1.0, egui::Color32::WHITE),
+                egui::StrokeKind::Outside,
+            );
         }
         // Where the button went down, not where the pointer is when the move counts as a
         // drag (a few points further on).
