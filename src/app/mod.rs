@@ -827,6 +827,7 @@ impl eframe::App for WorkbenchApp {
         if self.state.inspect_mode {
             egui::Panel::right("inspector")
                 .resizable(true)
+                .min_size(380.0)
                 .default_size(420.0)
                 .show(ui, |ui| {
                     let title = match self.state.pinned {
