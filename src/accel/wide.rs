@@ -134,6 +134,31 @@ pub fn real_triangles(index: &[u32]) -> u32 {
     index.iter().filter(|&&i| i != u32::MAX).count() as u32
 }
 
+/// What a traversal counts as it goes: nothing for rendering (`()`), its nodes and triangles
+/// for the BVH-cost view ([`TraversalCost`]). One traversal serves both.
+pub trait CountWork {
+    fn node(&mut self);
+    fn leaf(&mut self, index: &[u32]);
+}
+
+impl CountWork for () {
+    #[inline(always)]
+    fn node(&mut self) {}
+    #[inline(always)]
+    fn leaf(&mut self, _index: &[u32]) {}
+}
+
+impl CountWork for TraversalCost {
+    #[inline(always)]
+    fn node(&mut self) {
+        self.nodes += 1;
+    }
+    #[inline(always)]
+    fn leaf(&mut self, index: &[u32]) {
+        self.triangles += real_triangles(index);
+    }
+}
+
 /// An 8-wide BVH.
 #[derive(Clone, Debug)]
 pub struct Bvh8 {
@@ -236,24 +261,27 @@ impl Bvh8 {
         // A stack on the stack, as small as the tree allows (it is cleared for every ray).
         if self.max_stack <= STACK_SMALL {
             let mut stack = [(0u32, 0f32); STACK_SMALL];
-            self.closest_on(k, r, t_max, best, &mut stack)
+            self.closest_on(k, r, t_max, best, &mut stack, &mut ())
         } else if self.max_stack <= STACK_INLINE {
             let mut stack = [(0u32, 0f32); STACK_INLINE];
-            self.closest_on(k, r, t_max, best, &mut stack)
+            self.closest_on(k, r, t_max, best, &mut stack, &mut ())
         } else {
             let mut stack = vec![(0u32, 0f32); self.max_stack];
-            self.closest_on(k, r, t_max, best, &mut stack)
+            self.closest_on(k, r, t_max, best, &mut stack, &mut ())
         }
     }
 
+    /// The closest-hit traversal, counting its work into `count` (`()` counts nothing and
+    /// compiles away; a [`TraversalCost`] counts, for the BVH-cost view).
     #[inline(always)]
-    fn closest_on<K: Kernels>(
+    fn closest_on<K: Kernels, C: CountWork>(
         &self,
         k: K,
         r: &RayK,
         t_max: f32,
         best: Option<Hit>,
         stack: &mut [(u32, f32)],
+        count: &mut C,
     ) -> Option<Hit> {
         let (mut best_t, mut best_i, mut best_uv) = best
             .map_or((t_max, u32::MAX, (0.0, 0.0)), |h| {
@@ -264,6 +292,7 @@ impl Bvh8 {
         'traversal: loop {
             if item & LEAF != 0 {
                 let p = &self.packets[(item & !LEAF) as usize];
+                count.leaf(&p.index);
                 // Once there is a hit, candidates at its very distance count too (ties).
                 let limit = if best_i == u32::MAX {
                     t_max
@@ -280,6 +309,7 @@ impl Bvh8 {
                 }
             } else {
                 let node = &self.nodes[item as usize];
+                count.node();
                 let (mut mask, t) = k.boxes(node, r, best_t * BOX_T_SLACK);
                 if mask != 0 && mask & (mask - 1) == 0 {
                     // One child hit (the common case): go straight down.
@@ -322,10 +352,10 @@ impl Bvh8 {
         })
     }
 
-    /// [`Bvh8::closest`], counting its work into `cost`: the same loop, line for line, with
-    /// the same kernels `k` (so the same box culling, bit for bit), plus two counters. It is
-    /// kept apart so that the fast traversal stays exactly as measured (PERFORMANCE.md); the
-    /// tests check that both return the same hit on every ray.
+    /// [`Bvh8::closest`], counting its work into `cost`: the same traversal (`closest_on`)
+    /// with the same kernels `k` (so the same box culling, bit for bit) and a counter that
+    /// counts; the fast one is given `()`, which counts nothing and compiles away. The tests
+    /// check that both return the same hit on every ray.
     ///
     /// What is counted, and why:
     /// * a node each time a wide node's eight child boxes are tested (one kernel call; the
@@ -349,69 +379,7 @@ impl Bvh8 {
             return best;
         }
         let mut stack = vec![(0u32, 0f32); self.max_stack];
-        let (mut best_t, mut best_i, mut best_uv) = best
-            .map_or((t_max, u32::MAX, (0.0, 0.0)), |h| {
-                (h.t, h.index, (h.u, h.v))
-            });
-        let mut sp = 0;
-        let mut item = self.root;
-        'traversal: loop {
-            if item & LEAF != 0 {
-                let p = &self.packets[(item & !LEAF) as usize];
-                cost.triangles += real_triangles(&p.index);
-                let limit = if best_i == u32::MAX {
-                    t_max
-                } else {
-                    best_t.next_up()
-                };
-                if let Some(h) = k.nearest(p, r, limit) {
-                    let i = p.index[h.lane];
-                    if h.t < best_t || i < best_i {
-                        best_t = h.t;
-                        best_i = i;
-                        best_uv = (h.u, h.v);
-                    }
-                }
-            } else {
-                let node = &self.nodes[item as usize];
-                cost.nodes += 1;
-                let (mut mask, t) = k.boxes(node, r, best_t * BOX_T_SLACK);
-                if mask != 0 && mask & (mask - 1) == 0 {
-                    item = node.child[mask.trailing_zeros() as usize];
-                    continue;
-                }
-                let base = sp;
-                while mask != 0 {
-                    let slot = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let entry = (node.child[slot], t[slot]);
-                    let mut j = sp;
-                    while j > base && stack[j - 1].1 < entry.1 {
-                        stack[j] = stack[j - 1];
-                        j -= 1;
-                    }
-                    stack[j] = entry;
-                    sp += 1;
-                }
-            }
-            loop {
-                if sp == 0 {
-                    break 'traversal;
-                }
-                sp -= 1;
-                let (next, t_near) = stack[sp];
-                if t_near <= best_t * BOX_T_SLACK {
-                    item = next;
-                    break;
-                }
-            }
-        }
-        (best_i != u32::MAX).then_some(Hit {
-            index: best_i,
-            t: best_t,
-            u: best_uv.0,
-            v: best_uv.1,
-        })
+        self.closest_on(k, r, t_max, best, &mut stack, cost)
     }
 
     /// Whether any triangle is hit with `0 ≤ t < t_max`; stops at the first.
