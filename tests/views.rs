@@ -9,10 +9,9 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 use raylab::accel::{Accel, AccelKind, Hit, Isa, TraversalCost};
-use raylab::geometry::{Ray, Triangle};
+use raylab::geometry::Ray;
 use raylab::light::in_shadow;
 use raylab::render::{Cancelled, render};
-use raylab::sampling::Rng;
 use raylab::scene::{Scene, SceneChoice, cornell_box};
 use raylab::view::{
     DEPTH_NO_HIT, SHADOW_BLOCKED, SHADOW_FACES_AWAY, SHADOW_LIT, ShadowState, View, ViewImage,
@@ -20,6 +19,7 @@ use raylab::view::{
 };
 use raylab::{RenderSettings, Shading, Stage};
 
+use common::rays::rays;
 use common::{raylab, stderr};
 
 fn settings(width: u32, height: u32) -> RenderSettings {
@@ -45,66 +45,6 @@ fn bunny() -> Scene {
 }
 
 // ---- The counting traversal equals the real one. ----
-
-fn random_dir(rng: &mut Rng) -> Vec3 {
-    loop {
-        let d = Vec3::new(
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
-        );
-        if d.length_squared() > 1e-4 && d.length_squared() <= 1.0 {
-            return d;
-        }
-    }
-}
-
-/// The random rays of tests/bvh.rs (a copy: test files share no code but `common`): from
-/// inside and around the scene's bounds, through random pixels of the default camera, and
-/// axis-aligned (zero direction components); a third without a limit, the others with one.
-fn rays(triangles: &[Triangle], count: usize, seed: u64) -> Vec<(Ray, f32)> {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for t in triangles {
-        for p in [t.v0, t.v1, t.v2] {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-    }
-    let margin = 0.1 * (hi - lo).max_element();
-    let (lo, hi) = (lo - margin, hi + margin);
-    let mut rng = Rng::new(seed);
-    let camera = raylab::Camera::default_for(512, 512);
-    let point = |rng: &mut Rng| {
-        Vec3::new(
-            rng.uniform(lo.x, hi.x),
-            rng.uniform(lo.y, hi.y),
-            rng.uniform(lo.z, hi.z),
-        )
-    };
-    (0..count)
-        .map(|i| {
-            let t_max = if i % 3 == 0 {
-                f32::INFINITY
-            } else {
-                rng.uniform(0.0, 2.0 * (hi - lo).max_element())
-            };
-            let ray = match i % 10 {
-                0..=5 => Ray::new(point(&mut rng), random_dir(&mut rng)),
-                6..=8 => camera.primary_ray(rng.uniform(0.0, 512.0), rng.uniform(0.0, 512.0)),
-                _ => {
-                    let o = point(&mut rng);
-                    let axis = (rng.next_u32() % 6) as usize;
-                    Ray::new(
-                        o,
-                        [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z][axis],
-                    )
-                }
-            };
-            (ray, t_max)
-        })
-        .collect()
-}
 
 /// On every kernel set, the scene's own structure (and the wide BVH, the binary BVH too, over
 /// any scene): `closest_counting`'s hit is `closest`'s, bit for bit, and the counts are

@@ -2,6 +2,8 @@
 // Each test binary that includes this module uses only some of it.
 #![allow(dead_code)]
 
+pub mod rays;
+
 use std::ffi::OsString;
 use std::path::Path;
 use std::process::{Command, Output};
