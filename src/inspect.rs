@@ -25,7 +25,6 @@
 //! Units: lengths in scene units (the box is 2 units wide), the light's power P in watts, D in
 //! watts per unit area. `·` stands for the lab's element-wise product `∗`.
 
-use std::f32::consts::PI;
 use std::fmt::Write as _;
 
 use glam::{Vec2, Vec3};
@@ -34,7 +33,7 @@ use serde::Serialize;
 use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Recorder, Stage, Tracer, path};
 use crate::intersect::Intersection;
-use crate::light::{MIN_LIGHT_DISTANCE, PointLight};
+use crate::light::PointLight;
 use crate::material::{Material, MaterialKind, Scatter};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -425,8 +424,8 @@ fn kind_name(kind: &MaterialKind) -> &'static str {
     }
 }
 
-/// The parts of equation 27 at `position` with `normal`, by [`direct_light`](crate::light::direct_light)'s own expression
-/// (the tracer's D is `d` exactly: tested), so that the inspector can show r, r̂·n̂ and 4πr².
+/// The parts of equation 27 at `position` with `normal`: the tracer's own
+/// [`DirectLight`](crate::light::DirectLight), whose `d` is the D the tracer used (tested).
 struct DParts {
     to_light: Vec3,
     distance: f32,
@@ -438,22 +437,14 @@ struct DParts {
 
 impl DParts {
     fn of(light: &PointLight, position: Vec3, normal: Vec3) -> Self {
-        let to_light = light.position - position;
-        let r2 = to_light.length_squared();
-        let min_r2 = MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE;
-        let (r2, cos) = if r2 < min_r2 {
-            (min_r2, normal.length())
-        } else {
-            (r2, (to_light / r2.sqrt()).dot(normal))
-        };
-        let four_pi_r2 = 4.0 * PI * r2;
+        let parts = crate::light::DirectLight::at(light, position, normal);
         Self {
-            to_light,
-            distance: r2.sqrt(),
-            r2,
-            cos,
-            four_pi_r2,
-            d: light.channel_power() * cos.max(0.0) / four_pi_r2,
+            to_light: parts.to_light,
+            distance: parts.r2.sqrt(),
+            r2: parts.r2,
+            cos: parts.cos,
+            four_pi_r2: parts.four_pi_r2,
+            d: parts.d,
         }
     }
 }
@@ -1268,7 +1259,7 @@ mod tests {
         assert_eq!(parts.d, direct_light(&light, p, n));
         // A light on the surface: the lab's guard, straight above at the least distance.
         let on = DParts::of(&light, light.position, n);
-        assert_eq!(on.distance, MIN_LIGHT_DISTANCE);
+        assert_eq!(on.distance, crate::light::MIN_LIGHT_DISTANCE);
         assert_eq!(on.d, direct_light(&light, light.position, n));
     }
 

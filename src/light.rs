@@ -139,17 +139,47 @@ impl From<LightFields> for PointLight {
 /// where `r` is the distance to the light and `r̂` the unit direction toward it. A point facing
 /// away from the light (or a zero normal) gets 0. For `r` below [`MIN_LIGHT_DISTANCE`] the
 /// light is treated as that far away and straight above the surface.
-#[inline]
+#[inline(always)]
 pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
-    let to_light = light.position - position;
-    let r2 = to_light.length_squared();
-    let min_r2 = MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE;
-    let (r2, cos) = if r2 < min_r2 {
-        (min_r2, normal.length())
-    } else {
-        (r2, (to_light / r2.sqrt()).dot(normal))
-    };
-    light.channel_power() * cos.max(0.0) / (4.0 * PI * r2)
+    DirectLight::at(light, position, normal).d
+}
+
+/// Equation 27 with its parts, as [`direct_light`] computes them (it is this, keeping only
+/// `d`): the pixel inspector shows r, r̂·n̂ and 4πr² from here.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectLight {
+    /// r, from the surface point to the light.
+    pub to_light: Vec3,
+    /// r², or [`MIN_LIGHT_DISTANCE`]² for a light closer than that.
+    pub r2: f32,
+    /// r̂·n̂ (not yet clamped at 0).
+    pub cos: f32,
+    /// 4πr².
+    pub four_pi_r2: f32,
+    /// D.
+    pub d: Vec3,
+}
+
+impl DirectLight {
+    #[inline(always)]
+    pub fn at(light: &PointLight, position: Vec3, normal: Vec3) -> Self {
+        let to_light = light.position - position;
+        let r2 = to_light.length_squared();
+        let min_r2 = MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE;
+        let (r2, cos) = if r2 < min_r2 {
+            (min_r2, normal.length())
+        } else {
+            (r2, (to_light / r2.sqrt()).dot(normal))
+        };
+        let four_pi_r2 = 4.0 * PI * r2;
+        Self {
+            to_light,
+            r2,
+            cos,
+            four_pi_r2,
+            d: light.channel_power() * cos.max(0.0) / four_pi_r2,
+        }
+    }
 }
 
 /// The shadow ray from a surface point toward the light, and the distance to stop at (lab
