@@ -348,7 +348,8 @@ fn normals_view(settings: &RenderSettings, normals: Vec<Option<Vec3>>) -> ViewIm
             title: "Normals".into(),
             lines: vec![
                 format!("the shading normal n at the first hit, {smooth}"),
-                "colour (n + 1)/2: x → red, y → green, z → blue; −1 → 0, 0 → ½, +1 → 1".into(),
+                "colour (n + 1)/2: x as red, y as green, z as blue; −1 is 0, 0 is ½, +1 is full"
+                    .into(),
                 "y points down (the lab's axes): a floor facing up, n = (0, −1, 0), is purple \
                  (½, 0, ½)"
                     .into(),
@@ -596,7 +597,7 @@ fn from_film(
 }
 
 /// The heat maps' colour scale, in words, before its maximum.
-pub const HEAT_RAMP: &str = "black 0 → blue → magenta → yellow → white at the maximum,";
+pub const HEAT_RAMP: &str = "black at 0, then blue, magenta, yellow, and white at the maximum,";
 
 /// The heat maps' colour for `x` in [0, 1] (clamped; NaN is black): black → blue → magenta →
 /// yellow → white at 0, ¼, ½, ¾, 1, linear in between. Its brightness rises all the way

@@ -435,7 +435,7 @@ pub fn map_ui(ui: &mut egui::Ui, settings: &RenderSettings) {
         egui::Stroke::new(1.0, egui::Color32::from_gray(30)),
     );
     response.on_hover_text(format!(
-        "Top view: x →, z ↑. Camera at ({:.2}, {:.2}, {:.2}), yaw {:.0}°; light at ({:.2}, \
+        "Top view: x to the right, z up. Camera at ({:.2}, {:.2}, {:.2}), yaw {:.0}°; light at ({:.2}, \
          {:.2}, {:.2}). The box's open front is the faint side.",
         camera.position.x,
         camera.position.y,
