@@ -418,7 +418,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     image.save_with(&args.out, &display)?;
 
     let c = &settings.camera;
-    println!(
+    let summary = format!(
         "rendered {} {}×{} (field of view {:.1}° × {:.1}°, {}{}, {} spp) in {:.1} ms on {} threads → {}",
         choice,
         c.width,
@@ -435,13 +435,24 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         pool.current_num_threads(),
         args.out.display()
     );
+    let mut text = summary + "\n";
     if let Some(legend) = legend {
-        println!("{} view:", legend.title);
+        text += &format!("{} view:\n", legend.title);
         for line in &legend.lines {
-            println!("  {line}");
+            text += &format!("  {line}\n");
         }
     }
-    Ok(())
+    // The image is written: a reader that went away (`| head`, `| true`) is no failure, and
+    // nothing may panic on a stdout that cannot be written (`> /dev/full`).
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(anyhow::anyhow!(
+            "wrote '{}', but could not print the summary: {e}",
+            args.out.display()
+        )),
+    }
 }
 
 fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {

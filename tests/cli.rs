@@ -364,3 +364,42 @@ fn the_extensions_on_the_command_line() {
         assert!(!out_path.exists());
     }
 }
+
+/// Issue 10, fault 2: a closed or full stdout after the image is written is not a panic. A
+/// reader that went away (`| true`) is no failure at all; a full device (`> /dev/full`) is
+/// reported in one line, the image kept.
+#[test]
+fn a_closed_or_full_stdout_does_not_panic() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("p.png");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(["render", "--width", "64", "--height", "64", "--out"])
+        .arg(&png)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the reading end before the render is done: its summary meets a broken pipe.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stderr(&out).is_empty(), "{}", stderr(&out));
+    assert!(png.exists());
+
+    if let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") {
+        let png = dir.path().join("q.png");
+        let out = Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(["render", "--width", "64", "--height", "64", "--out"])
+            .arg(&png)
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        let e = stderr(&out);
+        assert_eq!(e.lines().count(), 1, "{e}");
+        assert!(e.contains("could not print the summary"), "{e}");
+        assert!(!e.contains("panicked"), "{e}");
+        assert!(png.exists());
+    }
+}
