@@ -385,6 +385,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
+    raylab::film::check_writable(&args.out)?;
     let settings = args.options.resolve_settings()?;
     settings.validate()?;
     if args.view == raylab::view::View::Variance && settings.samples_per_pixel < 2 {

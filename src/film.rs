@@ -145,15 +145,48 @@ pub enum SaveError {
     UnknownExtension(PathBuf),
     #[error("could not encode '{}': {message}", path.display())]
     Encode { path: PathBuf, message: String },
-    #[error("could not write '{}': {source}", path.display())]
-    Write { path: PathBuf, source: io::Error },
+    /// The OS's reason is in the message and is not also the error's source, so a chain of
+    /// errors printed whole says it once.
+    #[error("could not write '{}': {reason}", path.display())]
+    Write { path: PathBuf, reason: io::Error },
+}
+
+/// Checks, before any work, that an image could be written to `path`: its format is known,
+/// it does not name a folder, and a file can be created in its folder (created and removed
+/// again). A render that could not be saved is refused before it starts.
+pub fn check_writable(path: &Path) -> Result<(), SaveError> {
+    OutputFormat::from_path(path)?;
+    let fail = |reason| SaveError::Write {
+        path: path.to_owned(),
+        reason,
+    };
+    if path.is_dir() {
+        return Err(fail(io::Error::new(
+            io::ErrorKind::IsADirectory,
+            "it is a folder",
+        )));
+    }
+    let name = path
+        .file_name()
+        .ok_or_else(|| fail(io::Error::new(io::ErrorKind::InvalidInput, "no file name")))?;
+    let mut probe_name = std::ffi::OsString::from(".");
+    probe_name.push(name);
+    probe_name.push(format!(".{}.check", std::process::id()));
+    let probe = path.with_file_name(probe_name);
+    fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(fail)?;
+    let _ = fs::remove_file(&probe);
+    Ok(())
 }
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it to `path`.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
-    let wrap = |source| SaveError::Write {
+    let wrap = |reason| SaveError::Write {
         path: path.to_owned(),
-        source,
+        reason,
     };
     let name = path
         .file_name()

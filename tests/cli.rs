@@ -403,3 +403,43 @@ fn a_closed_or_full_stdout_does_not_panic() {
         assert!(png.exists());
     }
 }
+
+/// Issue 10, fault 7: a destination that cannot be written is refused before the render (a
+/// request that would take a minute fails at once), a folder named as `--out` likewise, the
+/// OS's reason is said once, and no probe or temporary file is left behind.
+#[test]
+fn an_unwritable_destination_is_refused_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("looks-like.png");
+    std::fs::create_dir(&folder).unwrap();
+    let start = std::time::Instant::now();
+    let out = raylab(&[
+        "render",
+        "--out",
+        folder.to_str().unwrap(),
+        "--width",
+        "8192",
+        "--height",
+        "8192",
+        "--samples",
+        "64",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let e = stderr(&out);
+    assert_eq!(e.lines().count(), 1, "{e}");
+    assert!(e.contains("it is a folder"), "{e}");
+    assert!(
+        start.elapsed() < std::time::Duration::from_secs(10),
+        "it rendered first"
+    );
+    assert_eq!(files_in(dir.path()).len(), 1, "{:?}", files_in(dir.path()));
+
+    // /sys refuses new files even to root: the reason once, not twice.
+    if Path::new("/sys").is_dir() {
+        let out = raylab(&["render", "--out", "/sys/raylab-test.png", "--width", "8192"]);
+        assert_eq!(out.status.code(), Some(1));
+        let e = stderr(&out);
+        assert_eq!(e.lines().count(), 1, "{e}");
+        assert_eq!(e.matches("os error").count(), 1, "{e}");
+    }
+}
