@@ -417,6 +417,10 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let elapsed = start.elapsed();
     image.save_with(&args.out, &display)?;
+    if let Some(note) = raylab::render::camera_sees_nothing(&scene, &settings) {
+        // A black image the camera is to blame for: say so (the image is written all the same).
+        let _ = writeln!(std::io::stderr(), "note: {note}");
+    }
 
     let c = &settings.camera;
     let summary = format!(

@@ -93,6 +93,47 @@ pub fn focus_depth(scene: &Scene, settings: &RenderSettings, px: f32, py: f32) -
     Some(camera.depth_of(hit.position)).filter(|d| *d > 0.0 && d.is_finite())
 }
 
+/// Why the camera sees nothing at all, if it does not: a note for a uniformly black image that
+/// the camera, not the light, is to blame for. The pixel centres of a 16 × 16 grid over the
+/// image are traced; if none hits a surface, the camera is outside the scene looking away from
+/// it, or beyond it.
+pub fn camera_sees_nothing(scene: &Scene, settings: &RenderSettings) -> Option<String> {
+    let camera = &settings.camera;
+    const GRID: u32 = 16;
+    let any_hit = (0..GRID).any(|j| {
+        (0..GRID).any(|i| {
+            let px = (i as f32 + 0.5) / GRID as f32 * camera.width as f32;
+            let py = (j as f32 + 0.5) / GRID as f32 * camera.height as f32;
+            let ray = camera.primary_ray(px, py);
+            scene.closest_intersection(&ray, f32::INFINITY).is_some()
+        })
+    });
+    if any_hit {
+        return None;
+    }
+    let (lo, hi) = scene.triangles.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), t| {
+            (
+                lo.min(t.v0.min(t.v1.min(t.v2))),
+                hi.max(t.v0.max(t.v1.max(t.v2))),
+            )
+        },
+    );
+    let p = camera.position;
+    let inside = p.cmpge(lo).all() && p.cmple(hi).all();
+    Some(if inside {
+        "the camera sees nothing: every ray leaves the scene (the box's open front is behind it)"
+            .to_owned()
+    } else {
+        format!(
+            "the camera sees nothing: it is outside the box, at ({:.2}, {:.2}, {:.2}), looking \
+             away from it",
+            p.x, p.y, p.z
+        )
+    })
+}
+
 /// One sample per pixel (sample index `sample`) of the whole image, or [`Cancelled`] if
 /// `cancelled()` turned true before the last row was done.
 pub fn render_pass(
@@ -230,5 +271,24 @@ mod tests {
         away.camera.position = glam::Vec3::new(0.0, 0.0, -3.0);
         away.camera.yaw = std::f32::consts::PI;
         assert_eq!(focus_depth(&scene, &away, 32.0, 24.0), None);
+    }
+
+    /// The default view sees the box; behind the box (z = 2, looking on along +z) or turned
+    /// away from its open front, it sees nothing, and says why.
+    #[test]
+    fn a_camera_that_sees_nothing_says_so() {
+        let scene = cornell_box();
+        assert_eq!(camera_sees_nothing(&scene, &small()), None);
+        let mut behind = small();
+        behind.camera.position = glam::Vec3::new(0.0, 0.0, 2.0);
+        let note = camera_sees_nothing(&scene, &behind).unwrap();
+        assert!(note.contains("outside the box"), "{note}");
+        let mut away = small();
+        away.camera.yaw = std::f32::consts::PI;
+        assert!(
+            camera_sees_nothing(&scene, &away)
+                .unwrap()
+                .contains("outside the box")
+        );
     }
 }

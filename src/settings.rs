@@ -18,6 +18,11 @@ use crate::view::View;
 /// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 
+/// The longest focal length, in pixels: a field of view of a 10,000th of a degree on a
+/// 16384-pixel image. Far beyond it, the squared length of a primary ray's direction
+/// overflows `f32` and every ray is lost (a black image).
+pub const MAX_FOCAL_LENGTH: f32 = 1e7;
+
 /// The largest exposure, either way, in stops.
 pub const MAX_EXPOSURE: f32 = 20.0;
 
@@ -99,6 +104,10 @@ impl RenderSettings {
         check_finite("focal length", c.focal_length)?;
         if c.focal_length <= 0.0 {
             return Err(err("focal length", c.focal_length, "must be > 0"));
+        }
+        if c.focal_length > MAX_FOCAL_LENGTH {
+            let f = c.focal_length;
+            return Err(err("focal length", f, "must be at most 1e7 px"));
         }
         check_vec("light position", self.light.position)?;
         check_finite("aperture", c.aperture)?;
@@ -218,6 +227,9 @@ mod tests {
         assert_eq!(s.validate().unwrap_err().name, "height");
         let mut s = RenderSettings::default();
         s.camera.focal_length = -1.0;
+        assert_eq!(s.validate().unwrap_err().name, "focal length");
+        // 2e19 px would overflow the rays' squared length: refused, not a black image.
+        s.camera.focal_length = 2e19;
         assert_eq!(s.validate().unwrap_err().name, "focal length");
         let mut s = RenderSettings::default();
         s.light.position.y = f32::NAN;

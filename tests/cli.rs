@@ -443,3 +443,27 @@ fn an_unwritable_destination_is_refused_before_rendering() {
         assert_eq!(e.matches("os error").count(), 1, "{e}");
     }
 }
+
+/// Issue 10, fault 9: a black image the camera is to blame for says so on stderr, and a focal
+/// length so long that every ray would be lost is refused.
+#[test]
+fn a_camera_that_sees_nothing_is_noted_and_absurd_focal_lengths_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("black.png");
+    let out = raylab(&[
+        "render",
+        "--out",
+        png.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--camera",
+        "0,0,2",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("note: the camera sees nothing: it is outside the box"));
+    let out = raylab(&["render", "--out", png.to_str().unwrap(), "--focal", "2e19"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("focal length"), "{}", stderr(&out));
+}

@@ -84,6 +84,8 @@ pub enum Cause {
     InvalidSettings,
     /// The screenshot folder did not exist.
     MissingFolder(std::path::PathBuf),
+    /// The camera sees nothing (a notice, taken down by the next render that sees something).
+    CameraSeesNothing,
 }
 
 /// The frame on screen, without its display pixels (those went to the texture).
@@ -254,6 +256,7 @@ impl WorkbenchApp {
         let fixed = match self.status.as_ref().and_then(|s| s.cause.as_ref()) {
             Some(Cause::InvalidSettings) => self.state.settings.validate().is_ok(),
             Some(Cause::MissingFolder(_)) => self.state.screenshot_folder.is_dir(),
+            Some(Cause::CameraSeesNothing) => false,
             None => false,
         };
         if fixed {
@@ -370,6 +373,27 @@ impl WorkbenchApp {
         }
         match restarted {
             Some(Ok(generation)) => {
+                // A black image the camera is to blame for says so; the note goes with the
+                // first view that sees something again.
+                let note = raylab::render::camera_sees_nothing(&self.scene, &self.state.settings);
+                let noted = self
+                    .status
+                    .as_ref()
+                    .is_some_and(|s| s.cause == Some(Cause::CameraSeesNothing));
+                match note {
+                    Some(text) => {
+                        self.status = Some(Status {
+                            text: format!("The image is black: {text}"),
+                            kind: StatusKind::Notice,
+                            cause: Some(Cause::CameraSeesNothing),
+                        });
+                    }
+                    None if noted => self.status = None,
+                    None => {}
+                }
+                let Some(controller) = &mut self.controller else {
+                    return;
+                };
                 self.submitted_generation = generation;
                 self.change = Some((Instant::now(), 0));
                 self.stats.threads = controller.threads();

@@ -1268,3 +1268,21 @@ fn the_view_selector_shows_a_debug_view_with_its_legend() {
     assert_eq!(*shown(&h).image, render(&cornell_box(), &settings(&h)));
     assert_eq!(h.state().stats.legend, None);
 }
+
+/// Issue 10, fault 9: with the camera behind the box (z = 2) the image is black, and the
+/// status line says why; back in front of the box, the note goes.
+#[test]
+fn a_camera_that_sees_nothing_says_why() {
+    let mut h = harness(small_state());
+    h.get_by_role_and_label(Role::Slider, "Camera z")
+        .set_value_accesskit(2.0);
+    settle(&mut h);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Notice, "{text}");
+    assert!(text.contains("outside the box"), "{text}");
+    assert!(shown(&h).image.pixels.iter().all(|p| *p == Vec3::ZERO));
+    h.get_by_role_and_label(Role::Button, "Reset camera")
+        .click();
+    settle(&mut h);
+    assert!(h.state().status.is_none(), "{:?}", h.state().status);
+}
