@@ -41,6 +41,16 @@ use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsError};
 use crate::view::{Legend, View, render_view};
 
+/// The display a frame's pixels are made with: the one in force, but the lab's for a debug
+/// view (one with a legend), whose colours must be its legend's.
+fn shown_with(display: Display, legend: Option<&Legend>) -> Display {
+    if legend.is_some() {
+        Display::default()
+    } else {
+        display
+    }
+}
+
 /// The preview's size divisor: a 1024² image previews at 128².
 pub const PREVIEW_DIVISOR: u32 = 8;
 
@@ -471,14 +481,9 @@ impl Worker {
         if same_display(&last.display, &display) {
             return;
         }
-        // A debug view keeps the lab's display: its colours are its legend's.
-        let shown_with = if last.legend.is_some() {
-            Display::default()
-        } else {
-            display
-        };
+        let shown = shown_with(display, last.legend.as_ref());
         let frame = Frame {
-            rgba: self.pool.install(|| shown_with.to_rgba8(&last.image)),
+            rgba: self.pool.install(|| shown.to_rgba8(&last.image)),
             display,
             ..last.clone()
         };
@@ -527,11 +532,8 @@ impl Worker {
             };
             let ms = start.elapsed().as_secs_f64() * 1e3;
             let rays = u64::from(width) * u64::from(height);
-            let mut frame = self.frame(job, view.image, target, false, ms, rays, None);
-            frame.legend = Some(view.legend);
-            frame.rgba = self
-                .pool
-                .install(|| Display::default().to_rgba8(&frame.image));
+            let legend = Some(view.legend);
+            let frame = self.frame(job, view.image, target, false, ms, rays, None, legend);
             return self.publish_and_keep(frame);
         }
 
@@ -542,7 +544,7 @@ impl Worker {
                 return false;
             };
             let rays = u64::from(w) * u64::from(h);
-            let frame = self.frame(job, image, 0, true, pass_ms, rays, None);
+            let frame = self.frame(job, image, 0, true, pass_ms, rays, None, None);
             if !self.publish_and_keep(frame) {
                 return false;
             }
@@ -585,13 +587,7 @@ impl Worker {
             }
             let rays = u64::from(width) * u64::from(height);
             let noise = film.noise();
-            let mut frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise);
-            if legend.is_some() {
-                frame.rgba = self
-                    .pool
-                    .install(|| Display::default().to_rgba8(&frame.image));
-                frame.legend = legend;
-            }
+            let frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise, legend);
             if !self.publish_and_keep(frame) {
                 return false;
             }
@@ -636,9 +632,11 @@ impl Worker {
         pass_ms: f64,
         rays: u64,
         noise: Option<NoiseEstimate>,
+        legend: Option<Legend>,
     ) -> Frame {
         let display = self.shared.display();
-        let rgba = self.pool.install(|| display.to_rgba8(&image));
+        let shown = shown_with(display, legend.as_ref());
+        let rgba = self.pool.install(|| shown.to_rgba8(&image));
         Frame {
             generation: job.generation,
             settings: job.settings.clone(),
@@ -656,7 +654,7 @@ impl Worker {
             },
             since_submit_ms: job.submitted.elapsed().as_secs_f64() * 1e3,
             noise,
-            legend: None,
+            legend,
         }
     }
 
