@@ -27,7 +27,7 @@ use raylab::scene::Scene;
 use raylab::{Camera, Image, RenderSettings, Shading};
 
 use super::stats::Stats;
-use super::viewport::NEAREST_FROM_SCALE;
+use super::viewport::filter_for;
 use super::{Command, Shown, StatusKind, WorkbenchApp};
 
 /// A drag that starts this close to the divider, in points, moves it.
@@ -87,12 +87,7 @@ impl Texture {
     /// does for B, so both sides of the divider show pixels alike.
     fn id_for(&mut self, rect: egui::Rect, pixels_per_point: f32) -> Option<egui::TextureId> {
         let (handle, pixels) = (self.handle.as_mut()?, self.pixels.as_ref()?);
-        let scale = rect.width() * pixels_per_point / (pixels.size[0] as f32).max(1.0);
-        let wanted = if scale >= NEAREST_FROM_SCALE {
-            egui::TextureOptions::NEAREST
-        } else {
-            egui::TextureOptions::LINEAR
-        };
+        let wanted = filter_for(rect, pixels_per_point, pixels.size[0]);
         if wanted != self.options {
             self.options = wanted;
             handle.set(Arc::clone(pixels), wanted);

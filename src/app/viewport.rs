@@ -11,7 +11,7 @@ use eframe::egui;
 use super::compare::Compare;
 
 /// Magnification from which pixels are shown as blocks (nearest filtering).
-pub const NEAREST_FROM_SCALE: f32 = 2.0;
+const NEAREST_FROM_SCALE: f32 = 2.0;
 
 /// What the pointer did on the image this frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -108,12 +108,7 @@ impl Viewport {
         self.shown_rect = Some(rect);
 
         // Pick the filter for the scale it is shown at; re-upload only when that changes.
-        let scale = rect.width() * ui.ctx().pixels_per_point() / size.x.max(1.0);
-        let wanted = if scale >= NEAREST_FROM_SCALE {
-            egui::TextureOptions::NEAREST
-        } else {
-            egui::TextureOptions::LINEAR
-        };
+        let wanted = filter_for(rect, ui.ctx().pixels_per_point(), pixels.size[0]);
         if wanted != self.options {
             self.options = wanted;
             texture.set(Arc::clone(pixels), wanted);
@@ -217,6 +212,17 @@ fn draw_light_marker(painter: &egui::Painter, pos: egui::Pos2) {
         egui::Color32::from_rgb(255, 220, 60),
         rim,
     );
+}
+
+/// The texture filter for an image `width` pixels wide shown in `rect`: nearest from
+/// [`NEAREST_FROM_SCALE`] times magnification on (honest pixels), linear below.
+pub fn filter_for(rect: egui::Rect, pixels_per_point: f32, width: usize) -> egui::TextureOptions {
+    let scale = rect.width() * pixels_per_point / (width as f32).max(1.0);
+    if scale >= NEAREST_FROM_SCALE {
+        egui::TextureOptions::NEAREST
+    } else {
+        egui::TextureOptions::LINEAR
+    }
 }
 
 /// The largest rect of `image`'s aspect that fits in `available`, centred.
