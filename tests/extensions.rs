@@ -4,27 +4,15 @@
 //! Each extension is off by default (no texture, light radius 0, aperture 0, white light), and
 //! then the lab's images are unchanged: the stage tests (tests/stages.rs) keep passing.
 
+mod common;
+
+use common::{bits, settings};
 use glam::Vec3;
 use raylab::geometry::Triangle;
 use raylab::material::{PRESET_TEXTURE_SCALE, TexturePreset};
 use raylab::render::render;
 use raylab::scene::{Scene, SceneChoice, cornell_box};
-use raylab::{Camera, Image, Material, RenderSettings, Shading, Stage};
-
-fn settings(stage: Stage, side: u32) -> RenderSettings {
-    let mut s = RenderSettings::default();
-    s.camera = s.camera.with_resolution(side, side);
-    s.shading = Shading::for_stage(stage);
-    s
-}
-
-fn bits(image: &Image) -> Vec<[u32; 3]> {
-    image
-        .pixels
-        .iter()
-        .map(|p| p.to_array().map(f32::to_bits))
-        .collect()
-}
+use raylab::{Camera, Image, Material, RenderSettings, Stage};
 
 /// The checkerboard floor: every pixel that sees the floor shows the colour of the square its
 /// hit falls in, computed by hand from the hit position. The floor is the plane y = 1; its

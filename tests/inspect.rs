@@ -6,21 +6,14 @@ mod common;
 
 use std::f32::consts::PI;
 
-use common::{raylab, stderr};
+use common::{raylab, settings, stderr};
 use glam::Vec3;
 use raylab::inspect::{InspectError, Inspection, ShadedHit, inspect_pixel};
 use raylab::light::direct_light;
 use raylab::material::TexturePreset;
 use raylab::render::{render, trace_pixel};
 use raylab::scene::{Scene, SceneChoice, cornell_box};
-use raylab::{MaterialPreset, RenderSettings, Shading, Stage};
-
-fn settings(stage: Stage, side: u32) -> RenderSettings {
-    let mut s = RenderSettings::default();
-    s.camera = s.camera.with_resolution(side, side);
-    s.shading = Shading::for_stage(stage);
-    s
-}
+use raylab::{MaterialPreset, RenderSettings, Stage};
 
 fn bits(v: Vec3) -> [u32; 3] {
     v.to_array().map(f32::to_bits)

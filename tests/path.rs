@@ -5,28 +5,16 @@
 //! energy gives; bounces only ever add light; two ways of sampling the hemisphere agree; the
 //! image does not depend on the thread count.
 
+mod common;
+
+use common::{bits, settings};
 use glam::Vec3;
 use raylab::geometry::{Ray, Triangle};
 use raylab::integrator::Tracer;
 use raylab::render::{render, render_pass, trace_pixel};
 use raylab::sampling::{Rng, cosine_hemisphere, orthonormal_basis, uniform_hemisphere};
 use raylab::scene::{Scene, cornell_box};
-use raylab::{Material, MaterialPreset, PointLight, RenderSettings, Shading, Stage};
-
-fn settings(stage: Stage, side: u32) -> RenderSettings {
-    let mut s = RenderSettings::default();
-    s.camera = s.camera.with_resolution(side, side);
-    s.shading = Shading::for_stage(stage);
-    s
-}
-
-fn bits(image: &raylab::Image) -> Vec<[u32; 3]> {
-    image
-        .pixels
-        .iter()
-        .map(|p| p.to_array().map(f32::to_bits))
-        .collect()
-}
+use raylab::{Material, MaterialPreset, PointLight, Stage};
 
 /// With 0 bounces a path is the camera ray and the lab's direct term: the `shadows` stage
 /// (figure 6), bit for bit, at the pixel centres (sample 0).

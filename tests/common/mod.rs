@@ -27,3 +27,21 @@ pub fn files_in(dir: &Path) -> Vec<OsString> {
         .map(|e| e.expect("a folder entry").file_name())
         .collect()
 }
+
+/// The default settings (figure 7's scene, light and camera) at `side × side` with `stage` and
+/// its figure's switches: what the image tests start from.
+pub fn settings(stage: raylab::Stage, side: u32) -> raylab::RenderSettings {
+    let mut s = raylab::RenderSettings::default();
+    s.camera = s.camera.with_resolution(side, side);
+    s.shading = raylab::Shading::for_stage(stage);
+    s
+}
+
+/// An image's pixels as bits, to compare images exactly.
+pub fn bits(image: &raylab::Image) -> Vec<[u32; 3]> {
+    image
+        .pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
