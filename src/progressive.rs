@@ -36,7 +36,7 @@ use std::time::Instant;
 
 use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
-use crate::render::{Cancelled, render_pass};
+use crate::render::{Cancelled, camera_sees_nothing, render_pass};
 use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsError};
 use crate::view::{Legend, View, render_view};
@@ -92,6 +92,9 @@ pub struct Frame {
     /// For a debug view (`settings.view`), what its colours mean; its pixels are shown with the
     /// lab's display whatever the display in force, so they match the legend.
     pub legend: Option<Legend>,
+    /// Why the image is black, when the camera sees nothing at all
+    /// ([`crate::render::camera_sees_nothing`], asked here, off the UI thread, once a job).
+    pub camera_note: Option<String>,
 }
 
 impl Frame {
@@ -398,6 +401,8 @@ struct Worker {
     /// The last frame published, without its `rgba` (the linear image is shared with the UI's
     /// copy through the `Arc`), so a display change can publish it again without tracing.
     last: Option<Frame>,
+    /// The running job's [`Frame::camera_note`].
+    camera_note: Option<String>,
 }
 
 impl Worker {
@@ -408,6 +413,7 @@ impl Worker {
             pool,
             job: None,
             last: None,
+            camera_note: None,
         }
     }
 
@@ -519,6 +525,7 @@ impl Worker {
         let settings = &job.settings;
         let target = settings.samples_per_pixel.max(1);
         let (width, height) = (settings.camera.width, settings.camera.height);
+        self.camera_note = camera_sees_nothing(&job.scene, settings);
 
         if settings.view.is_traced() {
             // A debug view: one ray per pixel centre, once.
@@ -655,6 +662,7 @@ impl Worker {
             since_submit_ms: job.submitted.elapsed().as_secs_f64() * 1e3,
             noise,
             legend,
+            camera_note: self.camera_note.clone(),
         }
     }
 

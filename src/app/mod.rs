@@ -22,7 +22,6 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Instant;
 
 use eframe::egui;
-use raylab::inspect::Inspection;
 use raylab::progressive::{Controller, Frame};
 use raylab::scene::{Scene, SceneChoice, cornell_box};
 use raylab::{Camera, Image, RenderSettings, Shading, Stage};
@@ -128,7 +127,7 @@ pub struct WorkbenchApp {
     screenshot_wanted: bool,
     screenshots_saving: Vec<Receiver<Result<screenshot::Saved, String>>>,
     /// The inspector's last result: the settings and pixel it is for.
-    inspection: Option<(RenderSettings, [u32; 2], Result<Inspection, String>)>,
+    inspection: Option<(RenderSettings, [u32; 2], Result<Inspected, String>)>,
     /// While the light's marker is dragged: the light's depth when the drag started.
     dragging_light: Option<f32>,
     /// When the newest job was submitted, and UI frames since.
@@ -144,6 +143,12 @@ struct SceneLoad {
     choice: SceneChoice,
     started: Instant,
     result: Receiver<Result<Scene, String>>,
+}
+
+/// An inspection as the inspector panel shows it: its lines, and the same as text to copy.
+struct Inspected {
+    lines: Vec<raylab::inspect::InspectLine>,
+    text: String,
 }
 
 /// Where the light appears in the image, as a fraction of its width and height, or `None` when
@@ -373,27 +378,6 @@ impl WorkbenchApp {
         }
         match restarted {
             Some(Ok(generation)) => {
-                // A black image the camera is to blame for says so; the note goes with the
-                // first view that sees something again.
-                let note = raylab::render::camera_sees_nothing(&self.scene, &self.state.settings);
-                let noted = self
-                    .status
-                    .as_ref()
-                    .is_some_and(|s| s.cause == Some(Cause::CameraSeesNothing));
-                match note {
-                    Some(text) => {
-                        self.status = Some(Status {
-                            text: format!("The image is black: {text}"),
-                            kind: StatusKind::Notice,
-                            cause: Some(Cause::CameraSeesNothing),
-                        });
-                    }
-                    None if noted => self.status = None,
-                    None => {}
-                }
-                let Some(controller) = &mut self.controller else {
-                    return;
-                };
                 self.submitted_generation = generation;
                 self.change = Some((Instant::now(), 0));
                 self.stats.threads = controller.threads();
@@ -436,9 +420,9 @@ impl WorkbenchApp {
         self.state.pinned = Some([x, y]);
     }
 
-    /// The inspection of the pinned pixel with the settings in force, recomputed only when
-    /// either changes (one ray's worth of work, recorded step by step).
-    fn inspection(&mut self) -> Option<&Result<Inspection, String>> {
+    /// The pinned pixel's lines with the settings in force, recomputed only when either
+    /// changes (one ray's worth of work, recorded step by step), not every UI frame.
+    fn inspection(&mut self) -> Option<&Result<Inspected, String>> {
         let pixel = self.state.pinned?;
         if !self.state.inspect_mode || self.state.settings.scene != self.scene_choice {
             return None;
@@ -454,6 +438,10 @@ impl WorkbenchApp {
                 pixel[0],
                 pixel[1],
             )
+            .map(|inspection| Inspected {
+                lines: inspection.lines(),
+                text: inspection.to_text(),
+            })
             .map_err(|e| e.to_string());
             self.inspection = Some((self.state.settings.clone(), pixel, result));
         }
@@ -462,44 +450,47 @@ impl WorkbenchApp {
 
     /// The inspector: the pinned pixel's lines, each beside the lab equation it evaluates.
     fn inspector_ui(&mut self, ui: &mut egui::Ui) {
-        let Some(result) = self.inspection() else {
-            ui.label("Click a pixel of the image to see how its value is computed.");
-            return;
-        };
-        let inspection = match result {
-            Ok(i) => i.clone(),
-            Err(e) => {
-                ui.colored_label(ui.visuals().error_fg_color, e.clone());
-                return;
+        let (mut copied, mut unpin) = (false, false);
+        match self.inspection() {
+            None => {
+                ui.label("Click a pixel of the image to see how its value is computed.");
             }
-        };
-        let lines = inspection.lines();
-        ui.horizontal(|ui| {
-            if ui
-                .button("Copy as text")
-                .on_hover_text("The lines below, for a report or a question")
-                .clicked()
-            {
-                ui.ctx().copy_text(inspection.to_text());
-                self.set_status(StatusKind::Info, "Copied the inspector's lines");
+            Some(Err(e)) => {
+                ui.colored_label(ui.visuals().error_fg_color, e);
             }
-            if ui.button("Unpin").clicked() {
-                self.state.pinned = None;
-            }
-        });
-        ui.weak("Shift + arrows move the pixel by one.");
-        egui::ScrollArea::vertical().show(ui, |ui| {
-            egui::Grid::new("inspector-lines")
-                .num_columns(2)
-                .striped(true)
-                .show(ui, |ui| {
-                    for line in &lines {
-                        ui.weak(&line.equation);
-                        ui.add(egui::Label::new(&line.text).wrap());
-                        ui.end_row();
+            Some(Ok(inspected)) => {
+                ui.horizontal(|ui| {
+                    if ui
+                        .button("Copy as text")
+                        .on_hover_text("The lines below, for a report or a question")
+                        .clicked()
+                    {
+                        ui.ctx().copy_text(inspected.text.clone());
+                        copied = true;
                     }
+                    unpin = ui.button("Unpin").clicked();
                 });
-        });
+                ui.weak("Shift + arrows move the pixel by one.");
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    egui::Grid::new("inspector-lines")
+                        .num_columns(2)
+                        .striped(true)
+                        .show(ui, |ui| {
+                            for line in &inspected.lines {
+                                ui.weak(&line.equation);
+                                ui.add(egui::Label::new(&line.text).wrap());
+                                ui.end_row();
+                            }
+                        });
+                });
+            }
+        }
+        if copied {
+            self.set_status(StatusKind::Info, "Copied the inspector's lines");
+        }
+        if unpin {
+            self.state.pinned = None;
+        }
     }
 
     /// "Click to focus": sets the focus distance to the depth of what the clicked point of the
@@ -552,6 +543,23 @@ impl WorkbenchApp {
     }
 
     fn show_frame(&mut self, ctx: &egui::Context, frame: Frame) {
+        // A black image the camera is to blame for says so (the controller asked, off this
+        // thread); the note goes with the first view that sees something again.
+        let noted = self
+            .status
+            .as_ref()
+            .is_some_and(|s| s.cause == Some(Cause::CameraSeesNothing));
+        match &frame.camera_note {
+            Some(text) => {
+                self.status = Some(Status {
+                    text: format!("The image is black: {text}"),
+                    kind: StatusKind::Notice,
+                    cause: Some(Cause::CameraSeesNothing),
+                });
+            }
+            None if noted => self.status = None,
+            None => {}
+        }
         let (w, h) = (frame.image.width, frame.image.height);
         self.viewport.set_image(ctx, w, h, &frame.rgba);
         if frame.generation >= self.submitted_generation
