@@ -14,7 +14,6 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use crate::display::Display;
-use crate::view::{HEAT_RAMP, Legend, heat, number};
 
 /// A `width × height` image of linear RGB values, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -322,40 +321,6 @@ impl Film {
         )
     }
 
-    /// [`Film::variance`] as a heat map over 0 to its maximum ([`crate::view::heat`]), with its
-    /// legend: the variance view of the workbench and `raylab render --view variance`.
-    pub fn variance_image(&self) -> Option<(Image, Legend)> {
-        let variance = self.variance()?;
-        let max = variance.iter().copied().fold(0.0f32, f32::max);
-        let mean =
-            variance.iter().map(|&v| f64::from(v)).sum::<f64>() / variance.len().max(1) as f64;
-        let image = Image {
-            width: self.sum.width,
-            height: self.sum.height,
-            pixels: variance
-                .iter()
-                .map(|&v| heat(if max > 0.0 { v / max } else { 0.0 }))
-                .collect(),
-        };
-        let legend = Legend {
-            title: "Variance".into(),
-            lines: vec![
-                format!(
-                    "variance of each pixel's mean, from n = {} samples: s²/n, s² the spread of \
-                     its samples (each the mean of R, G and B)",
-                    self.samples
-                ),
-                format!("{HEAT_RAMP} {}", number(max)),
-                format!(
-                    "mean {}; it falls as 1/n: 4× the samples halve the noise",
-                    number(mean as f32)
-                ),
-            ],
-            range: Some((0.0, max)),
-        };
-        Some((image, legend))
-    }
-
     /// The mean of the passes so far (black before the first).
     pub fn resolve(&self) -> Image {
         let scale = if self.samples == 0 {
@@ -410,43 +375,6 @@ mod tests {
         );
         assert_eq!(noise.share_of_pixels_above_1_percent, 0.5);
         assert_eq!(Film::new(2, 1).noise(), None, "not tracked");
-    }
-
-    /// Three pixels over four passes, by hand (grey values, so the channel mean is the value):
-    /// 1, 1, 1, 1 has no spread: 0. 1, 3, 1, 3: mean 2, s² = (1 + 1 + 1 + 1)/3 = 4/3, s²/n =
-    /// 1/3, the maximum (white). 0, 0, 0, 2: mean ½, s² = (3·¼ + 9/4)/3 = 1, s²/n = ¼, which is
-    /// ¾ of the maximum: yellow.
-    #[test]
-    fn variance_image_by_hand() {
-        let mut film = Film::with_noise(3, 1);
-        assert!(film.variance_image().is_none(), "no samples");
-        for (b, c) in [(1.0, 0.0), (3.0, 0.0), (1.0, 0.0), (3.0, 2.0)] {
-            let mut pass = Image::new(3, 1);
-            pass.pixels = vec![Vec3::ONE, Vec3::splat(b), Vec3::splat(c)];
-            film.add_pass(&pass);
-            if film.samples() == 1 {
-                assert!(film.variance().is_none(), "one sample has no spread");
-            }
-        }
-        let v = film.variance().unwrap();
-        assert_eq!(v[0], 0.0);
-        assert!((v[1] - 1.0 / 3.0).abs() < 1e-6, "{v:?}");
-        assert!((v[2] - 0.25).abs() < 1e-6, "{v:?}");
-        let (image, legend) = film.variance_image().unwrap();
-        assert_eq!(image.pixels[0], Vec3::ZERO);
-        assert_eq!(image.pixels[1], Vec3::ONE);
-        assert!(
-            (image.pixels[2] - Vec3::new(1.0, 1.0, 0.0))
-                .abs()
-                .max_element()
-                < 1e-5
-        );
-        let (lo, hi) = legend.range.unwrap();
-        assert_eq!(lo, 0.0);
-        assert!((hi - 1.0 / 3.0).abs() < 1e-6);
-        assert!(legend.lines[0].contains("n = 4 samples"), "{legend:?}");
-        assert!(legend.lines[1].contains("0.333"), "{legend:?}");
-        assert!(Film::new(3, 1).variance_image().is_none(), "not tracked");
     }
 
     #[test]

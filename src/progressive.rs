@@ -39,7 +39,7 @@ use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, camera_sees_nothing, render_pass};
 use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsError};
-use crate::view::{Legend, View, render_view};
+use crate::view::{Legend, View, render_view, variance_view};
 
 /// The display a frame's pixels are made with: the one in force, but the lab's for a debug
 /// view (one with a legend), whose colours must be its legend's.
@@ -579,7 +579,7 @@ impl Worker {
             published = Instant::now();
             // The variance view: each pixel's variance of the mean, once there are two samples.
             let variance = if settings.view == View::Variance {
-                film.variance_image()
+                variance_view(&film).map(|v| (v.image, v.legend))
             } else {
                 None
             };

@@ -10,7 +10,7 @@
 //! inspector to read.
 //!
 //! The shaded image and the variance map come from the renderer and its [`Film`] instead
-//! ([`Film::variance_image`] for the workbench's progressive film); [`render_view`] renders
+//! ([`variance_view`] for the workbench's progressive film); [`render_view`] renders
 //! them from scratch only so that it answers for every view.
 
 use std::collections::HashSet;
@@ -200,7 +200,7 @@ pub const SHADOW_FACES_AWAY: Vec3 = Vec3::splat(0.4);
 ///
 /// [`View::Shaded`] renders `samples_per_pixel` passes, exactly [`crate::render::render`]'s
 /// image; [`View::Variance`] renders them too (at least 2: a variance needs two samples) into a
-/// film that tracks the noise, and gives its [`Film::variance_image`].
+/// film that tracks the noise, and gives its [`variance_view`].
 pub fn render_view(
     scene: &Scene,
     settings: &RenderSettings,
@@ -573,13 +573,9 @@ fn from_film(
         film.add_pass(&render_pass(scene, settings, sample, cancelled)?);
     }
     if view == View::Variance
-        && let (Some((image, legend)), Some(values)) = (film.variance_image(), film.variance())
+        && let Some(variance) = variance_view(&film)
     {
-        return Ok(ViewImage {
-            image,
-            legend,
-            values: ViewValues::Variance(values),
-        });
+        return Ok(variance);
     }
     Ok(ViewImage {
         image: film.resolve(),
@@ -593,6 +589,44 @@ fn from_film(
             range: None,
         },
         values: ViewValues::Shaded,
+    })
+}
+
+/// The variance view of a film that tracks the noise: [`Film::variance`] as a heat map over 0 to
+/// its maximum, with its legend and the raw values (`None` before two samples, or when the film
+/// does not track the noise). The workbench's progressive film and `from_film` both use it.
+pub fn variance_view(film: &Film) -> Option<ViewImage> {
+    let variance = film.variance()?;
+    let max = variance.iter().copied().fold(0.0f32, f32::max);
+    let mean = variance.iter().map(|&v| f64::from(v)).sum::<f64>() / variance.len().max(1) as f64;
+    let image = Image {
+        width: film.width(),
+        height: film.height(),
+        pixels: variance
+            .iter()
+            .map(|&v| heat(if max > 0.0 { v / max } else { 0.0 }))
+            .collect(),
+    };
+    let legend = Legend {
+        title: "Variance".into(),
+        lines: vec![
+            format!(
+                "variance of each pixel's mean, from n = {} samples: s²/n, s² the spread of \
+                 its samples (each the mean of R, G and B)",
+                film.samples()
+            ),
+            format!("{HEAT_RAMP} {}", number(max)),
+            format!(
+                "mean {}; it falls as 1/n: 4× the samples halve the noise",
+                number(mean as f32)
+            ),
+        ],
+        range: Some((0.0, max)),
+    };
+    Some(ViewImage {
+        image,
+        legend,
+        values: ViewValues::Variance(variance),
     })
 }
 
@@ -631,6 +665,43 @@ pub fn number(x: f32) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Three pixels over four passes, by hand (grey values, so the channel mean is the value):
+    /// 1, 1, 1, 1 has no spread: 0. 1, 3, 1, 3: mean 2, s² = (1 + 1 + 1 + 1)/3 = 4/3, s²/n =
+    /// 1/3, the maximum (white). 0, 0, 0, 2: mean ½, s² = (3·¼ + 9/4)/3 = 1, s²/n = ¼, which is
+    /// ¾ of the maximum: yellow.
+    #[test]
+    fn variance_image_by_hand() {
+        let mut film = Film::with_noise(3, 1);
+        assert!(variance_view(&film).is_none(), "no samples");
+        for (b, c) in [(1.0, 0.0), (3.0, 0.0), (1.0, 0.0), (3.0, 2.0)] {
+            let mut pass = Image::new(3, 1);
+            pass.pixels = vec![Vec3::ONE, Vec3::splat(b), Vec3::splat(c)];
+            film.add_pass(&pass);
+            if film.samples() == 1 {
+                assert!(film.variance().is_none(), "one sample has no spread");
+            }
+        }
+        let v = film.variance().unwrap();
+        assert_eq!(v[0], 0.0);
+        assert!((v[1] - 1.0 / 3.0).abs() < 1e-6, "{v:?}");
+        assert!((v[2] - 0.25).abs() < 1e-6, "{v:?}");
+        let ViewImage { image, legend, .. } = variance_view(&film).unwrap();
+        assert_eq!(image.pixels[0], Vec3::ZERO);
+        assert_eq!(image.pixels[1], Vec3::ONE);
+        assert!(
+            (image.pixels[2] - Vec3::new(1.0, 1.0, 0.0))
+                .abs()
+                .max_element()
+                < 1e-5
+        );
+        let (lo, hi) = legend.range.unwrap();
+        assert_eq!(lo, 0.0);
+        assert!((hi - 1.0 / 3.0).abs() < 1e-6);
+        assert!(legend.lines[0].contains("n = 4 samples"), "{legend:?}");
+        assert!(legend.lines[1].contains("0.333"), "{legend:?}");
+        assert!(variance_view(&Film::new(3, 1)).is_none(), "not tracked");
+    }
 
     #[test]
     fn names_parse_and_round_trip_through_json() {
