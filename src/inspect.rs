@@ -33,7 +33,7 @@ use serde::Serialize;
 use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Recorder, Stage, Tracer, path};
 use crate::intersect::Intersection;
-use crate::light::PointLight;
+use crate::light::{DirectLight, PointLight};
 use crate::material::{Material, MaterialKind, Scatter};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -416,39 +416,6 @@ fn scatter_kind(kind: &MaterialKind, incoming: Vec3, outgoing: Vec3, normal: Vec
     }
 }
 
-fn kind_name(kind: &MaterialKind) -> &'static str {
-    match kind {
-        MaterialKind::Diffuse => "diffuse",
-        MaterialKind::Mirror { .. } => "mirror",
-        MaterialKind::Glass { .. } => "glass",
-    }
-}
-
-/// The parts of equation 27 at `position` with `normal`: the tracer's own
-/// [`DirectLight`](crate::light::DirectLight), whose `d` is the D the tracer used (tested).
-struct DParts {
-    to_light: Vec3,
-    distance: f32,
-    r2: f32,
-    cos: f32,
-    four_pi_r2: f32,
-    d: Vec3,
-}
-
-impl DParts {
-    fn of(light: &PointLight, position: Vec3, normal: Vec3) -> Self {
-        let parts = crate::light::DirectLight::at(light, position, normal);
-        Self {
-            to_light: parts.to_light,
-            distance: parts.r2.sqrt(),
-            r2: parts.r2,
-            cos: parts.cos,
-            four_pi_r2: parts.four_pi_r2,
-            d: parts.d,
-        }
-    }
-}
-
 impl LightTerms {
     /// The terms of a hit as the tracer left them, with the parts of D and the blocker.
     fn of(tracer: &Tracer, stage: Stage, terms: &HitTerms, material: &Material) -> Self {
@@ -461,9 +428,9 @@ impl LightTerms {
             return out;
         }
         let light = &tracer.light;
-        let parts = DParts::of(light, terms.position, terms.normal);
+        let parts = DirectLight::at(light, terms.position, terms.normal);
         out.to_light = Some(parts.to_light);
-        out.light_distance = Some(parts.distance);
+        out.light_distance = Some(parts.distance());
         out.light_distance_squared = Some(parts.r2);
         out.cos_theta = Some(parts.cos);
         out.power = Some(light.channel_power());
@@ -569,7 +536,7 @@ impl Inspection {
                     if first {
                         inspection.triangle = Some(hit.triangle_index);
                         inspection.surface = Some(material.name.clone());
-                        inspection.kind = Some(kind_name(&material.kind));
+                        inspection.kind = Some(material.kind.name());
                         inspection.t = Some(hit.distance);
                         inspection.u = Some(hit.u);
                         inspection.v = Some(hit.v);
@@ -582,7 +549,7 @@ impl Inspection {
                             depth: *depth,
                             triangle: hit.triangle_index,
                             surface: material.name.clone(),
-                            kind: kind_name(&material.kind),
+                            kind: material.kind.name(),
                             position: hit.position,
                             beta: *weight,
                             light_added: Vec3::ZERO,
@@ -612,7 +579,7 @@ impl Inspection {
                         depth: *depth,
                         triangle: hit.triangle_index,
                         surface: material.name.clone(),
-                        kind: kind_name(&material.kind),
+                        kind: material.kind.name(),
                         position: hit.position,
                         branch,
                         direction,
@@ -1250,7 +1217,7 @@ mod tests {
     fn the_parts_of_d_at_the_floor_centre() {
         let light = PointLight::default();
         let (p, n) = (Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
-        let parts = DParts::of(&light, p, n);
+        let parts = DirectLight::at(&light, p, n);
         assert_eq!(parts.to_light, Vec3::new(0.0, -1.5, -0.7));
         assert!((parts.r2 - 2.74).abs() < 1e-6);
         assert!((parts.cos - 0.906_183).abs() < 1e-6);
@@ -1258,8 +1225,8 @@ mod tests {
         assert!((parts.d.x - 0.368_454).abs() < 1e-6);
         assert_eq!(parts.d, direct_light(&light, p, n));
         // A light on the surface: the lab's guard, straight above at the least distance.
-        let on = DParts::of(&light, light.position, n);
-        assert_eq!(on.distance, crate::light::MIN_LIGHT_DISTANCE);
+        let on = DirectLight::at(&light, light.position, n);
+        assert_eq!(on.distance(), crate::light::MIN_LIGHT_DISTANCE);
         assert_eq!(on.d, direct_light(&light, light.position, n));
     }
 

@@ -161,6 +161,11 @@ pub struct DirectLight {
 }
 
 impl DirectLight {
+    /// |r|, the distance to the light (at least [`MIN_LIGHT_DISTANCE`]).
+    pub fn distance(&self) -> f32 {
+        self.r2.sqrt()
+    }
+
     #[inline(always)]
     pub fn at(light: &PointLight, position: Vec3, normal: Vec3) -> Self {
         let to_light = light.position - position;

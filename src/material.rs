@@ -40,6 +40,17 @@ pub enum MaterialKind {
     Glass { ior: f32, tint: Vec3 },
 }
 
+impl MaterialKind {
+    /// The kind's name: diffuse, mirror or glass.
+    pub fn name(&self) -> &'static str {
+        match self {
+            MaterialKind::Diffuse => "diffuse",
+            MaterialKind::Mirror { .. } => "mirror",
+            MaterialKind::Glass { .. } => "glass",
+        }
+    }
+}
+
 /// A material: the lab's per-triangle `color` (its diffuse reflectance ρ) and its kind.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
