@@ -94,6 +94,10 @@ pub struct RenderArgs {
     /// --display says, so their colours are the legend's. Combines with --settings.
     #[arg(long, default_value = "shaded", value_name = "VIEW")]
     pub view: raylab::view::View,
+    /// Also write the render's settings as a scene file (.toml), to open in the workbench or
+    /// render again with --scene-file.
+    #[arg(long, value_name = "FILE.toml")]
+    pub save_scene: Option<PathBuf>,
     #[command(flatten)]
     pub options: RenderOptions,
 }
@@ -118,20 +122,34 @@ pub struct Pixel(pub u32, pub u32);
 /// very image `render` would write with the same options).
 #[derive(Debug, Args)]
 pub struct RenderOptions {
-    /// Take every setting from a JSON file: a workbench screenshot's .json (which reproduces the
-    /// screenshot exactly) or a bare settings object. Only --out, --pixel, --json and --threads
-    /// combine with it.
+    /// Take every setting from a file: a workbench screenshot (its .png, which carries them,
+    /// or the .json beside it, either reproducing the screenshot exactly), a bare settings
+    /// JSON object, or a scene file (.toml). Only --out, --pixel, --json, --threads, --view
+    /// and --save-scene combine with it.
     #[arg(
         long,
-        value_name = "FILE.json",
+        value_name = "FILE",
         conflicts_with_all = [
-            "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw", "light",
-            "light_power", "indirect", "shadows", "samples", "seed", "bounces",
+            "scene_file", "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
+            "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
             "material_preset", "specular_depth", "texture_preset", "smooth", "light_radius",
             "light_colour", "aperture", "focus_distance", "display", "exposure",
         ]
     )]
     pub settings: Option<PathBuf>,
+    /// Take the scene and every setting from a scene file (.toml; see assets/scenes/). Only
+    /// --out, --pixel, --json, --threads, --view and --save-scene combine with it.
+    #[arg(
+        long,
+        value_name = "FILE.toml",
+        conflicts_with_all = [
+            "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
+            "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
+            "material_preset", "specular_depth", "texture_preset", "smooth", "light_radius",
+            "light_colour", "aperture", "focus_distance", "display", "exposure",
+        ]
+    )]
+    pub scene_file: Option<PathBuf>,
     /// Scene: cornell, bunny, teapot, textured-teapot or terrain.
     #[arg(
         long,
@@ -243,8 +261,13 @@ impl RenderOptions {
         }
     }
 
-    /// The settings to render: from `--settings FILE.json`, or from the other arguments.
+    /// The settings to render: from `--settings FILE`, `--scene-file FILE.toml`, or from the
+    /// other arguments. What a settings file held that raylab does not know is printed as a
+    /// warning.
     pub fn resolve_settings(&self) -> anyhow::Result<RenderSettings> {
+        if let Some(path) = &self.scene_file {
+            return Ok(raylab::scene_file::load(path)?);
+        }
         match &self.settings {
             Some(path) => read_settings_file(path),
             None => Ok(self.settings()),
@@ -309,17 +332,15 @@ impl RenderOptions {
     }
 }
 
-/// Reads render settings from a JSON file: a screenshot's sidecar (whose `settings` field holds
-/// them) or a bare settings object. Missing fields take the lab's defaults.
+/// Reads render settings from a file ([`raylab::settings::files::read_file`]): a scene file,
+/// a screenshot PNG or its JSON, or a bare settings object. Unknown fields are warned of on
+/// stderr.
 pub fn read_settings_file(path: &std::path::Path) -> anyhow::Result<RenderSettings> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("could not read settings file '{}'", path.display()))?;
-    let bad = || format!("settings file '{}' is not valid", path.display());
-    let mut value: serde_json::Value = serde_json::from_str(&text).with_context(bad)?;
-    if let Some(inner) = value.get_mut("settings") {
-        value = inner.take();
+    let loaded = raylab::settings::files::read_file(path)?;
+    for warning in &loaded.warnings {
+        let _ = writeln!(std::io::stderr(), "warning: {}: {warning}", path.display());
     }
-    serde_json::from_value(value).with_context(bad)
+    Ok(loaded.settings)
 }
 
 /// Parses the arguments and runs the command; the one place errors become exit codes.
@@ -375,7 +396,10 @@ fn one_line(text: &str) -> String {
 
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     // Refuse what can't be written before spending time on the render.
-    OutputFormat::from_path(&args.out)?;
+    let format = OutputFormat::from_path(&args.out)?;
+    if let Some(path) = &args.save_scene {
+        check_scene_destination(path)?;
+    }
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty())
         && !dir.is_dir()
     {
@@ -416,7 +440,19 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         }
     };
     let elapsed = start.elapsed();
-    image.save_with(&args.out, &display)?;
+    // A PNG carries its settings, so the image alone reopens to the same render.
+    let mut bytes = image
+        .encode_with(format, &display)
+        .with_context(|| format!("could not encode '{}'", args.out.display()))?;
+    if format == OutputFormat::Png {
+        let mut carried = settings.clone();
+        carried.view = args.view;
+        bytes = raylab::settings::files::png_with_settings(&bytes, &carried);
+    }
+    raylab::film::write_atomically(&args.out, &bytes)?;
+    if let Some(path) = &args.save_scene {
+        raylab::scene_file::save(&settings, path)?;
+    }
     if let Some(note) = raylab::render::camera_sees_nothing(&scene, &settings) {
         // A black image the camera is to blame for: say so (the image is written all the same).
         let _ = writeln!(std::io::stderr(), "note: {note}");
@@ -458,6 +494,35 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             args.out.display()
         )),
     }
+}
+
+/// `--save-scene`'s file: a `.toml` in a folder that exists.
+fn check_scene_destination(path: &std::path::Path) -> anyhow::Result<()> {
+    let toml = path
+        .extension()
+        .is_some_and(|e| e == raylab::scene_file::EXTENSION);
+    if !toml {
+        anyhow::bail!(
+            "--save-scene '{}': a scene file's name ends in .toml",
+            path.display()
+        );
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        anyhow::bail!(
+            "could not write scene file '{}': folder '{}' does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    if path.is_dir() {
+        anyhow::bail!(
+            "could not write scene file '{}': it is a folder",
+            path.display()
+        );
+    }
+    Ok(())
 }
 
 fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {

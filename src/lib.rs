@@ -33,6 +33,7 @@ pub mod progressive;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod scene_file;
 pub mod settings;
 pub mod texture;
 pub mod view;

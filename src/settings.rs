@@ -4,6 +4,8 @@
 //! [`RenderSettings`]; the renderer takes nothing else. `#[serde(default)]` everywhere means an
 //! older or partial settings file still loads, with the lab's values for what it lacks.
 
+pub mod files;
+
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 

@@ -201,6 +201,7 @@ pub fn scene_label(choice: &SceneChoice) -> String {
         SceneChoice::TexturedTeapot => "Textured teapot (porcelain)".to_owned(),
         SceneChoice::Terrain => "Fractal terrain (1M triangles)".to_owned(),
         SceneChoice::Obj(_) => format!("OBJ: {choice}"),
+        SceneChoice::Custom(_) => format!("Scene: {choice}"),
     }
 }
 

@@ -6,9 +6,11 @@
 
 mod cornell;
 pub mod obj;
+pub mod spec;
 pub mod terrain;
 
 pub use cornell::{CORNELL_TRIANGLES, cornell_box};
+pub use spec::{ModelSpec, SceneSpec};
 
 use std::fmt;
 use std::path::PathBuf;
@@ -205,7 +207,7 @@ fn intersection(ray: &Ray, hit: Hit) -> Intersection {
 
 /// A scene by name: what the command line's `--scene`/`--obj` and the workbench's scene
 /// selector choose from.
-#[derive(Clone, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SceneChoice {
     /// The lab's Cornell box (30 triangles).
@@ -223,6 +225,8 @@ pub enum SceneChoice {
     Terrain,
     /// Any OBJ file, standing in the box.
     Obj(PathBuf),
+    /// A scene of its own parts, as a scene file describes it ([`crate::scene_file`]).
+    Custom(Box<SceneSpec>),
 }
 
 impl SceneChoice {
@@ -235,7 +239,8 @@ impl SceneChoice {
         SceneChoice::Terrain,
     ];
 
-    /// The name: `cornell`, `bunny`, `teapot`, `terrain`, or the OBJ file's name.
+    /// The name: `cornell`, `bunny`, `teapot`, `terrain`, the OBJ file's name, or a custom
+    /// scene's.
     pub fn name(&self) -> String {
         match self {
             SceneChoice::Cornell => "cornell".into(),
@@ -247,39 +252,75 @@ impl SceneChoice {
                 || path.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),
             ),
+            SceneChoice::Custom(spec) => spec.name.clone(),
         }
+    }
+
+    /// The parts the scene is made of: every choice is built from its spec
+    /// ([`SceneSpec::build`]).
+    pub fn spec(&self) -> SceneSpec {
+        let with_model = |name: &str, model: ModelSpec| SceneSpec {
+            models: vec![model],
+            ..SceneSpec::cornell(name)
+        };
+        match self {
+            SceneChoice::Cornell => SceneSpec::cornell("cornell"),
+            SceneChoice::Bunny => with_model(
+                "bunny",
+                ModelSpec::new("bunny", &obj::Placement::FRONT_LEFT),
+            ),
+            SceneChoice::Teapot => {
+                with_model("teapot", ModelSpec::new("teapot", &obj::Placement::TEAPOT))
+            }
+            SceneChoice::TexturedTeapot => with_model(
+                "textured-teapot",
+                ModelSpec::new("textured-teapot", &obj::Placement::TEAPOT),
+            ),
+            SceneChoice::Terrain => SceneSpec {
+                blocks: false,
+                terrain: Some(terrain::TerrainSpec::default()),
+                ..SceneSpec::cornell("terrain")
+            },
+            SceneChoice::Obj(path) => with_model(
+                &self.name(),
+                ModelSpec::new(path.clone(), &obj::Placement::FRONT_LEFT),
+            ),
+            SceneChoice::Custom(spec) => (**spec).clone(),
+        }
+    }
+
+    /// The choice a spec is: a built-in scene or an OBJ model in the box when it is one of
+    /// those exactly (whatever its name), else a custom scene.
+    pub fn from_spec(spec: SceneSpec) -> SceneChoice {
+        let same = |choice: &SceneChoice| {
+            SceneSpec {
+                name: spec.name.clone(),
+                ..choice.spec()
+            } == spec
+        };
+        if let Some(built_in) = SceneChoice::BUILT_IN.into_iter().find(same) {
+            return built_in;
+        }
+        if let [model] = &spec.models[..]
+            && model.built_in().is_none()
+        {
+            let obj = SceneChoice::Obj(model.file.clone());
+            if same(&obj) && spec.name == obj.name() {
+                return obj;
+            }
+        }
+        SceneChoice::Custom(Box::new(spec))
     }
 
     /// Builds the scene and its acceleration structure (on the current rayon pool).
     pub fn load(&self) -> Result<Scene, SceneError> {
-        match self {
-            SceneChoice::Cornell => Ok(cornell_box()),
-            SceneChoice::Bunny => {
-                let mesh = obj::builtin(obj::BUNNY_OBJ, "bunny")?;
-                Ok(obj::model_in_box(
-                    &mesh,
-                    &obj::Placement::FRONT_LEFT,
-                    "bunny",
-                ))
-            }
-            SceneChoice::Teapot => {
-                let mesh = obj::builtin(obj::TEAPOT_OBJ, "teapot")?;
-                Ok(obj::model_in_box(&mesh, &obj::Placement::TEAPOT, "teapot"))
-            }
-            SceneChoice::TexturedTeapot => {
-                // The built-in texture decodes (a unit test checks it): no warnings to show.
-                let (scene, _warnings) = obj::builtin_textured(
-                    obj::TEXTURED_TEAPOT_OBJ,
-                    obj::TEXTURED_TEAPOT_MTL,
-                    obj::TEXTURED_TEAPOT_PNG,
-                    "textured-teapot",
-                    &obj::Placement::TEAPOT,
-                )?;
-                Ok(scene)
-            }
-            SceneChoice::Terrain => Ok(terrain::terrain_scene(&terrain::TerrainSpec::default())),
-            SceneChoice::Obj(path) => obj::obj_scene(path),
-        }
+        self.load_with_warnings().map(|(scene, _)| scene)
+    }
+
+    /// [`SceneChoice::load`], with what could not be used on the way (a model's missing
+    /// texture).
+    pub fn load_with_warnings(&self) -> Result<(Scene, Vec<String>), SceneError> {
+        self.spec().build(&|| false, &|_| {})
     }
 }
 
@@ -315,6 +356,10 @@ pub enum SceneError {
     Obj { path: PathBuf, reason: String },
     #[error("OBJ file '{}' has no triangles", path.display())]
     EmptyMesh { path: PathBuf },
+    #[error("the scene has no triangles (no room, blocks, model or terrain)")]
+    Empty,
+    #[error("loading the scene was cancelled")]
+    Cancelled,
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::{Material, Scene, SceneError, cornell_box};
+use super::{Material, Scene, SceneError};
 use crate::geometry::Triangle;
 use crate::texture::{Texture, TextureError, TextureImage};
 
@@ -438,25 +438,9 @@ pub fn model_in_box(mesh: &Mesh, placement: &Placement, name: &str) -> Scene {
 }
 
 fn scene_with_model(mesh: &Mesh, placement: &Placement, material: Material) -> Scene {
-    let scene = cornell_box();
-    let box_triangles = scene.triangles.len();
-    let mut triangles = scene.triangles;
-    let mut materials = scene.materials;
-    materials.push(material);
-    let placed = place_model(mesh, placement, (materials.len() - 1) as u32);
-    triangles.extend(placed.triangles);
-    let normals = after_flat_box(box_triangles, placed.normals);
-    let uvs = placed
-        .uvs
-        .map_or_else(Vec::new, |uvs| after_flat_box(box_triangles, uvs));
-    Scene::new(triangles, materials).with_surface(normals, uvs)
-}
-
-/// `None` for each of the box's triangles, then the model's values.
-fn after_flat_box<T: Copy>(box_triangles: usize, model: Vec<T>) -> Vec<Option<T>> {
-    std::iter::repeat_n(None, box_triangles)
-        .chain(model.into_iter().map(Some))
-        .collect()
+    let models = [(mesh.clone(), *placement, material)];
+    super::spec::assemble(true, true, &models, None, &|| false, &|_| {})
+        .expect("the box is never empty")
 }
 
 /// An OBJ file standing in the box at [`Placement::FRONT_LEFT`] (warnings dropped; see
@@ -472,6 +456,17 @@ pub fn obj_scene(path: &Path) -> Result<Scene, SceneError> {
 /// image that cannot be read leaves the model untextured and adds a warning naming the file;
 /// only the OBJ file itself failing is an error.
 pub fn obj_scene_with_warnings(path: &Path) -> Result<(Scene, Vec<String>), SceneError> {
+    let (mesh, texture, warnings) = load_textured(path)?;
+    let name = path
+        .file_stem()
+        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
+    let scene = textured_scene(&mesh, &Placement::FRONT_LEFT, &name, texture);
+    Ok((scene, warnings))
+}
+
+/// An OBJ file's mesh and the diffuse texture its material library names, with a warning for
+/// each library or image that could not be used (see [`obj_scene_with_warnings`]).
+pub fn load_textured(path: &Path) -> Result<(Mesh, Option<Texture>, Vec<String>), SceneError> {
     let text = read(path)?;
     let folder = path.parent().unwrap_or(Path::new(""));
     // tobj asks for libraries through a `Fn`, hence the cell.
@@ -490,13 +485,9 @@ pub fn obj_scene_with_warnings(path: &Path) -> Result<(Scene, Vec<String>), Scen
             })
     })?;
     let mut warnings = warnings.into_inner();
-    let name = path
-        .file_stem()
-        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
     let texture = texture_name(&parsed, &path.display().to_string(), &mut warnings)
         .and_then(|file| image_or_warning(TextureImage::load(&folder.join(file)), &mut warnings));
-    let scene = textured_scene(&parsed.mesh, &Placement::FRONT_LEFT, &name, texture);
-    Ok((scene, warnings))
+    Ok((parsed.mesh, texture, warnings))
 }
 
 /// A model compiled into the binary (`include_str!`/`include_bytes!`) standing in the box,
@@ -513,6 +504,17 @@ pub fn builtin_textured(
     name: &str,
     placement: &Placement,
 ) -> Result<(Scene, Vec<String>), SceneError> {
+    let (mesh, texture, warnings) = builtin_textured_mesh(obj_text, mtl_text, texture_png, name)?;
+    Ok((textured_scene(&mesh, placement, name, texture), warnings))
+}
+
+/// The mesh and texture of [`builtin_textured`], before it is placed.
+pub fn builtin_textured_mesh(
+    obj_text: &str,
+    mtl_text: &str,
+    texture_png: &[u8],
+    name: &str,
+) -> Result<(Mesh, Option<Texture>, Vec<String>), SceneError> {
     let path = builtin_path(name);
     let warnings = RefCell::new(Vec::new());
     let parsed = parse_with_materials(obj_text.as_bytes(), &path, |library| {
@@ -538,10 +540,7 @@ pub fn builtin_textured(
             None
         }
     };
-    Ok((
-        textured_scene(&parsed.mesh, placement, name, texture),
-        warnings,
-    ))
+    Ok((parsed.mesh, texture, warnings))
 }
 
 /// The diffuse texture file named by the first material the model's faces use, if any;
@@ -595,7 +594,7 @@ fn builtin_path(name: &str) -> PathBuf {
 }
 
 /// A built-in model by file name.
-pub(super) fn builtin(text: &str, name: &str) -> Result<Mesh, SceneError> {
+pub fn builtin(text: &str, name: &str) -> Result<Mesh, SceneError> {
     parse_obj(text.as_bytes(), &builtin_path(name))
 }
 

@@ -6,11 +6,14 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::{Material, Scene, cornell_box};
+use super::Scene;
 use crate::geometry::Triangle;
 
+/// The terrain's diffuse reflectance ρ: a sandy brown.
+pub const TERRAIN_REFLECTANCE: Vec3 = Vec3::new(0.75, 0.65, 0.45);
+
 /// What to generate.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TerrainSpec {
     /// The noise's seed: the same seed gives the same terrain.
     pub seed: u64,
@@ -207,17 +210,22 @@ fn coord(n: usize, i: usize) -> f32 {
 /// The Cornell box with the blocks replaced by a terrain covering the floor, shaded smoothly
 /// (the room's walls stay flat).
 pub fn terrain_scene(spec: &TerrainSpec) -> Scene {
-    let scene = cornell_box();
-    let mut materials = scene.materials;
-    materials.push(Material::diffuse("terrain", Vec3::new(0.75, 0.65, 0.45)));
-    let material = (materials.len() - 1) as u32;
-    // The room is the first ten triangles; the blocks would stick out of the ground.
-    let mut triangles = scene.triangles[..10].to_vec();
+    let no = || false;
+    super::spec::assemble(true, false, &[], Some(spec), &no, &|_| {})
+        .expect("the room alone is a scene")
+}
+
+/// Appends the terrain's triangles to `triangles` and their corners' normals to `normals`
+/// (what [`terrain_surface`] returns, without a second copy of a million triangles).
+pub(super) fn extend_with_terrain(
+    spec: &TerrainSpec,
+    material: u32,
+    triangles: &mut Vec<Triangle>,
+    normals: &mut Vec<Option<[Vec3; 3]>>,
+) {
     let field = Heightfield::new(spec);
     triangles.par_extend(field.triangles(material));
-    let mut normals = vec![None; 10];
     normals.par_extend(field.corner_normals(&field.vertex_normals()).map(Some));
-    Scene::new(triangles, materials).with_surface(normals, Vec::new())
 }
 
 #[cfg(test)]

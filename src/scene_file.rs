@@ -1,0 +1,752 @@
+//! Scene files: a whole setup — the scene's parts, the camera, the light and every render
+//! setting — as a TOML text a teacher can write by hand, send, and a student can open to the
+//! same image (`raylab render --scene-file FILE`, or Open in the workbench).
+//!
+//! Why TOML: it is read and written by people (comments, one `key = value` a line, sections
+//! that match the panels), it is what Cargo uses so a Rust student has seen it, and its parser
+//! reports the line of every mistake. (RON would mirror Rust's types more closely, but its
+//! nesting of parentheses is harder to edit by hand, and JSON, which raylab's screenshot
+//! sidecars use, has no comments.)
+//!
+//! The format is versioned and strict, unlike the lenient settings JSON: `version = 1` first,
+//! every field present (but a scene's `models` list and its optional `terrain`), no unknown
+//! field, every value checked ([`RenderSettings::validate`], [`SceneSpec::validate`]); an error
+//! names the field and its line. The file's structs below are version 1 itself, kept apart
+//! from raylab's in-memory types so those can change without changing what old files mean.
+//! Angles are in radians, as in the settings JSON, so a file round-trips exactly.
+//!
+//! An example, the lab's figure 7 (`assets/scenes/figure7.toml`):
+//!
+//! ```toml
+//! version = 1
+//!
+//! [scene]
+//! name = "figure 7"
+//! room = true
+//! blocks = true
+//! material_preset = "none"
+//! texture_preset = "none"
+//!
+//! [camera]
+//! position = [0.0, 0.0, -3.001]
+//! yaw = 0.0
+//! pitch = 0.0
+//! focal_length = 512.0
+//! width = 512
+//! height = 512
+//! aperture = 0.0
+//! focus_distance = 3.001
+//!
+//! [light]
+//! position = [0.0, -0.5, -0.7]
+//! power = 14.0
+//! colour = [1.0, 1.0, 1.0]
+//! radius = 0.0
+//!
+//! [shading]
+//! stage = "lab"
+//! shadows = true
+//! indirect = true
+//! indirect_light = [0.5, 0.5, 0.5]
+//! bounces = "unlimited"
+//! specular_depth = 6
+//! smooth = true
+//!
+//! [display]
+//! transform = "lab"
+//! exposure = 0.0
+//!
+//! [render]
+//! samples_per_pixel = 1
+//! seed = 0
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::camera::Camera;
+use crate::display::{Display, DisplayTransform};
+use crate::integrator::{Shading, Stage};
+use crate::light::PointLight;
+use crate::material::{MaterialKind, MaterialPreset, TexturePreset};
+use crate::scene::SceneChoice;
+use crate::scene::spec::{self, ModelSpec, SceneSpec};
+use crate::scene::terrain::TerrainSpec;
+use crate::settings::RenderSettings;
+use crate::view::View;
+
+/// The version this raylab reads and writes.
+pub const VERSION: u32 = 1;
+
+/// The extension of scene files.
+pub const EXTENSION: &str = "toml";
+
+/// Why a scene file could not be read or written. Every message names the file; a parse or
+/// value error also names the field and its line.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneFileError {
+    #[error("could not read scene file '{}': {reason}", path.display())]
+    Read { path: PathBuf, reason: String },
+    #[error("could not write scene file '{}': {reason}", path.display())]
+    Write { path: PathBuf, reason: String },
+    #[error("scene file '{}', {message}", path.display())]
+    Invalid { path: PathBuf, message: String },
+}
+
+/// Reads a scene file: the settings it describes, with model paths resolved against the
+/// file's folder.
+pub fn load(path: &Path) -> Result<RenderSettings, SceneFileError> {
+    let bytes = std::fs::read(path).map_err(|e| SceneFileError::Read {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| SceneFileError::Invalid {
+        path: path.to_path_buf(),
+        message: format!("byte {}: not UTF-8 text", e.valid_up_to()),
+    })?;
+    let folder = path.parent().unwrap_or(Path::new(""));
+    parse(text, folder).map_err(|message| SceneFileError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    })
+}
+
+/// Parses scene-file text; relative model paths are taken from `folder`. The error is
+/// `line L (the line's text): what is wrong`, or without a line where none applies.
+pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
+    // A byte-order mark, as some Windows editors write, is not part of the text.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    #[derive(Deserialize)]
+    struct Versioned {
+        version: Option<toml::Value>,
+    }
+    let versioned: Versioned = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
+    match versioned.version {
+        None => {
+            return Err(format!(
+                "line 1: missing field `version` (this raylab reads version {VERSION}: \
+                 write `version = {VERSION}` first)"
+            ));
+        }
+        Some(toml::Value::Integer(v)) if v == i64::from(VERSION) => {}
+        Some(other) => {
+            return Err(at_key(
+                text,
+                &["version"],
+                &format!(
+                    "version {other} is not one this raylab reads (it reads version {VERSION})"
+                ),
+            ));
+        }
+    }
+    let file: FileV1 = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
+    let mut settings = file.into_settings();
+    if let SceneChoice::Custom(spec) = &settings.scene {
+        spec.validate()
+            .map_err(|e| at_key(text, &key_path(e.name), &e.to_string()))?;
+    }
+    settings
+        .validate()
+        .map_err(|e| at_key(text, &key_path(e.name), &e.to_string()))?;
+    let mut spec = settings.scene.spec();
+    spec::resolve_models(&mut spec, folder);
+    settings.scene = SceneChoice::from_spec(spec);
+    Ok(settings)
+}
+
+/// The text of a scene file for `settings`, to be written into `folder` (model paths inside it
+/// are written relative to it). Fails only for a seed above 2⁶³ − 1, which TOML's integers
+/// cannot hold.
+pub fn to_text(settings: &RenderSettings, folder: &Path) -> Result<String, String> {
+    let file = FileV1::from_settings(settings, folder)?;
+    let body = toml::to_string(&file).map_err(|e| e.to_string())?;
+    Ok(format!(
+        "# A raylab scene file: open it in the workbench, or `raylab render --scene-file FILE`.\n\
+         # Angles are in radians, lengths in scene units (the box spans \
+         −1 to 1), sizes and focal length in pixels.\n{body}"
+    ))
+}
+
+/// Writes `settings` as a scene file at `path` (through a temporary file, so a failed write
+/// leaves any earlier file whole).
+pub fn save(settings: &RenderSettings, path: &Path) -> Result<(), SceneFileError> {
+    let folder = path.parent().unwrap_or(Path::new(""));
+    let text = to_text(settings, folder).map_err(|reason| SceneFileError::Write {
+        path: path.to_path_buf(),
+        reason,
+    })?;
+    crate::film::write_atomically(path, text.as_bytes()).map_err(|e| SceneFileError::Write {
+        path: path.to_path_buf(),
+        reason: match e {
+            crate::film::SaveError::Write { reason, .. } => reason.to_string(),
+            other => other.to_string(),
+        },
+    })
+}
+
+/// A toml error as `line L (text): message`.
+fn toml_error(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().trim().to_owned();
+    match e.span() {
+        Some(span) => format!("{}: {message}", line_of(text, span.start)),
+        None => message,
+    }
+}
+
+/// `line L (the line's text, shortened)` for a byte offset.
+fn line_of(text: &str, offset: usize) -> String {
+    let offset = offset.min(text.len());
+    let line = text[..offset].matches('\n').count() + 1;
+    let content = text.lines().nth(line - 1).unwrap_or("").trim();
+    let content: String = content.chars().take(60).collect();
+    if content.is_empty() {
+        format!("line {line}")
+    } else {
+        format!("line {line} ({content})")
+    }
+}
+
+/// The TOML key path of a value [`RenderSettings::validate`] or [`SceneSpec::validate`] names.
+fn key_path(name: &str) -> Vec<String> {
+    let path: &[&str] = match name {
+        "width" => &["camera", "width"],
+        "height" => &["camera", "height"],
+        "camera position" => &["camera", "position"],
+        "yaw" => &["camera", "yaw"],
+        "pitch" => &["camera", "pitch"],
+        "focal length" => &["camera", "focal_length"],
+        "aperture" => &["camera", "aperture"],
+        "focus distance" => &["camera", "focus_distance"],
+        "light position" => &["light", "position"],
+        "light power" => &["light", "power"],
+        "light colour" => &["light", "colour"],
+        "light radius" => &["light", "radius"],
+        "exposure" => &["display", "exposure"],
+        "indirect light" => &["shading", "indirect_light"],
+        "specular depth" => &["shading", "specular_depth"],
+        "samples per pixel" => &["render", "samples_per_pixel"],
+        // `scene.models[0].height` and the like.
+        other => {
+            return other
+                .split('.')
+                .flat_map(|part| match part.split_once('[') {
+                    Some((key, index)) => {
+                        vec![key.to_owned(), index.trim_end_matches(']').to_owned()]
+                    }
+                    None => vec![part.to_owned()],
+                })
+                .collect();
+        }
+    };
+    path.iter().map(|s| (*s).to_owned()).collect()
+}
+
+/// `message`, after the line where `path` is set in `text` when it can be found.
+fn at_key(text: &str, path: &[impl AsRef<str>], message: &str) -> String {
+    let Ok(root) = toml::de::DeTable::parse(text) else {
+        return message.to_owned();
+    };
+    let mut span = None;
+    let mut table = Some(root.get_ref());
+    let mut value: Option<&toml::Spanned<toml::de::DeValue<'_>>> = None;
+    for part in path {
+        let part = part.as_ref();
+        let next = match (table, value.map(|v| v.get_ref())) {
+            (Some(t), _) => t.get(part),
+            (None, Some(toml::de::DeValue::Array(items))) => {
+                part.parse::<usize>().ok().and_then(|i| items.get(i))
+            }
+            _ => None,
+        };
+        let Some(next) = next else {
+            break;
+        };
+        span = Some(next.span());
+        value = Some(next);
+        table = match next.get_ref() {
+            toml::de::DeValue::Table(t) => Some(t),
+            _ => None,
+        };
+    }
+    match span {
+        Some(span) => format!("{}: {message}", line_of(text, span.start)),
+        None => message.to_owned(),
+    }
+}
+
+// Version 1 of the format. Every field is required (but `models` and `terrain`), none unknown.
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileV1 {
+    version: u32,
+    scene: SceneV1,
+    camera: CameraV1,
+    light: LightV1,
+    shading: ShadingV1,
+    display: DisplayV1,
+    render: RenderV1,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneV1 {
+    /// Shown in the workbench's scene list.
+    name: String,
+    /// The lab's room: floor, walls, ceiling.
+    room: bool,
+    /// The lab's two blocks.
+    blocks: bool,
+    /// Mirror and glass for the blocks: none, mirror, glass, both.
+    material_preset: MaterialPreset,
+    /// Textures for the floor and walls: none, checker-floor, grid-walls, both.
+    texture_preset: TexturePreset,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    models: Vec<ModelV1>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    terrain: Option<TerrainV1>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelV1 {
+    /// `bunny`, `teapot`, `textured-teapot`, or an OBJ file's path (relative to the scene file).
+    file: PathBuf,
+    height: f32,
+    floor_position: [f32; 2],
+    yaw: f32,
+    reflectance: Vec3,
+    /// `{ kind = "diffuse" }`, `{ kind = "mirror", tint = [r, g, b] }` or
+    /// `{ kind = "glass", ior = 1.5, tint = [r, g, b] }`.
+    material: MaterialKind,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TerrainV1 {
+    seed: u64,
+    grid: u32,
+    height: f32,
+    octaves: u32,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraV1 {
+    position: Vec3,
+    yaw: f32,
+    pitch: f32,
+    focal_length: f32,
+    width: u32,
+    height: u32,
+    aperture: f32,
+    focus_distance: f32,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightV1 {
+    position: Vec3,
+    power: f32,
+    colour: Vec3,
+    radius: f32,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShadingV1 {
+    stage: Stage,
+    shadows: bool,
+    indirect: bool,
+    indirect_light: Vec3,
+    bounces: Bounces,
+    specular_depth: u32,
+    smooth: bool,
+}
+
+/// The path tracer's bounce limit: a number, or `"unlimited"` (TOML has no null).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Bounces(Option<u32>);
+
+impl Serialize for Bounces {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self.0 {
+            Some(n) => s.serialize_u32(n),
+            None => s.serialize_str("unlimited"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Bounces {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Bounces;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a number of bounces (0 or more) or \"unlimited\"")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Bounces, E> {
+                u32::try_from(v)
+                    .map(|n| Bounces(Some(n)))
+                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Signed(v), &self))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Bounces, E> {
+                u32::try_from(v)
+                    .map(|n| Bounces(Some(n)))
+                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Unsigned(v), &self))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Bounces, E> {
+                if v == "unlimited" {
+                    Ok(Bounces(None))
+                } else {
+                    Err(E::invalid_value(serde::de::Unexpected::Str(v), &self))
+                }
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DisplayV1 {
+    transform: DisplayTransform,
+    exposure: f32,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderV1 {
+    samples_per_pixel: u32,
+    seed: u64,
+}
+
+impl FileV1 {
+    fn from_settings(s: &RenderSettings, folder: &Path) -> Result<Self, String> {
+        if s.seed > i64::MAX as u64 {
+            return Err(format!(
+                "seed {} is above 2^63 − 1, the largest integer a TOML file holds",
+                s.seed
+            ));
+        }
+        let mut spec = s.scene.spec();
+        spec::relative_models(&mut spec, folder);
+        let c = &s.camera;
+        let l = &s.light;
+        let sh = &s.shading;
+        Ok(Self {
+            version: VERSION,
+            scene: SceneV1 {
+                name: spec.name,
+                room: spec.room,
+                blocks: spec.blocks,
+                material_preset: s.material_preset,
+                texture_preset: s.texture_preset,
+                models: spec
+                    .models
+                    .into_iter()
+                    .map(|m| ModelV1 {
+                        file: m.file,
+                        height: m.height,
+                        floor_position: m.floor_position,
+                        yaw: m.yaw,
+                        reflectance: m.reflectance,
+                        material: m.kind,
+                    })
+                    .collect(),
+                terrain: spec.terrain.map(|t| TerrainV1 {
+                    seed: t.seed,
+                    grid: t.grid,
+                    height: t.height,
+                    octaves: t.octaves,
+                }),
+            },
+            camera: CameraV1 {
+                position: c.position,
+                yaw: c.yaw,
+                pitch: c.pitch,
+                focal_length: c.focal_length,
+                width: c.width,
+                height: c.height,
+                aperture: c.aperture,
+                focus_distance: c.focus_distance,
+            },
+            light: LightV1 {
+                position: l.position,
+                power: l.power,
+                colour: l.colour,
+                radius: l.radius,
+            },
+            shading: ShadingV1 {
+                stage: sh.stage,
+                shadows: sh.shadows,
+                indirect: sh.indirect,
+                indirect_light: sh.indirect_light,
+                bounces: Bounces(sh.bounces),
+                specular_depth: sh.specular_depth,
+                smooth: sh.smooth,
+            },
+            display: DisplayV1 {
+                transform: s.display.transform,
+                exposure: s.display.exposure,
+            },
+            render: RenderV1 {
+                samples_per_pixel: s.samples_per_pixel,
+                seed: s.seed,
+            },
+        })
+    }
+
+    fn into_settings(self) -> RenderSettings {
+        let scene = self.scene;
+        let spec = SceneSpec {
+            name: scene.name,
+            room: scene.room,
+            blocks: scene.blocks,
+            models: scene
+                .models
+                .into_iter()
+                .map(|m| ModelSpec {
+                    file: m.file,
+                    height: m.height,
+                    floor_position: m.floor_position,
+                    yaw: m.yaw,
+                    reflectance: m.reflectance,
+                    kind: m.material,
+                })
+                .collect(),
+            terrain: scene.terrain.map(|t| TerrainSpec {
+                seed: t.seed,
+                grid: t.grid,
+                height: t.height,
+                octaves: t.octaves,
+            }),
+        };
+        let c = self.camera;
+        let l = self.light;
+        let sh = self.shading;
+        RenderSettings {
+            scene: SceneChoice::from_spec(spec),
+            camera: Camera {
+                position: c.position,
+                yaw: c.yaw,
+                pitch: c.pitch,
+                focal_length: c.focal_length,
+                width: c.width,
+                height: c.height,
+                aperture: c.aperture,
+                focus_distance: c.focus_distance,
+            },
+            light: PointLight {
+                position: l.position,
+                power: l.power,
+                colour: l.colour,
+                radius: l.radius,
+            },
+            shading: Shading {
+                stage: sh.stage,
+                shadows: sh.shadows,
+                indirect: sh.indirect,
+                indirect_light: sh.indirect_light,
+                bounces: sh.bounces.0,
+                specular_depth: sh.specular_depth,
+                smooth: sh.smooth,
+            },
+            material_preset: scene.material_preset,
+            texture_preset: scene.texture_preset,
+            display: Display {
+                transform: self.display.transform,
+                exposure: self.display.exposure,
+            },
+            view: View::Shaded,
+            samples_per_pixel: self.render.samples_per_pixel,
+            seed: self.render.seed,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn round_trip(settings: &RenderSettings) -> RenderSettings {
+        let text = to_text(settings, Path::new("/scenes")).unwrap();
+        parse(&text, Path::new("/scenes")).unwrap_or_else(|e| panic!("{e}\n{text}"))
+    }
+
+    #[test]
+    fn every_setting_round_trips_exactly() {
+        let mut s = RenderSettings::default();
+        s.camera.position = Vec3::new(0.1, -0.2, -2.7);
+        s.camera.yaw = 0.1;
+        s.camera.pitch = -0.05;
+        s.camera.focal_length = 333.3;
+        s.camera.width = 320;
+        s.camera.height = 200;
+        s.camera.aperture = 0.02;
+        s.camera.focus_distance = 2.5;
+        s.light.position = Vec3::new(0.3, -0.7, 0.1);
+        s.light.power = 21.5;
+        s.light.colour = Vec3::new(1.0, 0.8, 0.6);
+        s.light.radius = 0.05;
+        s.shading = Shading::for_stage(Stage::Path);
+        s.shading.bounces = Some(3);
+        s.shading.indirect_light = Vec3::new(0.1, 0.2, 0.3);
+        s.shading.smooth = false;
+        s.material_preset = MaterialPreset::Both;
+        s.texture_preset = TexturePreset::CheckerFloor;
+        s.display = Display {
+            transform: DisplayTransform::Filmic,
+            exposure: 1.5,
+        };
+        s.samples_per_pixel = 64;
+        s.seed = 12345;
+        assert_eq!(round_trip(&s), s);
+        for scene in SceneChoice::BUILT_IN {
+            let s = RenderSettings {
+                scene,
+                ..RenderSettings::default()
+            };
+            assert_eq!(round_trip(&s), s);
+        }
+    }
+
+    #[test]
+    fn a_custom_scene_round_trips_with_its_models_relative_to_the_file() {
+        let mut spec = SceneSpec::cornell("two models");
+        spec.blocks = false;
+        spec.models.push(ModelSpec::new(
+            "bunny",
+            &crate::scene::obj::Placement::FRONT_LEFT,
+        ));
+        let mut dragon = ModelSpec::new(
+            "/scenes/models/dragon.obj",
+            &crate::scene::obj::Placement::TEAPOT,
+        );
+        dragon.kind = MaterialKind::Glass {
+            ior: 1.5,
+            tint: Vec3::ONE,
+        };
+        spec.models.push(dragon);
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(spec)),
+            ..RenderSettings::default()
+        };
+        let text = to_text(&s, Path::new("/scenes")).unwrap();
+        assert!(text.contains("file = \"models/dragon.obj\""), "{text}");
+        assert!(text.contains("kind = \"glass\""), "{text}");
+        assert_eq!(parse(&text, Path::new("/scenes")).unwrap(), s);
+    }
+
+    #[test]
+    fn a_built_in_scene_read_from_a_file_is_that_scene() {
+        let s = RenderSettings {
+            scene: SceneChoice::Bunny,
+            ..RenderSettings::default()
+        };
+        let text = to_text(&s, Path::new("/x"))
+            .unwrap()
+            .replace("name = \"bunny\"", "name = \"my bunny\"");
+        assert_eq!(
+            parse(&text, Path::new("/x")).unwrap().scene,
+            SceneChoice::Bunny
+        );
+    }
+
+    fn error_of(edit: impl Fn(String) -> String) -> String {
+        let text = edit(to_text(&RenderSettings::default(), Path::new("/x")).unwrap());
+        parse(&text, Path::new("/x")).unwrap_err()
+    }
+
+    #[test]
+    fn errors_name_the_field_and_the_line() {
+        // The default file: comments on lines 1–2, then `version = 1` on 3.
+        let text = to_text(&RenderSettings::default(), Path::new("/x")).unwrap();
+        let line = |key: &str| text.lines().position(|l| l.starts_with(key)).unwrap() + 1;
+
+        let e = error_of(|t| t.replace("power = 14.0", "power = -1.0"));
+        assert_eq!(
+            e,
+            format!(
+                "line {} (power = -1.0): invalid light power -1: must be ≥ 0",
+                line("power")
+            )
+        );
+        let e = error_of(|t| t.replace("power = 14.0", "power = nan"));
+        assert!(
+            e.starts_with(&format!(
+                "line {} (power = nan): invalid light power NaN",
+                line("power")
+            )),
+            "{e}"
+        );
+        let e = error_of(|t| t.replace("power = 14.0", "power = 14.0\nwatts = 3"));
+        assert!(
+            e.starts_with(&format!(
+                "line {} (watts = 3): unknown field `watts`",
+                line("power") + 1
+            )),
+            "{e}"
+        );
+        let e = error_of(|t| t.replace("power = 14.0\n", ""));
+        assert!(e.contains("missing field `power`"), "{e}");
+        assert!(e.contains("[light]"), "{e}");
+        let e = error_of(|t| t.replace("width = 512", "width = 0"));
+        assert!(
+            e.starts_with(&format!(
+                "line {} (width = 0): invalid width 0",
+                line("width")
+            )),
+            "{e}"
+        );
+        let e = error_of(|t| t.replace("stage = \"lab\"", "stage = \"lap\""));
+        assert!(e.contains("line") && e.contains("lap"), "{e}");
+    }
+
+    #[test]
+    fn the_version_is_checked_first() {
+        let e = error_of(|t| t.replace("version = 1", "version = 2"));
+        assert_eq!(
+            e,
+            "line 3 (version = 2): version 2 is not one this raylab reads (it reads version 1)"
+        );
+        let e = error_of(|t| t.replace("version = 1\n", ""));
+        assert!(e.starts_with("line 1: missing field `version`"), "{e}");
+        let e = parse("not toml [", Path::new("/x")).unwrap_err();
+        assert!(e.starts_with("line 1 (not toml [)"), "{e}");
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_ignored() {
+        let text = format!(
+            "\u{feff}{}",
+            to_text(&RenderSettings::default(), Path::new("/x")).unwrap()
+        );
+        assert_eq!(
+            parse(&text, Path::new("/x")).unwrap(),
+            RenderSettings::default()
+        );
+    }
+
+    #[test]
+    fn bad_model_values_name_the_model() {
+        let mut s = RenderSettings {
+            scene: SceneChoice::Bunny,
+            ..RenderSettings::default()
+        };
+        s.scene = SceneChoice::Custom(Box::new(SceneSpec {
+            name: "x".into(),
+            ..s.scene.spec()
+        }));
+        let text = to_text(&s, Path::new("/x"))
+            .unwrap()
+            .replace("height = 0.75", "height = -2.0");
+        let e = parse(&text, Path::new("/x")).unwrap_err();
+        assert!(
+            e.contains("(height = -2.0): invalid scene.models[0].height -2: must be in (0, 2]"),
+            "{e}"
+        );
+    }
+}
