@@ -7,7 +7,7 @@
 //! | W / S, A / D, Q / E | light forward / back, left / right, up / down ([`LIGHT_STEP`]) |
 //! | drag on the image | turn the camera (yaw, and pitch) |
 //! | wheel on the image | focal length (zoom) |
-//! | F1 | help; Ctrl+S: screenshot |
+//! | F1 | help; Ctrl+S: screenshot; Ctrl+O: open; Ctrl+Shift+S: save scene |
 //!
 //! Each key press (and each auto-repeat while a key is held) is one step. Keys do nothing while
 //! a text field has focus; the arrows also leave a focused slider alone, which uses them itself.
@@ -33,6 +33,9 @@ pub const WHEEL_ZOOM_PER_POINT: f32 = 0.002;
 pub const FOCAL_RANGE_WIDTHS: (f32, f32) = (0.1, 10.0);
 
 pub const SCREENSHOT_SHORTCUT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
+pub const OPEN_SHORTCUT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
+pub const SAVE_SCENE_SHORTCUT: KeyboardShortcut =
+    KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::S);
 
 /// Every key and mouse action, for the help window: (input, action).
 pub const HELP: &[(&str, &str)] = &[
@@ -52,6 +55,12 @@ pub const HELP: &[(&str, &str)] = &[
     ),
     ("Shift + arrows", "move the inspected pixel by one"),
     ("Ctrl+S", "save a screenshot"),
+    ("Ctrl+O", "open a scene file, screenshot or OBJ model"),
+    ("Ctrl+Shift+S", "save the setup as a scene file"),
+    (
+        "Drop a file",
+        "open it (scene file, screenshot .png/.json, OBJ)",
+    ),
     ("F1", "show / hide this help"),
     (
         "Esc",
@@ -65,6 +74,13 @@ pub fn keys(ctx: &egui::Context, settings: &mut RenderSettings) -> Vec<Command> 
     let text_focused = ctx.egui_wants_keyboard_input();
     let widget_focused = ctx.memory(|m| m.focused().is_some());
     ctx.input_mut(|i| {
+        // Before Ctrl+S, which would also match Ctrl+Shift+S.
+        if i.consume_shortcut(&SAVE_SCENE_SHORTCUT) {
+            commands.push(Command::ShowSaveSceneDialog);
+        }
+        if i.consume_shortcut(&OPEN_SHORTCUT) {
+            commands.push(Command::ShowOpenDialog);
+        }
         if i.consume_shortcut(&SCREENSHOT_SHORTCUT) {
             commands.push(Command::SaveScreenshot);
         }

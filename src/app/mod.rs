@@ -8,6 +8,7 @@
 //! for finished frames and never waits on the renderer.
 
 mod compare;
+mod files;
 mod input;
 mod panels;
 mod persistence;
@@ -55,6 +56,17 @@ pub enum Command {
     MovePinned([i32; 2]),
     /// Compare A/B: freeze the current settings and scene as A ([`compare`]).
     FreezeA,
+    /// Open the file whose path is typed in the File field.
+    OpenTyped,
+    /// Save the setup as a scene file at the path typed in the File field.
+    SaveSceneTyped,
+    /// Show the Open dialog (Ctrl+O), or the one for screenshots.
+    ShowOpenDialog,
+    ShowScreenshotDialog,
+    /// Show the Save scene dialog (Ctrl+Shift+S).
+    ShowSaveSceneDialog,
+    /// Give up loading a scene: the scene on screen stays.
+    CancelLoading,
     /// Compare A/B: drop A and its renderer.
     StopComparing,
 }
@@ -136,13 +148,28 @@ pub struct WorkbenchApp {
     started: Instant,
     /// Compare A/B: the frozen A and its renderer, while comparing ([`compare`]).
     compare: Option<compare::Compare>,
+    /// The Open or Save scene dialog, while shown.
+    file_dialog: Option<files::FileDialog>,
+    /// Scenes loaded before, newest first, so switching back is instant (at most
+    /// [`SCENE_CACHE`]).
+    scene_cache: Vec<(SceneChoice, Arc<Scene>)>,
+    /// The settings before a file was opened whose scene is still loading: put back if the
+    /// scene cannot be loaded, so nothing is lost.
+    restore_on_failure: Option<RenderSettings>,
 }
+
+/// How many scenes besides the one on screen stay loaded for switching back.
+pub const SCENE_CACHE: usize = 4;
 
 /// A scene being loaded off the UI thread.
 struct SceneLoad {
     choice: SceneChoice,
     started: Instant,
-    result: Receiver<Result<Scene, String>>,
+    result: Receiver<Result<(Scene, Vec<String>), String>>,
+    /// What the loader is doing, for the status line.
+    progress: Arc<std::sync::Mutex<String>>,
+    /// Set by Cancel: the loader stops at its next step.
+    cancel: Arc<std::sync::atomic::AtomicBool>,
 }
 
 /// An inspection as the inspector panel shows it: its lines, and the same as text to copy.
@@ -235,6 +262,9 @@ impl WorkbenchApp {
             log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
             started: Instant::now(),
             compare: None,
+            file_dialog: None,
+            scene_cache: Vec::new(),
+            restore_on_failure: None,
         }
     }
 
@@ -269,7 +299,8 @@ impl WorkbenchApp {
         }
     }
 
-    /// Starts loading the scene the settings ask for, unless it is loaded or on its way.
+    /// Starts loading the scene the settings ask for, unless it is loaded, kept from before
+    /// (then it is swapped in at once), or on its way.
     fn sync_scene(&mut self, ctx: &egui::Context) {
         let wanted = &self.state.settings.scene;
         if *wanted == self.scene_choice
@@ -280,6 +311,21 @@ impl WorkbenchApp {
         {
             return;
         }
+        if let Some(i) = self.scene_cache.iter().position(|(c, _)| c == wanted) {
+            let (choice, scene) = self.scene_cache.remove(i);
+            if let Some(load) = self.scene_loading.take() {
+                load.cancel.store(true, std::sync::atomic::Ordering::SeqCst);
+            }
+            self.set_status(
+                StatusKind::Info,
+                format!(
+                    "Switched to the {choice} scene ({} triangles, kept loaded)",
+                    scene.triangles.len()
+                ),
+            );
+            self.swap_in_scene(choice, scene);
+            return;
+        }
         if self.scene_loading.is_some() {
             // One load at a time: the wanted scene starts when the running load ends.
             return;
@@ -288,10 +334,23 @@ impl WorkbenchApp {
         let (sender, receiver) = mpsc::channel();
         let repaint = ctx.clone();
         let job = choice.clone();
+        let progress = Arc::new(std::sync::Mutex::new(String::from("starting")));
+        let cancel = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let (job_progress, job_cancel) = (Arc::clone(&progress), Arc::clone(&cancel));
         let spawned = std::thread::Builder::new()
             .name("raylab-scene-loader".to_owned())
             .spawn(move || {
-                let _ = sender.send(job.load().map_err(|e| e.to_string()));
+                let cancelled = || job_cancel.load(std::sync::atomic::Ordering::SeqCst);
+                let report = |what: &str| {
+                    if let Ok(mut p) = job_progress.lock() {
+                        *p = what.to_owned();
+                    }
+                    repaint.request_repaint();
+                };
+                let result = job
+                    .load_with(&cancelled, &report)
+                    .map_err(|e| e.to_string());
+                let _ = sender.send(result);
                 repaint.request_repaint();
             });
         match spawned {
@@ -301,12 +360,63 @@ impl WorkbenchApp {
                     choice,
                     started: Instant::now(),
                     result: receiver,
+                    progress,
+                    cancel,
                 });
             }
             Err(e) => {
                 self.state.settings.scene = self.scene_choice.clone();
                 self.set_status(StatusKind::Error, format!("Could not load {choice}: {e}"));
             }
+        }
+    }
+
+    /// Puts `scene` on screen, keeping the one it replaces for switching back.
+    fn swap_in_scene(&mut self, choice: SceneChoice, scene: Arc<Scene>) {
+        let old_choice = std::mem::replace(&mut self.scene_choice, choice);
+        let old_scene = std::mem::replace(&mut self.scene, scene);
+        self.scene_cache.retain(|(c, _)| *c != old_choice);
+        self.scene_cache.insert(0, (old_choice, old_scene));
+        self.scene_cache.truncate(SCENE_CACHE);
+        self.restore_on_failure = None;
+        // Render the new scene even if nothing else changed.
+        self.submitted = None;
+    }
+
+    /// The status line while a scene loads: what the loader is doing, and for how long.
+    fn loading_status(&mut self) {
+        let Some(load) = &self.scene_loading else {
+            return;
+        };
+        let doing = load.progress.lock().map(|p| p.clone()).unwrap_or_default();
+        let text = format!(
+            "Loading the {} scene: {doing}... {:.1} s (Cancel keeps the scene on screen)",
+            load.choice,
+            load.started.elapsed().as_secs_f64()
+        );
+        self.set_status(StatusKind::Info, text);
+    }
+
+    /// Cancel: the load stops at its next step; the scene and settings on screen stay.
+    fn cancel_loading(&mut self) {
+        let Some(load) = self.scene_loading.take() else {
+            return;
+        };
+        load.cancel.store(true, std::sync::atomic::Ordering::SeqCst);
+        self.put_back_settings(&load.choice);
+        self.set_status(
+            StatusKind::Info,
+            format!("Loading the {} scene was cancelled", load.choice),
+        );
+    }
+
+    /// After a load that did not finish: the settings from before the file was opened, or at
+    /// least the scene on screen.
+    fn put_back_settings(&mut self, failed: &SceneChoice) {
+        if let Some(old) = self.restore_on_failure.take() {
+            self.state.settings = old;
+        } else if self.state.settings.scene == *failed {
+            self.state.settings.scene = self.scene_choice.clone();
         }
     }
 
@@ -317,35 +427,120 @@ impl WorkbenchApp {
         };
         let result = match load.result.try_recv() {
             Ok(result) => result,
-            Err(TryRecvError::Empty) => return,
+            Err(TryRecvError::Empty) => {
+                self.loading_status();
+                return;
+            }
             Err(TryRecvError::Disconnected) => Err("the loader thread stopped".to_owned()),
         };
         let Some(load) = self.scene_loading.take() else {
             return;
         };
         match result {
-            Ok(scene) => {
+            Ok((scene, warnings)) => {
                 let ms = load.started.elapsed().as_secs_f64() * 1e3;
-                self.set_status(
-                    StatusKind::Info,
-                    format!(
-                        "Loaded the {} scene: {} triangles in {ms:.0} ms",
-                        load.choice,
-                        scene.triangles.len()
-                    ),
+                let mut text = format!(
+                    "Loaded the {} scene: {} triangles in {ms:.0} ms",
+                    load.choice,
+                    scene.triangles.len()
                 );
-                self.scene = Arc::new(scene);
-                self.scene_choice = load.choice;
-                // Render the new scene even if nothing else changed.
-                self.submitted = None;
+                let kind = if warnings.is_empty() {
+                    StatusKind::Info
+                } else {
+                    text += &format!(" ({})", warnings.join("; "));
+                    StatusKind::Notice
+                };
+                self.set_status(kind, text);
+                self.swap_in_scene(load.choice, Arc::new(scene));
             }
             Err(e) => {
                 // Nothing is lost: the scene on screen stays, and so do its settings.
-                if self.state.settings.scene == load.choice {
-                    self.state.settings.scene = self.scene_choice.clone();
-                }
+                self.put_back_settings(&load.choice);
                 self.set_status(StatusKind::Error, e);
             }
+        }
+    }
+
+    /// Opens a scene file, a screenshot (PNG or JSON) or an OBJ model: from the File field,
+    /// the dialog or a drop on the window. A file that cannot be used changes nothing.
+    fn open_path(&mut self, path: &std::path::Path) {
+        self.state.obj_path = path.display().to_string();
+        match files::open(path) {
+            Ok(files::Opened::Model(model)) => {
+                self.state.settings.scene = SceneChoice::Obj(model);
+            }
+            Ok(files::Opened::Settings(loaded)) => {
+                let old = std::mem::replace(&mut self.state.settings, loaded.settings);
+                if self.state.settings.scene != self.scene_choice {
+                    self.restore_on_failure = Some(old);
+                }
+                self.state.walk_step = None;
+                let name = path.file_name().map_or_else(
+                    || path.display().to_string(),
+                    |n| n.to_string_lossy().into_owned(),
+                );
+                if loaded.warnings.is_empty() {
+                    self.set_status(StatusKind::Info, format!("Opened {name}"));
+                } else {
+                    self.set_status(
+                        StatusKind::Notice,
+                        format!("Opened {name}: {}", loaded.warnings.join("; ")),
+                    );
+                }
+            }
+            Err(e) => self.set_status(StatusKind::Error, e),
+        }
+    }
+
+    fn save_scene_to(&mut self, path: &std::path::Path) {
+        match files::save_scene(&self.state.settings, path) {
+            Ok(written) => {
+                self.state.obj_path = written.display().to_string();
+                self.set_status(
+                    StatusKind::Info,
+                    format!("Saved the scene file {}", written.display()),
+                );
+            }
+            Err(e) => self.set_status(StatusKind::Error, e),
+        }
+    }
+
+    /// The dialog's folder: the typed path's, else the screenshot folder.
+    fn dialog_folder(&self) -> (std::path::PathBuf, String) {
+        let typed = std::path::Path::new(self.state.obj_path.trim());
+        match (typed.parent(), typed.file_name()) {
+            (Some(dir), Some(name)) if dir.is_dir() => {
+                (dir.to_path_buf(), name.to_string_lossy().into_owned())
+            }
+            _ => (self.state.screenshot_folder.clone(), String::new()),
+        }
+    }
+
+    fn file_dialog_ui(&mut self, ctx: &egui::Context) {
+        let Some(dialog) = &mut self.file_dialog else {
+            return;
+        };
+        let mode = dialog.mode;
+        match dialog.ui(ctx) {
+            files::DialogOutcome::Open => {}
+            files::DialogOutcome::Cancelled => self.file_dialog = None,
+            files::DialogOutcome::Chosen(path) => {
+                self.file_dialog = None;
+                if mode == files::DialogMode::SaveScene {
+                    self.save_scene_to(&path);
+                } else {
+                    self.open_path(&path);
+                }
+            }
+        }
+    }
+
+    /// Files dropped on the window are opened (the last, if several).
+    fn receive_dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        if let Some(file) = dropped.last() {
+            let path = file.path().to_path_buf();
+            self.open_path(&path);
         }
     }
 
@@ -671,6 +866,42 @@ impl WorkbenchApp {
             }
             Command::FreezeA => self.freeze_a(ctx),
             Command::StopComparing => self.compare = None,
+            Command::OpenTyped => {
+                let typed = self.state.obj_path.trim().to_owned();
+                if typed.is_empty() {
+                    self.set_status(StatusKind::Notice, "Type a file's path to open it");
+                } else {
+                    self.open_path(std::path::Path::new(&typed));
+                }
+            }
+            Command::SaveSceneTyped => {
+                let typed = self.state.obj_path.trim().to_owned();
+                if typed.is_empty() {
+                    self.set_status(StatusKind::Notice, "Type a path ending in .toml to save to");
+                } else {
+                    self.save_scene_to(std::path::Path::new(&typed));
+                }
+            }
+            Command::ShowOpenDialog | Command::ShowScreenshotDialog => {
+                let mode = if command == Command::ShowOpenDialog {
+                    files::DialogMode::Open
+                } else {
+                    files::DialogMode::OpenScreenshot
+                };
+                let (folder, name) = if mode == files::DialogMode::OpenScreenshot {
+                    (self.state.screenshot_folder.clone(), String::new())
+                } else {
+                    self.dialog_folder()
+                };
+                self.file_dialog = Some(files::FileDialog::new(mode, &folder, &name));
+            }
+            Command::ShowSaveSceneDialog => {
+                let (folder, _) = self.dialog_folder();
+                let name = format!("{}.toml", self.scene_choice.name().replace(' ', "-"));
+                let dialog = files::FileDialog::new(files::DialogMode::SaveScene, &folder, &name);
+                self.file_dialog = Some(dialog);
+            }
+            Command::CancelLoading => self.cancel_loading(),
         }
     }
 
@@ -906,6 +1137,8 @@ impl eframe::App for WorkbenchApp {
         for command in commands {
             self.handle(command, &ctx);
         }
+        self.receive_dropped_files(&ctx);
+        self.file_dialog_ui(&ctx);
         self.help_ui(&ctx);
         self.sync_scene(&ctx);
         self.sync_render();

@@ -99,7 +99,13 @@ pub fn controls_ui(
         egui::CollapsingHeader::new("Scene")
             .default_open(true)
             .show(ui, |ui| {
-                scene_ui(ui, &mut state.settings.scene, &mut state.obj_path, loading)
+                scene_ui(
+                    ui,
+                    &mut state.settings.scene,
+                    &mut state.obj_path,
+                    loading,
+                    &mut commands,
+                )
             });
         egui::CollapsingHeader::new("Camera")
             .default_open(true)
@@ -153,12 +159,14 @@ pub fn controls_ui(
     commands
 }
 
-/// The scene: the lab's box or a model standing in it, or any OBJ file.
+/// The scene: the lab's box or a model standing in it, a scene file's or any OBJ file; and the
+/// File row, which opens scene files, screenshots and models and saves scene files.
 pub fn scene_ui(
     ui: &mut egui::Ui,
     scene: &mut SceneChoice,
-    obj_path: &mut String,
+    file_path: &mut String,
     loading: Option<&SceneChoice>,
+    commands: &mut Vec<Command>,
 ) {
     ui.horizontal(|ui| {
         egui::ComboBox::new("scene", "Scene")
@@ -175,19 +183,61 @@ pub fn scene_ui(
             // In the selector's row, so nothing below moves while a scene loads (the status
             // line says what is loading).
             ui.spinner().on_hover_text(format!("Loading {choice}..."));
+            if ui
+                .button("Cancel")
+                .on_hover_text("Stop loading; the scene on screen stays")
+                .clicked()
+            {
+                commands.push(Command::CancelLoading);
+            }
         }
     });
     ui.horizontal(|ui| {
-        let label = ui.label("OBJ file");
+        let label = ui.label("File");
         let field = ui
-            .add(egui::TextEdit::singleline(obj_path).desired_width(160.0))
+            .add(egui::TextEdit::singleline(file_path).desired_width(200.0))
             .labelled_by(label.id)
             .on_hover_text(
-                "A path to any .obj file: it stands on the box's floor (Enter loads it)",
+                "A scene file (.toml), a screenshot (.png, or its .json) or an OBJ model \
+                 (Enter opens it). Files dropped on the window open too.",
             );
-        let entered = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-        if (ui.button("Load OBJ").clicked() || entered) && !obj_path.trim().is_empty() {
-            *scene = SceneChoice::Obj(obj_path.trim().into());
+        if field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+            commands.push(Command::OpenTyped);
+        }
+    });
+    ui.horizontal_wrapped(|ui| {
+        if ui
+            .button("Open")
+            .on_hover_text("Open the file typed above")
+            .clicked()
+        {
+            commands.push(Command::OpenTyped);
+        }
+        if ui
+            .button("Save scene")
+            .on_hover_text(
+                "Save the scene, camera, light and every setting to the .toml file typed above",
+            )
+            .clicked()
+        {
+            commands.push(Command::SaveSceneTyped);
+        }
+        if ui.button("Open…").on_hover_text("Ctrl+O").clicked() {
+            commands.push(Command::ShowOpenDialog);
+        }
+        if ui
+            .button("Save scene as…")
+            .on_hover_text("Ctrl+Shift+S")
+            .clicked()
+        {
+            commands.push(Command::ShowSaveSceneDialog);
+        }
+        if ui
+            .button("Open settings from screenshot…")
+            .on_hover_text("A screenshot's PNG (or .json) restores the render it shows")
+            .clicked()
+        {
+            commands.push(Command::ShowScreenshotDialog);
         }
     });
 }

@@ -1,5 +1,7 @@
 //! Screenshots: the render buffer (not a grab of the window) encoded as PNG, with the settings
-//! that made it in a `.json` file beside it, so the image can be reproduced.
+//! that made it inside the PNG (an `iTXt` chunk) and in a `.json` file beside it, so the image
+//! alone reproduces the render: open it (or drop it on the window) and the workbench restores
+//! its settings; `raylab render --settings SHOT.png` renders it again.
 //!
 //! Files are named `raylab-YYYYMMDD-HHMMSS.png`; if that name (or its `.json`) is taken, `-1`,
 //! `-2`, … is added. Files are created with `create_new`, so nothing is ever overwritten, even
@@ -68,6 +70,7 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
         .image
         .encode_with(OutputFormat::Png, &request.settings.display)
         .context("could not encode the screenshot as PNG")?;
+    let png_bytes = raylab::settings::files::png_with_settings(&png_bytes, &request.settings);
     let base = base_name(&request.time);
     let (png_path, png_file, json_path, json_file) = reserve(folder, &base)?;
     let name = png_path

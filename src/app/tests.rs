@@ -20,6 +20,8 @@ use raylab::{Image, MaterialPreset, RenderSettings, Shading, Stage};
 use super::persistence::{WorkbenchState, lab_defaults};
 use super::*;
 
+mod files_ui;
+
 const DEADLINE: Duration = Duration::from_secs(90);
 
 /// A small image and one sample, so each test renders in milliseconds.
@@ -507,14 +509,14 @@ fn a_missing_obj_file_shows_an_error_and_keeps_the_scene() {
     let mut h = harness(small_state());
     let before = shown(&h);
     let missing = "/no/such/model.obj";
-    let field = h.get_by_role_and_label(Role::TextInput, "OBJ file");
+    let field = h.get_by_role_and_label(Role::TextInput, "File");
     field.focus();
     h.step();
-    h.get_by_role_and_label(Role::TextInput, "OBJ file")
+    h.get_by_role_and_label(Role::TextInput, "File")
         .type_text(missing);
     h.run_steps(2);
     assert_eq!(h.state().state.obj_path, missing);
-    h.get_by_label("Load OBJ").click();
+    h.get_by_role_and_label(Role::Button, "Open").click();
     settle(&mut h);
     let (text, kind) = status(&h);
     assert_eq!(kind, StatusKind::Error);
@@ -936,9 +938,9 @@ fn a_screenshot_before_the_target_says_so() {
 fn enter_in_the_obj_field_loads_it() {
     let mut h = harness(small_state());
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models/teapot.obj");
-    h.get_by_role_and_label(Role::TextInput, "OBJ file").focus();
+    h.get_by_role_and_label(Role::TextInput, "File").focus();
     h.step();
-    h.get_by_role_and_label(Role::TextInput, "OBJ file")
+    h.get_by_role_and_label(Role::TextInput, "File")
         .type_text(path);
     h.step();
     h.key_press(Key::Enter);

@@ -320,7 +320,17 @@ impl SceneChoice {
     /// [`SceneChoice::load`], with what could not be used on the way (a model's missing
     /// texture).
     pub fn load_with_warnings(&self) -> Result<(Scene, Vec<String>), SceneError> {
-        self.spec().build(&|| false, &|_| {})
+        self.load_with(&|| false, &|_| {})
+    }
+
+    /// [`SceneChoice::load_with_warnings`], asking `cancelled` between the parts of the work
+    /// and telling `progress` what is being done (the workbench's loading line and Cancel).
+    pub fn load_with(
+        &self,
+        cancelled: &(dyn Fn() -> bool + Sync),
+        progress: spec::Progress<'_>,
+    ) -> Result<(Scene, Vec<String>), SceneError> {
+        self.spec().build(cancelled, progress)
     }
 }
 

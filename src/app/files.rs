@@ -1,0 +1,261 @@
+//! Files in the workbench: opening a scene file (`.toml`), a screenshot (its `.png`, which
+//! carries its settings, or the `.json` beside it) or an OBJ model, and saving the setup as a
+//! scene file — from a typed path, drag-and-drop onto the window, or the Open / Save dialog
+//! (Ctrl+O, Ctrl+Shift+S).
+//!
+//! The dialog is the workbench's own (a folder's listing in an egui window), not the desktop's:
+//! it works wherever the window does, under Xvfb and in the UI tests included, and needs no
+//! portal service or GTK.
+
+use std::path::{Path, PathBuf};
+
+use eframe::egui;
+use raylab::RenderSettings;
+use raylab::settings::files::{self, Loaded};
+
+/// What a file holds, once read.
+#[derive(Debug)]
+pub enum Opened {
+    /// Settings (a scene file, a screenshot or its JSON), checked and valid.
+    Settings(Loaded),
+    /// An OBJ model, to stand in the box (it is read by the scene loader, off this thread).
+    Model(PathBuf),
+}
+
+/// Reads what `path` holds. Settings are validated here, so a file with a bad value changes
+/// nothing: the error names the file and the value.
+pub fn open(path: &Path) -> Result<Opened, String> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if extension.as_deref() == Some("obj") {
+        if !path.is_file() {
+            return Err(format!("could not open '{}': no such file", path.display()));
+        }
+        return Ok(Opened::Model(path.to_path_buf()));
+    }
+    let loaded = files::read_file(path).map_err(|e| e.to_string())?;
+    loaded
+        .settings
+        .validate()
+        .map_err(|e| format!("'{}' was not opened: {e}", path.display()))?;
+    Ok(Opened::Settings(loaded))
+}
+
+/// Writes the settings as a scene file at `path` (`.toml` added when it has no extension).
+/// Returns the path written.
+pub fn save_scene(settings: &RenderSettings, path: &Path) -> Result<PathBuf, String> {
+    let path = match path.extension() {
+        None => path.with_extension(raylab::scene_file::EXTENSION),
+        Some(e) if e == raylab::scene_file::EXTENSION => path.to_path_buf(),
+        Some(_) => {
+            return Err(format!(
+                "not saved: a scene file's name ends in .toml ('{}')",
+                path.display()
+            ));
+        }
+    };
+    raylab::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
+    Ok(path)
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DialogMode {
+    /// Any file the workbench opens.
+    Open,
+    /// A screenshot's settings (PNG and JSON only).
+    OpenScreenshot,
+    SaveScene,
+}
+
+/// What the dialog ended with this frame.
+#[derive(Debug, PartialEq)]
+pub enum DialogOutcome {
+    Open,
+    Cancelled,
+    Chosen(PathBuf),
+}
+
+/// The Open / Save dialog: a folder's sub-folders and the files of the kinds it offers.
+pub struct FileDialog {
+    pub mode: DialogMode,
+    folder: PathBuf,
+    /// The file name typed or clicked.
+    name: String,
+    /// Sub-folders, then files, by name.
+    entries: Vec<(String, bool)>,
+    error: Option<String>,
+}
+
+impl FileDialog {
+    pub fn new(mode: DialogMode, folder: &Path, name: &str) -> Self {
+        let folder = std::fs::canonicalize(folder).unwrap_or_else(|_| folder.to_path_buf());
+        let mut dialog = Self {
+            mode,
+            folder,
+            name: name.to_owned(),
+            entries: Vec::new(),
+            error: None,
+        };
+        dialog.list();
+        dialog
+    }
+
+    fn offers(&self, name: &str) -> bool {
+        let lower = name.to_ascii_lowercase();
+        let ends = |e: &[&str]| e.iter().any(|e| lower.ends_with(e));
+        match self.mode {
+            DialogMode::Open => ends(&[".toml", ".png", ".json", ".obj"]),
+            DialogMode::OpenScreenshot => ends(&[".png", ".json"]),
+            DialogMode::SaveScene => ends(&[".toml"]),
+        }
+    }
+
+    fn list(&mut self) {
+        self.entries.clear();
+        match std::fs::read_dir(&self.folder) {
+            Ok(read) => {
+                for entry in read.flatten() {
+                    let name = entry.file_name().to_string_lossy().into_owned();
+                    if name.starts_with('.') {
+                        continue;
+                    }
+                    let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+                    if is_dir || self.offers(&name) {
+                        self.entries.push((name, is_dir));
+                    }
+                }
+                self.entries
+                    .sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+                self.error = None;
+            }
+            Err(e) => self.error = Some(format!("could not list '{}': {e}", self.folder.display())),
+        }
+    }
+
+    fn enter(&mut self, folder: PathBuf) {
+        self.folder = folder;
+        self.list();
+    }
+
+    pub fn title(&self) -> &'static str {
+        match self.mode {
+            DialogMode::Open => "Open",
+            DialogMode::OpenScreenshot => "Open settings from screenshot",
+            DialogMode::SaveScene => "Save scene as",
+        }
+    }
+
+    pub fn ui(&mut self, ctx: &egui::Context) -> DialogOutcome {
+        let mut outcome = DialogOutcome::Open;
+        let mut open = true;
+        egui::Window::new(self.title())
+            .open(&mut open)
+            .collapsible(false)
+            .default_width(420.0)
+            .show(ctx, |ui| {
+                ui.horizontal(|ui| {
+                    if ui.button("Up").on_hover_text("The parent folder").clicked()
+                        && let Some(parent) = self.folder.parent()
+                    {
+                        self.enter(parent.to_path_buf());
+                    }
+                    ui.label(self.folder.display().to_string());
+                });
+                if let Some(e) = &self.error {
+                    ui.colored_label(ui.visuals().error_fg_color, e);
+                }
+                let mut enter = None;
+                egui::ScrollArea::vertical()
+                    .max_height(260.0)
+                    .show(ui, |ui| {
+                        for (name, is_dir) in &self.entries {
+                            let label = if *is_dir {
+                                format!("{name}/")
+                            } else {
+                                name.clone()
+                            };
+                            let selected = !is_dir && *name == self.name;
+                            let response = ui.selectable_label(selected, label);
+                            if response.clicked() {
+                                if *is_dir {
+                                    enter = Some(self.folder.join(name));
+                                } else {
+                                    self.name = name.clone();
+                                }
+                            }
+                            if response.double_clicked() && !is_dir {
+                                outcome = DialogOutcome::Chosen(self.folder.join(name));
+                            }
+                        }
+                        if self.entries.is_empty() {
+                            ui.weak("No folders or files of the kinds offered here.");
+                        }
+                    });
+                if let Some(folder) = enter {
+                    self.enter(folder);
+                }
+                ui.separator();
+                ui.horizontal(|ui| {
+                    let label = ui.label("File name");
+                    let field = ui
+                        .add(egui::TextEdit::singleline(&mut self.name).desired_width(220.0))
+                        .labelled_by(label.id);
+                    let entered =
+                        field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+                    let action = if self.mode == DialogMode::SaveScene {
+                        "Save file"
+                    } else {
+                        "Open file"
+                    };
+                    if (ui.button(action).clicked() || entered) && !self.name.trim().is_empty() {
+                        outcome = DialogOutcome::Chosen(self.folder.join(self.name.trim()));
+                    }
+                    if ui.button("Cancel").clicked() {
+                        outcome = DialogOutcome::Cancelled;
+                    }
+                });
+            });
+        if !open {
+            outcome = DialogOutcome::Cancelled;
+        }
+        outcome
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn open_tells_the_kinds_apart_and_refuses_bad_values() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("m.obj");
+        std::fs::write(&model, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        assert!(matches!(open(&model), Ok(Opened::Model(p)) if p == model));
+        let missing = dir.path().join("gone.obj");
+        assert!(open(&missing).unwrap_err().contains("gone.obj"));
+
+        let json = dir.path().join("s.json");
+        std::fs::write(&json, r#"{"seed": 5}"#).unwrap();
+        match open(&json).unwrap() {
+            Opened::Settings(loaded) => assert_eq!(loaded.settings.seed, 5),
+            other => panic!("{other:?}"),
+        }
+        std::fs::write(&json, r#"{"light": {"power": -3}}"#).unwrap();
+        let e = open(&json).unwrap_err();
+        assert!(
+            e.contains("s.json") && e.contains("invalid light power -3"),
+            "{e}"
+        );
+
+        let saved = save_scene(&RenderSettings::default(), &dir.path().join("setup")).unwrap();
+        assert_eq!(saved, dir.path().join("setup.toml"));
+        match open(&saved).unwrap() {
+            Opened::Settings(loaded) => assert_eq!(loaded.settings, RenderSettings::default()),
+            other => panic!("{other:?}"),
+        }
+        let e = save_scene(&RenderSettings::default(), &dir.path().join("x.png")).unwrap_err();
+        assert!(e.contains("ends in .toml"), "{e}");
+    }
+}
