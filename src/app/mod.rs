@@ -1134,6 +1134,9 @@ impl eframe::App for WorkbenchApp {
                 }
             }
         });
+        if let Some(message) = panels::take_clamped() {
+            self.set_status(StatusKind::Notice, message);
+        }
         for command in commands {
             self.handle(command, &ctx);
         }

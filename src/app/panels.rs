@@ -264,6 +264,7 @@ pub fn camera_ui(ui: &mut egui::Ui, camera: &mut Camera, commands: &mut Vec<Comm
     let w = camera.width as f32;
     ui.add(
         egui::Slider::new(&mut camera.focal_length, 0.1 * w..=10.0 * w)
+            .custom_parser(typed_number("Focal length", 0.1 * w, 10.0 * w))
             .logarithmic(true)
             .max_decimals(1)
             .suffix(" px")
@@ -293,11 +294,55 @@ fn position_slider(
     label: &str,
 ) {
     ui.add(
-        egui::Slider::new(value, range)
+        egui::Slider::new(value, range.clone())
+            .custom_parser(typed_number(label, *range.start(), *range.end()))
             .clamping(egui::SliderClamping::Edits)
             .custom_formatter(|v, _| fixed(v, 2))
             .text(label),
     );
+}
+
+thread_local! {
+    /// The newest "typed value was clamped" message, until the app takes it.
+    static CLAMPED: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The parser of every number field. egui's own turns `NaN` into the field's maximum (NaN
+/// compares false with both ends of the range); here a text that is not a finite number —
+/// `NaN`, `inf`, `abc` — parses to nothing, so the value stays as it was. A number outside
+/// `lo..=hi` is clamped by the field as before, and [`take_clamped`] says so.
+pub fn typed_number<'a, T: Into<f64> + Copy>(
+    name: &'a str,
+    lo: T,
+    hi: T,
+) -> impl Fn(&str) -> Option<f64> + 'a {
+    let (lo, hi) = (lo.into(), hi.into());
+    move |text: &str| {
+        let number = text
+            .trim()
+            .trim_end_matches(['°', ' '])
+            .trim_end_matches(" px")
+            .trim_end_matches(" W")
+            .trim_end_matches(" EV");
+        let v: f64 = number.trim().parse().ok().filter(|v: &f64| v.is_finite())?;
+        if v < lo || v > hi {
+            let to = v.clamp(lo, hi);
+            let message = format!(
+                "{name}: {} is outside {} to {}, so it was set to {}",
+                number.trim(),
+                fixed(lo, 2).trim_end_matches(".00"),
+                fixed(hi, 2).trim_end_matches(".00"),
+                fixed(to, 2).trim_end_matches(".00")
+            );
+            CLAMPED.with(|c| *c.borrow_mut() = Some(message));
+        }
+        Some(v)
+    }
+}
+
+/// The message of the newest typed value that was clamped, once.
+pub fn take_clamped() -> Option<String> {
+    CLAMPED.with(|c| c.borrow_mut().take())
 }
 
 /// `v` with `decimals` decimals, never "-0.00": a value that rounds to zero shows as zero
@@ -320,7 +365,8 @@ fn degrees_slider(
 ) {
     let mut degrees = radians.to_degrees();
     let response = ui.add(
-        egui::Slider::new(&mut degrees, range)
+        egui::Slider::new(&mut degrees, range.clone())
+            .custom_parser(typed_number(label, *range.start(), *range.end()))
             .suffix("°")
             .custom_formatter(|v, _| fixed(v, 1))
             .text(label),
@@ -334,6 +380,7 @@ fn degrees_slider(
 pub fn lens_ui(ui: &mut egui::Ui, camera: &mut Camera, focus_mode: &mut bool) {
     ui.add(
         egui::Slider::new(&mut camera.aperture, 0.0..=MAX_APERTURE_UI)
+            .custom_parser(typed_number("Aperture", 0.0, MAX_APERTURE_UI))
             .clamping(egui::SliderClamping::Edits)
             .max_decimals(3)
             .text("Aperture"),
@@ -345,6 +392,7 @@ pub fn lens_ui(ui: &mut egui::Ui, camera: &mut Camera, focus_mode: &mut bool) {
     ui.add_enabled(
         camera.aperture > 0.0,
         egui::Slider::new(&mut camera.focus_distance, 0.1..=10.0)
+            .custom_parser(typed_number("Focus distance", 0.1, 10.0))
             .logarithmic(true)
             .clamping(egui::SliderClamping::Edits)
             .max_decimals(3)
@@ -362,6 +410,7 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
     position_slider(ui, &mut light.position.z, -1.0..=1.0, "Light z");
     ui.add(
         egui::Slider::new(&mut light.power, 0.0..=100.0)
+            .custom_parser(typed_number("Light power", 0.0, 100.0))
             .suffix(" W")
             .text("Light power"),
     )
@@ -381,6 +430,7 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
     });
     ui.add(
         egui::Slider::new(&mut light.radius, 0.0..=MAX_LIGHT_RADIUS_UI)
+            .custom_parser(typed_number("Light radius", 0.0, MAX_LIGHT_RADIUS_UI))
             .clamping(egui::SliderClamping::Edits)
             .max_decimals(3)
             .text("Light radius"),
@@ -524,6 +574,7 @@ pub fn display_ui(ui: &mut egui::Ui, display: &mut Display) {
         );
     ui.add(
         egui::Slider::new(&mut display.exposure, -MAX_EXPOSURE_UI..=MAX_EXPOSURE_UI)
+            .custom_parser(typed_number("Exposure", -MAX_EXPOSURE_UI, MAX_EXPOSURE_UI))
             .clamping(egui::SliderClamping::Edits)
             .max_decimals(2)
             .suffix(" EV")
@@ -678,7 +729,9 @@ pub fn shading_ui(
     let response = ui
         .add_enabled(
             shading.indirect && !path,
-            egui::Slider::new(&mut n, 0.0..=1.0).text("Indirect N"),
+            egui::Slider::new(&mut n, 0.0..=1.0)
+                .custom_parser(typed_number("Indirect N", 0.0, 1.0))
+                .text("Indirect N"),
         )
         .on_hover_text("The lab's constant indirect light N, added to D at every hit")
         .on_disabled_hover_text(if path {
@@ -720,6 +773,7 @@ pub fn shading_ui(
         .add_enabled(
             bounces_enabled && shading.bounces.is_some(),
             egui::Slider::new(&mut bounces, 0..=MAX_BOUNCES_UI)
+                .custom_parser(typed_number("Bounces", 0, MAX_BOUNCES_UI))
                 .clamping(egui::SliderClamping::Edits)
                 .text("Bounces"),
         )
@@ -739,6 +793,7 @@ pub fn shading_ui(
     ui.add_enabled(
         whitted,
         egui::Slider::new(&mut shading.specular_depth, 0..=MAX_SPECULAR_DEPTH)
+            .custom_parser(typed_number("Specular depth", 0, MAX_SPECULAR_DEPTH))
             .clamping(egui::SliderClamping::Edits)
             .text("Specular depth"),
     )
@@ -772,11 +827,19 @@ pub fn image_ui(ui: &mut egui::Ui, settings: &mut RenderSettings, threads: &mut 
         });
     ui.horizontal(|ui| {
         let w = ui.label("Width");
-        ui.add(egui::DragValue::new(&mut width).range(1..=MAX_SIDE_UI))
-            .labelled_by(w.id);
+        ui.add(
+            egui::DragValue::new(&mut width)
+                .range(1..=MAX_SIDE_UI)
+                .custom_parser(typed_number("Width", 1, MAX_SIDE_UI)),
+        )
+        .labelled_by(w.id);
         let h = ui.label("Height");
-        ui.add(egui::DragValue::new(&mut height).range(1..=MAX_SIDE_UI))
-            .labelled_by(h.id);
+        ui.add(
+            egui::DragValue::new(&mut height)
+                .range(1..=MAX_SIDE_UI)
+                .custom_parser(typed_number("Height", 1, MAX_SIDE_UI)),
+        )
+        .labelled_by(h.id);
     });
     if (width, height) != (camera.width, camera.height) {
         // Keep the field of view: the focal length follows the width.
@@ -784,11 +847,16 @@ pub fn image_ui(ui: &mut egui::Ui, settings: &mut RenderSettings, threads: &mut 
     }
     ui.add(
         egui::Slider::new(&mut settings.samples_per_pixel, 1..=MAX_SAMPLES_UI)
+            .custom_parser(typed_number("Sample target", 1, MAX_SAMPLES_UI))
             .logarithmic(true)
             .text("Sample target"),
     )
     .on_hover_text("Samples per pixel to accumulate: 1 is the lab's image, more anti-alias it");
-    ui.add(egui::Slider::new(threads, 1..=MAX_THREADS_UI).text("Render threads"));
+    ui.add(
+        egui::Slider::new(threads, 1..=MAX_THREADS_UI)
+            .custom_parser(typed_number("Render threads", 1, MAX_THREADS_UI as u32))
+            .text("Render threads"),
+    );
 }
 
 pub fn screenshot_ui(ui: &mut egui::Ui, folder: &mut std::path::PathBuf) {

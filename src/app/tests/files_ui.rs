@@ -247,3 +247,55 @@ fn a_long_load_shows_progress_and_can_be_cancelled() {
     settle(&mut h);
     assert!(!shown(&h).settings.shading.shadows);
 }
+
+/// Types `text` into the value box of the number field labelled `label`, then Enter.
+fn type_number(h: &mut Harness<'_, WorkbenchApp>, label: &str, text: &str) {
+    let node = h
+        .query_all_by_label(label)
+        .find(|n| n.accesskit_node().role() == Role::SpinButton)
+        .unwrap_or_else(|| panic!("no value box labelled {label}"));
+    node.click();
+    h.run_steps(2);
+    h.key_press_modifiers(Modifiers::COMMAND, Key::A);
+    h.step();
+    for c in text.chars() {
+        h.event(egui::Event::Text(c.to_string()));
+        h.step();
+    }
+    h.key_press(Key::Enter);
+    h.run_steps(2);
+}
+
+/// Fault 1 of issue 10: `NaN` typed into a number field set it to its maximum.
+#[test]
+fn a_typed_non_number_changes_nothing_and_a_clamped_value_says_so() {
+    let mut h = harness(small_state());
+    let before = settings(&h);
+    for label in [
+        "Light x",
+        "Light power",
+        "Sample target",
+        "Indirect N",
+        "Yaw",
+    ] {
+        for text in ["NaN", "nan", "inf", "abc"] {
+            type_number(&mut h, label, text);
+            assert_eq!(settings(&h), before, "{label} = {text}");
+        }
+    }
+    type_number(&mut h, "Width", "NaN");
+    assert_eq!(settings(&h), before, "Width = NaN");
+    settle(&mut h);
+    assert_eq!(*shown(&h).image, render(&cornell_box(), &before));
+
+    type_number(&mut h, "Light power", "150");
+    assert_eq!(settings(&h).light.power, 100.0);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Notice);
+    assert_eq!(
+        text,
+        "Light power: 150 is outside 0 to 100, so it was set to 100"
+    );
+    type_number(&mut h, "Light power", "20");
+    assert_eq!(settings(&h).light.power, 20.0);
+}
