@@ -194,6 +194,8 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
     tmp_name.push(name);
     tmp_name.push(format!(".{}.tmp", std::process::id()));
     let tmp = path.with_file_name(tmp_name);
+    // Removed by the command line's Ctrl+C handler if the program is stopped mid-write.
+    let _registered = crate::temp_files::register(&tmp);
     let result = (|| {
         let mut file = BufWriter::new(fs::File::create(&tmp)?);
         file.write_all(bytes)?;

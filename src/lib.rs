@@ -35,6 +35,7 @@ pub mod sampling;
 pub mod scene;
 pub mod scene_file;
 pub mod settings;
+pub mod temp_files;
 pub mod texture;
 pub mod view;
 pub mod walkthrough;
