@@ -153,6 +153,8 @@ impl FileDialog {
             .open(&mut open)
             .collapsible(false)
             .default_width(420.0)
+            .pivot(egui::Align2::CENTER_CENTER)
+            .default_pos(ctx.content_rect().center())
             .show(ctx, |ui| {
                 ui.horizontal(|ui| {
                     if ui.button("Up").on_hover_text("The parent folder").clicked()
