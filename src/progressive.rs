@@ -26,9 +26,16 @@
 //! idle worker is woken and publishes its last frame again (same generation, samples and linear
 //! image), converted anew.
 //!
+//! A job that panics (a bug in the tracer) does not take the worker down: rayon re-raises a
+//! panic from its pool on the thread that installed the work, the worker catches it there, reports
+//! it through [`Controller::take_error`] with the message and the job's settings, publishes
+//! nothing more of that job, and waits for the next one.
+//!
 //! Nothing here knows about egui. The same settings always give the same image.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::any::Any;
+use std::panic::AssertUnwindSafe;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
@@ -116,8 +123,63 @@ pub enum ControllerError {
     Spawn(String),
 }
 
-/// Called by the worker after it publishes a frame (the app passes `ctx.request_repaint`).
+/// Called by the worker after it publishes a frame or meets a problem (the app passes
+/// `ctx.request_repaint`).
 pub type Notify = Box<dyn Fn() + Send + Sync>;
+
+/// A problem the worker met, for the status line ([`Controller::take_error`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorkerError {
+    /// What happened, in one line: for a job that panicked, the panic's message and the job's
+    /// settings in brief ([`RenderSettings::summary`]).
+    pub message: String,
+    /// The settings of the job that panicked, in full, so the failure can be reproduced
+    /// (`raylab render --settings` reads them back as JSON).
+    pub settings: Option<RenderSettings>,
+}
+
+impl std::fmt::Display for WorkerError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl WorkerError {
+    /// The failed job's settings as pretty JSON (a settings file), if there was a job.
+    pub fn settings_json(&self) -> Option<String> {
+        let settings = self.settings.as_ref()?;
+        serde_json::to_string_pretty(settings).ok()
+    }
+}
+
+/// The message of a panic caught by [`std::panic::catch_unwind`]: `panic!`'s formatted text
+/// (a `String` or a `&str`); any other payload is named as such.
+pub fn panic_message(payload: &(dyn Any + Send)) -> String {
+    if let Some(text) = payload.downcast_ref::<&str>() {
+        (*text).to_owned()
+    } else if let Some(text) = payload.downcast_ref::<String>() {
+        text.clone()
+    } else {
+        "a panic with no message".to_owned()
+    }
+}
+
+/// Runs `f`, returning the message of a panic inside it instead of unwinding further.
+///
+/// For the threads of the workbench (the render worker, the scene loader, the A/B difference):
+/// each runs one piece of work whose panic must become a message on the status line, not a
+/// thread gone silent. `AssertUnwindSafe` is sound there because nothing `f` may leave half
+/// updated is used after a panic: the callers drop the work's results and state, and every
+/// lock they share is taken with `unwrap_or_else(PoisonError::into_inner)` on data that stays
+/// whole (a frame slot, a number). The default panic hook still prints the message and
+/// location on stderr.
+pub fn catch_panic<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    std::panic::catch_unwind(AssertUnwindSafe(f)).map_err(|payload| panic_message(&*payload))
+}
+
+/// The message of the panic [`Controller::inject_panic_on_next_pass`] causes.
+#[doc(hidden)]
+pub const INJECTED_PANIC: &str = "injected panic (Controller::inject_panic_on_next_pass)";
 
 enum Message {
     Job {
@@ -146,12 +208,15 @@ struct Shared {
     done_changed: Condvar,
     /// Jobs abandoned before their target because a newer submission arrived.
     abandoned_jobs: AtomicU64,
-    /// A problem the worker met (the thread pool could not be rebuilt), until the UI takes it.
-    error: Mutex<Option<String>>,
+    /// A problem the worker met (the thread pool could not be rebuilt, a job panicked), until
+    /// the UI takes it.
+    error: Mutex<Option<WorkerError>>,
     /// The display frames are converted with; read by the worker at every pass boundary.
     display: Mutex<Display>,
     /// Passes traced so far (previews included), for [`Controller::passes_traced`].
     passes: AtomicU64,
+    /// Test hook: the next pass panics inside the pool ([`Controller::inject_panic_on_next_pass`]).
+    panic_next_pass: AtomicBool,
     notify: Notify,
 }
 
@@ -162,6 +227,22 @@ impl Shared {
 
     fn display(&self) -> Display {
         *self.display.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    fn report(&self, error: WorkerError) {
+        *self.error.lock().unwrap_or_else(PoisonError::into_inner) = Some(error);
+        (self.notify)();
+    }
+
+    /// Panics if [`Controller::inject_panic_on_next_pass`] asked for it: called by every row of
+    /// a pass, on the render pool's threads, so the panic takes the path a tracer bug would.
+    /// A plain load first: the swap's write would bounce the flag between cores every row.
+    fn injected_panic(&self) {
+        if self.panic_next_pass.load(Ordering::Relaxed)
+            && self.panic_next_pass.swap(false, Ordering::SeqCst)
+        {
+            panic!("{INJECTED_PANIC}");
+        }
     }
 }
 
@@ -193,6 +274,7 @@ impl Controller {
             error: Mutex::new(None),
             display: Mutex::new(Display::default()),
             passes: AtomicU64::new(0),
+            panic_next_pass: AtomicBool::new(false),
             notify,
         });
         let (sender, receiver) = mpsc::channel();
@@ -292,9 +374,22 @@ impl Controller {
         }
     }
 
-    /// A problem the worker met since the last call.
-    pub fn take_error(&self) -> Option<String> {
-        self.shared.error.try_lock().ok().and_then(|mut e| e.take())
+    /// A problem the worker met since the last call. Never waits (a held lock is tried again
+    /// at the next call).
+    pub fn take_error(&self) -> Option<WorkerError> {
+        match self.shared.error.try_lock() {
+            Ok(mut error) => error.take(),
+            Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner().take(),
+            Err(std::sync::TryLockError::WouldBlock) => None,
+        }
+    }
+
+    /// Test hook: the next pass traced (of the running job, or of the next one submitted)
+    /// panics inside the render pool with [`INJECTED_PANIC`], as a bug in the tracer would, so
+    /// tests exercise the real path: rayon re-raising it on the worker, which reports it.
+    #[doc(hidden)]
+    pub fn inject_panic_on_next_pass(&self) {
+        self.shared.panic_next_pass.store(true, Ordering::SeqCst);
     }
 
     /// Jobs abandoned so far, before their target, because a newer one arrived.
@@ -302,8 +397,9 @@ impl Controller {
         self.shared.abandoned_jobs.load(Ordering::SeqCst)
     }
 
-    /// Blocks until the newest job has reached its sample target, or `timeout` passes. Returns
-    /// whether it finished. For tests and scripts: **never call this on the UI thread**.
+    /// Blocks until the newest job has reached its sample target (or panicked: see
+    /// [`Controller::take_error`]), or `timeout` passes. Returns whether it finished. For tests
+    /// and scripts: **never call this on the UI thread**.
     pub fn wait_idle(&self, timeout: std::time::Duration) -> bool {
         let deadline = Instant::now() + timeout;
         let mut done = self
@@ -464,14 +560,31 @@ impl Worker {
             }
             // A job to render shows the display in force anyway.
             if run && let Some(job) = self.job.take() {
-                if self.render_job(&job) {
-                    self.mark_done(job.generation);
-                } else {
-                    self.shared.abandoned_jobs.fetch_add(1, Ordering::SeqCst);
+                match catch_panic(|| self.render_job(&job)) {
+                    Ok(true) => self.mark_done(job.generation),
+                    Ok(false) => {
+                        self.shared.abandoned_jobs.fetch_add(1, Ordering::SeqCst);
+                    }
+                    Err(panic) => {
+                        self.drop_frames_of(job.generation);
+                        self.shared.report(WorkerError {
+                            message: format!(
+                                "The render panicked: {panic} (settings: {})",
+                                job.settings.summary()
+                            ),
+                            settings: Some(job.settings.clone()),
+                        });
+                        // Nothing more will come of it: `wait_idle` need not wait.
+                        self.mark_done(job.generation);
+                    }
                 }
+                // Kept even after a panic: a thread change renders it again, as asked.
                 self.job = Some(job);
-            } else if redisplay {
-                self.redisplay();
+            } else if redisplay && let Err(panic) = catch_panic(|| self.redisplay()) {
+                self.shared.report(WorkerError {
+                    message: format!("Showing the image with the new display panicked: {panic}"),
+                    settings: None,
+                });
             }
         }
     }
@@ -499,11 +612,30 @@ impl Worker {
     fn rebuild_pool(&mut self, threads: usize) {
         match build_pool(threads) {
             Ok(pool) => self.pool = pool,
-            Err(e) => {
-                if let Ok(mut slot) = self.shared.error.lock() {
-                    *slot = Some(format!("could not start {threads} render threads: {e}"));
-                }
-            }
+            Err(e) => self.shared.report(WorkerError {
+                message: format!("could not start {threads} render threads: {e}"),
+                settings: None,
+            }),
+        }
+    }
+
+    /// After a panic: nothing of generation `generation` is shown any more, neither a frame it
+    /// published that the UI has not taken yet, nor (for a display change) its last frame.
+    fn drop_frames_of(&mut self, generation: u64) {
+        let mut slot = self
+            .shared
+            .slot
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        if slot.as_ref().is_some_and(|f| f.generation == generation) {
+            *slot = None;
+        }
+        if self
+            .last
+            .as_ref()
+            .is_some_and(|f| f.generation == generation)
+        {
+            self.last = None;
         }
     }
 
@@ -530,7 +662,10 @@ impl Worker {
         if settings.view.is_traced() {
             // A debug view: one ray per pixel centre, once.
             let start = Instant::now();
-            let cancelled = || shared.current() != job.generation;
+            let cancelled = || {
+                shared.injected_panic();
+                shared.current() != job.generation
+            };
             let result = self
                 .pool
                 .install(|| render_view(&job.scene, settings, settings.view, &cancelled));
@@ -612,10 +747,14 @@ impl Worker {
     /// One pass, or `None` if the job went stale.
     fn pass(&self, job: &Job, settings: &RenderSettings, sample: u32) -> Option<(Image, f64)> {
         let shared = &self.shared;
-        let cancelled = || shared.current() != job.generation;
-        if cancelled() {
+        if shared.current() != job.generation {
             return None;
         }
+        // Asked by every row, on the pool's threads.
+        let cancelled = || {
+            shared.injected_panic();
+            shared.current() != job.generation
+        };
         let start = Instant::now();
         let result = self
             .pool
@@ -1009,6 +1148,82 @@ mod tests {
         assert!(controller.wait_idle(TIMEOUT));
         std::thread::sleep(Duration::from_millis(50));
         assert!(controller.take_frame().is_none(), "no stale frame after it");
+    }
+
+    #[test]
+    fn a_job_that_panics_is_reported_and_the_next_one_renders() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let failing = small(40, 30, 3);
+        controller.inject_panic_on_next_pass();
+        let g = controller.submit(&scene, &failing).unwrap();
+        // A job that panicked counts as finished: nothing more will come of it.
+        assert!(controller.wait_idle(TIMEOUT));
+        let error = controller.take_error().expect("the panic is reported");
+        assert_eq!(
+            error.message,
+            format!(
+                "The render panicked: {INJECTED_PANIC} (settings: scene cornell, stage lab \
+                 (shadows on, indirect on), 40×30, camera (0, 0, -3.001) yaw 0° pitch 0° f 40 \
+                 px, light (0, -0.5, -0.7) 14 W, 3 spp, seed 0)"
+            )
+        );
+        assert_eq!(error.settings.as_ref(), Some(&failing));
+        let json = error.settings_json().unwrap();
+        assert_eq!(
+            serde_json::from_str::<RenderSettings>(&json).unwrap(),
+            failing
+        );
+        assert!(controller.take_error().is_none(), "reported once");
+        // Its first pass panicked (40 < 64: no preview): nothing traced, nothing published.
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.passes_traced(), 0);
+        assert_eq!(controller.generation(), g);
+
+        // The worker goes on: the next job renders as if nothing had happened.
+        let next = small(48, 32, 4);
+        let g = controller.submit(&scene, &next).unwrap();
+        let frame = last_frame(&controller, g);
+        assert_eq!(frame.settings, next);
+        assert_eq!(*frame.image, render(&scene, &next));
+        assert!(controller.take_error().is_none());
+    }
+
+    #[test]
+    fn after_a_panic_mid_job_nothing_more_of_it_is_shown() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        // Long enough to be mid-accumulation when the panic comes.
+        let settings = small(128, 128, 4096);
+        let g = controller.submit(&scene, &settings).unwrap();
+        while next_frame(&controller).samples < 2 {}
+        controller.inject_panic_on_next_pass();
+        assert!(controller.wait_idle(TIMEOUT));
+        let error = controller.take_error().expect("the panic is reported");
+        assert!(error.message.contains(INJECTED_PANIC), "{}", error.message);
+        // The frame the worker may have published before the panic is gone from the slot, and a
+        // display change does not show the failed job's last frame again.
+        assert!(controller.take_frame().is_none());
+        controller.set_display(BRIGHTER);
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.abandoned_jobs(), 0);
+        assert_eq!(controller.generation(), g);
+    }
+
+    #[test]
+    fn a_panic_message_is_read_from_its_payload() {
+        assert_eq!(catch_panic(|| 7), Ok(7));
+        assert_eq!(
+            catch_panic(|| panic!("at {}", 3)),
+            Err::<(), _>("at 3".to_owned())
+        );
+        assert_eq!(
+            catch_panic(|| panic!("static")),
+            Err::<(), _>("static".to_owned())
+        );
+        let other = catch_panic(|| std::panic::panic_any(42));
+        assert_eq!(other, Err::<(), _>("a panic with no message".to_owned()));
     }
 
     #[test]

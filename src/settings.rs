@@ -94,6 +94,33 @@ impl RenderSettings {
         same_display == *other
     }
 
+    /// One line naming what most often explains a render: the scene, stage and switches,
+    /// resolution, camera, light, samples and seed. For error reports (a render that panicked
+    /// says which settings did it); the JSON (`serde_json::to_string`) has everything.
+    pub fn summary(&self) -> String {
+        let (c, l, s) = (&self.camera, &self.light, &self.shading);
+        let on = |b: bool| if b { "on" } else { "off" };
+        let v = |v: Vec3| format!("({}, {}, {})", v.x, v.y, v.z);
+        format!(
+            "scene {}, stage {} (shadows {}, indirect {}), {}×{}, camera {} yaw {}° pitch {}° \
+             f {} px, light {} {} W, {} spp, seed {}",
+            self.scene,
+            s.stage,
+            on(s.shadows),
+            on(s.indirect),
+            c.width,
+            c.height,
+            v(c.position),
+            c.yaw.to_degrees(),
+            c.pitch.to_degrees(),
+            c.focal_length,
+            v(l.position),
+            l.power,
+            self.samples_per_pixel,
+            self.seed,
+        )
+    }
+
     /// Checks every value before a render: sizes in 1..=16384, finite numbers, a positive focal
     /// length, non-negative light power and indirect light, 1..=65536 samples.
     pub fn validate(&self) -> Result<(), SettingsError> {
@@ -206,6 +233,18 @@ mod tests {
         assert_eq!(partial.light.position, Vec3::new(0.5, 0.0, 0.0));
         assert_eq!(partial.light.channel_power(), Vec3::splat(14.0));
         assert_eq!(partial.camera, Camera::default());
+    }
+
+    #[test]
+    fn the_summary_names_what_explains_a_render() {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(128, 96);
+        s.seed = 3;
+        assert_eq!(
+            s.summary(),
+            "scene cornell, stage lab (shadows on, indirect on), 128×96, camera (0, 0, -3.001) \
+             yaw 0° pitch 0° f 128 px, light (0, -0.5, -0.7) 14 W, 1 spp, seed 3"
+        );
     }
 
     #[test]

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use eframe::egui;
-use raylab::progressive::{Controller, ControllerError, Frame};
+use raylab::progressive::{Controller, ControllerError, Frame, WorkerError, catch_panic};
 use raylab::scene::Scene;
 use raylab::{Camera, Image, RenderSettings, Shading};
 
@@ -124,7 +124,7 @@ struct Diff {
     /// The images (A's, B's) the newest difference was started for: a new frame on either side
     /// makes them stale.
     started: Option<(Arc<Image>, Arc<Image>)>,
-    running: Option<Receiver<Computed>>,
+    running: Option<Receiver<Result<Computed, String>>>,
     shown: Option<Difference>,
     error: Option<String>,
     texture: Texture,
@@ -185,13 +185,14 @@ impl Compare {
 
     /// Once a UI frame: takes A's newest frame, notes B's (`b`, the app's frame on screen),
     /// keeps A's threads equal to B's (`threads`), and takes or starts the difference. Never
-    /// waits. Returns a problem A's renderer met, for the status line.
+    /// waits. Returns a problem A's renderer met (a job that panicked among them), for the
+    /// status line.
     pub fn update(
         &mut self,
         ctx: &egui::Context,
         b: Option<&Shown>,
         threads: usize,
-    ) -> Option<String> {
+    ) -> Option<WorkerError> {
         let mut error = self.controller.take_error();
         if let Some(frame) = self.controller.take_frame() {
             self.show_a(ctx, frame);
@@ -199,7 +200,10 @@ impl Compare {
         if threads != self.controller.threads()
             && let Err(e) = self.controller.set_threads(threads)
         {
-            error = Some(e.to_string());
+            error = Some(WorkerError {
+                message: e.to_string(),
+                settings: None,
+            });
         }
         self.b = b.map(|b| BSide {
             image: Arc::clone(&b.image),
@@ -268,11 +272,16 @@ impl Compare {
         let spawned = std::thread::Builder::new()
             .name("raylab-difference".to_owned())
             .spawn(move || {
-                let (image, max) = difference(&a, &b);
-                let rgba = difference_rgba(&image, max);
-                let size = [image.width as usize, image.height as usize];
-                let pixels = egui::ColorImage::from_rgba_unmultiplied(size, &rgba);
-                let _ = sender.send(Computed { image, max, pixels });
+                // A panic is sent as its message: the difference view says what went wrong
+                // rather than that the thread stopped.
+                let computed = catch_panic(|| {
+                    let (image, max) = difference(&a, &b);
+                    let rgba = difference_rgba(&image, max);
+                    let size = [image.width as usize, image.height as usize];
+                    let pixels = egui::ColorImage::from_rgba_unmultiplied(size, &rgba);
+                    Computed { image, max, pixels }
+                });
+                let _ = sender.send(computed);
                 repaint.request_repaint();
             });
         match spawned {
@@ -289,7 +298,10 @@ impl Compare {
             return;
         };
         match receiver.try_recv() {
-            Ok(computed) => {
+            Ok(Err(panic)) => {
+                self.diff.error = Some(format!("computing the difference panicked: {panic}"));
+            }
+            Ok(Ok(computed)) => {
                 self.diff
                     .texture
                     .set(ctx, "raylab-compare-difference", computed.pixels);
@@ -500,6 +512,11 @@ impl Compare {
     #[cfg(test)]
     pub fn threads(&self) -> usize {
         self.controller.threads()
+    }
+
+    #[cfg(test)]
+    pub fn inject_panic_on_next_pass(&self) {
+        self.controller.inject_panic_on_next_pass();
     }
 }
 
@@ -766,7 +783,7 @@ impl WorkbenchApp {
         };
         let threads = threads.unwrap_or_else(|| compare.controller.threads());
         if let Some(error) = compare.update(ctx, self.shown.as_ref(), threads) {
-            self.set_status(StatusKind::Error, format!("A: {error}"));
+            self.show_worker_error("A: ", error, None);
         }
     }
 }

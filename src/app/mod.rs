@@ -23,7 +23,7 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Instant;
 
 use eframe::egui;
-use raylab::progressive::{Controller, Frame};
+use raylab::progressive::{Controller, Frame, WorkerError, catch_panic};
 use raylab::scene::{Scene, SceneChoice, cornell_box};
 use raylab::{Camera, Image, RenderSettings, Shading, Stage};
 
@@ -86,6 +86,9 @@ pub struct Status {
     /// For an error whose condition can go away: what to check, so the message goes when the
     /// condition does.
     pub cause: Option<Cause>,
+    /// More than fits on the line, offered by a "Copy details" button: for a render that
+    /// panicked, its settings as JSON, to reproduce it with `raylab render --settings FILE`.
+    pub details: Option<String>,
 }
 
 /// A condition an error reports, checked every frame ([`WorkbenchApp::clear_fixed_error`]).
@@ -97,6 +100,10 @@ pub enum Cause {
     MissingFolder(std::path::PathBuf),
     /// The camera sees nothing (a notice, taken down by the next render that sees something).
     CameraSeesNothing,
+    /// A render job panicked. Taken down by the first frame of a job submitted after the error
+    /// reached the screen (a generation above `submitted`, the newest then): a change made once
+    /// the user could read it. Frames of jobs already on their way then don't hide it at once.
+    RenderFailed { submitted: u64 },
 }
 
 /// The frame on screen, without its display pixels (those went to the texture).
@@ -156,6 +163,9 @@ pub struct WorkbenchApp {
     /// The settings before a file was opened whose scene is still loading: put back if the
     /// scene cannot be loaded, so nothing is lost.
     restore_on_failure: Option<RenderSettings>,
+    /// Test hook: the next scene load panics on its thread.
+    #[cfg(test)]
+    inject_loader_panic: bool,
 }
 
 /// How many scenes besides the one on screen stay loaded for switching back.
@@ -232,11 +242,13 @@ impl WorkbenchApp {
                 text,
                 kind: StatusKind::Error,
                 cause: None,
+                details: None,
             }),
             (None, Some(text)) => Some(Status {
                 text,
                 kind: StatusKind::Notice,
                 cause: None,
+                details: None,
             }),
             (None, None) => None,
         };
@@ -265,6 +277,8 @@ impl WorkbenchApp {
             file_dialog: None,
             scene_cache: Vec::new(),
             restore_on_failure: None,
+            #[cfg(test)]
+            inject_loader_panic: false,
         }
     }
 
@@ -273,6 +287,7 @@ impl WorkbenchApp {
             text: text.into(),
             kind,
             cause: None,
+            details: None,
         });
     }
 
@@ -282,6 +297,20 @@ impl WorkbenchApp {
             text: text.into(),
             kind: StatusKind::Error,
             cause: Some(cause),
+            details: None,
+        });
+    }
+
+    /// A problem a render thread reported (`prefix` says whose: "" for the live image, "A: "
+    /// for the frozen side), with the failed job's settings to copy. The live image's panic
+    /// goes once a later change renders ([`Cause::RenderFailed`]); A is never re-rendered, so
+    /// its error stays until another message replaces it.
+    fn show_worker_error(&mut self, prefix: &str, error: WorkerError, cause: Option<Cause>) {
+        self.status = Some(Status {
+            text: format!("{prefix}{}", error.message),
+            kind: StatusKind::Error,
+            details: error.settings_json(),
+            cause: cause.filter(|_| error.settings.is_some()),
         });
     }
 
@@ -291,7 +320,7 @@ impl WorkbenchApp {
         let fixed = match self.status.as_ref().and_then(|s| s.cause.as_ref()) {
             Some(Cause::InvalidSettings) => self.state.settings.validate().is_ok(),
             Some(Cause::MissingFolder(_)) => self.state.screenshot_folder.is_dir(),
-            Some(Cause::CameraSeesNothing) => false,
+            Some(Cause::CameraSeesNothing | Cause::RenderFailed { .. }) => false,
             None => false,
         };
         if fixed {
@@ -337,6 +366,8 @@ impl WorkbenchApp {
         let progress = Arc::new(std::sync::Mutex::new(String::from("starting")));
         let cancel = Arc::new(std::sync::atomic::AtomicBool::new(false));
         let (job_progress, job_cancel) = (Arc::clone(&progress), Arc::clone(&cancel));
+        #[cfg(test)]
+        let inject_panic = std::mem::take(&mut self.inject_loader_panic);
         let spawned = std::thread::Builder::new()
             .name("raylab-scene-loader".to_owned())
             .spawn(move || {
@@ -347,9 +378,17 @@ impl WorkbenchApp {
                     }
                     repaint.request_repaint();
                 };
-                let result = job
-                    .load_with(&cancelled, &report)
-                    .map_err(|e| e.to_string());
+                // A panic while building the scene (a bug, or a model the loader chokes on)
+                // becomes the status line's error, and the scene on screen stays.
+                let result = catch_panic(|| {
+                    #[cfg(test)]
+                    if inject_panic {
+                        panic!("injected loader panic");
+                    }
+                    job.load_with(&cancelled, &report)
+                })
+                .map_err(|panic| format!("Loading the {job} scene panicked: {panic}"))
+                .and_then(|loaded| loaded.map_err(|e| e.to_string()));
                 let _ = sender.send(result);
                 repaint.request_repaint();
             });
@@ -721,7 +760,8 @@ impl WorkbenchApp {
         };
         let (error, frame) = (controller.take_error(), controller.take_frame());
         if let Some(error) = error {
-            self.set_status(StatusKind::Error, error);
+            let submitted = self.submitted_generation;
+            self.show_worker_error("", error, Some(Cause::RenderFailed { submitted }));
         }
         let Some(frame) = frame else {
             return;
@@ -740,19 +780,21 @@ impl WorkbenchApp {
     fn show_frame(&mut self, ctx: &egui::Context, frame: Frame) {
         // A black image the camera is to blame for says so (the controller asked, off this
         // thread); the note goes with the first view that sees something again.
-        let noted = self
-            .status
-            .as_ref()
-            .is_some_and(|s| s.cause == Some(Cause::CameraSeesNothing));
+        let cause = self.status.as_ref().and_then(|s| s.cause.as_ref());
+        let noted = cause == Some(&Cause::CameraSeesNothing);
+        // A panic's error goes with the first frame of a change made after it was shown.
+        let failure_passed = matches!(cause, Some(Cause::RenderFailed { submitted })
+            if frame.generation > *submitted);
         match &frame.camera_note {
             Some(text) => {
                 self.status = Some(Status {
                     text: format!("The image is black: {text}"),
                     kind: StatusKind::Notice,
                     cause: Some(Cause::CameraSeesNothing),
+                    details: None,
                 });
             }
-            None if noted => self.status = None,
+            None if noted || failure_passed => self.status = None,
             None => {}
         }
         let (w, h) = (frame.image.width, frame.image.height);
@@ -999,6 +1041,17 @@ impl WorkbenchApp {
                         StatusKind::Notice => ui.visuals().warn_fg_color,
                         StatusKind::Error => ui.visuals().error_fg_color,
                     };
+                    if let Some(details) = &status.details
+                        && ui
+                            .small_button("Copy details")
+                            .on_hover_text(
+                                "Copy the settings of the render that failed, as JSON: \
+                                 `raylab render --settings FILE` reproduces it",
+                            )
+                            .clicked()
+                    {
+                        ui.ctx().copy_text(details.clone());
+                    }
                     ui.label(egui::RichText::new(&status.text).color(color));
                 }
                 None => {

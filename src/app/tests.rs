@@ -1288,3 +1288,129 @@ fn a_camera_that_sees_nothing_says_why() {
     settle(&mut h);
     assert!(h.state().status.is_none(), "{:?}", h.state().status);
 }
+
+/// Steps frames until the status line shows an error (or fails after [`DEADLINE`]).
+fn until_error(h: &mut Harness<'_, WorkbenchApp>) -> String {
+    let start = Instant::now();
+    loop {
+        h.step();
+        if let Some(status) = h
+            .state()
+            .status
+            .as_ref()
+            .filter(|s| s.kind == StatusKind::Error)
+        {
+            return status.text.clone();
+        }
+        assert!(start.elapsed() < DEADLINE, "no error within {DEADLINE:?}");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+#[test]
+fn a_render_that_panics_is_reported_and_the_next_change_renders() {
+    let mut h = harness(small_state());
+    let before = shown(&h);
+    h.state()
+        .controller
+        .as_ref()
+        .unwrap()
+        .inject_panic_on_next_pass();
+    h.get_by_role_and_label(Role::CheckBox, "Shadows").click();
+    let text = until_error(&mut h);
+    let failed = settings(&h);
+    assert!(!failed.shading.shadows);
+    assert_eq!(
+        text,
+        format!(
+            "The render panicked: {} (settings: {})",
+            raylab::progressive::INJECTED_PANIC,
+            failed.summary()
+        )
+    );
+    assert!(text.contains("128×96"), "{text}");
+    // On screen, with the failed settings to copy, as JSON.
+    assert!(h.query_by_label_contains("The render panicked").is_some());
+    assert!(h.query_by_label("Copy details").is_some());
+    let details = h.state().status.clone().unwrap().details.unwrap();
+    assert_eq!(
+        serde_json::from_str::<RenderSettings>(&details).unwrap(),
+        failed
+    );
+    // Nothing of the failed job was shown: the image is the one before it.
+    for _ in 0..20 {
+        std::thread::sleep(Duration::from_millis(2));
+        h.step();
+    }
+    assert_eq!(shown(&h).generation, before.generation);
+    assert_eq!(
+        status(&h).1,
+        StatusKind::Error,
+        "the error stays until a change"
+    );
+
+    // A change renders again, and the error goes with its first frame.
+    h.get_by_role_and_label(Role::CheckBox, "Indirect light")
+        .click();
+    settle(&mut h);
+    assert!(h.state().status.is_none(), "{:?}", h.state().status);
+    let after = shown(&h);
+    assert!(after.generation > before.generation + 1);
+    assert_eq!(after.settings, settings(&h));
+    assert!(!after.settings.shading.shadows && !after.settings.shading.indirect);
+    assert_eq!(*after.image, render(&cornell_box(), &after.settings));
+}
+
+#[test]
+fn a_scene_load_that_panics_is_reported_and_keeps_the_scene() {
+    let mut h = harness(small_state());
+    let before = shown(&h);
+    h.state_mut().inject_loader_panic = true;
+    choose(&mut h, "Scene", "Utah teapot");
+    settle(&mut h);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Error);
+    assert_eq!(
+        text,
+        "Loading the teapot scene panicked: injected loader panic"
+    );
+    assert_eq!(settings(&h).scene, SceneChoice::Cornell);
+    assert_eq!(shown(&h).image, before.image);
+    // The next load works.
+    choose(&mut h, "Scene", "Utah teapot");
+    settle(&mut h);
+    assert_eq!(shown(&h).settings.scene, SceneChoice::Teapot);
+    assert_eq!(status(&h).1, StatusKind::Info);
+}
+
+#[test]
+fn a_panic_rendering_a_is_reported_and_b_goes_on() {
+    let mut h = harness(small_state());
+    freeze_a(&mut h);
+    comparing(&h).inject_panic_on_next_pass();
+    // A thread change re-renders both sides: A's first pass panics, B renders.
+    h.get_by_role_and_label(Role::Slider, "Render threads")
+        .set_value_accesskit(1.0);
+    let text = until_error(&mut h);
+    let a = comparing(&h).settings().clone();
+    assert_eq!(
+        text,
+        format!(
+            "A: The render panicked: {} (settings: {})",
+            raylab::progressive::INJECTED_PANIC,
+            a.summary()
+        )
+    );
+    assert!(h.state().status.clone().unwrap().details.is_some());
+    let start = Instant::now();
+    while shown(&h).generation != h.state().controller.as_ref().unwrap().generation()
+        || !shown(&h).is_final()
+    {
+        assert!(start.elapsed() < DEADLINE);
+        std::thread::sleep(Duration::from_millis(2));
+        h.step();
+    }
+    assert_eq!(*shown(&h).image, render(&cornell_box(), &settings(&h)));
+    // B's frames don't take A's error down: A will not render again by itself.
+    assert_eq!(status(&h).1, StatusKind::Error);
+}
