@@ -143,13 +143,10 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
     }
     let file: FileV1 = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
     let mut settings = file.into_settings();
-    if let SceneChoice::Custom(spec) = &settings.scene {
-        spec.validate()
-            .map_err(|e| at_key(text, &key_path(e.name), &e.to_string()))?;
-    }
+    // The scene's parts are checked too (`SceneSpec::validate`).
     settings
         .validate()
-        .map_err(|e| at_key(text, &key_path(e.name), &e.to_string()))?;
+        .map_err(|e| at_key(text, &key_path(&e.name), &e.to_string()))?;
     let mut spec = settings.scene.spec();
     spec::resolve_models(&mut spec, folder);
     settings.scene = SceneChoice::from_spec(spec);

@@ -80,7 +80,9 @@ impl Default for RenderSettings {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("invalid {name} {value}: {reason}")]
 pub struct SettingsError {
-    pub name: &'static str,
+    /// The value's name (`light power`), or for a scene's part its path in a scene file
+    /// (`scene.models[0].height`).
+    pub name: std::borrow::Cow<'static, str>,
     pub value: String,
     pub reason: &'static str,
 }
@@ -124,6 +126,9 @@ impl RenderSettings {
     /// Checks every value before a render: sizes in 1..=16384, finite numbers, a positive focal
     /// length, non-negative light power and indirect light, 1..=65536 samples.
     pub fn validate(&self) -> Result<(), SettingsError> {
+        if let SceneChoice::Custom(spec) = &self.scene {
+            spec.validate()?;
+        }
         let c = &self.camera;
         check_side("width", c.width)?;
         check_side("height", c.height)?;
@@ -187,7 +192,7 @@ impl RenderSettings {
 
 fn err(name: &'static str, value: impl std::fmt::Display, reason: &'static str) -> SettingsError {
     SettingsError {
-        name,
+        name: name.into(),
         value: value.to_string(),
         reason,
     }

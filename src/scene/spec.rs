@@ -129,7 +129,7 @@ impl SceneSpec {
     /// Checks the values a scene file may hold; errors name the field (`scene.models[0].height`).
     pub fn validate(&self) -> Result<(), SettingsError> {
         let bad = |name: String, value: String, reason: &'static str| SettingsError {
-            name: Box::leak(name.into_boxed_str()),
+            name: name.into(),
             value,
             reason,
         };
