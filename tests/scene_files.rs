@@ -152,7 +152,7 @@ fn every_shipped_scene_file_loads_and_is_valid() {
         raylab::MaterialPreset::Glass
     );
     let gallery = load("gallery.toml").scene.spec();
-    assert_eq!(gallery.models.len(), 2);
+    assert_eq!(gallery.models.len(), 3);
     assert!(!gallery.blocks);
 }
 

@@ -34,7 +34,7 @@ pub struct WorkbenchState {
     pub render_threads: usize,
     /// Where screenshots go.
     pub screenshot_folder: PathBuf,
-    /// The path typed in the Scene panel's OBJ field.
+    /// The path typed in the Scene panel's File field (a scene file, screenshot or OBJ model).
     pub obj_path: String,
     /// The path tracer's bounce count while "Unlimited bounces" is ticked, for when it is
     /// unticked again.
