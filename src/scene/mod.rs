@@ -252,7 +252,17 @@ impl SceneChoice {
 
     /// Builds the scene and its acceleration structure (on the current rayon pool).
     pub fn load(&self) -> Result<Scene, SceneError> {
-        match self {
+        self.load_with_warnings().map(|(scene, _)| scene)
+    }
+
+    /// [`SceneChoice::load`], and what went wrong on the way without stopping it (an OBJ
+    /// file's unreadable material library or texture, its faces left out: see
+    /// [`obj::obj_scene_with_warnings`]). Only OBJ files have any.
+    pub fn load_with_warnings(&self) -> Result<(Scene, Vec<String>), SceneError> {
+        if let SceneChoice::Obj(path) = self {
+            return obj::obj_scene_with_warnings(path);
+        }
+        let scene = match self {
             SceneChoice::Cornell => Ok(cornell_box()),
             SceneChoice::Bunny => {
                 let mesh = obj::builtin(obj::BUNNY_OBJ, "bunny")?;
@@ -279,7 +289,8 @@ impl SceneChoice {
             }
             SceneChoice::Terrain => Ok(terrain::terrain_scene(&terrain::TerrainSpec::default())),
             SceneChoice::Obj(path) => obj::obj_scene(path),
-        }
+        }?;
+        Ok((scene, Vec::new()))
     }
 }
 
