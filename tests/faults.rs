@@ -3,6 +3,8 @@
 //!
 //! * Fault 3: coincident and degenerate geometry (a million copies of one triangle) loads and
 //!   builds in linear time, and the structures still answer as the brute-force loop does.
+//! * Fault 5: huge but finite light (1e38 W, N = 1e38) is refused, naming the bound, instead of
+//!   writing infinite pixels.
 
 mod common;
 
@@ -208,4 +210,76 @@ fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(stderr(&out), format!("warning: {want}\n"));
     assert_eq!(image::open(&png).unwrap().width(), 32);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fault 5: huge but finite light.
+
+/// `raylab render ARGS… --out DIR/x.exr`, which must be refused: exit code 1, one line naming
+/// `names`, and no file (nor a temporary one) left in the folder.
+fn assert_render_refused(args: &[&str], names: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("x.exr");
+    let mut argv = vec!["render", "--out", exr.to_str().unwrap()];
+    argv.extend_from_slice(args);
+    let out = raylab(&argv);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    for name in names {
+        assert!(err.contains(name), "{args:?}: '{err}' should say '{name}'");
+    }
+    assert!(
+        common::files_in(dir.path()).is_empty(),
+        "{args:?} wrote a file"
+    );
+}
+
+/// The fault's two commands wrote ∞ into the EXR and exited 0; they are refused now, saying
+/// which value and what its bound is.
+#[test]
+fn huge_light_and_indirect_light_are_refused_with_their_bound() {
+    assert_render_refused(
+        &["--light", "0,0.999,0", "--light-power", "1e38"],
+        &["invalid light power 1e38", "at most 1e6 W"],
+    );
+    assert_render_refused(
+        &["--indirect", "1e38"],
+        &["invalid indirect light (1e38, 1e38, 1e38)", "at most 1e6"],
+    );
+    assert_render_refused(
+        &["--light-colour", "1,1e30,1"],
+        &["invalid light colour", "at most 1000"],
+    );
+}
+
+/// At the bounds the image is written, and every value in the EXR is finite.
+#[test]
+fn the_largest_allowed_light_writes_a_finite_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("bright.exr");
+    let out = raylab(&[
+        "render",
+        "--out",
+        exr.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--light",
+        "0,0.999,0",
+        "--light-power",
+        "1e6",
+        "--light-colour",
+        "1000,1000,1000",
+        "--indirect",
+        "1e6",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let pixels = image::open(&exr).unwrap().to_rgb32f().into_raw();
+    assert!(pixels.iter().all(|v| v.is_finite()), "{pixels:?}");
+    // A kilowatt-scale light a millimetre above the floor: the walls near it are lit at
+    // D = 1e9 · cos / (4π r²), hundreds of millions for r of a few tenths.
+    let brightest = pixels.iter().copied().fold(0.0, f32::max);
+    assert!(brightest > 1e8, "{brightest}");
 }
