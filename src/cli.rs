@@ -443,7 +443,10 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let pool = pool.build().context("could not start the render threads")?;
 
     let choice = &settings.scene;
-    let scene = pool.install(|| choice.load())?;
+    let (scene, warnings) = pool.install(|| choice.load_with_warnings())?;
+    for warning in warnings {
+        let _ = writeln!(std::io::stderr(), "warning: {warning}");
+    }
     let start = Instant::now();
     let (image, display, legend) = match args.view {
         raylab::view::View::Shaded => (

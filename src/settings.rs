@@ -31,6 +31,18 @@ pub const MAX_EXPOSURE: f32 = 20.0;
 /// The most samples per pixel a render may ask for.
 pub const MAX_SAMPLES: u32 = 1 << 16;
 
+/// The most light power, in watts: 71,000 times the lab's 14 W. With [`MAX_LIGHT_COLOUR`] and
+/// [`MAX_INDIRECT_LIGHT`] it keeps every value a render makes finite (the derivation is in
+/// [`RenderSettings::validate`]); brighter images are what the exposure is for.
+pub const MAX_LIGHT_POWER: f32 = 1e6;
+
+/// The largest channel of the light's colour (the lab's white is 1, 1, 1): each channel's
+/// power is the power times it.
+pub const MAX_LIGHT_COLOUR: f32 = 1e3;
+
+/// The largest constant indirect light N, per channel (the lab's is 0.5).
+pub const MAX_INDIRECT_LIGHT: f32 = 1e6;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RenderSettings {
@@ -124,7 +136,26 @@ impl RenderSettings {
     }
 
     /// Checks every value before a render: sizes in 1..=16384, finite numbers, a positive focal
-    /// length, non-negative light power and indirect light, 1..=65536 samples.
+    /// length, light power, colour and indirect light from 0 to their maxima, 1..=65536
+    /// samples.
+    ///
+    /// **Why the light has a maximum.** Finite is not enough: a light of 1e38 W, or N = 1e38,
+    /// made infinite pixels (written to EXR files as ∞). The bounds keep every value a render
+    /// makes below `f32::MAX` (3.4e38), with room to spare:
+    ///
+    /// * D (equation 27) is at most P · c / (4π r²) with r never below
+    ///   [`MIN_LIGHT_DISTANCE`](crate::light::MIN_LIGHT_DISTANCE) (1e−3): at most
+    ///   1e6 W · 1000 / (4π · 1e−6) = 8.0e13 with the largest power and colour.
+    /// * Every reflectance ρ is at most 1, so a lab stage's value, ρ·(D + N) or D + N, is at
+    ///   most 8.0e13 + 1e6; mirror and glass branches split a weight of at most 1.
+    /// * The path tracer adds ρ·D at each of at most
+    ///   [`MAX_DEPTH`](crate::integrator::path::MAX_DEPTH) = 256 vertices, weighted by a
+    ///   throughput that Russian roulette raises by at most 1/0.95 a vertex: at most
+    ///   256 · 0.95^−253 · 8.0e13 ≈ 9e21.
+    /// * A pixel sums up to 65,536 samples before dividing: at most 6e26. The display
+    ///   multiplies by at most 2^20 (+20 EV) and its curves take any finite value.
+    ///
+    /// So the image, its sums and the EXR file are always finite; outputs are not clamped.
     pub fn validate(&self) -> Result<(), SettingsError> {
         if let SceneChoice::Custom(spec) = &self.scene {
             spec.validate()?;
@@ -157,9 +188,21 @@ impl RenderSettings {
         if light.power < 0.0 {
             return Err(err("light power", light.power, "must be ≥ 0"));
         }
+        if light.power > MAX_LIGHT_POWER {
+            let p = number(light.power);
+            return Err(err(
+                "light power",
+                p,
+                "must be at most 1e6 W (--light-power ≤ 1e6)",
+            ));
+        }
         check_vec("light colour", light.colour)?;
         if light.colour.min_element() < 0.0 {
             return Err(err("light colour", light.colour, "must be ≥ 0"));
+        }
+        if light.colour.max_element() > MAX_LIGHT_COLOUR {
+            let c = vector(light.colour);
+            return Err(err("light colour", c, "each channel must be at most 1000"));
         }
         check_finite("light radius", light.radius)?;
         if light.radius < 0.0 {
@@ -177,6 +220,14 @@ impl RenderSettings {
         if self.shading.indirect_light.min_element() < 0.0 {
             let n = self.shading.indirect_light;
             return Err(err("indirect light", n, "must be ≥ 0"));
+        }
+        if self.shading.indirect_light.max_element() > MAX_INDIRECT_LIGHT {
+            let n = vector(self.shading.indirect_light);
+            return Err(err(
+                "indirect light",
+                n,
+                "must be at most 1e6 (--indirect ≤ 1e6)",
+            ));
         }
         if self.shading.specular_depth > MAX_SPECULAR_DEPTH {
             let d = self.shading.specular_depth;
@@ -196,6 +247,20 @@ fn err(name: &'static str, value: impl std::fmt::Display, reason: &'static str) 
         value: value.to_string(),
         reason,
     }
+}
+
+/// A number as a person would write it: 1e38, not 100000000000000000000000000000000000000.
+fn number(x: f32) -> String {
+    if x.abs() >= 1e7 {
+        format!("{x:e}")
+    } else {
+        x.to_string()
+    }
+}
+
+/// A vector as [`number`] writes its components.
+fn vector(v: Vec3) -> String {
+    format!("({}, {}, {})", number(v.x), number(v.y), number(v.z))
 }
 
 fn check_side(name: &'static str, side: u32) -> Result<(), SettingsError> {
@@ -285,5 +350,77 @@ mod tests {
         let mut s = RenderSettings::default();
         s.camera.yaw = f32::INFINITY;
         assert_eq!(s.validate().unwrap_err().name, "yaw");
+    }
+
+    /// Huge but finite light is refused above its bound, naming the field and the bound
+    /// (issue 10, fault 5: 1e38 W and N = 1e38 wrote ∞ to EXR files); the bounds themselves
+    /// are allowed.
+    #[test]
+    fn light_beyond_its_bounds_is_refused_naming_the_bound() {
+        let mut s = RenderSettings::default();
+        s.light.power = 1e38;
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid light power 1e38: must be at most 1e6 W (--light-power ≤ 1e6)"
+        );
+        s.light.power = MAX_LIGHT_POWER;
+        s.light.colour = Vec3::new(1.0, 2e3, 0.0);
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid light colour (1, 2000, 0): each channel must be at most 1000"
+        );
+        s.light.colour = Vec3::splat(MAX_LIGHT_COLOUR);
+        s.shading.indirect_light = Vec3::splat(1e38);
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid indirect light (1e38, 1e38, 1e38): must be at most 1e6 (--indirect ≤ 1e6)"
+        );
+        s.shading.indirect_light = Vec3::splat(MAX_INDIRECT_LIGHT);
+        s.validate().unwrap();
+    }
+
+    /// The largest light and N the bounds allow, the light on a surface (where D is largest:
+    /// r counts as 1 mm), the most samples: every pixel and every sum finite, in every stage.
+    /// The brightest pixel is the one below the light: D = 1e9 / (4π · 1e−6) = 7.96e13.
+    #[test]
+    fn the_largest_allowed_light_gives_a_finite_image() {
+        let scene = crate::scene::cornell_box();
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(9, 9);
+        // On the floor, clear of both blocks.
+        s.light.position = Vec3::new(0.5, 1.0, 0.3);
+        s.light.power = MAX_LIGHT_POWER;
+        s.light.colour = Vec3::splat(MAX_LIGHT_COLOUR);
+        for stage in crate::Stage::ALL {
+            // Indirect light on: N in the lab stages, bounces in the path stage.
+            s.shading = crate::Shading::for_stage(stage);
+            s.shading.indirect = true;
+            s.shading.indirect_light = Vec3::splat(MAX_INDIRECT_LIGHT);
+            s.samples_per_pixel = if stage == crate::Stage::Path { 64 } else { 1 };
+            s.validate().unwrap();
+            let image = crate::render::render(&scene, &s);
+            assert!(
+                image.pixels.iter().all(|p| p.is_finite()),
+                "{stage}: {:?}",
+                image.pixels
+            );
+            let brightest = image
+                .pixels
+                .iter()
+                .map(|p| p.max_element())
+                .fold(0.0, f32::max);
+            if stage != crate::Stage::Flat {
+                assert!(brightest > 1e6, "{stage}: {brightest}");
+            }
+        }
+        // The incoming stage (D, no ρ) summed over the most samples, on a 1 × 1 image whose
+        // rays meet the back wall near (0, 0, 1): r = (0.5, 1, −0.7), r² = 1.74, r̂·n̂ = 0.7/1.319,
+        // D ≈ 1e9 · 0.5307 / (4π · 1.74) = 2.4e7 there.
+        s.shading = crate::Shading::for_stage(crate::Stage::Incoming);
+        s.camera = s.camera.with_resolution(1, 1);
+        s.samples_per_pixel = MAX_SAMPLES;
+        let many = crate::render::render(&scene, &s);
+        assert!(many.pixels[0].is_finite(), "{}", many.pixels[0]);
+        assert!(many.pixels[0].x > 1e7, "{}", many.pixels[0]);
     }
 }

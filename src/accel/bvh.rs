@@ -10,6 +10,12 @@
 //! [`EDGE_TOLERANCE`] lets a hit lie beyond the triangle's edges, plus a rounding margin, so a
 //! ray the triangle test accepts always enters every box around it: the tree never opens a
 //! crack the brute-force loop does not have.
+//!
+//! **Degenerate input.** Triangles no ray can hit (zero area) are left out, and so are exact
+//! copies of another triangle, which can never be the answer (the lower index wins ties);
+//! centroids that coincide, which no split can separate, are halved at the median. So a
+//! million copies of one triangle build in milliseconds into a one-leaf tree, and the build
+//! stays O(n log n) whatever the input (tests/faults.rs).
 
 use glam::Vec3;
 
@@ -204,6 +210,7 @@ impl Bvh {
             .par_iter()
             .enumerate()
             .filter(|(i, _)| excluded.binary_search(&(*i as u32)).is_err())
+            .filter(|(_, t)| can_be_hit(t))
             .filter_map(|(i, t)| {
                 Aabb::of_triangle(t).map(|bounds| Prim {
                     bounds,
@@ -215,35 +222,42 @@ impl Bvh {
         if prims.is_empty() {
             return Self::default();
         }
-        let root = build_node(&mut prims, 0, 0);
+        let root = build_node(triangles, &mut prims, 0, 0);
         let mut bvh = Bvh {
             nodes: Vec::with_capacity(2 * prims.len() / 3 + 1),
-            indices: prims.iter().map(|p| p.index).collect(),
+            indices: Vec::with_capacity(prims.len()),
         };
-        bvh.flatten(&root);
+        bvh.flatten(&root, &prims);
         bvh
     }
 
-    fn flatten(&mut self, node: &BuildNode) -> usize {
+    /// Appends `node`'s subtree, depth first; its leaves' triangles go to `indices` in leaf
+    /// order (copies left out by the build are in no leaf, so not there either).
+    fn flatten(&mut self, node: &BuildNode, prims: &[Prim]) -> usize {
         let at = self.nodes.len();
         match node {
             BuildNode::Leaf {
                 bounds,
                 first,
                 count,
-            } => self.nodes.push(Node {
-                bounds: *bounds,
-                first_or_right: *first,
-                count: *count,
-            }),
+            } => {
+                let start = self.indices.len() as u32;
+                let range = *first as usize..(*first + *count) as usize;
+                self.indices.extend(prims[range].iter().map(|p| p.index));
+                self.nodes.push(Node {
+                    bounds: *bounds,
+                    first_or_right: start,
+                    count: *count,
+                });
+            }
             BuildNode::Interior { bounds, children } => {
                 self.nodes.push(Node {
                     bounds: *bounds,
                     first_or_right: 0,
                     count: 0,
                 });
-                self.flatten(&children[0]);
-                let right = self.flatten(&children[1]);
+                self.flatten(&children[0], prims);
+                let right = self.flatten(&children[1], prims);
                 self.nodes[at].first_or_right = right as u32;
             }
         }
@@ -387,13 +401,57 @@ fn leaf(prims: &[Prim], offset: usize, bounds: Aabb) -> BuildNode {
     }
 }
 
-fn build_node(prims: &mut [Prim], offset: usize, depth: u32) -> BuildNode {
+/// Whether a ray can ever hit `t`: not when its edges' cross product is exactly zero (its
+/// corners coincide or lie on a line), for then [`intersect_triangle`] (and every kernel, which
+/// computes the same product) divides zero by zero and rejects the NaN. Such triangles are left
+/// out of the tree: a million of them in one point would otherwise be a million candidates.
+fn can_be_hit(t: &Triangle) -> bool {
+    let (e1, e2) = t.edges();
+    e1.cross(e2) != Vec3::ZERO
+}
+
+/// Keeps one of each set of bit-identical triangles among `prims`, the lowest index, at the
+/// front (in no particular order); returns how many are kept. A copy can never be the closest
+/// hit (it ties with the triangle it copies, and the lower index wins ties) nor change whether
+/// a shadow ray is blocked, so leaving it out of the tree changes no answer; left in, every
+/// ray reaching the triangle would test every copy.
+fn keep_one_of_each_copy(triangles: &[Triangle], prims: &mut [Prim]) -> usize {
+    let key = |p: &Prim| {
+        let t = &triangles[p.index as usize];
+        (
+            [t.v0, t.v1, t.v2].map(|v| v.to_array().map(f32::to_bits)),
+            p.index,
+        )
+    };
+    prims.sort_unstable_by_key(key);
+    let mut kept = 0;
+    for i in 0..prims.len() {
+        if kept == 0 || key(&prims[i]).0 != key(&prims[kept - 1]).0 {
+            prims.swap(kept, i);
+            kept += 1;
+        }
+    }
+    kept
+}
+
+fn build_node(triangles: &[Triangle], prims: &mut [Prim], offset: usize, depth: u32) -> BuildNode {
     let mut bounds = Aabb::EMPTY;
     let mut centroids = Aabb::EMPTY;
     for p in prims.iter() {
         bounds.grow(&p.bounds);
         centroids.grow_point(p.centroid);
     }
+    // Copies of one triangle share their centroid, so binning keeps them together down to a
+    // node whose centroids are all one point: here they are found (only here, where it costs
+    // nothing on ordinary scenes) and all but one left out of the tree. The copies' boxes are
+    // the kept one's, so `bounds` stays right. (Coincident centroids of different triangles are
+    // then halved at the median below, which keeps the build O(n log n).)
+    let prims = if prims.len() > MAX_LEAF && centroids.extent() == Vec3::ZERO {
+        let kept = keep_one_of_each_copy(triangles, prims);
+        &mut prims[..kept]
+    } else {
+        prims
+    };
     let n = prims.len();
     if n <= 1 {
         return leaf(prims, offset, bounds);
@@ -427,13 +485,13 @@ fn build_node(prims: &mut [Prim], offset: usize, depth: u32) -> BuildNode {
     let (left, right) = prims.split_at_mut(mid);
     let (a, b) = if n >= PARALLEL_MIN {
         rayon::join(
-            || build_node(left, offset, depth + 1),
-            || build_node(right, offset + mid, depth + 1),
+            || build_node(triangles, left, offset, depth + 1),
+            || build_node(triangles, right, offset + mid, depth + 1),
         )
     } else {
         (
-            build_node(left, offset, depth + 1),
-            build_node(right, offset + mid, depth + 1),
+            build_node(triangles, left, offset, depth + 1),
+            build_node(triangles, right, offset + mid, depth + 1),
         )
     };
     BuildNode::Interior {

@@ -106,6 +106,8 @@ struct Parsed {
     materials: Vec<tobj::Material>,
     /// Indices into `materials` that faces use, in order of first use.
     used: Vec<usize>,
+    /// The faces left out.
+    dropped: DroppedFaces,
 }
 
 /// Parses OBJ text, asking `material_library` for each `mtllib` it names (a library it cannot
@@ -188,6 +190,17 @@ fn parse_with_materials(
             path: path.to_path_buf(),
         });
     }
+    let dropped = drop_unseen_faces(&mut mesh);
+    if mesh.indices.is_empty() {
+        return Err(SceneError::Obj {
+            path: path.to_path_buf(),
+            reason: format!(
+                "all of its {} faces are degenerate (no area: their corners coincide or lie on \
+                 a line)",
+                dropped.degenerate
+            ),
+        });
+    }
     if all_have_normals && !normals.is_empty() {
         if let Some(bad) = normals.iter().find(|n| !n.is_finite()) {
             return Err(not_finite("normal", bad.to_string()));
@@ -204,7 +217,88 @@ fn parse_with_materials(
         mesh,
         materials,
         used,
+        dropped,
     })
+}
+
+/// Faces of a file that loading leaves out because they could never be seen
+/// ([`drop_unseen_faces`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DroppedFaces {
+    /// Faces of zero area: corners that coincide or lie on one line. No ray can hit them.
+    pub degenerate: usize,
+    /// Faces at exactly the positions of an earlier face, with the same winding: the earlier
+    /// face hides them (ties go to the lower index), so they only cost time.
+    pub duplicate: usize,
+}
+
+impl DroppedFaces {
+    /// The loader's warning, or `None` when nothing was left out. `source` names the file.
+    pub fn warning(&self, source: &str) -> Option<String> {
+        let parts: Vec<String> = [
+            (self.degenerate, "degenerate (zero area)"),
+            (self.duplicate, "exact duplicates of an earlier face"),
+        ]
+        .iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, what)| format!("{n} {what}"))
+        .collect();
+        (!parts.is_empty()).then(|| {
+            format!(
+                "{source}: left out {} face{} that can never be seen: {}",
+                self.degenerate + self.duplicate,
+                if self.degenerate + self.duplicate == 1 {
+                    ""
+                } else {
+                    "s"
+                },
+                parts.join(", ")
+            )
+        })
+    }
+}
+
+/// Removes the faces that could never be seen from `mesh.indices` (keeping the order of the
+/// others) and counts them:
+///
+/// * degenerate faces, whose edge vectors' cross product is exactly zero in the file's
+///   coordinates (computed in `f64`, where the products of `f32` coordinates are exact): the
+///   corners coincide or lie on one line;
+/// * exact duplicates: the same three positions (bit for bit, −0 as +0) in the same cyclic
+///   order as an earlier face. The first is kept; a face with the opposite winding is a
+///   different face (its other side) and is kept too.
+///
+/// Besides costing memory, copies of a face meet at the same positions, and every copy is a
+/// candidate for every ray that reaches one: a file of a million copies of one triangle took
+/// minutes to load and would take as long to trace.
+pub fn drop_unseen_faces(mesh: &mut Mesh) -> DroppedFaces {
+    use std::collections::HashSet;
+    let key = |i: u32| {
+        (mesh.positions[i as usize] + Vec3::ZERO)
+            .to_array()
+            .map(f32::to_bits)
+    };
+    let mut seen: HashSet<[[u32; 3]; 3]> = HashSet::with_capacity(mesh.indices.len());
+    let mut dropped = DroppedFaces::default();
+    let positions = &mesh.positions;
+    mesh.indices.retain(|face| {
+        let [a, b, c] = face.map(|i| positions[i as usize].as_dvec3());
+        if (b - a).cross(c - a) == glam::DVec3::ZERO {
+            dropped.degenerate += 1;
+            return false;
+        }
+        // The same cycle whichever corner it is read from: start at the smallest key.
+        let keys = face.map(key);
+        let first = (0..3).min_by_key(|&k| keys[k]).unwrap_or(0);
+        let cycle = [0, 1, 2].map(|k| keys[(first + k) % 3]);
+        if seen.insert(cycle) {
+            true
+        } else {
+            dropped.duplicate += 1;
+            false
+        }
+    });
+    dropped
 }
 
 /// Reads and parses an OBJ file (without its material libraries).
@@ -347,6 +441,9 @@ pub fn place_model(mesh: &Mesh, placement: &Placement, material: u32) -> PlacedM
 /// own face: a sharper edge stays sharp. Weighting by angle makes the result depend on the
 /// shape, not on how it was cut into triangles (a square face split in two still counts as one
 /// 90° corner). A corner with nothing to average (a degenerate face) keeps its face's normal.
+/// The time is linear in the number of faces: where more than [`MAX_FAN`] faces meet at one
+/// position, equal normals are summed once, and more than that many distinct normals are
+/// averaged whole (see [`MAX_FAN`]).
 pub fn smooth_normals(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
@@ -399,6 +496,12 @@ pub fn smooth_normals(
         }
     }
     let cos_crease = crease_angle.cos();
+    // Positions with more than `MAX_FAN` faces around them: their faces grouped by normal
+    // (so that each corner there costs the number of distinct normals, not of faces).
+    let fans: HashMap<usize, Fan> = (0..ids.len())
+        .filter(|&w| start[w + 1] - start[w] > MAX_FAN)
+        .map(|w| (w, Fan::of(&around[start[w]..start[w + 1]], face_normals)))
+        .collect();
     triangles
         .par_iter()
         .enumerate()
@@ -407,23 +510,71 @@ pub fn smooth_normals(
             if degenerate(f) {
                 return [own; 3];
             }
+            let within_crease = |n: Vec3, angle: f32| {
+                if n.dot(own) >= cos_crease {
+                    angle * n
+                } else {
+                    Vec3::ZERO
+                }
+            };
             tri.map(|i| {
                 let w = welded(i);
-                let sum: Vec3 = around[start[w]..start[w + 1]]
-                    .iter()
-                    .map(|&(g, angle)| {
-                        let n = face_normals[g as usize];
-                        if n.dot(own) >= cos_crease {
-                            angle * n
-                        } else {
-                            Vec3::ZERO
-                        }
-                    })
-                    .sum();
+                let sum: Vec3 = match fans.get(&w) {
+                    None => around[start[w]..start[w + 1]]
+                        .iter()
+                        .map(|&(g, angle)| within_crease(face_normals[g as usize], angle))
+                        .sum(),
+                    Some(Fan::Grouped(groups)) => groups
+                        .iter()
+                        .map(|&(n, angle)| within_crease(n, angle))
+                        .sum(),
+                    Some(Fan::Whole(sum)) => *sum,
+                };
                 sum.try_normalize().unwrap_or(own)
             })
         })
         .collect()
+}
+
+/// Above this many faces around one position, [`smooth_normals`] groups them by normal; above
+/// this many distinct normals, it averages them all, without the crease test. Averaging each
+/// corner over every face around its position costs the square of their number: a file of a
+/// million copies of one triangle (a million faces around each of three positions) took
+/// minutes. No real surface has more than a few dozen differently facing faces meeting at a
+/// point (a 64-sided cone's apex is one), so real models are smoothed exactly as described.
+pub const MAX_FAN: usize = 64;
+
+/// The faces around a position with more than [`MAX_FAN`] of them.
+enum Fan {
+    /// Each distinct normal once, with the sum of the angles of the faces that have it.
+    Grouped(Vec<(Vec3, f32)>),
+    /// More than [`MAX_FAN`] distinct normals: the sum of every face's angle × normal, which
+    /// every corner there takes whole (a point where so many directions meet has no edge to
+    /// keep sharp).
+    Whole(Vec3),
+}
+
+impl Fan {
+    fn of(around: &[(u32, f32)], face_normals: &[Vec3]) -> Fan {
+        let mut faces: Vec<(Vec3, f32)> = around
+            .iter()
+            .map(|&(g, angle)| (face_normals[g as usize], angle))
+            .collect();
+        let key = |n: Vec3| n.to_array().map(f32::to_bits);
+        faces.sort_unstable_by_key(|&(n, _)| key(n));
+        let mut groups: Vec<(Vec3, f32)> = Vec::new();
+        for (n, angle) in faces {
+            match groups.last_mut() {
+                Some((m, sum)) if key(*m) == key(n) => *sum += angle,
+                _ => groups.push((n, angle)),
+            }
+        }
+        if groups.len() <= MAX_FAN {
+            Fan::Grouped(groups)
+        } else {
+            Fan::Whole(groups.iter().map(|&(n, angle)| angle * n).sum())
+        }
+    }
 }
 
 /// The Cornell box with `mesh` standing in it. The model's triangles carry their corners'
@@ -485,6 +636,7 @@ pub fn load_textured(path: &Path) -> Result<(Mesh, Option<Texture>, Vec<String>)
             })
     })?;
     let mut warnings = warnings.into_inner();
+    warnings.extend(parsed.dropped.warning(&path.display().to_string()));
     let texture = texture_name(&parsed, &path.display().to_string(), &mut warnings)
         .and_then(|file| image_or_warning(TextureImage::load(&folder.join(file)), &mut warnings));
     Ok((parsed.mesh, texture, warnings))
@@ -527,6 +679,7 @@ pub fn builtin_textured_mesh(
         })
     })?;
     let mut warnings = warnings.into_inner();
+    warnings.extend(parsed.dropped.warning(&path.display().to_string()));
     let texture = match texture_name(&parsed, &path.display().to_string(), &mut warnings) {
         Some(file) => image_or_warning(
             TextureImage::from_encoded(texture_png, &format!("assets/models/{file}")),
@@ -843,6 +996,113 @@ mod tests {
         let normals = smooth_normals(&positions, &triangles, &faces, 60f32.to_radians());
         assert_eq!(normals[0], [Vec3::Z; 3]);
         assert_eq!(normals[1], [Vec3::ZERO; 3]);
+    }
+
+    /// Faces by hand: 1 2 3 is kept; 2 3 1 is the same face read from another corner and
+    /// 3 2 1 its other side (kept); 1 2 4 has its corners on the x axis and 1 1 2 two in one
+    /// place (degenerate); 5 2 3 repeats 1 2 3 through vertex 5, written at 1's position as
+    /// −0 (a duplicate); the last 1 2 3 is a duplicate too.
+    #[test]
+    fn degenerate_and_duplicate_faces_are_left_out_and_counted() {
+        let text = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv -0 0 -0\n\
+                     f 1 2 3\nf 2 3 1\nf 3 2 1\nf 1 2 4\nf 1 1 2\nf 5 2 3\nf 1 2 3\n";
+        let mesh = parse_obj(text, Path::new("faces.obj")).unwrap();
+        assert_eq!(mesh.indices, [[0, 1, 2], [2, 1, 0]]);
+        let mut again = Mesh {
+            indices: vec![
+                [0, 1, 2],
+                [1, 2, 0],
+                [2, 1, 0],
+                [0, 1, 3],
+                [0, 0, 1],
+                [4, 1, 2],
+            ],
+            ..mesh
+        };
+        let dropped = drop_unseen_faces(&mut again);
+        assert_eq!(
+            dropped,
+            DroppedFaces {
+                degenerate: 2,
+                duplicate: 2
+            }
+        );
+        assert_eq!(
+            dropped.warning("faces.obj").unwrap(),
+            "faces.obj: left out 4 faces that can never be seen: 2 degenerate (zero area), 2 \
+             exact duplicates of an earlier face"
+        );
+        assert_eq!(DroppedFaces::default().warning("x"), None);
+        // A file of nothing but degenerate faces is refused, saying why.
+        let err = parse_obj(
+            b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+            Path::new("line.obj"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("line.obj") && err.contains("degenerate"),
+            "{err}"
+        );
+    }
+
+    /// Around a position with more than `MAX_FAN` faces: copies of two faces give each corner
+    /// the normal the two faces alone give it (equal normals grouped, their angles summed), and
+    /// a fan of many different faces is averaged whole; both in linear time (a million faces
+    /// around one position took minutes).
+    #[test]
+    fn many_faces_around_one_position_are_smoothed_in_linear_time() {
+        // Two faces meeting at 30° along the y axis, as in the test above, then copied.
+        let positions = [
+            Vec3::ZERO,
+            Vec3::Y,
+            Vec3::X,
+            Vec3::new(-(30f32.to_radians().cos()), 0.0, 30f32.to_radians().sin()),
+        ];
+        let faces = [[0, 1, 2], [0, 3, 1]];
+        let face_normals: Vec<Vec3> = faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i: u32| positions[i as usize]);
+                (c - a).cross(b - a).normalize()
+            })
+            .collect();
+        let crease = 60f32.to_radians();
+        let two = smooth_normals(&positions, &faces, &face_normals, crease);
+        let copies = 100_000;
+        let many_faces: Vec<[u32; 3]> = (0..copies).map(|i| faces[i % 2]).collect();
+        let many_normals: Vec<Vec3> = (0..copies).map(|i| face_normals[i % 2]).collect();
+        let start = std::time::Instant::now();
+        let many = smooth_normals(&positions, &many_faces, &many_normals, crease);
+        assert!(start.elapsed().as_secs_f32() < 2.0, "{:?}", start.elapsed());
+        for (i, corners) in many.iter().enumerate() {
+            for (a, b) in corners.iter().zip(&two[i % 2]) {
+                assert!((*a - *b).length() < 1e-5, "face {i}: {a} against {b}");
+            }
+        }
+        // A fan of 100,000 faces around the origin, each turned a little further about the
+        // z axis and tilted up: more distinct normals than MAX_FAN, so averaged whole. The fan
+        // is symmetric about the z axis, so the apex's normal is the z axis.
+        let n = 100_000;
+        let mut fan_positions = vec![Vec3::ZERO];
+        let mut fan_faces = Vec::new();
+        for k in 0..n {
+            let angle = |k: usize| std::f32::consts::TAU * k as f32 / n as f32;
+            let ring = |a: f32| Vec3::new(a.cos(), a.sin(), -1.0);
+            fan_positions.push(ring(angle(k)));
+            fan_faces.push([0, 1 + k as u32, 1 + ((k + 1) % n) as u32]);
+        }
+        let fan_normals: Vec<Vec3> = fan_faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i: u32| fan_positions[i as usize]);
+                (b - a).cross(c - a).normalize()
+            })
+            .collect();
+        let start = std::time::Instant::now();
+        let fan = smooth_normals(&fan_positions, &fan_faces, &fan_normals, crease);
+        assert!(start.elapsed().as_secs_f32() < 2.0, "{:?}", start.elapsed());
+        assert!((fan[0][0] - Vec3::Z).length() < 1e-3, "{}", fan[0][0]);
     }
 
     #[test]
