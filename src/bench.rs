@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Surface};
-use crate::light::PointLight;
+use crate::light::{PointLight, approach_at_edge};
 use crate::render::render_pass;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -121,6 +121,12 @@ pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(R
                 normal,
                 geometric: normal,
                 rho: scene.material_of(hit.triangle_index).reflectance,
+                at_edge: approach_at_edge(
+                    &scene.triangles[hit.triangle_index],
+                    hit.u,
+                    hit.v,
+                    ray.direction,
+                ),
             };
             HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
         })

@@ -5,6 +5,14 @@
 //! along +z; positive yaw turns the view to the right (forward moves toward +x); positive pitch
 //! tilts it up (toward −y). The lab's camera has only yaw; pitch is 0 by default and the lab's
 //! figures never use it.
+//!
+//! **A camera on a surface.** A camera may stand exactly on a surface: on a wall of the box, or
+//! in one of its corners. It sees what lies in front of it, as if it stood a hair in front of
+//! the surface: a ray does not hit what it starts on (hits need `t > 0`, see
+//! [`crate::intersect`]), so the surface the camera stands on is not seen, and a ray leaving
+//! through it goes on beyond it (out of the box: black). From the corner (−1, −1, −1) looking
+//! along +z, the quarter of the rays that go into the box see it and the rest see nothing
+//! (tests/faults.rs works it out by hand).
 
 use glam::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};

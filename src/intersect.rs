@@ -9,6 +9,14 @@
 //! (equations 7–9); taken literally, a ray through the diagonal shared by a wall's two triangles
 //! hits neither and the image shows a crack. raylab accepts `u, v ≥ −EDGE_TOLERANCE` and
 //! `u + v ≤ 1 + EDGE_TOLERANCE`, so rounding can never open a gap between neighbours.
+//!
+//! **A ray does not hit what it starts on.** A hit needs `t > 0`, strictly (the lab's
+//! equation 11 says `0 ≤ t`). A ray starting exactly on a surface would otherwise meet that
+//! surface at `t = 0` whichever way it goes: a camera standing exactly on a wall of the box (or
+//! in a corner) saw that wall in every pixel, one uniform colour. Now it sees what lies in front
+//! of it; rays that leave through the surface it stands on go on beyond it (out of the box:
+//! black). Nothing else changes: rays from the camera and from surfaces (lifted off them, see
+//! [`crate::light::shadow_ray_to`]) start off every surface.
 
 use glam::{Mat3, Vec3};
 
@@ -40,7 +48,7 @@ pub fn inside_triangle(u: f32, v: f32) -> bool {
     u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE
 }
 
-/// Intersects `ray` with `tri`, returning `(t, u, v)` when the hit has `0 ≤ t < t_max` and lies
+/// Intersects `ray` with `tri`, returning `(t, u, v)` when the hit has `0 < t < t_max` and lies
 /// in the triangle (edges included).
 ///
 /// Cramer's rule on `A = (−d e1 e2)`, `b = s − v0` (equations 16–17), with the scalar triple
@@ -52,7 +60,8 @@ pub fn inside_triangle(u: f32, v: f32) -> bool {
 /// * `v = det(−d, e1, b) / det A = −e1 · (b × d) / det A`.
 ///
 /// A ray parallel to the plane or a zero-area triangle gives `det A = 0`, so `t` is ±∞ or NaN,
-/// and the range test rejects both: no NaN hit ever leaves this function.
+/// and the range test rejects both: no NaN hit ever leaves this function. A ray starting in the
+/// triangle's plane gives `t = ±0`, rejected too (see the module docs).
 #[inline]
 pub fn intersect_triangle(ray: &Ray, tri: &Triangle, t_max: f32) -> Option<(f32, f32, f32)> {
     let (e1, e2) = tri.edges();
@@ -60,7 +69,7 @@ pub fn intersect_triangle(ray: &Ray, tri: &Triangle, t_max: f32) -> Option<(f32,
     let b = ray.origin - tri.v0;
     let inv_det = 1.0 / -ray.direction.dot(n);
     let t = b.dot(n) * inv_det;
-    if !(t >= 0.0 && t < t_max) {
+    if !(t > 0.0 && t < t_max) {
         return None;
     }
     let m = b.cross(ray.direction);
@@ -86,7 +95,7 @@ pub fn intersect_triangle_matrix_inverse(
     }
     let x = a.inverse() * (ray.origin - tri.v0);
     let (t, u, v) = (x.x, x.y, x.z);
-    (t >= 0.0 && t < t_max && inside_triangle(u, v)).then_some((t, u, v))
+    (t > 0.0 && t < t_max && inside_triangle(u, v)).then_some((t, u, v))
 }
 
 /// The lab's `ClosestIntersection`: the nearest hit over every triangle, by brute force.
@@ -115,7 +124,7 @@ pub fn closest_intersection_brute_force(
     best
 }
 
-/// Whether any triangle is hit with `0 ≤ t < t_max`: a shadow ray's any-hit query, which may
+/// Whether any triangle is hit with `0 < t < t_max`: a shadow ray's any-hit query, which may
 /// stop at the first hit it finds.
 pub fn occluded_brute_force(ray: &Ray, triangles: &[Triangle], t_max: f32) -> bool {
     triangles

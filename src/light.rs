@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::Ray;
+use crate::geometry::{Ray, Triangle};
 use crate::sampling::{orthonormal_basis, uniform_cone};
 use crate::scene::Scene;
 
@@ -187,28 +187,91 @@ impl DirectLight {
     }
 }
 
+/// How near an edge of its triangle a surface point must be for its shadow ray to start the
+/// way [`shadow_ray_to`] describes for edges: where another surface may meet this one (a
+/// room's corner), within reach of the ray's first steps.
+pub const EDGE_ZONE: f32 = 2.0 * SHADOW_OFFSET;
+
+/// What a shadow ray from a hit needs to know of how the hit was found: `Some(incoming)`, the
+/// direction of the ray that found it, when the hit lies within [`EDGE_ZONE`] of an edge of its
+/// triangle (`u`, `v` its barycentric coordinates, as [`crate::intersect::intersect_triangle`]
+/// gives them); `None` elsewhere, where it is not needed (see [`shadow_ray_to`]).
+#[inline]
+pub fn approach_at_edge(triangle: &Triangle, u: f32, v: f32, incoming: Vec3) -> Option<Vec3> {
+    // The distance to the edge where v = 0 (from v0 along e1) is v times the height of v2
+    // above it, |e1 × e2| / |e1|; likewise u and |e2|, and 1 − u − v and |e2 − e1|. Squared,
+    // so no square root.
+    let (e1, e2) = triangle.edges();
+    let n2 = e1.cross(e2).length_squared();
+    let w = 1.0 - u - v;
+    let zone2 = EDGE_ZONE * EDGE_ZONE;
+    let near = v * v * n2 < zone2 * e1.length_squared()
+        || u * u * n2 < zone2 * e2.length_squared()
+        || w * w * n2 < zone2 * (e2 - e1).length_squared();
+    near.then_some(incoming)
+}
+
 /// The shadow ray from a surface point toward the light, and the distance to stop at (lab
 /// section 5.1), or `None` when the light is on the surface (nothing can lie between).
 ///
 /// The ray starts [`SHADOW_OFFSET`] off the surface on the side the light is on, so the surface
-/// can't shadow itself, and skips its first [`SHADOW_OFFSET`] along the way: at a corner, the
-/// offset point lies in the plane of the neighbouring wall, which would otherwise block it at
-/// `t = 0`. It stops [`SHADOW_OFFSET`] short of the light, so a light touching a surface is not
-/// hidden by that surface.
+/// can't shadow itself, and skips its first [`SHADOW_OFFSET`] along the way. It stops
+/// [`SHADOW_OFFSET`] short of the light, so a light touching a surface is not hidden by that
+/// surface.
+///
+/// **At an edge** (`at_edge` is [`approach_at_edge`]'s answer: the direction of the ray that
+/// found the point, if the point lies near an edge of its triangle) another surface may meet
+/// this one, as the box's walls meet in its corners, and then the point lifted off its own
+/// surface still lies in the other surface's plane. A shadow ray from there meets that surface
+/// at `t = 0` whichever way it goes, into the room toward a light inside (which must not block
+/// it) or through the wall toward a light outside (which must). Skipping the ray's first
+/// steps let the second slip through the wall: a light outside the box lit a line of pixels
+/// along the floor's edge with the right wall (issue 10, fault 6). The ray that found the point
+/// tells the two apart: it reached the point through free space. So at an edge the ray starts
+/// [`SHADOW_OFFSET`] off the surface and [`SHADOW_OFFSET`] along it back toward where that ray
+/// came from (its part along the surface, so the lift off the surface is unchanged), which is
+/// off the other surface's plane on the free side, and skips nothing: a ray into the room
+/// leaves the wall behind it, one through the wall toward a light outside crosses it at a `t`
+/// above 0 and is blocked. It stops [`SHADOW_OFFSET`] short of the light there too.
+///
+/// (Elsewhere the ray is what it always was, so the lab's images are unchanged bit for bit: a
+/// shadow ray grazing a block's edge may go either way, and moving its start would turn some.)
 #[inline]
-pub fn shadow_ray(light: &PointLight, position: Vec3, normal: Vec3) -> Option<(Ray, f32)> {
-    shadow_ray_to(light.position, position, normal)
+pub fn shadow_ray(
+    light: &PointLight,
+    position: Vec3,
+    normal: Vec3,
+    at_edge: Option<Vec3>,
+) -> Option<(Ray, f32)> {
+    shadow_ray_to(light.position, position, normal, at_edge)
 }
 
 /// [`shadow_ray`] toward any point `target` of the light (see [`PointLight::sample_point`]).
 #[inline]
-pub fn shadow_ray_to(target: Vec3, position: Vec3, normal: Vec3) -> Option<(Ray, f32)> {
+pub fn shadow_ray_to(
+    target: Vec3,
+    position: Vec3,
+    normal: Vec3,
+    at_edge: Option<Vec3>,
+) -> Option<(Ray, f32)> {
     let side = if (target - position).dot(normal) >= 0.0 {
         1.0
     } else {
         -1.0
     };
     let lifted = position + side * SHADOW_OFFSET * normal;
+    if let Some(incoming) = at_edge {
+        // Back toward where the point was seen from, along the surface.
+        let back = incoming.dot(normal) * normal - incoming;
+        let origin = lifted + SHADOW_OFFSET * back;
+        let to_light = target - origin;
+        let distance = to_light.length();
+        if !(distance > 3.0 * SHADOW_OFFSET) {
+            return None;
+        }
+        let direction = to_light / distance;
+        return Some((Ray { origin, direction }, distance - SHADOW_OFFSET));
+    }
     let to_light = target - lifted;
     let distance = to_light.length();
     if !(distance > 3.0 * SHADOW_OFFSET) {
@@ -224,9 +287,17 @@ pub fn shadow_ray_to(target: Vec3, position: Vec3, normal: Vec3) -> Option<(Ray,
 }
 
 /// Whether the segment from a surface point to the light is blocked (lab section 5.1): a shadow
-/// ray is cast toward the light and any hit closer than the light shadows the point.
-pub fn in_shadow(scene: &Scene, light: &PointLight, position: Vec3, normal: Vec3) -> bool {
-    shadow_ray(light, position, normal).is_some_and(|(ray, t_max)| scene.occluded(&ray, t_max))
+/// ray is cast toward the light and any hit closer than the light shadows the point. `at_edge`:
+/// see [`shadow_ray`].
+pub fn in_shadow(
+    scene: &Scene,
+    light: &PointLight,
+    position: Vec3,
+    normal: Vec3,
+    at_edge: Option<Vec3>,
+) -> bool {
+    shadow_ray(light, position, normal, at_edge)
+        .is_some_and(|(ray, t_max)| scene.occluded(&ray, t_max))
 }
 
 #[cfg(test)]
@@ -236,6 +307,12 @@ mod tests {
 
     fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
         (a - b).abs().max_element() <= tol
+    }
+
+    /// The direction in which the default camera, at (0, 0, −3.001), sees `p`, for a point on
+    /// an edge of its triangle (as [`approach_at_edge`] gives it there).
+    fn seen(p: Vec3) -> Option<Vec3> {
+        Some((p - Vec3::new(0.0, 0.0, -3.001)).normalize())
     }
 
     #[test]
@@ -310,7 +387,13 @@ mod tests {
             Vec3::ZERO
         );
         let scene = cornell_box();
-        assert!(!in_shadow(&scene, &light, Vec3::new(0.0, 1.0, 0.0), n));
+        assert!(!in_shadow(
+            &scene,
+            &light,
+            Vec3::new(0.0, 1.0, 0.0),
+            n,
+            None
+        ));
     }
 
     #[test]
@@ -323,14 +406,64 @@ mod tests {
             let p = Vec3::new(-1.0, -1.0, z);
             for n in [Vec3::X, Vec3::Y] {
                 assert!(
-                    !in_shadow(&scene, &light, p, n),
+                    !in_shadow(&scene, &light, p, n, seen(p)),
                     "corner ({p}) with normal {n}"
                 );
             }
         }
         // The floor's corner with the back wall, lit by a light in front of the blocks.
         let p = Vec3::new(0.9, 1.0, 1.0);
-        assert!(!in_shadow(&scene, &light, p, Vec3::new(0.0, -1.0, 0.0)));
+        assert!(!in_shadow(
+            &scene,
+            &light,
+            p,
+            Vec3::new(0.0, -1.0, 0.0),
+            seen(p)
+        ));
+    }
+
+    /// By hand, on the triangle (0, 0, 0), (1, 0, 0), (0, 1, 0) (|e1 × e2| = 1): the distance
+    /// to the edge along e1 (v = 0) is v, to the edge along e2 (u = 0) is u, to the third edge
+    /// (1 − u − v)/√2. EDGE_ZONE is 2e−4.
+    #[test]
+    fn approach_at_edge_by_hand() {
+        let t = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y, 0);
+        let d = Vec3::Z;
+        assert_eq!(approach_at_edge(&t, 0.3, 0.3, d), None);
+        assert_eq!(approach_at_edge(&t, 0.5, 1.9e-4, d), Some(d));
+        assert_eq!(approach_at_edge(&t, 0.5, 2.1e-4, d), None);
+        assert_eq!(approach_at_edge(&t, 1.9e-4, 0.5, d), Some(d));
+        // 1 − u − v = 2.5e−4: 1.77e−4 from the third edge; 3e−4: 2.12e−4.
+        assert_eq!(approach_at_edge(&t, 0.5, 0.49975, d), Some(d));
+        assert_eq!(approach_at_edge(&t, 0.5, 0.4997, d), None);
+    }
+
+    /// The same corners lit from outside the box (issue 10, fault 6): the wall the point
+    /// touches stands between it and the light, whichever of the two walls' normals the point
+    /// is shaded with. The floor's edge with the right wall (x = 1) under a light at
+    /// (1.5, 0, 0), and the left wall's edge with the ceiling under a light above the box.
+    #[test]
+    fn corners_are_shadowed_by_the_wall_they_touch_from_a_light_outside() {
+        let scene = cornell_box();
+        let outside_right = PointLight {
+            position: Vec3::new(1.5, 0.0, 0.0),
+            ..PointLight::default()
+        };
+        let above = PointLight {
+            position: Vec3::new(-0.5, -1.5, 0.0),
+            ..PointLight::default()
+        };
+        for z in [-0.9, -0.248, 0.0, 0.5, 0.99] {
+            // The floor's normal faces the light above it: D > 0, so only the shadow ray can
+            // keep the light out.
+            let p = Vec3::new(1.0, 1.0, z);
+            let floor = Vec3::new(0.0, -1.0, 0.0);
+            assert!(direct_light(&outside_right, p, floor).x > 0.0);
+            assert!(in_shadow(&scene, &outside_right, p, floor, seen(p)), "{p}");
+            let p = Vec3::new(-1.0, -1.0, z);
+            assert!(direct_light(&above, p, Vec3::X).x > 0.0);
+            assert!(in_shadow(&scene, &above, p, Vec3::X, seen(p)), "{p}");
+        }
     }
 
     #[test]
@@ -342,9 +475,15 @@ mod tests {
         let light = PointLight::default();
         let p = Vec3::new(-0.45, 1.0, 0.9);
         let n = Vec3::new(0.0, -1.0, 0.0);
-        assert!(in_shadow(&scene, &light, p, n));
+        assert!(in_shadow(&scene, &light, p, n, None));
         // ...while a floor point in front of the blocks is lit.
-        assert!(!in_shadow(&scene, &light, Vec3::new(0.0, 1.0, -0.8), n));
+        assert!(!in_shadow(
+            &scene,
+            &light,
+            Vec3::new(0.0, 1.0, -0.8),
+            n,
+            None
+        ));
         // The unshadowed D at p is positive: shadows, not orientation, make it dark.
         assert!(direct_light(&light, p, n).x > 0.0);
     }
@@ -430,7 +569,7 @@ mod tests {
             let mut seen = 0;
             for _ in 0..samples {
                 let q = light.sample_point(p, rng.next_f32(), rng.next_f32());
-                let (ray, t_max) = shadow_ray_to(q, p, n).unwrap();
+                let (ray, t_max) = shadow_ray_to(q, p, n, None).unwrap();
                 if !scene.occluded(&ray, t_max) {
                     seen += 1;
                 }

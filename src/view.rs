@@ -25,7 +25,7 @@ use crate::accel::{AccelKind, TraversalCost};
 use crate::film::{Film, Image};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::{PointLight, direct_light, in_shadow};
+use crate::light::{PointLight, approach_at_edge, direct_light, in_shadow};
 use crate::render::{Cancelled, render_pass};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -256,7 +256,7 @@ pub fn render_view(
             let light = &settings.light;
             let states = per_pixel(settings, cancelled, |ray| match closest(ray) {
                 None => ShadowState::NoHit,
-                Some(hit) => shadow_state(scene, light, &hit, smooth),
+                Some(hit) => shadow_state(scene, light, &hit, ray.direction, smooth),
             })?;
             Ok(shadow_view(settings, states))
         }
@@ -266,11 +266,14 @@ pub fn render_view(
 /// The shadow view at a hit, by the integrator's rules ([`crate::integrator::HitTerms::at`]):
 /// no light arrives where the lab's D is 0 for the shading normal, or (with a smooth normal)
 /// where the triangle itself faces away; elsewhere the shadow ray leaves from the side of the
-/// triangle's own normal, as [`in_shadow`] casts it toward the light's centre.
+/// triangle's own normal, as [`in_shadow`] casts it toward the light's centre. `incoming` is
+/// the direction of the ray that found the hit (the shadow ray of a hit at an edge of its
+/// triangle needs it: [`crate::light::shadow_ray`]).
 pub fn shadow_state(
     scene: &Scene,
     light: &PointLight,
     hit: &Intersection,
+    incoming: Vec3,
     smooth: bool,
 ) -> ShadowState {
     let (index, p) = (hit.triangle_index, hit.position);
@@ -287,7 +290,13 @@ pub fn shadow_state(
         || (normal != geometric && (light.position - p).dot(geometric) <= 0.0);
     if faces_away {
         ShadowState::FacesAway
-    } else if in_shadow(scene, light, p, geometric) {
+    } else if in_shadow(
+        scene,
+        light,
+        p,
+        geometric,
+        approach_at_edge(&scene.triangles[index], hit.u, hit.v, incoming),
+    ) {
         ShadowState::Blocked
     } else {
         ShadowState::Lit

@@ -5,6 +5,8 @@
 //!   builds in linear time, and the structures still answer as the brute-force loop does.
 //! * Fault 5: huge but finite light (1e38 W, N = 1e38) is refused, naming the bound, instead of
 //!   writing infinite pixels.
+//! * Fault 6: a light outside the box no longer leaks in along its edges, and a camera exactly
+//!   on a wall sees the room, not the wall.
 
 mod common;
 
@@ -282,4 +284,130 @@ fn the_largest_allowed_light_writes_a_finite_exr() {
     // D = 1e9 · cos / (4π r²), hundreds of millions for r of a few tenths.
     let brightest = pixels.iter().copied().fold(0.0, f32::max);
     assert!(brightest > 1e8, "{brightest}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fault 6: light through the box's edges; a camera on a wall.
+
+/// The `shadows` stage (figure 6: ρ·D with shadows, no indirect term) of the box from the
+/// default camera, with the light at `light`.
+fn shadows_stage(light: Vec3, side: u32) -> raylab::Image {
+    let mut s = common::settings(raylab::Stage::Shadows, side);
+    s.light.position = light;
+    raylab::render::render(&raylab::scene::cornell_box(), &s)
+}
+
+/// A light outside the box (which spans −1..1) lights nothing inside it: the walls stand in the
+/// way. The fault: at (1.5, 0, 0), 32 pixels of a 128 × 128 image along the floor's edge with
+/// the right wall were lit, their shadow rays slipping out through the corner. The default
+/// camera sees no surface facing such a light from outside, so every pixel is black; the same
+/// from the left, above (y points down), below and behind.
+#[test]
+fn a_light_outside_the_box_lights_nothing_inside() {
+    for light in [
+        Vec3::new(1.5, 0.0, 0.0),
+        Vec3::new(-1.5, 0.3, 0.2),
+        Vec3::new(0.2, -1.5, 0.0),
+        Vec3::new(0.0, 1.5, 0.3),
+        Vec3::new(0.0, 0.0, 1.5),
+    ] {
+        for side in [128, 96, 255] {
+            let image = shadows_stage(light, side);
+            let lit = image.pixels.iter().filter(|p| **p != Vec3::ZERO).count();
+            assert_eq!(lit, 0, "light at {light}, {side}²: {lit} pixels lit");
+        }
+    }
+    // The fault's command, as a user runs it (the lab stage: with N, so not black; the floor's
+    // edge pixels must be ρ·N exactly, not ρ·(D + N)).
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("outside.png");
+    let out = raylab(&[
+        "render",
+        "--light",
+        "1.5,0,0",
+        "--width",
+        "128",
+        "--height",
+        "128",
+        "--stage",
+        "shadows",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rgb = image::open(&png).unwrap().to_rgb8();
+    assert!(
+        rgb.pixels().all(|p| p.0 == [0, 0, 0]),
+        "lit pixels in the PNG"
+    );
+}
+
+/// The corner pixels themselves, where the fault lit the floor: the pixel centres on the image's
+/// diagonal from (96, 96) to (127, 127) see the edge where the floor meets the right wall
+/// (x = y = 1). Lit from inside (the lab's light) they are lit as before, but for 104–112,
+/// which lie in the short block's shadow; from outside all are dark.
+#[test]
+fn the_floor_edge_is_lit_from_inside_and_dark_from_outside() {
+    let inside = shadows_stage(raylab::PointLight::default().position, 128);
+    let outside = shadows_stage(Vec3::new(1.5, 0.0, 0.0), 128);
+    for i in 96..128 {
+        let in_blocks_shadow = (104..=112).contains(&i);
+        let lit = inside.get(i, i).y > 0.05;
+        assert_eq!(lit, !in_blocks_shadow, "({i}, {i}): {}", inside.get(i, i));
+        assert_eq!(outside.get(i, i), Vec3::ZERO, "({i}, {i})");
+    }
+}
+
+/// A camera exactly in the box's top-left front corner (−1, −1, −1), looking along +z, stands
+/// on the left wall and the ceiling. It used to see that wall in every pixel (its rays met it at
+/// t = 0); now it sees what lies in front of it. By hand, on 16 × 16 pixels (focal length 16):
+/// pixel (x, y)'s ray goes along (x + ½ − 8, y + ½ − 8, 16), so only the rays of the bottom-right
+/// quarter (x, y ≥ 8) go into the box; they meet the white back wall (z = 1) at
+/// (−1 + (x − 7.5)/8, −1 + (y − 7.5)/8), above the blocks (flat stage: ρ = 0.75). The others
+/// leave through the walls the camera stands on and see nothing: black.
+#[test]
+fn a_camera_in_a_corner_sees_the_room_in_front_of_it() {
+    let mut s = common::settings(raylab::Stage::Flat, 16);
+    s.camera.position = Vec3::new(-1.0, -1.0, -1.0);
+    let image = raylab::render::render(&raylab::scene::cornell_box(), &s);
+    for y in 0..16 {
+        for x in 0..16 {
+            let want = if x >= 8 && y >= 8 {
+                Vec3::splat(0.75)
+            } else {
+                Vec3::ZERO
+            };
+            assert_eq!(image.get(x, y), want, "pixel ({x}, {y})");
+        }
+    }
+}
+
+/// A camera exactly on the back wall (z = 1) looking into the box sees the room as a camera a
+/// hair in front of the wall does, not the wall (the fault: one colour everywhere), whatever
+/// the stage.
+#[test]
+fn a_camera_on_a_wall_sees_what_is_in_front_of_it() {
+    let scene = raylab::scene::cornell_box();
+    for stage in [raylab::Stage::Flat, raylab::Stage::Lab] {
+        let mut on = common::settings(stage, 48);
+        on.camera.position = Vec3::new(0.0, 0.0, 1.0);
+        on.camera.yaw = std::f32::consts::PI;
+        let mut before = on.clone();
+        before.camera.position.z = 1.0 - 1e-3;
+        let (a, b) = (
+            raylab::render::render(&scene, &on),
+            raylab::render::render(&scene, &before),
+        );
+        // The blue and red blocks and the open front (black) at least, not one colour.
+        let colours: std::collections::HashSet<[u32; 3]> = common::bits(&a).into_iter().collect();
+        assert!(colours.len() >= 3, "{stage}: {} colours", colours.len());
+        // Only where a pixel's ray passes an edge within the millimetre may they differ.
+        let differ = a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .filter(|(p, q)| (**p - **q).abs().max_element() > 1e-2)
+            .count();
+        assert!(differ <= 48, "{stage}: {differ} pixels differ");
+    }
 }

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use glam::Vec3;
 use raylab::accel::{Accel, AccelKind, Hit, Isa, TraversalCost};
 use raylab::geometry::Ray;
-use raylab::light::in_shadow;
+use raylab::light::{approach_at_edge, in_shadow};
 use raylab::render::{Cancelled, render};
 use raylab::scene::{Scene, SceneChoice, cornell_box};
 use raylab::view::{
@@ -343,7 +343,9 @@ fn shadow_view_agrees_with_in_shadow_and_the_shadows_stage() {
                 (ShadowState::FacesAway, Some(_)) => assert_eq!(*p, SHADOW_FACES_AWAY),
                 (lit_or_blocked, Some(h)) => {
                     let n = scene.triangles[h.triangle_index].normal;
-                    let blocked = in_shadow(&scene, &s.light, h.position, n);
+                    let t = &scene.triangles[h.triangle_index];
+                    let at_edge = approach_at_edge(t, h.u, h.v, ray.direction);
+                    let blocked = in_shadow(&scene, &s.light, h.position, n, at_edge);
                     assert_eq!(*lit_or_blocked == ShadowState::Blocked, blocked);
                     let colour = if blocked { SHADOW_BLOCKED } else { SHADOW_LIT };
                     assert_eq!(*p, colour);

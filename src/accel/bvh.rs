@@ -343,7 +343,7 @@ impl Bvh {
         (best, cost)
     }
 
-    /// Whether any triangle is hit with `0 ≤ t < t_max`; stops at the first hit.
+    /// Whether any triangle is hit with `0 < t < t_max`; stops at the first hit.
     pub fn occluded(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> bool {
         let Some(root) = self.nodes.first() else {
             return false;

@@ -274,7 +274,7 @@ impl Accel {
         self.triangles == n
     }
 
-    /// The closest hit with `0 ≤ t < t_max`: the lowest index among hits at the same
+    /// The closest hit with `0 < t < t_max`: the lowest index among hits at the same
     /// distance, exactly as the brute-force loop.
     #[inline(always)]
     pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
@@ -360,7 +360,7 @@ impl Accel {
         }
     }
 
-    /// Whether anything is hit with `0 ≤ t < t_max` (a shadow ray's any-hit query).
+    /// Whether anything is hit with `0 < t < t_max` (a shadow ray's any-hit query).
     #[inline(always)]
     pub fn occluded(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> bool {
         match (&self.structure, self.isa) {

@@ -171,9 +171,9 @@ pub trait Kernels: Copy {
     /// Bit `i` set when the ray enters child box `i` within `[0, t_limit]`, and each box's
     /// entry distance.
     fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]);
-    /// The nearest hit in the packet with `0 ≤ t < t_limit`, the lowest lane among equal `t`.
+    /// The nearest hit in the packet with `0 < t < t_limit`, the lowest lane among equal `t`.
     fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit>;
-    /// Whether any triangle of the packet is hit with `0 ≤ t < t_limit`.
+    /// Whether any triangle of the packet is hit with `0 < t < t_limit`.
     fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool;
 }
 
@@ -212,7 +212,7 @@ fn lane_hit<const N: usize>(
     let bz = oz - p.v0[2][i];
     let inv_det = 1.0 / -(dx * nx + dy * ny + dz * nz);
     let t = (bx * nx + by * ny + bz * nz) * inv_det;
-    if !(t >= 0.0 && t < t_limit) {
+    if !(t > 0.0 && t < t_limit) {
         return None;
     }
     // m = b × d
@@ -428,7 +428,7 @@ mod x86 {
         let v = mul(_mm256_xor_ps(e1m, sign), inv_det);
         let lo = _mm256_set1_ps(-EDGE_TOLERANCE);
         let in_t = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_setzero_ps()),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(t, _mm256_setzero_ps()),
             _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_limit)),
         );
         let in_uv = _mm256_and_ps(
@@ -510,7 +510,7 @@ mod x86 {
         let e1m = add(add(mul(e1x, mx), mul(e1y, my)), mul(e1z, mz));
         let v = mul(_mm512_xor_ps(e1m, sign), inv_det);
         let lo = _mm512_set1_ps(-EDGE_TOLERANCE);
-        let mut hit = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(t, _mm512_setzero_ps());
+        let mut hit = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_setzero_ps());
         hit &= _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, _mm512_set1_ps(t_limit));
         hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(u, lo);
         hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, lo);

@@ -382,7 +382,7 @@ impl Bvh8 {
         self.closest_on(k, r, t_max, best, &mut stack, cost)
     }
 
-    /// Whether any triangle is hit with `0 ≤ t < t_max`; stops at the first.
+    /// Whether any triangle is hit with `0 < t < t_max`; stops at the first.
     #[inline(always)]
     pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
         if self.root == EMPTY {

@@ -12,7 +12,7 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use glam::Vec3;
-use raylab::light::{direct_light, in_shadow, shadow_ray};
+use raylab::light::{approach_at_edge, direct_light, in_shadow, shadow_ray};
 use raylab::render::render;
 use raylab::scene::{SceneChoice, cornell_box};
 use raylab::{Image, MaterialPreset, RenderSettings, Shading, Stage};
@@ -150,10 +150,14 @@ fn shadows_switch_changes_only_pixels_a_shadow_can_reach() {
         for x in 0..w {
             let ray = s.camera.pixel_ray(x, y);
             let hit = scene.closest_intersection(&ray, f32::INFINITY);
+            let at_edge = |hit: &raylab::intersect::Intersection| {
+                let t = &scene.triangles[hit.triangle_index];
+                approach_at_edge(t, hit.u, hit.v, ray.direction)
+            };
             let shadowed = hit.as_ref().is_some_and(|hit| {
                 let n = scene.triangles[hit.triangle_index].normal;
                 direct_light(&s.light, hit.position, n) != Vec3::ZERO
-                    && in_shadow(&scene, &s.light, hit.position, n)
+                    && in_shadow(&scene, &s.light, hit.position, n, at_edge(hit))
             });
             let differs = changed(with_shadows.image.get(x, y), without.image.get(x, y));
             assert_eq!(differs, shadowed, "pixel ({x}, {y})");
@@ -163,8 +167,8 @@ fn shadows_switch_changes_only_pixels_a_shadow_can_reach() {
             // What blocks the light must be one of the two blocks (triangles 10..30): the room's
             // walls face the light, which hangs inside the box, and never shadow each other.
             let n = scene.triangles[hit.triangle_index].normal;
-            let (shadow_ray, t_max) =
-                shadow_ray(&s.light, hit.position, n).expect("a lit-facing point has a shadow ray");
+            let (shadow_ray, t_max) = shadow_ray(&s.light, hit.position, n, at_edge(&hit))
+                .expect("a lit-facing point has a shadow ray");
             let blocker = scene
                 .closest_intersection(&shadow_ray, t_max)
                 .expect("a shadowed point has a blocker");

@@ -18,6 +18,7 @@ use glam::Vec3;
 use super::{BATCH, HitTerms, Recorder, Tracer, cast_shadow_rays, continue_ray, light_point};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
+use crate::light::approach_at_edge;
 use crate::sampling::Rng;
 
 /// Where a specular branch's value goes and what it is multiplied by.
@@ -126,7 +127,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             Wave::Branches(b) => b[i].pixel as usize,
         };
         if material.is_diffuse() {
-            let surface = tracer.surface(hit, material);
+            let surface = tracer.surface(hit, material, ray.direction);
             let light = &tracer.light;
             terms.push(HitTerms::at(
                 light,
@@ -158,8 +159,11 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             if R::ENABLED {
                 rec.specular_hit(hit, branch.weight, branch.depth, branches.as_slice());
             }
+            let triangle = &scene.triangles[hit.triangle_index];
+            let at_edge = approach_at_edge(triangle, hit.u, hit.v, d);
             for &(direction, weight) in branches.as_slice() {
-                next.0.push(continue_ray(hit.position, normal, direction));
+                next.0
+                    .push(continue_ray(hit.position, normal, direction, at_edge));
                 next.1.push(Branch {
                     pixel: branch.pixel,
                     weight: branch.weight * weight,
@@ -228,7 +232,10 @@ mod tests {
                 }
                 mirror_pixels += 1;
                 let n = scene.triangles[hit.triangle_index].normal;
-                let r = continue_ray(hit.position, n, crate::material::reflect(ray.direction, n));
+                let t = &scene.triangles[hit.triangle_index];
+                let at_edge = approach_at_edge(t, hit.u, hit.v, ray.direction);
+                let reflected = crate::material::reflect(ray.direction, n);
+                let r = continue_ray(hit.position, n, reflected, at_edge);
                 let seen = scene
                     .closest_intersection(&r, f32::INFINITY)
                     .map_or(Vec3::ZERO, |h| {

@@ -40,7 +40,7 @@ use crate::accel::Isa;
 use crate::accel::simd::{Avx2, Avx512};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::{PointLight, SHADOW_OFFSET, direct_light, shadow_ray_to};
+use crate::light::{PointLight, SHADOW_OFFSET, approach_at_edge, direct_light, shadow_ray_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -308,6 +308,10 @@ pub struct Surface {
     pub geometric: Vec3,
     /// ρ, the diffuse reflectance: the material's, or its texture's value at the hit.
     pub rho: Vec3,
+    /// The direction of the ray that found the hit when the hit lies near an edge of its
+    /// triangle, where its shadow ray starts differently ([`crate::light::approach_at_edge`],
+    /// [`crate::light::shadow_ray`]); `None` elsewhere, or when no shadow ray is cast.
+    pub at_edge: Option<Vec3>,
 }
 
 /// The terms of the lab's equations at one diffuse hit: the one place they are computed.
@@ -366,6 +370,7 @@ impl HitTerms {
             normal,
             geometric,
             rho,
+            at_edge,
         } = surface;
         let mut terms = Self {
             position,
@@ -383,7 +388,8 @@ impl HitTerms {
             }
             // A shadow ray only matters where there is light to block.
             if shadows && terms.d != Vec3::ZERO {
-                terms.shadow_ray = shadow_ray_to(light_point(position), position, geometric);
+                let target = light_point(position);
+                terms.shadow_ray = shadow_ray_to(target, position, geometric, at_edge);
             }
         }
         terms
@@ -506,17 +512,26 @@ pub fn cast_shadow_rays(scene: &Scene, terms: &mut [HitTerms]) {
 
 /// A ray leaving a surface point along `direction`, started [`SHADOW_OFFSET`] off the surface
 /// on the side it leaves by, so it cannot hit the surface it leaves.
+///
+/// `at_edge` is [`approach_at_edge`]'s answer for the point. At an edge where another surface
+/// meets this one, the lifted point lies in that surface's plane, and a ray leaving it would
+/// meet that surface at `t = 0`, which is no hit: it would slip through it. So there, as a
+/// shadow ray does ([`crate::light::shadow_ray`]), it starts [`SHADOW_OFFSET`] along the
+/// surface back toward where the arriving ray came from: a ray into the other surface then
+/// meets it just beyond its start, one away from it leaves it behind.
 #[inline(always)]
-pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3) -> Ray {
+pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3, at_edge: Option<Vec3>) -> Ray {
     let side = if direction.dot(normal) >= 0.0 {
         1.0
     } else {
         -1.0
     };
-    Ray {
-        origin: position + side * SHADOW_OFFSET * normal,
-        direction,
-    }
+    let lifted = position + side * SHADOW_OFFSET * normal;
+    let origin = match at_edge {
+        Some(incoming) => lifted + SHADOW_OFFSET * (incoming.dot(normal) * normal - incoming),
+        None => lifted,
+    };
+    Ray { origin, direction }
 }
 
 /// Everything an integrator needs for one pass: the scene, its materials with the preset
@@ -558,14 +573,22 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// The surface at a diffuse hit: its shading normal (smooth or flat, as the switch and the
-    /// mesh say), its own normal, and ρ (textured: at the mesh's texture coordinates, or at a
-    /// planar projection of the hit for surfaces without them, such as the box's walls).
+    /// The surface at a diffuse hit found by a ray going along `incoming`: its shading normal
+    /// (smooth or flat, as the switch and the mesh say), its own normal, and ρ (textured: at
+    /// the mesh's texture coordinates, or at a planar projection of the hit for surfaces
+    /// without them, such as the box's walls).
     #[inline(always)]
-    pub fn surface(&self, hit: &Intersection, material: &Material) -> Surface {
+    pub fn surface(&self, hit: &Intersection, material: &Material, incoming: Vec3) -> Surface {
         let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
         let scene = self.scene;
-        let geometric = scene.triangles[index].normal;
+        let triangle = &scene.triangles[index];
+        let geometric = triangle.normal;
+        // Only a shadow ray needs it.
+        let at_edge = if self.shading.shadows {
+            approach_at_edge(triangle, u, v, incoming)
+        } else {
+            None
+        };
         if self.plain {
             // The same values as below (flat normal, constant ρ) without asking per hit:
             // 2–3 % of the lab pass (PERFORMANCE.md).
@@ -574,6 +597,7 @@ impl<'a> Tracer<'a> {
                 normal: geometric,
                 geometric,
                 rho: material.reflectance,
+                at_edge,
             };
         }
         Surface {
@@ -585,6 +609,7 @@ impl<'a> Tracer<'a> {
                     .uv(index, u, v)
                     .unwrap_or_else(|| planar_uv(hit.position, geometric))
             }),
+            at_edge,
         }
     }
 
@@ -742,6 +767,7 @@ mod tests {
             normal: floor,
             geometric: floor,
             rho,
+            at_edge: None,
         };
         let t = HitTerms::at(&light, Stage::Lab, true, surface, |_| light.position);
         assert!(

@@ -28,6 +28,7 @@ use super::{
 };
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
+use crate::light::approach_at_edge;
 use crate::material::facing;
 use crate::sampling::Rng;
 
@@ -124,7 +125,7 @@ fn batch<R: Recorder>(
             let incoming = path.ray.direction;
             if material.is_diffuse() {
                 // Two-sided: both normals turned to face the arriving ray.
-                let mut surface = tracer.surface(&hit, material);
+                let mut surface = tracer.surface(&hit, material, incoming);
                 let turned = facing(geometric, incoming);
                 if turned != geometric {
                     surface.geometric = turned;
@@ -143,7 +144,8 @@ fn batch<R: Recorder>(
             }
             let scatter = material.sample(incoming, geometric, rng);
             path.beta *= scatter.weight;
-            path.ray = continue_ray(hit.position, geometric, scatter.direction);
+            let at_edge = approach_at_edge(triangle, hit.u, hit.v, incoming);
+            path.ray = continue_ray(hit.position, geometric, scatter.direction, at_edge);
             path.depth += 1;
             // Russian roulette from ROULETTE_DEPTH on. Its number is drawn at every vertex,
             // used or not, and the outcome is computed without branches: whether a path
