@@ -250,6 +250,21 @@ impl SceneChoice {
         }
     }
 
+    /// Roughly the most memory loading and building the scene takes, in bytes: nothing to
+    /// speak of for the Cornell box; 16 MiB for the built-in models; 320 MiB for the terrain
+    /// (a million triangles with their normals and structure: it runs in about 350 MiB of
+    /// address space in all); for an OBJ file, 8 times its size (a face of some 40 bytes of
+    /// text becomes a triangle, its corners' normals and texture coordinates and its share of
+    /// the structure, some 300 bytes), or 0 if it cannot be read (loading it fails anyway).
+    pub fn memory_estimate(&self) -> u64 {
+        match self {
+            SceneChoice::Cornell => 0,
+            SceneChoice::Bunny | SceneChoice::Teapot | SceneChoice::TexturedTeapot => 16 << 20,
+            SceneChoice::Terrain => 320 << 20,
+            SceneChoice::Obj(path) => std::fs::metadata(path).map_or(0, |m| 8 * m.len()),
+        }
+    }
+
     /// Builds the scene and its acceleration structure (on the current rayon pool).
     pub fn load(&self) -> Result<Scene, SceneError> {
         self.load_with_warnings().map(|(scene, _)| scene)
