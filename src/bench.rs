@@ -24,9 +24,10 @@ use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Surface};
 use crate::light::{PointLight, approach_at_edge};
+use crate::memory::{AllocError, try_with_capacity};
 use crate::render::render_pass;
 use crate::scene::Scene;
-use crate::settings::RenderSettings;
+use crate::settings::{BASE_MEMORY, RenderSettings};
 use crate::{Camera, Shading, Stage};
 
 /// What to measure.
@@ -101,6 +102,16 @@ pub fn lab_settings(width: u32, height: u32) -> RenderSettings {
     }
 }
 
+/// The memory [`bench_scene`] needs at its peak, in bytes, besides the scene: the camera's rays
+/// (24 bytes a pixel) and the shadow rays cast from their hits (28 bytes each, at most one a
+/// pixel), which are made once and kept through every timed pass, and one pass's image (12
+/// bytes a pixel): 64 bytes a pixel, plus [`BASE_MEMORY`]. At 16384 × 16384: 16.1 GiB.
+pub fn memory_estimate(config: &BenchConfig) -> u64 {
+    let pixels = u64::from(config.width) * u64::from(config.height);
+    let per_pixel = (size_of::<Ray>() + size_of::<(Ray, f32)>() + size_of::<glam::Vec3>()) as u64;
+    pixels * per_pixel + BASE_MEMORY
+}
+
 /// The camera's rays through every pixel centre, row by row.
 pub fn primary_rays(camera: &Camera) -> Vec<Ray> {
     (0..camera.height)
@@ -108,29 +119,59 @@ pub fn primary_rays(camera: &Camera) -> Vec<Ray> {
         .collect()
 }
 
+/// [`primary_rays`], reserved fallibly: too many for the memory is an error, not an abort.
+pub fn try_primary_rays(camera: &Camera) -> Result<Vec<Ray>, AllocError> {
+    let len = camera.width as usize * camera.height as usize;
+    let mut rays = try_with_capacity(len, || {
+        format!("the {}×{} camera rays", camera.width, camera.height)
+    })?;
+    rays.extend(
+        (0..camera.height).flat_map(|y| (0..camera.width).map(move |x| camera.pixel_ray(x, y))),
+    );
+    Ok(rays)
+}
+
 /// The shadow rays the lab stage casts for these primary rays: from every hit that receives
 /// light, [`crate::light::shadow_ray`] towards the light, with its `t_max`.
 pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(Ray, f32)> {
     primary
         .par_iter()
-        .filter_map(|ray| {
-            let hit = scene.closest_intersection(ray, f32::INFINITY)?;
-            let normal = scene.triangles[hit.triangle_index].normal;
-            let surface = Surface {
-                position: hit.position,
-                normal,
-                geometric: normal,
-                rho: scene.material_of(hit.triangle_index).reflectance,
-                at_edge: approach_at_edge(
-                    &scene.triangles[hit.triangle_index],
-                    hit.u,
-                    hit.v,
-                    ray.direction,
-                ),
-            };
-            HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
-        })
+        .filter_map(|ray| shadow_ray_of(scene, light, ray))
         .collect()
+}
+
+/// [`shadow_rays`], reserved fallibly (room for one a primary ray), made a slice of rays at a
+/// time so that no second full-size buffer is needed.
+pub fn try_shadow_rays(
+    scene: &Scene,
+    light: &PointLight,
+    primary: &[Ray],
+) -> Result<Vec<(Ray, f32)>, AllocError> {
+    let mut rays = try_with_capacity(primary.len(), || {
+        format!("the shadow rays of {} pixels", primary.len())
+    })?;
+    for slice in primary.chunks(1 << 16) {
+        let part: Vec<(Ray, f32)> = slice
+            .par_iter()
+            .filter_map(|ray| shadow_ray_of(scene, light, ray))
+            .collect();
+        rays.extend(part);
+    }
+    Ok(rays)
+}
+
+/// The lab stage's shadow ray from where `ray` hits, if it hits a point the light reaches.
+fn shadow_ray_of(scene: &Scene, light: &PointLight, ray: &Ray) -> Option<(Ray, f32)> {
+    let hit = scene.closest_intersection(ray, f32::INFINITY)?;
+    let triangle = &scene.triangles[hit.triangle_index];
+    let surface = Surface {
+        position: hit.position,
+        normal: triangle.normal,
+        geometric: triangle.normal,
+        rho: scene.material_of(hit.triangle_index).reflectance,
+        at_edge: approach_at_edge(triangle, hit.u, hit.v, ray.direction),
+    };
+    HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
 }
 
 /// Closest hits of all `rays`, in parallel; returns how many hit (so the work is not optimised
@@ -153,13 +194,15 @@ pub fn trace_shadow(scene: &Scene, rays: &[(Ray, f32)]) -> usize {
 }
 
 /// Measures `scene` (whose structure was built with `kind` and `isa`) on the current rayon pool.
+/// The rays it keeps are reserved fallibly: too large a `config` for the memory is an error
+/// (see [`memory_estimate`]).
 pub fn bench_scene(
     name: &str,
     scene: &Scene,
     kind: AccelKind,
     isa: Isa,
     config: &BenchConfig,
-) -> BenchReport {
+) -> Result<BenchReport, AllocError> {
     let passes = config.passes.max(1);
     let builds = if scene.triangles.len() > 100_000 {
         3
@@ -171,8 +214,8 @@ pub fn bench_scene(
         .collect();
 
     let settings = lab_settings(config.width, config.height);
-    let primary = primary_rays(&settings.camera);
-    let shadow = shadow_rays(scene, &settings.light, &primary);
+    let primary = try_primary_rays(&settings.camera)?;
+    let shadow = try_shadow_rays(scene, &settings.light, &primary)?;
     let repeat = |f: &dyn Fn() -> usize| -> f64 {
         std::hint::black_box(f());
         median_ms(
@@ -201,7 +244,7 @@ pub fn bench_scene(
         )
     });
     let pixels = config.width as usize * config.height as usize;
-    BenchReport {
+    Ok(BenchReport {
         scene: name.to_string(),
         triangles: scene.triangles.len(),
         width: config.width,
@@ -213,7 +256,7 @@ pub fn bench_scene(
         lab_pass_ms: lab_ms,
         path_pass_ms: path_ms,
         path_samples_per_s: path_ms.map(|ms| mrays(pixels, ms) * 1e6),
-    }
+    })
 }
 
 #[cfg(test)]
@@ -238,7 +281,7 @@ mod tests {
             passes: 3,
             path: true,
         };
-        let r = bench_scene("cornell", &scene, AccelKind::Auto, Isa::best(), &config);
+        let r = bench_scene("cornell", &scene, AccelKind::Auto, Isa::best(), &config).unwrap();
         assert_eq!(
             (r.scene.as_str(), r.triangles, r.width),
             ("cornell", 30, 32)

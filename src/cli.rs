@@ -20,7 +20,7 @@ use raylab::film::OutputFormat;
 use raylab::inspect::{InspectError, inspect_pixel};
 use raylab::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
 use raylab::material::TexturePreset;
-use raylab::render::render;
+use raylab::render::try_render;
 use raylab::scene::SceneChoice;
 use raylab::settings::{MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_SAMPLES};
 use raylab::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
@@ -430,6 +430,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     raylab::film::check_writable(&args.out)?;
     let settings = args.options.resolve_settings()?;
     settings.validate()?;
+    // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
+    let c = &settings.camera;
+    raylab::memory::check(
+        format!("a {}×{} render", c.width, c.height),
+        settings.memory_estimate(args.view),
+    )?;
     if args.view == raylab::view::View::Variance && settings.samples_per_pixel < 2 {
         anyhow::bail!(
             "the variance view needs 2 or more samples per pixel (--samples 2 or more): it \
@@ -450,7 +456,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let (image, display, legend) = match args.view {
         raylab::view::View::Shaded => (
-            pool.install(|| render(&scene, &settings)),
+            pool.install(|| try_render(&scene, &settings))?,
             settings.display,
             None,
         ),
@@ -606,6 +612,12 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         passes: args.passes as usize,
         path: args.stage == "path",
     };
+    // Refused before any work if it cannot fit: the scenes are measured one after the other.
+    let largest_scene = scenes.iter().map(SceneChoice::memory_estimate).max();
+    raylab::memory::check(
+        format!("a {}×{} bench", args.width, args.height),
+        raylab::bench::memory_estimate(&config) + largest_scene.unwrap_or(0),
+    )?;
     // Written with `writeln!` so that a closed pipe (`raylab bench | head`) is an error, not a
     // panic.
     let mut out = std::io::stdout().lock();
@@ -632,7 +644,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         let report = pool.install(|| -> anyhow::Result<_> {
             let scene = choice.load()?.rebuilt(args.accel, isa);
             let kind = scene.accel().kind();
-            let report = bench_scene(&choice.name(), &scene, args.accel, isa, &config);
+            let report = bench_scene(&choice.name(), &scene, args.accel, isa, &config)?;
             Ok((report, kind))
         })?;
         let (r, kind) = report;

@@ -113,12 +113,25 @@ impl Display {
         self.convert::<4>(image)
     }
 
-    /// The curve chosen once, outside the loop, so each loop is compiled for one curve.
+    /// Some pixels (rows of an image, say) as 8-bit RGB into `out` (three bytes a pixel), in
+    /// parallel: the bytes [`Display::to_rgb8`] gives them. What a PNG is written from, a band
+    /// of rows at a time, without an 8-bit copy of the whole image.
+    pub fn rgb8_into(&self, pixels: &[Vec3], out: &mut [u8]) {
+        self.convert_into::<3>(pixels, out);
+    }
+
     fn convert<const N: usize>(&self, image: &Image) -> Vec<u8> {
+        let mut out = vec![0u8; image.pixels.len() * N];
+        self.convert_into::<N>(&image.pixels, &mut out);
+        out
+    }
+
+    /// The curve chosen once, outside the loop, so each loop is compiled for one curve.
+    fn convert_into<const N: usize>(&self, pixels: &[Vec3], out: &mut [u8]) {
         let scale = self.scale();
         match self.transform.curve() {
-            Curve::Lab => convert::<N>(image, |v| to_display_u8(v * scale)),
-            Curve::Table(steps) => convert::<N>(image, |v| steps.encode(v * scale)),
+            Curve::Lab => convert::<N>(pixels, out, |v| to_display_u8(v * scale)),
+            Curve::Table(steps) => convert::<N>(pixels, out, |v| steps.encode(v * scale)),
         }
     }
 }
@@ -264,11 +277,11 @@ impl Steps {
 /// 1-megapixel image over many threads.
 const CHUNK: usize = 16 * 1024;
 
-/// Each pixel's three channels through `channel`, plus opaque alpha when `N` is 4.
-fn convert<const N: usize>(image: &Image, channel: impl Fn(f32) -> u8 + Sync) -> Vec<u8> {
-    let mut out = vec![0u8; image.pixels.len() * N];
-    image
-        .pixels
+/// Each pixel's three channels through `channel`, plus opaque alpha when `N` is 4, into `out`
+/// (`N` bytes a pixel).
+fn convert<const N: usize>(pixels: &[Vec3], out: &mut [u8], channel: impl Fn(f32) -> u8 + Sync) {
+    assert_eq!(out.len(), pixels.len() * N);
+    pixels
         .par_chunks(CHUNK)
         .zip(out.par_chunks_mut(CHUNK * N))
         .for_each(|(pixels, out)| {
@@ -280,7 +293,6 @@ fn convert<const N: usize>(image: &Image, channel: impl Fn(f32) -> u8 + Sync) ->
                 *o = pixel;
             }
         });
-    out
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use crate::display::Display;
+use crate::memory::{AllocError, try_vec};
 
 /// A `width × height` image of linear RGB values, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -30,6 +31,18 @@ impl Image {
             height,
             pixels: vec![Vec3::ZERO; width as usize * height as usize],
         }
+    }
+
+    /// [`Image::new`], reserved with `try_reserve_exact`: an image the allocator will not give
+    /// (a 16384² one is 3 GiB) is an error naming its size, not an abort.
+    pub fn try_new(width: u32, height: u32) -> Result<Self, AllocError> {
+        let len = (width as usize).saturating_mul(height as usize);
+        let pixels = try_vec(Vec3::ZERO, len, || format!("the {width}×{height} image"))?;
+        Ok(Self {
+            width,
+            height,
+            pixels,
+        })
     }
 
     pub fn get(&self, x: u32, y: u32) -> Vec3 {
@@ -60,15 +73,13 @@ impl Image {
     /// The file is written under a temporary name in the same folder and renamed into place, so
     /// a failed write never leaves a half-written image, and an existing file is replaced
     /// whole or not at all.
+    ///
+    /// Both formats are encoded straight into the file from the image, a band of rows at a
+    /// time: no full-size copy is made, neither an 8-bit one nor one of the floats, nor of the
+    /// encoded file (for a 16384² image those were 0.75, 3 and up to 3 GiB more).
     pub fn save_with(&self, path: &Path, display: &Display) -> Result<(), SaveError> {
         let format = OutputFormat::from_path(path)?;
-        let bytes = self
-            .encode_with(format, display)
-            .map_err(|e| SaveError::Encode {
-                path: path.to_owned(),
-                message: e.to_string(),
-            })?;
-        write_atomically(path, &bytes)
+        write_atomically_with(path, |file| self.encode_to(format, display, file, path))
     }
 
     /// Encodes the image in memory, a PNG through the lab's display.
@@ -77,29 +88,83 @@ impl Image {
     }
 
     /// Encodes the image in memory: a PNG through `display`, an EXR as linear values (before
-    /// exposure and curve: `display` is not used).
+    /// exposure and curve: `display` is not used). The bytes [`Image::save_with`] writes.
     pub fn encode_with(
         &self,
         format: OutputFormat,
         display: &Display,
     ) -> Result<Vec<u8>, image::ImageError> {
         let mut bytes = io::Cursor::new(Vec::new());
-        match format {
-            OutputFormat::Png => {
-                image::RgbImage::from_raw(self.width, self.height, display.to_rgb8(self))
-                    .expect("buffer size matches the image size")
-                    .write_to(&mut bytes, image::ImageFormat::Png)?;
-            }
-            OutputFormat::Exr => {
-                let floats = self.pixels.iter().flat_map(|p| p.to_array()).collect();
-                image::Rgb32FImage::from_raw(self.width, self.height, floats)
-                    .expect("buffer size matches the image size")
-                    .write_to(&mut bytes, image::ImageFormat::OpenExr)?;
-            }
-        }
+        self.encode_to(format, display, &mut bytes, Path::new("memory"))
+            .map_err(|e| image::ImageError::IoError(io::Error::other(e.to_string())))?;
         Ok(bytes.into_inner())
     }
+
+    /// Encodes the image into `out` (`path` names it in errors).
+    fn encode_to<W: Write + io::Seek>(
+        &self,
+        format: OutputFormat,
+        display: &Display,
+        out: &mut W,
+        path: &Path,
+    ) -> Result<(), SaveError> {
+        let encode = |message: String| SaveError::Encode {
+            path: path.to_owned(),
+            message,
+        };
+        let write = |reason| SaveError::Write {
+            path: path.to_owned(),
+            reason,
+        };
+        let (width, height) = (self.width as usize, self.height as usize);
+        match format {
+            OutputFormat::Png => {
+                let png_error = |e: png::EncodingError| match e {
+                    png::EncodingError::IoError(e) => write(e),
+                    e => encode(e.to_string()),
+                };
+                // As the `image` crate encodes an RGB8 PNG: its default compression and
+                // adaptive filtering.
+                let mut encoder = png::Encoder::new(out, self.width, self.height);
+                encoder.set_color(png::ColorType::Rgb);
+                encoder.set_depth(png::BitDepth::Eight);
+                encoder.set_compression(png::Compression::Balanced);
+                encoder.set_filter(png::Filter::Adaptive);
+                let mut writer = encoder.write_header().map_err(png_error)?;
+                let mut stream = writer.stream_writer().map_err(png_error)?;
+                // Bands of about a megapixel (a few MiB of 8-bit rows), converted in parallel.
+                let rows = (PNG_BAND_PIXELS / width.max(1)).max(1);
+                let mut band = Vec::new();
+                for pixels in self.pixels.chunks(rows * width.max(1)) {
+                    band.resize(pixels.len() * 3, 0);
+                    display.rgb8_into(pixels, &mut band);
+                    stream.write_all(&band).map_err(write)?;
+                }
+                stream.finish().map_err(png_error)?;
+                writer.finish().map_err(png_error)
+            }
+            OutputFormat::Exr => {
+                use exr::prelude::{SpecificChannels, Vec2, WritableImage};
+                // As the `image` crate writes an RGB 32-bit float EXR, reading the pixels
+                // where they are.
+                let channels = SpecificChannels::rgb(|at: Vec2<usize>| {
+                    let p = self.pixels[at.y() * width + at.x()];
+                    (p.x, p.y, p.z)
+                });
+                exr::image::Image::from_channels((width, height), channels)
+                    .write()
+                    .to_buffered(out)
+                    .map_err(|e| match e {
+                        exr::error::Error::Io(e) => write(e),
+                        e => encode(e.to_string()),
+                    })
+            }
+        }
+    }
 }
+
+/// The pixels of a band of rows a PNG is written from, at most (unless one row is longer).
+const PNG_BAND_PIXELS: usize = 1 << 20;
 
 /// The lab's display: clamp to [0, 1], scale to 255, round (halves up). NaN shows as 0.
 #[allow(clippy::manual_clamp)]
@@ -183,6 +248,20 @@ pub fn check_writable(path: &Path) -> Result<(), SaveError> {
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it to `path`.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
+    write_atomically_with(path, |file| {
+        file.write_all(bytes).map_err(|reason| SaveError::Write {
+            path: path.to_owned(),
+            reason,
+        })
+    })
+}
+
+/// Has `write` write a temporary file beside `path` (buffered), then renames it to `path`; the
+/// temporary file is removed if anything fails.
+pub fn write_atomically_with(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<fs::File>) -> Result<(), SaveError>,
+) -> Result<(), SaveError> {
     let wrap = |reason| SaveError::Write {
         path: path.to_owned(),
         reason,
@@ -197,15 +276,16 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
     // Removed by the command line's Ctrl+C handler if the program is stopped mid-write.
     let _registered = crate::temp_files::register(&tmp);
     let result = (|| {
-        let mut file = BufWriter::new(fs::File::create(&tmp)?);
-        file.write_all(bytes)?;
-        file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        fs::rename(&tmp, path)
+        let mut file = BufWriter::new(fs::File::create(&tmp).map_err(wrap)?);
+        write(&mut file)?;
+        let file = file.into_inner().map_err(|e| wrap(e.into_error()))?;
+        file.sync_all().map_err(wrap)?;
+        fs::rename(&tmp, path).map_err(wrap)
     })();
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
-    result.map_err(wrap)
+    result
 }
 
 /// Accumulates passes of one view into a running mean (progressive refinement), and, if asked,
@@ -435,6 +515,52 @@ mod tests {
             film.resolve().pixels,
             vec![Vec3::splat(0.5), Vec3::new(0.25, 0.5, 1.0)]
         );
+    }
+
+    /// An image too large to exist is an error naming it, not an abort.
+    #[test]
+    fn an_impossible_image_is_an_error() {
+        let e = Image::try_new(u32::MAX, u32::MAX).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "could not allocate the 4294967295×4294967295 image: it is too large"
+        );
+        assert_eq!(Image::try_new(3, 2).unwrap(), Image::new(3, 2));
+    }
+
+    /// A PNG and an EXR written a band of rows at a time, of an image taller than one band
+    /// (1500 × 800 pixels, a band is 1,048,576 / 1500 = 699 rows): the file holds the bytes
+    /// `encode_with` gives, and decodes to the display's bytes and the linear values.
+    #[test]
+    fn images_are_written_band_by_band_whole() {
+        let (w, h) = (1500u32, 800u32);
+        let mut image = Image::new(w, h);
+        for (i, p) in image.pixels.iter_mut().enumerate() {
+            let (x, y) = ((i % w as usize) as f32, (i / w as usize) as f32);
+            *p = Vec3::new(x / w as f32, y / h as f32, 1.5 - x / w as f32);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let display = Display {
+            transform: crate::display::DisplayTransform::Srgb,
+            exposure: 0.5,
+        };
+        let png = dir.path().join("bands.png");
+        image.save_with(&png, &display).unwrap();
+        let bytes = fs::read(&png).unwrap();
+        assert_eq!(
+            bytes,
+            image.encode_with(OutputFormat::Png, &display).unwrap()
+        );
+        let decoded = image::load_from_memory(&bytes).unwrap().to_rgb8();
+        assert_eq!(decoded.dimensions(), (w, h));
+        assert_eq!(decoded.into_raw(), display.to_rgb8(&image));
+        let exr = dir.path().join("bands.exr");
+        image.save(&exr).unwrap();
+        let back = image::open(&exr).unwrap().to_rgb32f().into_raw();
+        let want: Vec<f32> = image.pixels.iter().flat_map(|p| p.to_array()).collect();
+        assert_eq!(back, want);
+        // Only the two images: no temporary file is left.
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 
     #[test]

@@ -29,6 +29,7 @@ pub mod integrator;
 pub mod intersect;
 pub mod light;
 pub mod material;
+pub mod memory;
 pub mod progressive;
 pub mod render;
 pub mod sampling;

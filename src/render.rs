@@ -12,9 +12,12 @@
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
-use crate::film::{Film, Image};
+#[cfg(doc)]
+use crate::film::Film;
+use crate::film::Image;
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, Tracer};
+use crate::memory::AllocError;
 use crate::sampling::{Rng, concentric_disk, pixel_offset, pixel_sample};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -143,9 +146,9 @@ pub fn render_pass(
     cancelled: &(dyn Fn() -> bool + Sync),
 ) -> Result<Image, Cancelled> {
     let (width, height) = (settings.camera.width, settings.camera.height);
-    let rotation = settings.camera.rotation();
     let tracer = Tracer::new(scene, settings);
     let mut image = Image::new(width, height);
+    let rows = Rows::new(&tracer, settings, sample);
     image
         .pixels
         .par_chunks_mut(width as usize)
@@ -154,35 +157,100 @@ pub fn render_pass(
             if cancelled() {
                 return Err(Cancelled);
             }
-            let mut rays = [Ray {
-                origin: Vec3::ZERO,
-                direction: Vec3::ZERO,
-            }; BATCH];
-            let mut rngs = [Rng::UNUSED; BATCH];
-            for (c, chunk) in row.chunks_mut(BATCH).enumerate() {
-                let n = chunk.len();
-                for (i, (ray, rng)) in rays[..n].iter_mut().zip(&mut rngs[..n]).enumerate() {
-                    let x = (c * BATCH + i) as u32;
-                    camera_sample(&tracer, settings, &rotation, x, y as u32, sample, ray, rng);
-                }
-                tracer.trace(&rays[..n], &mut rngs[..n], chunk);
-            }
+            rows.trace(y as u32, row, |pixel, value| *pixel = value);
             Ok(())
         })?;
     Ok(image)
 }
 
+/// What tracing a row of one pass needs, made once a pass.
+struct Rows<'a> {
+    tracer: &'a Tracer<'a>,
+    settings: &'a RenderSettings,
+    rotation: Mat3,
+    sample: u32,
+}
+
+impl<'a> Rows<'a> {
+    fn new(tracer: &'a Tracer<'a>, settings: &'a RenderSettings, sample: u32) -> Self {
+        Self {
+            tracer,
+            settings,
+            rotation: settings.camera.rotation(),
+            sample,
+        }
+    }
+
+    /// Traces row `y` in batches ([`Tracer::trace`]) and hands each pixel of `row` its value.
+    #[inline(always)]
+    fn trace(&self, y: u32, row: &mut [Vec3], mut put: impl FnMut(&mut Vec3, Vec3)) {
+        let mut rays = [Ray {
+            origin: Vec3::ZERO,
+            direction: Vec3::ZERO,
+        }; BATCH];
+        let mut rngs = [Rng::UNUSED; BATCH];
+        let mut values = [Vec3::ZERO; BATCH];
+        for (c, chunk) in row.chunks_mut(BATCH).enumerate() {
+            let n = chunk.len();
+            for (i, (ray, rng)) in rays[..n].iter_mut().zip(&mut rngs[..n]).enumerate() {
+                let x = (c * BATCH + i) as u32;
+                let (tracer, settings) = (self.tracer, self.settings);
+                camera_sample(
+                    tracer,
+                    settings,
+                    &self.rotation,
+                    x,
+                    y,
+                    self.sample,
+                    ray,
+                    rng,
+                );
+            }
+            self.tracer
+                .trace(&rays[..n], &mut rngs[..n], &mut values[..n]);
+            for (pixel, value) in chunk.iter_mut().zip(&values[..n]) {
+                put(pixel, *value);
+            }
+        }
+    }
+}
+
 /// The full image: `samples_per_pixel` passes averaged. Not cancellable; for the command line
 /// and tests.
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Image {
-    let mut film = Film::new(settings.camera.width, settings.camera.height);
-    for sample in 0..settings.samples_per_pixel.max(1) {
-        match render_pass(scene, settings, sample, &|| false) {
-            Ok(pass) => film.add_pass(&pass),
-            Err(Cancelled) => unreachable!("never cancelled"),
-        }
+    let mut image = Image::new(settings.camera.width, settings.camera.height);
+    accumulate(scene, settings, &mut image);
+    image
+}
+
+/// [`render`], with the image reserved fallibly ([`Image::try_new`]): a 16384² image the
+/// allocator will not give is an error, not an abort. The command line renders with this.
+pub fn try_render(scene: &Scene, settings: &RenderSettings) -> Result<Image, AllocError> {
+    let mut image = Image::try_new(settings.camera.width, settings.camera.height)?;
+    accumulate(scene, settings, &mut image);
+    Ok(image)
+}
+
+/// Adds `samples_per_pixel` passes into `sum` (all zeros), a row at a time, then divides by
+/// their number: the mean of the passes in the one image, where a [`Film`] holds its sum and a
+/// whole pass beside it and resolves into a third image (three full-size images at the peak;
+/// one here). The same operations in the same order as [`Film::add_pass`] and
+/// [`Film::resolve`], so the same image bit for bit (the workbench's, accumulated in a film,
+/// equals this one: `progressive`'s tests).
+fn accumulate(scene: &Scene, settings: &RenderSettings, sum: &mut Image) {
+    let width = settings.camera.width as usize;
+    let tracer = Tracer::new(scene, settings);
+    let samples = settings.samples_per_pixel.max(1);
+    for sample in 0..samples {
+        let rows = Rows::new(&tracer, settings, sample);
+        sum.pixels
+            .par_chunks_mut(width.max(1))
+            .enumerate()
+            .for_each(|(y, row)| rows.trace(y as u32, row, |s, value| *s += value));
     }
-    film.resolve()
+    // `Film::resolve`'s scale.
+    let scale = 1.0 / samples as f32;
+    sum.pixels.par_iter_mut().for_each(|p| *p *= scale);
 }
 
 #[cfg(test)]

@@ -99,7 +99,31 @@ pub struct SettingsError {
     pub reason: &'static str,
 }
 
+/// What [`RenderSettings::memory_estimate`] allows for the program itself: its code, its
+/// threads' stacks and its allocator's first reserves (a small render runs in 50 MiB of
+/// address space).
+pub const BASE_MEMORY: u64 = 64 << 20;
+
 impl RenderSettings {
+    /// The memory a render of these settings needs at its peak, in bytes, as the command line
+    /// makes it: the shaded image (`view` [`View::Shaded`], whatever the sample count) or a
+    /// debug view. A rough upper bound, for refusing early what cannot fit
+    /// ([`crate::memory::check`]), counted as:
+    ///
+    /// * per pixel, what lives together at the peak: the shaded image is one linear float
+    ///   image, 12 bytes a pixel, which the passes are summed into row by row
+    ///   ([`crate::render::try_render`]) and which PNG and EXR files are encoded from a band
+    ///   of rows at a time ([`crate::film::Image::save_with`]); a debug view holds its raw
+    ///   values beside its image ([`View::bytes_per_pixel`]);
+    /// * the scene ([`SceneChoice::memory_estimate`]);
+    /// * [`BASE_MEMORY`] for the program.
+    ///
+    /// A 16384 × 16384 render: 268,435,456 pixels × 12 bytes = 3.0 GiB, plus 64 MiB: 3.1 GiB.
+    pub fn memory_estimate(&self, view: View) -> u64 {
+        let pixels = u64::from(self.camera.width) * u64::from(self.camera.height);
+        pixels * view.bytes_per_pixel() + self.scene.memory_estimate() + BASE_MEMORY
+    }
+
     /// Whether `other` renders the same linear image: equal but perhaps for the display
     /// transform and exposure, which change only how the image is shown.
     pub fn renders_like(&self, other: &RenderSettings) -> bool {
@@ -377,6 +401,30 @@ mod tests {
         );
         s.shading.indirect_light = Vec3::splat(MAX_INDIRECT_LIGHT);
         s.validate().unwrap();
+    }
+
+    /// The estimate by hand: 16384² pixels × 12 bytes + 64 MiB = 3,288,334,336 bytes for the
+    /// Cornell box's shaded image; the normals view adds 16 bytes a pixel (an optional vector);
+    /// the terrain adds its 320 MiB.
+    #[test]
+    fn memory_estimates_by_hand() {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(MAX_IMAGE_SIDE, MAX_IMAGE_SIDE);
+        let pixels = 16_384u64 * 16_384;
+        assert_eq!(s.memory_estimate(View::Shaded), 3_288_334_336);
+        s.samples_per_pixel = 1000;
+        assert_eq!(
+            s.memory_estimate(View::Shaded),
+            3_288_334_336,
+            "summed in place"
+        );
+        assert_eq!(s.memory_estimate(View::Normals), pixels * 28 + BASE_MEMORY);
+        s.scene = SceneChoice::Terrain;
+        s.camera = s.camera.with_resolution(512, 512);
+        assert_eq!(
+            s.memory_estimate(View::Shaded),
+            512 * 512 * 12 + (320 << 20) + BASE_MEMORY
+        );
     }
 
     /// The largest light and N the bounds allow, the light on a surface (where D is largest:

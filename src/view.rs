@@ -98,6 +98,24 @@ impl View {
     pub fn is_traced(self) -> bool {
         !matches!(self, View::Shaded | View::Variance)
     }
+
+    /// The bytes a pixel of this view takes while it is made ([`render_view`]; the shaded
+    /// image as [`crate::render::try_render`] makes it): its linear image (12 bytes), and the
+    /// raw values of a traced view beside it (an optional vector: 16; an optional distance,
+    /// triangle index or a traversal cost: 8; a shadow state: 1). The variance view renders
+    /// into a film that tracks the noise (the sum, 12, and the squares, 4) beside one pass
+    /// (12), then makes its variances (4) and image (12) while the film is still there.
+    pub fn bytes_per_pixel(self) -> u64 {
+        let image = 12;
+        image
+            + match self {
+                View::Shaded => 0,
+                View::Normals | View::Barycentric => 16,
+                View::Depth | View::Triangle | View::BvhCost => 8,
+                View::Shadow => 1,
+                View::Variance => 20,
+            }
+    }
 }
 
 impl fmt::Display for View {

@@ -3,6 +3,8 @@
 //!
 //! * Fault 3: coincident and degenerate geometry (a million copies of one triangle) loads and
 //!   builds in linear time, and the structures still answer as the brute-force loop does.
+//! * Fault 4: a render or bench too large for the memory the process may use is refused at
+//!   once, saying how much it needs and how much there is, instead of aborting.
 //! * Fault 5: huge but finite light (1e38 W, N = 1e38) is refused, naming the bound, instead of
 //!   writing infinite pixels.
 //! * Fault 6: a light outside the box no longer leaks in along its edges, and a camera exactly
@@ -410,4 +412,85 @@ fn a_camera_on_a_wall_sees_what_is_in_front_of_it() {
             .count();
         assert!(differ <= 48, "{stage}: {differ} pixels differ");
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fault 4: the largest images under a memory limit.
+
+/// Runs `raylab ARGS…` under `ulimit -v KIB` (the address-space limit the fault was seen
+/// with): its output and how long it took.
+fn raylab_limited(kib: u32, args: &[&str]) -> (std::process::Output, Duration) {
+    let start = Instant::now();
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {kib}; exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_raylab"))
+        .args(args)
+        .output()
+        .expect("run raylab under sh");
+    (out, start.elapsed())
+}
+
+/// Refused at once (well under the seconds a 16384² render takes): exit code 1, one line saying
+/// what is needed and what the limit leaves, and no image nor temporary file.
+fn assert_refused_for_memory(kib: u32, args: &[&str], out: &str, needs: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join(out);
+    let mut argv = args.to_vec();
+    if args[0] == "render" {
+        argv.extend(["--out", out.to_str().unwrap()]);
+    }
+    let (out, took) = raylab_limited(kib, &argv);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    assert!(
+        err.starts_with(&format!("error: {needs} but only ")),
+        "{args:?}: {err}"
+    );
+    assert!(
+        err.trim_end()
+            .ends_with(" GiB is available (address-space limit: ulimit -v)"),
+        "{args:?}: {err}"
+    );
+    assert!(took < Duration::from_secs(5), "{args:?} took {took:?}");
+    assert!(
+        common::files_in(dir.path()).is_empty(),
+        "{args:?} wrote a file"
+    );
+}
+
+/// The fault: a 16384 × 16384 render under a 4 GB limit aborted ("memory allocation … failed",
+/// exit code 134) after rendering, needing 6.3 GB (PNG) to 9.4 GB (EXR). It now needs one image,
+/// 3 GiB, plus 64 MiB for the program: 3.1 GiB. That fits under `ulimit -v 4000000` (3.8 GiB),
+/// so here the limit is 3,000,000 KiB (2.9 GiB, less what the program already uses): refused.
+/// Under the fault's limit, what still does not fit is refused as well: the variance view
+/// (32 bytes a pixel: 8.1 GiB), and the bench (its rays, 64 bytes a pixel: 16.4 GiB).
+#[test]
+fn a_render_too_large_for_the_memory_is_refused_at_once() {
+    let side = ["--width", "16384", "--height", "16384"];
+    for out in ["X.png", "X.exr"] {
+        assert_refused_for_memory(
+            3_000_000,
+            &[&["render"][..], &side].concat(),
+            out,
+            "a 16384×16384 render needs about 3.1 GiB",
+        );
+    }
+    assert_refused_for_memory(
+        4_000_000,
+        &[
+            &["render", "--view", "variance", "--samples", "2"][..],
+            &side,
+        ]
+        .concat(),
+        "X.png",
+        "a 16384×16384 render needs about 8.1 GiB",
+    );
+    assert_refused_for_memory(
+        4_000_000,
+        &[&["bench", "--scene", "cornell"][..], &side].concat(),
+        "",
+        "a 16384×16384 bench needs about 16.1 GiB",
+    );
 }

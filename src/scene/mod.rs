@@ -312,6 +312,12 @@ impl SceneChoice {
         SceneChoice::Custom(Box::new(spec))
     }
 
+    /// Roughly the most memory loading and building the scene takes, in bytes
+    /// ([`SceneSpec::memory_estimate`]).
+    pub fn memory_estimate(&self) -> u64 {
+        self.spec().memory_estimate()
+    }
+
     /// Builds the scene and its acceleration structure (on the current rayon pool).
     pub fn load(&self) -> Result<Scene, SceneError> {
         self.load_with_warnings().map(|(scene, _)| scene)

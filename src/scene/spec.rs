@@ -220,6 +220,29 @@ impl SceneSpec {
         Ok(())
     }
 
+    /// Roughly the most memory loading and building the scene takes, in bytes: nothing to
+    /// speak of for the lab's box; 16 MiB a built-in model; for an OBJ file, 8 times its size
+    /// (a face of some 40 bytes of text becomes a triangle, its corners' normals and texture
+    /// coordinates and its share of the structure, some 300 bytes), or 0 if it cannot be read
+    /// (loading it fails anyway); 320 MiB for the default terrain's million triangles (it runs
+    /// in about 350 MiB of address space in all), in proportion to its triangle count for
+    /// another grid.
+    pub fn memory_estimate(&self) -> u64 {
+        let models: u64 = self
+            .models
+            .iter()
+            .map(|m| match m.built_in() {
+                Some(_) => 16 << 20,
+                None => std::fs::metadata(&m.file).map_or(0, |f| 8 * f.len()),
+            })
+            .sum();
+        let terrain = self.terrain.as_ref().map_or(0, |t| {
+            let default = u64::from(TerrainSpec::default().grid).pow(2);
+            (320u64 << 20) * u64::from(t.grid).pow(2) / default
+        });
+        models + terrain
+    }
+
     /// Builds the scene and its acceleration structure (on the current rayon pool), with a
     /// warning for each model part that could not be used (a missing material library or
     /// texture). `cancelled` is asked between parts: a load given up returns
