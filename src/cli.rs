@@ -314,12 +314,8 @@ impl RenderOptions {
 pub fn read_settings_file(path: &std::path::Path) -> anyhow::Result<RenderSettings> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("could not read settings file '{}'", path.display()))?;
-    let bad = || format!("settings file '{}' is not valid", path.display());
-    let mut value: serde_json::Value = serde_json::from_str(&text).with_context(bad)?;
-    if let Some(inner) = value.get_mut("settings") {
-        value = inner.take();
-    }
-    serde_json::from_value(value).with_context(bad)
+    RenderSettings::from_json(&text)
+        .with_context(|| format!("settings file '{}' is not valid", path.display()))
 }
 
 /// Parses the arguments and runs the command; the one place errors become exit codes.
