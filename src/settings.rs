@@ -132,6 +132,16 @@ impl RenderSettings {
         same_display == *other
     }
 
+    /// Reads settings from JSON text: a workbench screenshot's sidecar (whose `settings` field
+    /// holds them) or a bare settings object. Missing fields take the lab's defaults. The values
+    /// are not checked: call [`RenderSettings::validate`] before rendering.
+    ///
+    /// Here rather than in the command line so the settings-file fuzz target
+    /// (`fuzz/fuzz_targets/settings_json.rs`) runs exactly what `--settings FILE` runs.
+    pub fn from_json(text: &str) -> Result<Self, String> {
+        files::from_json(text).map(|loaded| loaded.settings)
+    }
+
     /// One line naming what most often explains a render: the scene, stage and switches,
     /// resolution, camera, light, samples and seed. For error reports (a render that panicked
     /// says which settings did it); the JSON (`serde_json::to_string`) has everything.
@@ -327,6 +337,24 @@ mod tests {
         assert_eq!(partial.light.position, Vec3::new(0.5, 0.0, 0.0));
         assert_eq!(partial.light.channel_power(), Vec3::splat(14.0));
         assert_eq!(partial.camera, Camera::default());
+    }
+
+    #[test]
+    fn json_text_is_a_sidecar_or_bare_settings() {
+        let mut s = RenderSettings::default();
+        s.seed = 7;
+        s.camera = s.camera.with_resolution(64, 32);
+        let bare = serde_json::to_string(&s).unwrap();
+        assert_eq!(RenderSettings::from_json(&bare).unwrap(), s);
+        let sidecar = format!(r#"{{"png": "x.png", "settings": {bare}}}"#);
+        assert_eq!(RenderSettings::from_json(&sidecar).unwrap(), s);
+        assert_eq!(
+            RenderSettings::from_json("{}").unwrap(),
+            RenderSettings::default()
+        );
+        assert!(RenderSettings::from_json("{").is_err());
+        assert!(RenderSettings::from_json(r#"{"samples_per_pixel": -1}"#).is_err());
+        assert!(RenderSettings::from_json("[1, 2]").is_err());
     }
 
     #[test]

@@ -126,6 +126,10 @@ fn parse_with_materials(
         ignore_lines: true,
         ..Default::default()
     };
+    check_element_indices(text).map_err(|reason| SceneError::Obj {
+        path: path.to_path_buf(),
+        reason,
+    })?;
     let mut reader = BufReader::new(text);
     let (models, materials) =
         tobj::load_obj_buf(&mut reader, &options, material_library).map_err(|e| {
@@ -299,6 +303,57 @@ pub fn drop_unseen_faces(mesh: &mut Mesh) -> DroppedFaces {
         }
     });
     dropped
+}
+
+/// The largest element index accepted: a mesh's indices are `u32`, and a file with more
+/// vertices than that would be gigabytes of text.
+const MAX_ELEMENT_INDEX: i64 = u32::MAX as i64;
+
+/// Refuses the face and line elements (`f`, `l`) whose texture-coordinate or normal indices
+/// tobj cannot take: a relative (negative) index pointing before the first `vt` or `vn` read
+/// so far, or an index beyond [`MAX_ELEMENT_INDEX`]. tobj 4.0.5 turns such an index into a
+/// `usize` near 2⁶⁴ and multiplies it by 2 or 3 before its bounds check: a panic ("attempt to
+/// multiply with overflow") where overflow checks are on, as in debug builds, and in release
+/// a wrapped product that may pass the check and read the wrong normal. Found by the `obj`
+/// fuzz target (tests/fuzz-regressions/obj).
+///
+/// Lines are read as tobj reads them: one statement a line, words split at whitespace, the
+/// counts of `v`, `vt` and `vn` statements so far giving the base of relative indices.
+fn check_element_indices(text: &[u8]) -> Result<(), String> {
+    let mut counts = [0i64; 3];
+    for (number, line) in text.split(|&b| b == b'\n').enumerate() {
+        // tobj stops at text that is not UTF-8 with an error of its own.
+        let Ok(line) = std::str::from_utf8(line) else {
+            return Ok(());
+        };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f" | "l") => {
+                for vertex in words {
+                    for (kind, index) in vertex.split('/').enumerate().skip(1).take(2) {
+                        let Ok(index) = index.parse::<i64>() else {
+                            // Empty (`1//3`) or not a number: tobj's to judge.
+                            continue;
+                        };
+                        let name = ["", "texture coordinate", "normal"][kind];
+                        if index > MAX_ELEMENT_INDEX || counts[kind] + index < 0 {
+                            return Err(format!(
+                                "line {}: {name} index {index} is out of range ({} read so \
+                                 far)",
+                                number + 1,
+                                counts[kind]
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Reads and parses an OBJ file (without its material libraries).
@@ -829,6 +884,38 @@ mod tests {
         assert!(e.to_string().contains("/no/such/model.obj"), "{e}");
         let e = parse_obj(b"v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", p).unwrap_err();
         assert!(e.to_string().contains("not finite"), "{e}");
+    }
+
+    #[test]
+    fn element_indices_tobj_cannot_take_are_errors() {
+        let p = Path::new("models/broken.obj");
+        let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nvn 0 1 0\n";
+        // Relative indices before the first texture coordinate or normal (tobj multiplies the
+        // wrapped index, a panic with overflow checks), and a normal index so large that
+        // 3 × index wraps past 2⁶⁴.
+        for (face, message) in [
+            (
+                "f 1/-2 2/1 3/1",
+                "line 7: texture coordinate index -2 is out of range (1 read",
+            ),
+            (
+                "f 1//-3 2//1 3//1",
+                "line 7: normal index -3 is out of range (2 read",
+            ),
+            (
+                "f 1//6148914691236517206 2//1 3//1",
+                "normal index 6148914691236517206",
+            ),
+            ("l 1/-9 2/1", "texture coordinate index -9"),
+        ] {
+            let e = parse_obj(format!("{tri}{face}\n").as_bytes(), p).unwrap_err();
+            assert!(e.to_string().contains("broken.obj"), "{e}");
+            assert!(e.to_string().contains(message), "{e}");
+        }
+        // The last one of each, relative, is fine: -1 is the newest.
+        let mesh = parse_obj(format!("{tri}f 1/-1/-2 2/-1/-1 3/1/1\n").as_bytes(), p).unwrap();
+        assert_eq!(mesh.indices.len(), 1);
+        assert_eq!(mesh.normals.unwrap()[0], Vec3::Z);
     }
 
     fn close(a: Vec3, b: Vec3) -> bool {
