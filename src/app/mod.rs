@@ -142,7 +142,9 @@ pub struct WorkbenchApp {
 struct SceneLoad {
     choice: SceneChoice,
     started: Instant,
-    result: Receiver<Result<Scene, String>>,
+    /// The scene and what went wrong on the way without stopping it (an OBJ file's faces left
+    /// out, its texture missing), or why it could not be loaded.
+    result: Receiver<Result<(Scene, Vec<String>), String>>,
 }
 
 /// An inspection as the inspector panel shows it: its lines, and the same as text to copy.
@@ -291,7 +293,7 @@ impl WorkbenchApp {
         let spawned = std::thread::Builder::new()
             .name("raylab-scene-loader".to_owned())
             .spawn(move || {
-                let _ = sender.send(job.load().map_err(|e| e.to_string()));
+                let _ = sender.send(job.load_with_warnings().map_err(|e| e.to_string()));
                 repaint.request_repaint();
             });
         match spawned {
@@ -324,16 +326,22 @@ impl WorkbenchApp {
             return;
         };
         match result {
-            Ok(scene) => {
+            Ok((scene, warnings)) => {
                 let ms = load.started.elapsed().as_secs_f64() * 1e3;
-                self.set_status(
-                    StatusKind::Info,
-                    format!(
-                        "Loaded the {} scene: {} triangles in {ms:.0} ms",
-                        load.choice,
-                        scene.triangles.len()
-                    ),
+                let loaded = format!(
+                    "Loaded the {} scene: {} triangles in {ms:.0} ms",
+                    load.choice,
+                    scene.triangles.len()
                 );
+                if warnings.is_empty() {
+                    self.set_status(StatusKind::Info, loaded);
+                } else {
+                    // Said, not hidden: the model is on screen, but not all of the file is.
+                    self.set_status(
+                        StatusKind::Notice,
+                        format!("{loaded}; {}", warnings.join("; ")),
+                    );
+                }
                 self.scene = Arc::new(scene);
                 self.scene_choice = load.choice;
                 // Render the new scene even if nothing else changed.
