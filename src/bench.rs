@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Surface};
-use crate::light::{PointLight, approach_at_edge};
+use crate::light::PointLight;
 use crate::memory::{AllocError, try_with_capacity};
 use crate::render::render_pass;
 use crate::scene::Scene;
@@ -169,7 +169,7 @@ fn shadow_ray_of(scene: &Scene, light: &PointLight, ray: &Ray) -> Option<(Ray, f
         normal: triangle.normal,
         geometric: triangle.normal,
         rho: scene.material_of(hit.triangle_index).reflectance,
-        at_edge: approach_at_edge(triangle, hit.u, hit.v, ray.direction),
+        at_edge: scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction),
     };
     HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
 }

@@ -196,19 +196,30 @@ pub const EDGE_ZONE: f32 = 2.0 * SHADOW_OFFSET;
 /// direction of the ray that found it, when the hit lies within [`EDGE_ZONE`] of an edge of its
 /// triangle (`u`, `v` its barycentric coordinates, as [`crate::intersect::intersect_triangle`]
 /// gives them); `None` elsewhere, where it is not needed (see [`shadow_ray_to`]).
+/// [`crate::scene::Scene::approach_at_edge`] answers the same from the scene's triangles'
+/// [`edge_zones`], made once.
 #[inline]
 pub fn approach_at_edge(triangle: &Triangle, u: f32, v: f32, incoming: Vec3) -> Option<Vec3> {
-    // The distance to the edge where v = 0 (from v0 along e1) is v times the height of v2
-    // above it, |e1 × e2| / |e1|; likewise u and |e2|, and 1 − u − v and |e2 − e1|. Squared,
-    // so no square root.
+    near_an_edge(&edge_zones(triangle), u, v).then_some(incoming)
+}
+
+/// A triangle's [`EDGE_ZONE`] in barycentric terms, squared, for [`near_an_edge`]: the
+/// distance from a point to the edge where v = 0 (along e1) is v times the height of v2 above
+/// that edge, |e1 × e2| / |e1|; likewise u and |e2|, and 1 − u − v and |e2 − e1|. So a point is
+/// within the zone of the first edge when v² < EDGE_ZONE² · |e1|² / |e1 × e2|², and so on.
+pub fn edge_zones(triangle: &Triangle) -> [f32; 3] {
     let (e1, e2) = triangle.edges();
     let n2 = e1.cross(e2).length_squared();
-    let w = 1.0 - u - v;
     let zone2 = EDGE_ZONE * EDGE_ZONE;
-    let near = v * v * n2 < zone2 * e1.length_squared()
-        || u * u * n2 < zone2 * e2.length_squared()
-        || w * w * n2 < zone2 * (e2 - e1).length_squared();
-    near.then_some(incoming)
+    [e1, e2, e2 - e1].map(|e| zone2 * e.length_squared() / n2)
+}
+
+/// Whether barycentric `(u, v)` lies within a triangle's [`edge_zones`].
+#[inline(always)]
+pub fn near_an_edge(zones: &[f32; 3], u: f32, v: f32) -> bool {
+    let w = 1.0 - u - v;
+    // `|`, not `||`: three compares and no branch (the answer is nearly always no).
+    (v * v < zones[0]) | (u * u < zones[1]) | (w * w < zones[2])
 }
 
 /// The shadow ray from a surface point toward the light, and the distance to stop at (lab

@@ -25,7 +25,7 @@ use crate::accel::{AccelKind, TraversalCost};
 use crate::film::{Film, Image};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::{PointLight, approach_at_edge, direct_light, in_shadow};
+use crate::light::{PointLight, direct_light, in_shadow};
 use crate::render::{Cancelled, render_pass};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -313,7 +313,7 @@ pub fn shadow_state(
         light,
         p,
         geometric,
-        approach_at_edge(&scene.triangles[index], hit.u, hit.v, incoming),
+        scene.approach_at_edge(index, hit.u, hit.v, incoming),
     ) {
         ShadowState::Blocked
     } else {

@@ -192,7 +192,7 @@ fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     assert_eq!(scene.triangles.len(), raylab::scene::CORNELL_TRIANGLES + 1);
     let want = format!(
         "{}: left out {} faces that can never be seen: 1 degenerate (zero area), {} exact \
-         duplicates of an earlier face",
+         duplicates of earlier faces",
         obj.display(),
         COPIES + 1,
         COPIES

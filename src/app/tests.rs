@@ -533,6 +533,42 @@ fn a_missing_obj_file_shows_an_error_and_keeps_the_scene() {
     assert!(!shown(&h).settings.shading.shadows);
 }
 
+/// An OBJ file with faces left out (issue 10, fault 3: a copy of a face, a face on a line)
+/// loads, and the status line says what was left out, as a notice.
+#[test]
+fn an_obj_with_faces_left_out_loads_with_a_notice_saying_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("copies.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 3\nf 1 2 4\n",
+    )
+    .unwrap();
+    let path = obj.to_str().unwrap();
+    let mut h = harness(small_state());
+    h.get_by_role_and_label(Role::TextInput, "File").focus();
+    h.step();
+    h.get_by_role_and_label(Role::TextInput, "File")
+        .type_text(path);
+    h.run_steps(2);
+    h.get_by_role_and_label(Role::Button, "Open").click();
+    settle(&mut h);
+    assert_eq!(settings(&h).scene, SceneChoice::Obj(path.into()));
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Notice, "{text}");
+    assert!(
+        text.starts_with("Loaded the copies.obj scene: 31 triangles"),
+        "{text}"
+    );
+    assert!(
+        text.ends_with(
+            "copies.obj: left out 2 faces that can never be seen: 1 degenerate (zero area), 1 \
+             exact duplicate of an earlier face)"
+        ),
+        "{text}"
+    );
+}
+
 #[test]
 fn non_finite_values_never_reach_the_renderer() {
     let mut h = harness(small_state());

@@ -18,7 +18,6 @@ use glam::Vec3;
 use super::{BATCH, HitTerms, Recorder, Tracer, cast_shadow_rays, continue_ray, light_point};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::approach_at_edge;
 use crate::sampling::Rng;
 
 /// Where a specular branch's value goes and what it is multiplied by.
@@ -159,8 +158,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             if R::ENABLED {
                 rec.specular_hit(hit, branch.weight, branch.depth, branches.as_slice());
             }
-            let triangle = &scene.triangles[hit.triangle_index];
-            let at_edge = approach_at_edge(triangle, hit.u, hit.v, d);
+            let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, d);
             for &(direction, weight) in branches.as_slice() {
                 next.0
                     .push(continue_ray(hit.position, normal, direction, at_edge));
@@ -232,8 +230,8 @@ mod tests {
                 }
                 mirror_pixels += 1;
                 let n = scene.triangles[hit.triangle_index].normal;
-                let t = &scene.triangles[hit.triangle_index];
-                let at_edge = approach_at_edge(t, hit.u, hit.v, ray.direction);
+                let at_edge =
+                    scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction);
                 let reflected = crate::material::reflect(ray.direction, n);
                 let r = continue_ray(hit.position, n, reflected, at_edge);
                 let seen = scene

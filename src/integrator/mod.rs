@@ -40,7 +40,7 @@ use crate::accel::Isa;
 use crate::accel::simd::{Avx2, Avx512};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::{PointLight, SHADOW_OFFSET, approach_at_edge, direct_light, shadow_ray_to};
+use crate::light::{PointLight, SHADOW_OFFSET, direct_light, shadow_ray_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -309,8 +309,9 @@ pub struct Surface {
     /// ρ, the diffuse reflectance: the material's, or its texture's value at the hit.
     pub rho: Vec3,
     /// The direction of the ray that found the hit when the hit lies near an edge of its
-    /// triangle, where its shadow ray starts differently ([`crate::light::approach_at_edge`],
-    /// [`crate::light::shadow_ray`]); `None` elsewhere, or when no shadow ray is cast.
+    /// triangle, where its shadow ray starts differently
+    /// ([`crate::scene::Scene::approach_at_edge`], [`crate::light::shadow_ray`]); `None`
+    /// elsewhere, or when no shadow ray is cast.
     pub at_edge: Option<Vec3>,
 }
 
@@ -513,12 +514,12 @@ pub fn cast_shadow_rays(scene: &Scene, terms: &mut [HitTerms]) {
 /// A ray leaving a surface point along `direction`, started [`SHADOW_OFFSET`] off the surface
 /// on the side it leaves by, so it cannot hit the surface it leaves.
 ///
-/// `at_edge` is [`approach_at_edge`]'s answer for the point. At an edge where another surface
-/// meets this one, the lifted point lies in that surface's plane, and a ray leaving it would
-/// meet that surface at `t = 0`, which is no hit: it would slip through it. So there, as a
-/// shadow ray does ([`crate::light::shadow_ray`]), it starts [`SHADOW_OFFSET`] along the
-/// surface back toward where the arriving ray came from: a ray into the other surface then
-/// meets it just beyond its start, one away from it leaves it behind.
+/// `at_edge` is [`crate::scene::Scene::approach_at_edge`]'s answer for the point. At an edge
+/// where another surface meets this one, the lifted point lies in that surface's plane, and a
+/// ray leaving it would meet that surface at `t = 0`, which is no hit: it would slip through
+/// it. So there, as a shadow ray does ([`crate::light::shadow_ray`]), it starts
+/// [`SHADOW_OFFSET`] along the surface back toward where the arriving ray came from: a ray into
+/// the other surface then meets it just beyond its start, one away from it leaves it behind.
 #[inline(always)]
 pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3, at_edge: Option<Vec3>) -> Ray {
     let side = if direction.dot(normal) >= 0.0 {
@@ -574,18 +575,17 @@ impl<'a> Tracer<'a> {
     }
 
     /// The surface at a diffuse hit found by a ray going along `incoming`: its shading normal
-    /// (smooth or flat, as the switch and the mesh say), its own normal, and ρ (textured: at
-    /// the mesh's texture coordinates, or at a planar projection of the hit for surfaces
-    /// without them, such as the box's walls).
+    /// (smooth or flat, as the switch and the mesh say), its own normal, ρ (textured: at the
+    /// mesh's texture coordinates, or at a planar projection of the hit for surfaces without
+    /// them, such as the box's walls), and whether it lies at an edge of its triangle (asked
+    /// only when shadow rays are cast, which alone need it).
     #[inline(always)]
     pub fn surface(&self, hit: &Intersection, material: &Material, incoming: Vec3) -> Surface {
         let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
         let scene = self.scene;
-        let triangle = &scene.triangles[index];
-        let geometric = triangle.normal;
-        // Only a shadow ray needs it.
+        let geometric = scene.triangles[index].normal;
         let at_edge = if self.shading.shadows {
-            approach_at_edge(triangle, u, v, incoming)
+            scene.approach_at_edge(index, u, v, incoming)
         } else {
             None
         };

@@ -28,7 +28,6 @@ use super::{
 };
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::approach_at_edge;
 use crate::material::facing;
 use crate::sampling::Rng;
 
@@ -144,7 +143,7 @@ fn batch<R: Recorder>(
             }
             let scatter = material.sample(incoming, geometric, rng);
             path.beta *= scatter.weight;
-            let at_edge = approach_at_edge(triangle, hit.u, hit.v, incoming);
+            let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, incoming);
             path.ray = continue_ray(hit.position, geometric, scatter.direction, at_edge);
             path.depth += 1;
             // Russian roulette from ROULETTE_DEPTH on. Its number is drawn at every vertex,

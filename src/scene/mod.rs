@@ -23,6 +23,7 @@ use glam::{Vec2, Vec3};
 use crate::accel::{Accel, AccelKind, Hit, Isa};
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{self, Intersection};
+use crate::light;
 pub use crate::material::{Material, MaterialKind};
 
 /// Geometry and materials to trace. Every triangle's `material` indexes `materials`.
@@ -43,6 +44,8 @@ pub struct Scene {
     /// Empty when no triangle has them; else one entry per triangle.
     pub uvs: Vec<Option<[Vec2; 3]>>,
     accel: Accel,
+    /// Per triangle, its [`crate::light::edge_zones`], for [`Scene::approach_at_edge`].
+    edge_zones: Vec<[f32; 3]>,
 }
 
 impl Scene {
@@ -66,13 +69,37 @@ impl Scene {
                 .all(|t| (t.material as usize) < materials.len())
         );
         let accel = Accel::build(&triangles, kind, isa);
+        let edge_zones = triangles.iter().map(light::edge_zones).collect();
         Self {
             triangles,
             materials,
             vertex_normals: Vec::new(),
             uvs: Vec::new(),
             accel,
+            edge_zones,
         }
+    }
+
+    /// [`light::approach_at_edge`] for a hit of triangle `index` at barycentric `(u, v)`, with
+    /// the triangle's edge zones made once (it is asked at every diffuse hit).
+    #[inline(always)]
+    pub fn approach_at_edge(&self, index: usize, u: f32, v: f32, incoming: Vec3) -> Option<Vec3> {
+        match self.edge_zones.get(index) {
+            Some(zones) => light::near_an_edge(zones, u, v).then_some(incoming),
+            None => self.approach_at_edge_of_a_new_triangle(index, u, v, incoming),
+        }
+    }
+
+    /// [`Scene::approach_at_edge`] for a triangle added since the scene was made.
+    #[cold]
+    fn approach_at_edge_of_a_new_triangle(
+        &self,
+        index: usize,
+        u: f32,
+        v: f32,
+        incoming: Vec3,
+    ) -> Option<Vec3> {
+        light::approach_at_edge(&self.triangles[index], u, v, incoming)
     }
 
     /// The same scene with per-vertex normals and texture coordinates (each empty, or one

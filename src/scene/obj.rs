@@ -239,9 +239,14 @@ pub struct DroppedFaces {
 impl DroppedFaces {
     /// The loader's warning, or `None` when nothing was left out. `source` names the file.
     pub fn warning(&self, source: &str) -> Option<String> {
+        let duplicates = if self.duplicate == 1 {
+            "exact duplicate of an earlier face"
+        } else {
+            "exact duplicates of earlier faces"
+        };
         let parts: Vec<String> = [
             (self.degenerate, "degenerate (zero area)"),
-            (self.duplicate, "exact duplicates of an earlier face"),
+            (self.duplicate, duplicates),
         ]
         .iter()
         .filter(|(n, _)| *n > 0)
@@ -1117,7 +1122,7 @@ mod tests {
         assert_eq!(
             dropped.warning("faces.obj").unwrap(),
             "faces.obj: left out 4 faces that can never be seen: 2 degenerate (zero area), 2 \
-             exact duplicates of an earlier face"
+             exact duplicates of earlier faces"
         );
         assert_eq!(DroppedFaces::default().warning("x"), None);
         // A file of nothing but degenerate faces is refused, saying why.
