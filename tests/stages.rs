@@ -78,7 +78,11 @@ fn expected(
     if shadows && dl != Vec3::ZERO {
         // Shadow ray from just off the surface toward the light; a blocker counts when it lies
         // between the first and the last 1e-4 of the way (the offsets that keep a surface, or
-        // the wall it meets at a corner, from shadowing itself).
+        // the wall it meets at a corner, from shadowing itself). The tracer starts the ray a
+        // little back toward the camera instead at a point within 2e-4 of its triangle's edge
+        // (`light::shadow_ray`, so that no light outside the box leaks in along its edges); with
+        // the lab's light inside the box both rules give the same images, which this test
+        // checks pixel for pixel.
         let origin = p + 1e-4 * tri.normal;
         let to_light = light_pos - origin;
         blocked = closest_from(scene, &Ray::new(origin, to_light), 1e-4)
