@@ -414,7 +414,7 @@ fn remove_temporary_files_on_interrupt() {
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     remove_temporary_files_on_interrupt();
     // Refuse what can't be written before spending time on the render.
-    let format = OutputFormat::from_path(&args.out)?;
+    OutputFormat::from_path(&args.out)?;
     if let Some(path) = &args.save_scene {
         check_scene_destination(path)?;
     }
@@ -468,15 +468,11 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let elapsed = start.elapsed();
     // A PNG carries its settings, so the image alone reopens to the same render.
-    let mut bytes = image
-        .encode_with(format, &display)
-        .with_context(|| format!("could not encode '{}'", args.out.display()))?;
-    if format == OutputFormat::Png {
-        let mut carried = settings.clone();
-        carried.view = args.view;
-        bytes = raylab::settings::files::png_with_settings(&bytes, &carried);
-    }
-    raylab::film::write_atomically(&args.out, &bytes)?;
+    let mut carried = settings.clone();
+    carried.view = args.view;
+    let text = raylab::settings::files::settings_text(&carried);
+    let keyword = raylab::settings::files::PNG_KEYWORD;
+    image.save_with_text(&args.out, &display, Some((keyword, &text)))?;
     if let Some(path) = &args.save_scene {
         raylab::scene_file::save(&settings, path)?;
     }

@@ -78,8 +78,22 @@ impl Image {
     /// time: no full-size copy is made, neither an 8-bit one nor one of the floats, nor of the
     /// encoded file (for a 16384² image those were 0.75, 3 and up to 3 GiB more).
     pub fn save_with(&self, path: &Path, display: &Display) -> Result<(), SaveError> {
+        self.save_with_text(path, display, None)
+    }
+
+    /// [`Image::save_with`], a PNG also carrying `text`, `(keyword, text)`, in an uncompressed
+    /// `iTXt` chunk before the image data (readers find it without decoding the image: see
+    /// [`crate::settings::files::png_text`]). An EXR carries no text.
+    pub fn save_with_text(
+        &self,
+        path: &Path,
+        display: &Display,
+        text: Option<(&str, &str)>,
+    ) -> Result<(), SaveError> {
         let format = OutputFormat::from_path(path)?;
-        write_atomically_with(path, |file| self.encode_to(format, display, file, path))
+        write_atomically_with(path, |file| {
+            self.encode_to(format, display, text, file, path)
+        })
     }
 
     /// Encodes the image in memory, a PNG through the lab's display.
@@ -94,17 +108,28 @@ impl Image {
         format: OutputFormat,
         display: &Display,
     ) -> Result<Vec<u8>, image::ImageError> {
+        self.encode_with_text(format, display, None)
+    }
+
+    /// [`Image::encode_with`], a PNG carrying `text` as [`Image::save_with_text`] writes it.
+    pub fn encode_with_text(
+        &self,
+        format: OutputFormat,
+        display: &Display,
+        text: Option<(&str, &str)>,
+    ) -> Result<Vec<u8>, image::ImageError> {
         let mut bytes = io::Cursor::new(Vec::new());
-        self.encode_to(format, display, &mut bytes, Path::new("memory"))
+        self.encode_to(format, display, text, &mut bytes, Path::new("memory"))
             .map_err(|e| image::ImageError::IoError(io::Error::other(e.to_string())))?;
         Ok(bytes.into_inner())
     }
 
-    /// Encodes the image into `out` (`path` names it in errors).
+    /// Encodes the image into `out` (`path` names it in errors), a PNG with `text`.
     fn encode_to<W: Write + io::Seek>(
         &self,
         format: OutputFormat,
         display: &Display,
+        text: Option<(&str, &str)>,
         out: &mut W,
         path: &Path,
     ) -> Result<(), SaveError> {
@@ -130,6 +155,11 @@ impl Image {
                 encoder.set_depth(png::BitDepth::Eight);
                 encoder.set_compression(png::Compression::Balanced);
                 encoder.set_filter(png::Filter::Adaptive);
+                if let Some((keyword, text)) = text {
+                    encoder
+                        .add_itxt_chunk(keyword.to_owned(), text.to_owned())
+                        .map_err(png_error)?;
+                }
                 let mut writer = encoder.write_header().map_err(png_error)?;
                 let mut stream = writer.stream_writer().map_err(png_error)?;
                 // Bands of about a megapixel (a few MiB of 8-bit rows), converted in parallel.

@@ -68,9 +68,15 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
     }
     let png_bytes = request
         .image
-        .encode_with(OutputFormat::Png, &request.settings.display)
+        .encode_with_text(
+            OutputFormat::Png,
+            &request.settings.display,
+            Some((
+                raylab::settings::files::PNG_KEYWORD,
+                &raylab::settings::files::settings_text(&request.settings),
+            )),
+        )
         .context("could not encode the screenshot as PNG")?;
-    let png_bytes = raylab::settings::files::png_with_settings(&png_bytes, &request.settings);
     let base = base_name(&request.time);
     let (png_path, png_file, json_path, json_file) = reserve(folder, &base)?;
     let name = png_path

@@ -12,7 +12,7 @@
 //!   512-wide image;
 //! - a UTF-8 byte-order mark before the text is ignored.
 
-use std::io::Cursor;
+use std::io::{BufRead, Read as _, Seek};
 use std::path::{Path, PathBuf};
 
 use super::RenderSettings;
@@ -54,16 +54,23 @@ pub fn read_file(path: &Path) -> Result<Loaded, ReadError> {
             warnings: Vec::new(),
         });
     }
-    let bytes = std::fs::read(path).map_err(|e| ReadError::Read {
+    let unreadable = |e: std::io::Error| ReadError::Read {
         path: path.to_path_buf(),
         reason: e.to_string(),
-    })?;
+    };
     let invalid = |message: String| ReadError::Invalid {
         path: path.to_path_buf(),
         message,
     };
-    let json = if bytes.starts_with(PNG_SIGNATURE) {
-        match png_text(&bytes, PNG_KEYWORD).map_err(invalid)? {
+    // A screenshot may be hundreds of megabytes: only its first chunks are read, up to the
+    // text (the workbench opens files on its UI thread).
+    let mut file = std::io::BufReader::new(std::fs::File::open(path).map_err(unreadable)?);
+    let is_png = file
+        .fill_buf()
+        .map_err(unreadable)?
+        .starts_with(PNG_SIGNATURE);
+    let json = if is_png {
+        match png_text(file, PNG_KEYWORD).map_err(invalid)? {
             Some(text) => text,
             None => {
                 return Err(ReadError::NoSettings {
@@ -72,6 +79,8 @@ pub fn read_file(path: &Path) -> Result<Loaded, ReadError> {
             }
         }
     } else {
+        let mut bytes = Vec::new();
+        file.read_to_end(&mut bytes).map_err(unreadable)?;
         String::from_utf8(bytes).map_err(|e| {
             invalid(format!(
                 "byte {}: not UTF-8 text",
@@ -105,10 +114,10 @@ pub fn from_json(text: &str) -> Result<Loaded, String> {
     Ok(Loaded { settings, warnings })
 }
 
-/// `png` carrying `settings` as JSON under [`PNG_KEYWORD`]: what [`read_file`] reads back.
-pub fn png_with_settings(png: &[u8], settings: &RenderSettings) -> Vec<u8> {
-    let json = serde_json::to_string(settings).expect("settings always serialise");
-    with_png_text(png, PNG_KEYWORD, &json)
+/// The text a PNG carries its settings as ([`crate::film::Image::save_with_text`] under
+/// [`PNG_KEYWORD`]): their JSON, what [`read_file`] reads back.
+pub fn settings_text(settings: &RenderSettings) -> String {
+    serde_json::to_string(settings).expect("settings always serialise")
 }
 
 /// The eight bytes every PNG starts with.
@@ -116,8 +125,8 @@ pub const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
 
 /// The UTF-8 text (`iTXt`) a PNG carries under `keyword`, if any. Text chunks written before
 /// the image data, as raylab writes them, are found without decoding the image.
-pub fn png_text(png: &[u8], keyword: &str) -> Result<Option<String>, String> {
-    let decoder = png::Decoder::new(Cursor::new(png));
+pub fn png_text(png: impl BufRead + Seek, keyword: &str) -> Result<Option<String>, String> {
+    let decoder = png::Decoder::new(png);
     let reader = decoder
         .read_info()
         .map_err(|e| format!("not a readable PNG: {e}"))?;
@@ -132,37 +141,11 @@ pub fn png_text(png: &[u8], keyword: &str) -> Result<Option<String>, String> {
     Ok(None)
 }
 
-/// `png` with an uncompressed `iTXt` chunk holding `text` under `keyword`, right after the
-/// header (so readers find it before the image data). `png` must be a whole PNG file.
-pub fn with_png_text(png: &[u8], keyword: &str, text: &str) -> Vec<u8> {
-    // Signature (8) + IHDR: length (4), type (4), 13 bytes of data, CRC (4).
-    const AFTER_IHDR: usize = 8 + 4 + 4 + 13 + 4;
-    assert!(
-        png.starts_with(PNG_SIGNATURE) && png.len() >= AFTER_IHDR && &png[12..16] == b"IHDR",
-        "with_png_text needs a PNG"
-    );
-    let mut data = Vec::with_capacity(keyword.len() + text.len() + 5);
-    data.extend_from_slice(keyword.as_bytes());
-    // Null separator, compression flag 0, method 0, empty language tag, empty translation.
-    data.extend_from_slice(&[0, 0, 0, 0, 0]);
-    data.extend_from_slice(text.as_bytes());
-    let mut chunk = Vec::with_capacity(data.len() + 12);
-    chunk.extend_from_slice(&(data.len() as u32).to_be_bytes());
-    let start = chunk.len();
-    chunk.extend_from_slice(b"iTXt");
-    chunk.extend_from_slice(&data);
-    let crc = crc32fast::hash(&chunk[start..]);
-    chunk.extend_from_slice(&crc.to_be_bytes());
-    let mut out = Vec::with_capacity(png.len() + chunk.len());
-    out.extend_from_slice(&png[..AFTER_IHDR]);
-    out.extend_from_slice(&chunk);
-    out.extend_from_slice(&png[AFTER_IHDR..]);
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::Cursor;
+
     use crate::film::{Image, OutputFormat};
 
     #[test]
@@ -201,9 +184,13 @@ mod tests {
         let mut image = Image::new(3, 2);
         image.pixels[4] = glam::Vec3::new(1.0, 0.5, 0.25);
         let png = image.encode(OutputFormat::Png).unwrap();
+        let png_text = |bytes: &[u8], keyword| png_text(Cursor::new(bytes), keyword);
         assert_eq!(png_text(&png, PNG_KEYWORD).unwrap(), None);
         let text = "{\"seed\": 7, \"é\": \"ü\"}";
-        let tagged = with_png_text(&png, PNG_KEYWORD, text);
+        let display = crate::display::Display::default();
+        let tagged = image
+            .encode_with_text(OutputFormat::Png, &display, Some((PNG_KEYWORD, text)))
+            .unwrap();
         assert_eq!(
             png_text(&tagged, PNG_KEYWORD).unwrap().as_deref(),
             Some(text)
