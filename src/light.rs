@@ -271,19 +271,13 @@ pub fn shadow_ray_to(
         -1.0
     };
     let lifted = position + side * SHADOW_OFFSET * normal;
-    if let Some(incoming) = at_edge {
-        // Back toward where the point was seen from, along the surface.
-        let back = incoming.dot(normal) * normal - incoming;
-        let origin = lifted + SHADOW_OFFSET * back;
-        let to_light = target - origin;
-        let distance = to_light.length();
-        if !(distance > 3.0 * SHADOW_OFFSET) {
-            return None;
-        }
-        let direction = to_light / distance;
-        return Some((Ray { origin, direction }, distance - SHADOW_OFFSET));
-    }
-    let to_light = target - lifted;
+    // Off an edge the ray starts back toward the viewer and skips nothing; elsewhere it starts
+    // at the lifted point and skips its first SHADOW_OFFSET.
+    let (start, skip) = match at_edge {
+        Some(incoming) => (edge_start(lifted, normal, incoming), 0.0),
+        None => (lifted, SHADOW_OFFSET),
+    };
+    let to_light = target - start;
     let distance = to_light.length();
     if !(distance > 3.0 * SHADOW_OFFSET) {
         // The light is at the surface, or a coordinate is not finite.
@@ -291,10 +285,20 @@ pub fn shadow_ray_to(
     }
     let direction = to_light / distance;
     let ray = Ray {
-        origin: lifted + SHADOW_OFFSET * direction,
+        origin: start + skip * direction,
         direction,
     };
-    Some((ray, distance - 2.0 * SHADOW_OFFSET))
+    // `skip + SHADOW_OFFSET` is exactly 2·SHADOW_OFFSET or SHADOW_OFFSET: the same stops as
+    // before, bit for bit.
+    Some((ray, distance - (skip + SHADOW_OFFSET)))
+}
+
+/// Where a ray leaving a point at an edge starts (see [`shadow_ray_to`]): the point `lifted`
+/// off its surface, moved [`SHADOW_OFFSET`] along the surface back toward where the ray that
+/// found it came from (`incoming`'s part along the surface, reversed).
+#[inline(always)]
+pub fn edge_start(lifted: Vec3, normal: Vec3, incoming: Vec3) -> Vec3 {
+    lifted + SHADOW_OFFSET * (incoming.dot(normal) * normal - incoming)
 }
 
 /// Whether the segment from a surface point to the light is blocked (lab section 5.1): a shadow

@@ -172,12 +172,7 @@ pub fn try_vec<T: Clone>(
     len: usize,
     what: impl Fn() -> String,
 ) -> Result<Vec<T>, AllocError> {
-    let bytes = len.checked_mul(std::mem::size_of::<T>()).map(|b| b as u64);
-    let mut v = Vec::new();
-    v.try_reserve_exact(len).map_err(|_| AllocError {
-        what: what(),
-        bytes,
-    })?;
+    let mut v = try_with_capacity(len, what)?;
     v.resize(len, value);
     Ok(v)
 }

@@ -142,14 +142,11 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
         }
     }
     let file: FileV1 = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
-    let mut settings = file.into_settings();
+    let settings = file.into_settings(folder);
     // The scene's parts are checked too (`SceneSpec::validate`).
     settings
         .validate()
         .map_err(|e| at_key(text, &key_path(&e.name), &e.to_string()))?;
-    let mut spec = settings.scene.spec();
-    spec::resolve_models(&mut spec, folder);
-    settings.scene = SceneChoice::from_spec(spec);
     Ok(settings)
 }
 
@@ -496,9 +493,10 @@ impl FileV1 {
         })
     }
 
-    fn into_settings(self) -> RenderSettings {
+    /// The settings the file describes, its models' relative paths taken from `folder`.
+    fn into_settings(self, folder: &Path) -> RenderSettings {
         let scene = self.scene;
-        let spec = SceneSpec {
+        let mut spec = SceneSpec {
             name: scene.name,
             room: scene.room,
             blocks: scene.blocks,
@@ -521,6 +519,7 @@ impl FileV1 {
                 octaves: t.octaves,
             }),
         };
+        spec::resolve_models(&mut spec, folder);
         let c = self.camera;
         let l = self.light;
         let sh = self.shading;

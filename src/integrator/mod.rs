@@ -529,7 +529,7 @@ pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3, at_edge: Opti
     };
     let lifted = position + side * SHADOW_OFFSET * normal;
     let origin = match at_edge {
-        Some(incoming) => lifted + SHADOW_OFFSET * (incoming.dot(normal) * normal - incoming),
+        Some(incoming) => crate::light::edge_start(lifted, normal, incoming),
         None => lifted,
     };
     Ray { origin, direction }
