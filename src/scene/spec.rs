@@ -177,7 +177,7 @@ impl SceneSpec {
                         && tint.max_element() <= 1.0) =>
                 {
                     return Err(bad(
-                        field("kind"),
+                        field("material"),
                         tint.to_string(),
                         "a tint must be in [0, 1]",
                     ));
@@ -186,7 +186,7 @@ impl SceneSpec {
                     if !(ior.is_finite() && (1.0..=4.0).contains(&ior)) =>
                 {
                     return Err(bad(
-                        field("kind"),
+                        field("material"),
                         ior.to_string(),
                         "an index of refraction must be in [1, 4]",
                     ));
