@@ -1018,7 +1018,7 @@ impl WorkbenchApp {
                     self.set_status(
                         kind,
                         format!(
-                            "Saved {}{early} (settings beside it as .json)",
+                            "Saved {}{early} (its settings inside it, and beside it as .json)",
                             shown.display()
                         ),
                     );

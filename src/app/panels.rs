@@ -62,7 +62,7 @@ pub fn controls_ui(
         if ui
             .button("Save screenshot")
             .on_hover_text(
-                "Ctrl+S: the render at full resolution, as PNG, with its settings as .json, \
+                "Ctrl+S: the render at full resolution, as PNG carrying its settings (and a .json of them), \
                  into the folder under Screenshot",
             )
             .clicked()
