@@ -22,7 +22,7 @@ use serde::Serialize;
 
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::geometry::Ray;
-use crate::integrator::{HitTerms, Surface};
+use crate::integrator::{BATCH, HitTerms, Surface};
 use crate::light::PointLight;
 use crate::memory::{AllocError, try_with_capacity};
 use crate::render::render_pass;
@@ -174,22 +174,38 @@ fn shadow_ray_of(scene: &Scene, light: &PointLight, ray: &Ray) -> Option<(Ray, f
     HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
 }
 
-/// Closest hits of all `rays`, in parallel; returns how many hit (so the work is not optimised
-/// away).
+/// Closest hits of all `rays`, in parallel, in batches of [`BATCH`] as the integrators ask
+/// (so coherent rays go as packets where the CPU traces packets); returns how many hit (so the
+/// work is not optimised away).
 pub fn trace_primary(scene: &Scene, rays: &[Ray]) -> usize {
     rays.par_chunks(1024)
         .map(|c| {
-            c.iter()
-                .filter(|r| scene.closest_intersection(r, f32::INFINITY).is_some())
-                .count()
+            let mut hits = [None; BATCH];
+            c.chunks(BATCH)
+                .map(|batch| {
+                    let hits = &mut hits[..batch.len()];
+                    scene.closest_intersections(batch, f32::INFINITY, hits);
+                    hits.iter().filter(|h| h.is_some()).count()
+                })
+                .sum::<usize>()
         })
         .sum()
 }
 
-/// Any-hit queries of all `rays`, in parallel; returns how many are blocked.
+/// Any-hit queries of all `rays`, in parallel, in batches of [`BATCH`] as the integrators ask;
+/// returns how many are blocked.
 pub fn trace_shadow(scene: &Scene, rays: &[(Ray, f32)]) -> usize {
     rays.par_chunks(1024)
-        .map(|c| c.iter().filter(|(r, t)| scene.occluded(r, *t)).count())
+        .map(|c| {
+            let mut blocked = [false; BATCH];
+            c.chunks(BATCH)
+                .map(|batch| {
+                    let blocked = &mut blocked[..batch.len()];
+                    scene.occluded_many(batch, blocked);
+                    blocked.iter().filter(|&&b| b).count()
+                })
+                .sum::<usize>()
+        })
         .sum()
 }
 

@@ -115,7 +115,7 @@ pub struct RayBoxData {
 }
 
 /// Stand-in for `1/0`: large, but `o · INV_HUGE` stays finite for coordinates up to 1e18.
-const INV_HUGE: f32 = 1e20;
+pub(super) const INV_HUGE: f32 = 1e20;
 
 impl RayBoxData {
     pub fn new(ray: &Ray) -> Self {

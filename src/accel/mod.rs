@@ -36,6 +36,8 @@
 //! ```
 
 pub mod bvh;
+#[cfg(target_arch = "x86_64")]
+pub mod packet;
 pub mod simd;
 pub mod wide;
 
@@ -47,6 +49,9 @@ use crate::geometry::{Ray, Triangle};
 use crate::intersect;
 
 use self::bvh::Bvh;
+/// Rays per packet where the CPU traces packets (16: one AVX-512 lane a ray), and per chunk of a
+/// batch elsewhere.
+const PACKET: usize = 16;
 use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
 use self::wide::{Bvh8Big, Flat};
@@ -465,19 +470,25 @@ fn closest_batch_avx512(
     t_max: f32,
     out: &mut [Option<Hit>],
 ) {
-    let rays_out = rays.iter().zip(out);
     match s {
         // The flat loop 16 wide; the tree with the AVX2 kernels, its large triangles 16 wide.
         Structure::Flat(f) => {
-            for (ray, hit) in rays_out {
+            for (ray, hit) in rays.iter().zip(out) {
                 *hit = f.closest16(k, &RayK::for_triangles(ray), t_max);
             }
         }
         Structure::Bvh8(b) => {
-            for (ray, hit) in rays_out {
-                let r = RayK::new(ray);
-                let best = b.big.closest16(k, &r, t_max);
-                *hit = b.tree.closest(k.avx2(), &r, t_max, best);
+            for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent(rays) {
+                    b.closest_packet(k, rays, t_max, out);
+                    continue;
+                }
+                for (ray, hit) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    let best = b.big.closest16(k, &r, t_max);
+                    *hit = b.tree.closest(k.avx2(), &r, t_max, best);
+                }
             }
         }
         Structure::BruteForce | Structure::Bvh2(_) => {}
@@ -489,18 +500,25 @@ fn closest_batch_avx512(
     target_feature(enable = "avx512f,avx512dq,avx2,fma")
 )]
 fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
-    let rays_out = rays.iter().zip(out);
     match s {
         Structure::Flat(f) => {
-            for ((ray, t_max), blocked) in rays_out {
+            for ((ray, t_max), blocked) in rays.iter().zip(out) {
                 // No boxes: the ray needs no reciprocal direction.
                 *blocked = f.occluded16(k, &RayK::for_triangles(ray), *t_max);
             }
         }
         Structure::Bvh8(b) => {
-            for ((ray, t_max), blocked) in rays_out {
-                let r = RayK::new(ray);
-                *blocked = b.tree.occluded(k.avx2(), &r, *t_max) || b.big.occluded16(k, &r, *t_max);
+            for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent_shadows(rays) {
+                    b.occluded_packet(k, rays, out);
+                    continue;
+                }
+                for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    *blocked =
+                        b.tree.occluded(k.avx2(), &r, *t_max) || b.big.occluded16(k, &r, *t_max);
+                }
             }
         }
         Structure::BruteForce | Structure::Bvh2(_) => {}

@@ -19,7 +19,7 @@ pub const LEAF: u32 = 1 << 31;
 pub const EMPTY: u32 = u32::MAX;
 
 /// Stack entries that fit in the fixed-size traversal stack; deeper trees use a heap one.
-const STACK_INLINE: usize = 64;
+pub(super) const STACK_INLINE: usize = 64;
 /// The stack of shallow trees.
 const STACK_SMALL: usize = 24;
 
@@ -261,25 +261,28 @@ impl Bvh8 {
         // A stack on the stack, as small as the tree allows (it is cleared for every ray).
         if self.max_stack <= STACK_SMALL {
             let mut stack = [(0u32, 0f32); STACK_SMALL];
-            self.closest_on(k, r, t_max, best, &mut stack, &mut ())
+            self.closest_on(k, r, t_max, best, self.root, &mut stack, &mut ())
         } else if self.max_stack <= STACK_INLINE {
             let mut stack = [(0u32, 0f32); STACK_INLINE];
-            self.closest_on(k, r, t_max, best, &mut stack, &mut ())
+            self.closest_on(k, r, t_max, best, self.root, &mut stack, &mut ())
         } else {
             let mut stack = vec![(0u32, 0f32); self.max_stack];
-            self.closest_on(k, r, t_max, best, &mut stack, &mut ())
+            self.closest_on(k, r, t_max, best, self.root, &mut stack, &mut ())
         }
     }
 
-    /// The closest-hit traversal, counting its work into `count` (`()` counts nothing and
-    /// compiles away; a [`TraversalCost`] counts, for the BVH-cost view).
+    /// The closest-hit traversal of the subtree `start` (the root, or a node where a packet
+    /// of rays leaves a ray to go on alone), counting its work into `count` (`()` counts
+    /// nothing and compiles away; a [`TraversalCost`] counts, for the BVH-cost view).
     #[inline(always)]
-    fn closest_on<K: Kernels, C: CountWork>(
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn closest_on<K: Kernels, C: CountWork>(
         &self,
         k: K,
         r: &RayK,
         t_max: f32,
         best: Option<Hit>,
+        start: u32,
         stack: &mut [(u32, f32)],
         count: &mut C,
     ) -> Option<Hit> {
@@ -288,7 +291,7 @@ impl Bvh8 {
                 (h.t, h.index, (h.u, h.v))
             });
         let mut sp = 0;
-        let mut item = self.root;
+        let mut item = start;
         'traversal: loop {
             if item & LEAF != 0 {
                 let p = &self.packets[(item & !LEAF) as usize];
@@ -379,7 +382,7 @@ impl Bvh8 {
             return best;
         }
         let mut stack = vec![(0u32, 0f32); self.max_stack];
-        self.closest_on(k, r, t_max, best, &mut stack, cost)
+        self.closest_on(k, r, t_max, best, self.root, &mut stack, cost)
     }
 
     /// Whether any triangle is hit with `0 < t < t_max`; stops at the first.
@@ -390,21 +393,29 @@ impl Bvh8 {
         }
         if self.max_stack <= STACK_SMALL {
             let mut stack = [0u32; STACK_SMALL];
-            self.occluded_on(k, r, t_max, &mut stack)
+            self.occluded_on(k, r, t_max, self.root, &mut stack)
         } else if self.max_stack <= STACK_INLINE {
             let mut stack = [0u32; STACK_INLINE];
-            self.occluded_on(k, r, t_max, &mut stack)
+            self.occluded_on(k, r, t_max, self.root, &mut stack)
         } else {
             let mut stack = vec![0u32; self.max_stack];
-            self.occluded_on(k, r, t_max, &mut stack)
+            self.occluded_on(k, r, t_max, self.root, &mut stack)
         }
     }
 
+    /// Whether anything in the subtree `start` is hit with `0 < t < t_max`.
     #[inline(always)]
-    fn occluded_on<K: Kernels>(&self, k: K, r: &RayK, t_max: f32, stack: &mut [u32]) -> bool {
+    pub(super) fn occluded_on<K: Kernels>(
+        &self,
+        k: K,
+        r: &RayK,
+        t_max: f32,
+        start: u32,
+        stack: &mut [u32],
+    ) -> bool {
         let box_limit = t_max * BOX_T_SLACK;
         let mut sp = 0;
-        let mut item = self.root;
+        let mut item = start;
         loop {
             if item & LEAF != 0 {
                 if k.any(&self.packets[(item & !LEAF) as usize], r, t_max) {

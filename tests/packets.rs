@@ -1,0 +1,147 @@
+//! Coherent rays traced together (ray packets, where the CPU has AVX-512) against the
+//! brute-force oracle: every camera ray of the default view and every shadow ray the lab stage
+//! casts from their hits (at 256², 512² for the Cornell box), through the batched queries the integrators use, for every structure
+//! and kernel set this CPU runs. The answers must be exactly the brute-force loop's (same
+//! triangle, `t`, `u`, `v`); and a lab image is the same bit for bit whichever kernels made it.
+
+use raylab::accel::{AccelKind, Isa};
+use raylab::bench::{lab_settings, primary_rays, shadow_rays};
+use raylab::geometry::Ray;
+use raylab::intersect::{closest_intersection_brute_force, occluded_brute_force};
+use raylab::render::render_pass;
+use raylab::scene::{Scene, SceneChoice, terrain};
+use rayon::prelude::*;
+
+/// The batched queries of `scene` on the default view's camera rays at `size`² and the shadow
+/// rays the lab stage casts from their hits, built as every structure with every kernel set,
+/// against the brute-force loop (computed once).
+fn check_every_configuration(scene: &Scene, size: u32) {
+    let settings = lab_settings(size, size);
+    let primary = primary_rays(&settings.camera);
+    let shadow = shadow_rays(scene, &settings.light, &primary);
+    let want_hits: Vec<_> = primary
+        .par_iter()
+        .map(|ray| closest_intersection_brute_force(ray, &scene.triangles, f32::INFINITY))
+        .collect();
+    let want_blocked: Vec<bool> = shadow
+        .par_iter()
+        .map(|(ray, t_max)| occluded_brute_force(ray, &scene.triangles, *t_max))
+        .collect();
+    // The view looks into the closed box: every camera ray hits, most hits see the light.
+    assert!(want_hits.iter().all(Option::is_some));
+    assert!(shadow.len() > primary.len() / 2, "{}", shadow.len());
+    assert!(want_blocked.iter().any(|&b| b) && !want_blocked.iter().all(|&b| b));
+
+    for isa in Isa::available() {
+        for kind in [AccelKind::Bvh8, AccelKind::Flat] {
+            if kind == AccelKind::Flat && scene.triangles.len() > 5_000 {
+                continue; // the flat loop is for tiny scenes
+            }
+            let scene = scene.clone().rebuilt(kind, isa);
+            let name = format!("{kind} {}", isa.name());
+            let mut got = vec![None; primary.len()];
+            // 64 at a time, as the integrators ask (the batch splits them into packets).
+            for (rays, out) in primary.chunks(64).zip(got.chunks_mut(64)) {
+                scene.closest_intersections(rays, f32::INFINITY, out);
+            }
+            for ((ray, got), want) in primary.iter().zip(&got).zip(&want_hits) {
+                assert_eq!(got, want, "{name}: camera ray {ray:?}");
+            }
+            let mut blocked = vec![false; shadow.len()];
+            for (rays, out) in shadow.chunks(64).zip(blocked.chunks_mut(64)) {
+                scene.occluded_many(rays, out);
+            }
+            for (((ray, t_max), got), want) in shadow.iter().zip(&blocked).zip(&want_blocked) {
+                assert_eq!(got, want, "{name}: shadow ray {ray:?} (t_max {t_max})");
+            }
+        }
+    }
+}
+
+#[test]
+fn bunny_default_view_equals_brute_force() {
+    check_every_configuration(&SceneChoice::Bunny.load().unwrap(), 256);
+}
+
+#[test]
+fn teapot_default_view_equals_brute_force() {
+    check_every_configuration(&SceneChoice::Teapot.load().unwrap(), 256);
+}
+
+#[test]
+fn cornell_default_view_equals_brute_force() {
+    check_every_configuration(&SceneChoice::Cornell.load().unwrap(), 512);
+}
+
+#[test]
+fn small_terrain_default_view_equals_brute_force() {
+    // The full terrain's generator at 20,000 triangles (the brute-force loop over a million
+    // triangles for every pixel would take hours).
+    let scene = terrain::terrain_scene(&terrain::TerrainSpec {
+        grid: 100,
+        ..terrain::TerrainSpec::default()
+    });
+    check_every_configuration(&scene, 128);
+}
+
+#[test]
+fn packets_of_every_size_and_mixed_directions_equal_single_rays() {
+    // Batches of 1 to 64 rays, coherent or not: the same answer as each ray alone.
+    let scene = SceneChoice::Bunny.load().unwrap();
+    let settings = lab_settings(64, 64);
+    let primary = primary_rays(&settings.camera);
+    let mut rng = raylab::sampling::Rng::new(7);
+    for len in 1..=64 {
+        let start = (rng.next_u32() as usize) % (primary.len() - len);
+        let mut rays: Vec<Ray> = primary[start..start + len].to_vec();
+        if len % 3 == 0 {
+            // One ray turned around: the batch is no longer coherent.
+            let r = rays[len / 2];
+            rays[len / 2] = Ray::new(r.origin, -r.direction);
+        }
+        let mut got = vec![None; len];
+        scene.closest_intersections(&rays, f32::INFINITY, &mut got);
+        for (ray, got) in rays.iter().zip(&got) {
+            assert_eq!(
+                *got,
+                scene.closest_intersection(ray, f32::INFINITY),
+                "{len}"
+            );
+        }
+        let t_max: Vec<(Ray, f32)> = rays.iter().map(|r| (*r, 2.0)).collect();
+        let mut blocked = vec![false; len];
+        scene.occluded_many(&t_max, &mut blocked);
+        for ((ray, t), got) in t_max.iter().zip(&blocked) {
+            assert_eq!(*got, scene.occluded(ray, *t), "{len}");
+        }
+    }
+}
+
+#[test]
+fn the_lab_image_is_the_same_whatever_the_kernels() {
+    // AVX-512 traces packets, AVX2 and scalar ray by ray: the same image, bit for bit.
+    let scene = SceneChoice::Bunny.load().unwrap();
+    let settings = lab_settings(128, 128);
+    let images: Vec<_> = Isa::available()
+        .into_iter()
+        .map(|isa| {
+            let scene = scene.clone().rebuilt(AccelKind::Auto, isa);
+            (
+                isa.name(),
+                render_pass(&scene, &settings, 0, &|| false).unwrap(),
+            )
+        })
+        .collect();
+    let (_, first) = &images[0];
+    for (name, image) in &images[1..] {
+        assert!(
+            image
+                .pixels
+                .iter()
+                .zip(&first.pixels)
+                .all(|(a, b)| a.to_array() == b.to_array()),
+            "{name} differs from {}",
+            images[0].0
+        );
+    }
+}
