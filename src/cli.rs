@@ -34,6 +34,10 @@ use raylab::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Kernels: best (the fastest measured on this CPU at start-up), avx512, avx2 or scalar.
+    /// Every set gives the same image; this changes only the speed. Also RAYLAB_ISA.
+    #[arg(long, global = true, default_value = "best", value_name = "ISA")]
+    pub isa: String,
 }
 
 #[derive(Debug, Subcommand)]
@@ -71,9 +75,6 @@ pub struct BenchArgs {
     /// Acceleration structure: auto, brute, flat, bvh2 or bvh8 (to compare them).
     #[arg(long, default_value = "auto", value_name = "KIND")]
     pub accel: AccelKind,
-    /// Kernels: best, avx512, avx2 or scalar (to compare them).
-    #[arg(long, default_value = "best", value_name = "ISA")]
-    pub isa: String,
     /// Print one JSON object per scene (one per line) instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -343,6 +344,19 @@ pub fn read_settings_file(path: &std::path::Path) -> anyhow::Result<RenderSettin
     Ok(loaded.settings)
 }
 
+/// `--isa NAME`: the kernels of every structure this process builds (`best`: measured).
+fn choose_kernels(name: &str) -> anyhow::Result<()> {
+    if name == "best" {
+        return Ok(());
+    }
+    let isa = Isa::by_name(name).with_context(|| {
+        format!(
+            "kernels '{name}' are unknown or not supported by this CPU (expected best, avx512, avx2 or scalar)"
+        )
+    })?;
+    isa.force().map_err(anyhow::Error::msg)
+}
+
 /// Parses the arguments and runs the command; the one place errors become exit codes.
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -357,11 +371,14 @@ pub fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let result = match cli.command {
-        Some(Command::Render(args)) => run_render(&args),
-        Some(Command::Inspect(args)) => run_inspect(&args),
-        Some(Command::Bench(args)) => run_bench(&args),
-        None => crate::start_workbench(),
+    let result = match choose_kernels(&cli.isa) {
+        Err(e) => Err(e),
+        Ok(()) => match cli.command {
+            Some(Command::Render(args)) => run_render(&args),
+            Some(Command::Inspect(args)) => run_inspect(&args),
+            Some(Command::Bench(args)) => run_bench(&args),
+            None => crate::start_workbench(),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -596,12 +613,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             .filter(|c| *c != SceneChoice::TexturedTeapot)
             .collect(),
     };
-    let isa = Isa::by_name(&args.isa).with_context(|| {
-        format!(
-            "kernels '{}' are unknown or not supported by this CPU (expected best, avx512, avx2 or scalar)",
-            args.isa
-        )
-    })?;
+    let isa = Isa::best();
     let config = BenchConfig {
         width: args.width,
         height: args.height,
@@ -668,11 +680,15 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
     if !args.json {
         writeln!(
             out,
-            "{}×{}, {} threads, medians of {} passes",
+            "{}×{}, {} threads, medians of {} passes; kernels {}",
             args.width,
             args.height,
             pool.current_num_threads(),
-            args.passes
+            args.passes,
+            Isa::calibration().map_or_else(
+                || format!("{} (forced)", isa.name()),
+                |c| format!("{}, the fastest measured here", c.summary())
+            )
         )?;
     }
     Ok(())

@@ -467,3 +467,51 @@ fn a_camera_that_sees_nothing_is_noted_and_absurd_focal_lengths_refused() {
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr(&out).contains("focal length"), "{}", stderr(&out));
 }
+
+#[test]
+fn every_kernel_set_forced_with_isa_gives_the_same_image() {
+    // `--isa` forces the kernels (the default measures which is fastest here); the bunny's
+    // structure traces packets with AVX-512 and single rays otherwise, the same hits either
+    // way, so the same pixels. A set this CPU lacks is refused with one line.
+    let dir = tempfile::tempdir().unwrap();
+    let available = raylab::accel::Isa::available();
+    let mut images = Vec::new();
+    for isa in ["best", "scalar", "avx2", "avx512"] {
+        let path = dir.path().join(format!("{isa}.png"));
+        let out = raylab(&[
+            "render",
+            "--scene",
+            "bunny",
+            "--isa",
+            isa,
+            "--width",
+            "48",
+            "--height",
+            "40",
+            "--out",
+            path.to_str().unwrap(),
+        ]);
+        let runs = isa == "best" || available.iter().any(|a| a.name() == isa);
+        if !runs {
+            assert!(!out.status.success());
+            assert!(
+                stderr(&out).contains("not supported by this CPU"),
+                "{}",
+                stderr(&out)
+            );
+            continue;
+        }
+        assert!(out.status.success(), "{isa}: {}", stderr(&out));
+        images.push((isa, image::open(&path).unwrap().to_rgb8()));
+    }
+    assert!(images.len() >= 2);
+    for (isa, image) in &images[1..] {
+        assert!(
+            image.as_raw() == images[0].1.as_raw(),
+            "{isa} differs from best"
+        );
+    }
+    let out = raylab(&["render", "--isa", "sse9", "--out", "x.png"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("kernels 'sse9'"), "{}", stderr(&out));
+}

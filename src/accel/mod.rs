@@ -5,11 +5,15 @@
 //! * [`wide`]: the fast path — an 8-wide BVH collapsed from it, triangles in 8-wide packets —
 //!   and the flat packet list (a SIMD loop over every triangle).
 //! * [`simd`]: the box and triangle kernels, AVX2 with a scalar twin.
+//! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) sixteen at a
+//!   time through the wide BVH, one AVX-512 lane a ray.
+//! * [`calibrate`]: which kernel set is fastest on this CPU, measured at start-up.
 //!
 //! [`Accel::build`] picks per scene ([`AccelKind::Auto`]): the flat list for tiny scenes (the
 //! 30-triangle Cornell box, where it beats any tree: see PERFORMANCE.md), the wide BVH
 //! otherwise, with the few triangles that are large next to the scene (the box's walls) set
-//! apart in one packet tested first; and the widest kernels the CPU has ([`Isa::best`]).
+//! apart in one packet tested first; and the kernels measured fastest on this CPU
+//! ([`Isa::best`]), or forced with `--isa`.
 //! Every kind returns exactly what [`crate::intersect::closest_intersection_brute_force`]
 //! returns, ties included.
 //!
@@ -36,6 +40,7 @@
 //! ```
 
 pub mod bvh;
+pub mod calibrate;
 #[cfg(target_arch = "x86_64")]
 pub mod packet;
 pub mod simd;
@@ -43,12 +48,14 @@ pub mod wide;
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use crate::geometry::{Ray, Triangle};
 use crate::intersect;
 
 use self::bvh::Bvh;
+use self::calibrate::Calibration;
 /// Rays per packet where the CPU traces packets (16: one AVX-512 lane a ray), and per chunk of a
 /// batch elsewhere.
 const PACKET: usize = 16;
@@ -159,9 +166,54 @@ pub enum Isa {
     Avx512(Avx512),
 }
 
+/// The kernels every structure uses unless told otherwise: forced ([`Isa::force`], the
+/// `RAYLAB_ISA` variable) or measured ([`calibrate`]), once per process.
+static CHOSEN: OnceLock<(Isa, Option<Calibration>)> = OnceLock::new();
+
 impl Isa {
-    /// The widest kernels this CPU runs: AVX-512, else AVX2 + FMA, else scalar.
+    /// The kernels to use on this CPU: the one forced by `--isa` ([`Isa::force`]) or the
+    /// `RAYLAB_ISA` environment variable (`avx512`, `avx2` or `scalar`, if this CPU runs it),
+    /// else the fastest measured here ([`calibrate::calibrate`]: not always the widest).
+    /// Decided once per process.
     pub fn best() -> Self {
+        Self::chosen().0
+    }
+
+    /// What [`Isa::best`] measured, if it measured (not when forced).
+    pub fn calibration() -> Option<&'static Calibration> {
+        Self::chosen().1.as_ref()
+    }
+
+    fn chosen() -> &'static (Isa, Option<Calibration>) {
+        CHOSEN.get_or_init(|| {
+            let forced = std::env::var("RAYLAB_ISA").ok();
+            match forced.as_deref().and_then(Isa::by_exact_name) {
+                Some(isa) => (isa, None),
+                None => {
+                    let c = calibrate::calibrate();
+                    (c.chosen, Some(c))
+                }
+            }
+        })
+    }
+
+    /// Makes `self` the kernels of every structure built from now on (`--isa`). Fails if
+    /// [`Isa::best`] has already decided on another set in this process.
+    pub fn force(self) -> Result<(), String> {
+        let (chosen, _) = CHOSEN.get_or_init(|| (self, None));
+        if chosen.name() == self.name() {
+            Ok(())
+        } else {
+            Err(format!(
+                "the kernels were already chosen ({}) before --isa {}",
+                chosen.name(),
+                self.name()
+            ))
+        }
+    }
+
+    /// The widest kernels this CPU runs: AVX-512, else AVX2 + FMA, else scalar.
+    pub fn widest() -> Self {
         match (Avx512::detect(), Avx2::detect()) {
             (Some(k), _) => Isa::Avx512(k),
             (None, Some(k)) => Isa::Avx2(k),
@@ -181,6 +233,13 @@ impl Isa {
     pub fn by_name(name: &str) -> Option<Isa> {
         match name {
             "best" => Some(Isa::best()),
+            name => Isa::by_exact_name(name),
+        }
+    }
+
+    /// `scalar`, `avx2` or `avx512`, if this CPU runs it.
+    fn by_exact_name(name: &str) -> Option<Isa> {
+        match name {
             "scalar" => Some(Isa::Scalar),
             "avx2" => Avx2::detect().map(Isa::Avx2),
             "avx512" => Avx512::detect().map(Isa::Avx512),

@@ -45,7 +45,7 @@ const COHERENT_COS: f32 = 0.95;
 const STACK: usize = 2 * STACK_INLINE;
 
 /// Whether `rays` point nearly the same way, so that they are worth tracing as a packet:
-/// every direction within [`COHERENT_COS`] of the first (directions are unit vectors).
+/// every direction within about 18° of the first (directions are unit vectors).
 pub fn coherent(rays: &[Ray]) -> bool {
     let Some(first) = rays.first() else {
         return false;

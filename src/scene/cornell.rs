@@ -69,6 +69,13 @@ fn block(corners: [Vec3; 8], material: u32, out: &mut Vec<Triangle>) {
 /// Triangles 0–9 are the room (floor, left wall, right wall, ceiling, back wall), 10–19 the
 /// short red block and 20–29 the tall blue block.
 pub fn cornell_box() -> Scene {
+    Scene::new(cornell_triangles(), materials())
+}
+
+/// The Cornell box's 30 triangles alone (materials 0–6 as [`cornell_box`] numbers them), for
+/// work that needs the geometry without a scene, such as measuring the kernels before any
+/// scene is built ([`crate::accel::calibrate`]).
+pub fn cornell_triangles() -> Vec<Triangle> {
     let v = Vec3::new;
     let mut tris = Vec::with_capacity(CORNELL_TRIANGLES);
 
@@ -127,8 +134,7 @@ pub fn cornell_box() -> Scene {
         BLUE,
         &mut tris,
     );
-
-    Scene::new(tris, materials())
+    tris
 }
 
 #[cfg(test)]

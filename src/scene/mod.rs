@@ -9,7 +9,7 @@ pub mod obj;
 pub mod spec;
 pub mod terrain;
 
-pub use cornell::{CORNELL_TRIANGLES, cornell_box};
+pub use cornell::{CORNELL_TRIANGLES, cornell_box, cornell_triangles};
 pub use spec::{ModelSpec, SceneSpec};
 
 use std::fmt;
