@@ -34,7 +34,8 @@ pub const PACKET: usize = 16;
 const _: () = assert!(PACKET == super::PACKET);
 
 /// A packet with at most this many rays left in a subtree lets each go on alone. Measured
-/// (one thread, 512², bunny and teapot lab passes): 2 and 3 are level, 1 and 4 slower.
+/// (whole `raylab bench --threads 1` runs, bunny and terrain, alternating binaries): 1, 2 and 4
+/// are level within 1 %.
 const ALONE: u32 = 2;
 
 /// Directions within about 18° of the first ray's (cosine 0.95) travel together.
