@@ -135,7 +135,7 @@ pub struct LightTerms {
     pub textured: bool,
     /// r, the vector from the hit to the light's centre.
     pub to_light: Option<Vec3>,
-    /// |r| (at least [`MIN_LIGHT_DISTANCE`]).
+    /// |r| (at least [`crate::light::MIN_LIGHT_DISTANCE`]).
     pub light_distance: Option<f32>,
     /// r², as equation 27 divides by it.
     pub light_distance_squared: Option<f32>,
