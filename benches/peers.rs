@@ -333,6 +333,9 @@ struct Row {
     mrays: [f64; 4],
     /// Share of rays raylab and CWBVH, raylab and BVH2 agree on.
     agree: [f64; 2],
+    /// The rays raylab and CWBVH disagree on: hit by raylab only, by CWBVH only, both hit
+    /// at different distances (for shadow rays: blocked for raylab only, for CWBVH only).
+    disagree: [usize; 3],
 }
 
 struct BuildRow {
@@ -429,6 +432,7 @@ fn main() {
                     rays: rays.len(),
                     mrays: row.0,
                     agree: row.1,
+                    disagree: row.2,
                 };
                 if args.json {
                     print_row_json(&row, &cpu, &obvhs);
@@ -470,7 +474,12 @@ fn build_all(scene: &Scene, triangles: &[PeerTriangle]) -> ([f64; 3], Peer) {
 
 /// Mrays/s of every tracer (medians; the tracers alternate run by run) and the share of rays
 /// on which raylab agrees with CWBVH and with BVH2.
-fn measure(scene: &Scene, peer: &Peer, rays: &Rays, reps: usize) -> ([f64; 4], [f64; 2]) {
+fn measure(
+    scene: &Scene,
+    peer: &Peer,
+    rays: &Rays,
+    reps: usize,
+) -> ([f64; 4], [f64; 2], [usize; 3]) {
     let n = rays.len();
     let mut answers = [
         vec![Answer::MISS; n],
@@ -508,7 +517,18 @@ fn measure(scene: &Scene, peer: &Peer, rays: &Rays, reps: usize) -> ([f64; 4], [
         same as f64 / n as f64
     };
     debug_assert!(answers[0] == answers[1], "batched and single calls agree");
-    (mrays, [agree(&answers[2]), agree(&answers[3])])
+    let mut disagree = [0; 3];
+    for (a, b) in answers[0].iter().zip(&answers[2]) {
+        if !a.agrees(*b) {
+            let kind = match (a.index == u32::MAX, b.index == u32::MAX) {
+                (false, true) => 0,
+                (true, false) => 1,
+                _ => 2,
+            };
+            disagree[kind] += 1;
+        }
+    }
+    (mrays, [agree(&answers[2]), agree(&answers[3])], disagree)
 }
 
 fn print_tables(threads: &[usize], rows: &[Row], builds: &[BuildRow]) {
@@ -517,19 +537,22 @@ fn print_tables(threads: &[usize], rows: &[Row], builds: &[BuildRow]) {
         println!("## {t} thread(s): Mrays/s (ratio = raylab / obvhs CWBVH)");
         println!();
         println!(
-            "| scene | rays | count | raylab | raylab 1 a call | CWBVH | BVH2 | ratio | agree CWBVH | agree BVH2 |"
+            "| scene | rays | count | raylab | raylab 1 a call | CWBVH | BVH2 | ratio | agree CWBVH | agree BVH2 | not agreed: raylab only / CWBVH only / other |"
         );
-        println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+        println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|");
         for r in rows.iter().filter(|r| r.threads == t) {
             let [raylab, single, cw, b2] = r.mrays;
             println!(
-                "| {} | {} | {} | {raylab:.1} | {single:.1} | {cw:.1} | {b2:.1} | {:.2}× | {:.3} % | {:.3} % |",
+                "| {} | {} | {} | {raylab:.1} | {single:.1} | {cw:.1} | {b2:.1} | {:.2}× | {:.3} % | {:.3} % | {} / {} / {} |",
                 r.scene,
                 r.set,
                 r.rays,
                 raylab / cw,
                 100.0 * r.agree[0],
                 100.0 * r.agree[1],
+                r.disagree[0],
+                r.disagree[1],
+                r.disagree[2],
             );
         }
         println!();
@@ -560,6 +583,11 @@ fn print_row_json(r: &Row, cpu: &str, obvhs: &str) {
         "ratio_cwbvh": raylab / cw,
         "agree_cwbvh": r.agree[0],
         "agree_bvh2": r.agree[1],
+        "disagree_cwbvh": {
+            "raylab_only": r.disagree[0],
+            "cwbvh_only": r.disagree[1],
+            "different": r.disagree[2],
+        },
         "cpu": cpu,
         "obvhs": obvhs,
     });
