@@ -25,7 +25,9 @@
 //!
 //! Each figure is the median of `--reps` timed runs after a warm-up, the tracers alternating
 //! run by run so that a busy moment of the machine falls on all of them alike; on a 1-thread
-//! rayon pool and on one of all cores. `agree` is the share of rays on which raylab and the
+//! rayon pool and on one of all cores. On one thread the runs are timed by the tracing
+//! thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`), so other processes taking the core (this
+//! machine is shared) do not count; on several, by the wall clock. `agree` is the share of rays on which raylab and the
 //! peer give the same answer: for closest hits the same triangle (or both a miss, or the same
 //! `t` within 1e-4 relative where two triangles tie, as along a shared edge); for shadow rays
 //! the same blocked or not.
@@ -336,6 +338,8 @@ struct Row {
     /// The rays raylab and CWBVH disagree on: hit by raylab only, by CWBVH only, both hit
     /// at different distances (for shadow rays: blocked for raylab only, for CWBVH only).
     disagree: [usize; 3],
+    /// What timed the runs ([`Clock::name`]).
+    clock: &'static str,
 }
 
 struct BuildRow {
@@ -433,6 +437,7 @@ fn main() {
                     mrays: row.0,
                     agree: row.1,
                     disagree: row.2,
+                    clock: row.3,
                 };
                 if args.json {
                     print_row_json(&row, &cpu, &obvhs);
@@ -444,6 +449,59 @@ fn main() {
     if !args.json {
         print_tables(&args.threads, &rows, &builds);
     }
+}
+
+/// What the traversals are timed by.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Clock {
+    /// The CPU time of the calling thread: on a 1-thread pool every ray is traced on the thread
+    /// that [`rayon::ThreadPool::install`] runs the measurement on, so time the core spends on
+    /// other processes (this machine is shared) is not counted.
+    ThreadCpu,
+    /// Wall-clock time, for pools of several threads.
+    Wall(Instant),
+}
+
+impl Clock {
+    /// The thread's CPU time on a 1-thread pool where it can be read, else the wall clock.
+    fn for_this_pool() -> Clock {
+        if rayon::current_num_threads() == 1 && thread_cpu_time().is_some() {
+            Clock::ThreadCpu
+        } else {
+            Clock::Wall(Instant::now())
+        }
+    }
+
+    fn now(self) -> Duration {
+        match self {
+            Clock::ThreadCpu => thread_cpu_time().unwrap_or_default(),
+            Clock::Wall(origin) => origin.elapsed(),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Clock::ThreadCpu => "thread CPU time",
+            Clock::Wall(_) => "wall-clock time",
+        }
+    }
+}
+
+/// The CPU time the calling thread has used (`CLOCK_THREAD_CPUTIME_ID`).
+#[cfg(unix)]
+fn thread_cpu_time() -> Option<Duration> {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `clock_gettime` only writes the `timespec` it is given, which outlives the call.
+    let ok = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0;
+    ok.then(|| Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32))
+}
+
+#[cfg(not(unix))]
+fn thread_cpu_time() -> Option<Duration> {
+    None
 }
 
 /// Median build times (ms) of raylab's structure, obvhs's CWBVH and BVH2, on the current pool,
@@ -479,7 +537,7 @@ fn measure(
     peer: &Peer,
     rays: &Rays,
     reps: usize,
-) -> ([f64; 4], [f64; 2], [usize; 3]) {
+) -> ([f64; 4], [f64; 2], [usize; 3], &'static str) {
     let n = rays.len();
     let mut answers = [
         vec![Answer::MISS; n],
@@ -493,11 +551,12 @@ fn measure(
     }
     let mut times: [Vec<Duration>; 4] = Default::default();
     let mut scratch = vec![Answer::MISS; n];
+    let clock = Clock::for_this_pool();
     for _ in 0..reps {
         for (tracer, times) in TRACERS.iter().zip(times.iter_mut()) {
-            let start = Instant::now();
+            let start = clock.now();
             trace(*tracer, scene, peer, rays, &mut scratch);
-            times.push(start.elapsed());
+            times.push(clock.now().saturating_sub(start));
             std::hint::black_box(&scratch);
         }
     }
@@ -528,13 +587,19 @@ fn measure(
             disagree[kind] += 1;
         }
     }
-    (mrays, [agree(&answers[2]), agree(&answers[3])], disagree)
+    (
+        mrays,
+        [agree(&answers[2]), agree(&answers[3])],
+        disagree,
+        clock.name(),
+    )
 }
 
 fn print_tables(threads: &[usize], rows: &[Row], builds: &[BuildRow]) {
     for &t in threads {
         println!();
-        println!("## {t} thread(s): Mrays/s (ratio = raylab / obvhs CWBVH)");
+        let clock = rows.iter().find(|r| r.threads == t).map_or("", |r| r.clock);
+        println!("## {t} thread(s): Mrays/s by {clock} (ratio = raylab / obvhs CWBVH)");
         println!();
         println!(
             "| scene | rays | count | raylab | raylab 1 a call | CWBVH | BVH2 | ratio | agree CWBVH | agree BVH2 | not agreed: raylab only / CWBVH only / other |"
@@ -588,6 +653,7 @@ fn print_row_json(r: &Row, cpu: &str, obvhs: &str) {
             "cwbvh_only": r.disagree[1],
             "different": r.disagree[2],
         },
+        "clock": r.clock,
         "cpu": cpu,
         "obvhs": obvhs,
     });
