@@ -278,6 +278,79 @@ pub fn bench_scene(
     })
 }
 
+// Incoherent rays: what the path tracer casts after the first bounce, for the peer benchmark
+// (`cargo bench --bench peers`), which traces them with raylab and with another BVH library.
+
+/// Diffuse bounce rays from the hits of `primary`: from every ray that hits, one direction
+/// drawn with density cos θ / π about the hit triangle's normal turned to face the ray (as the
+/// path tracer's diffuse bounces, [`crate::sampling::cosine_hemisphere_by_rejection`]), started
+/// where the path tracer would start it ([`crate::integrator::continue_ray`]). Rays that miss
+/// cast nothing, so there may be fewer bounce rays than primary rays.
+///
+/// Deterministic: ray `i`'s direction comes from its own generator, started from `seed` and `i`
+/// alone, so the set is the same on any number of threads.
+pub fn bounce_rays(scene: &Scene, primary: &[Ray], seed: u64) -> Vec<Ray> {
+    use crate::sampling::{Rng, cosine_hemisphere_by_rejection, orthonormal_basis};
+    primary
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, ray)| {
+            let hit = scene.closest_intersection(ray, f32::INFINITY)?;
+            let mut normal = scene.triangles[hit.triangle_index].normal;
+            if normal == glam::Vec3::ZERO {
+                return None;
+            }
+            if normal.dot(ray.direction) > 0.0 {
+                normal = -normal;
+            }
+            let mut rng = Rng::for_pixel_sample(seed, i as u32, (i >> 32) as u32, 0);
+            let local = cosine_hemisphere_by_rejection(&mut rng);
+            let (t, b) = orthonormal_basis(normal);
+            let direction = (local.x * t + local.y * b + local.z * normal).normalize();
+            let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction);
+            Some(crate::integrator::continue_ray(
+                hit.position,
+                normal,
+                direction,
+                at_edge,
+            ))
+        })
+        .collect()
+}
+
+/// The box around every triangle of `scene` (its room, for the built-in scenes), as its lowest
+/// and highest corners; zero for an empty scene.
+pub fn scene_bounds(scene: &Scene) -> (glam::Vec3, glam::Vec3) {
+    let mut corners = scene.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]);
+    let Some(first) = corners.next() else {
+        return (glam::Vec3::ZERO, glam::Vec3::ZERO);
+    };
+    corners.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)))
+}
+
+/// `n` random rays inside the box from `lo` to `hi` (the room: [`scene_bounds`]): origins
+/// uniform in the box shrunk by 1 % of its size on every side (so none starts on a wall),
+/// directions uniform over the sphere. The most incoherent rays a scene can be asked about:
+/// neighbours share neither origin nor direction. Deterministic in `seed`, whatever the threads.
+pub fn random_rays_in_room(lo: glam::Vec3, hi: glam::Vec3, n: usize, seed: u64) -> Vec<Ray> {
+    use crate::sampling::Rng;
+    let margin = 0.01 * (hi - lo);
+    let (lo, size) = (lo + margin, (hi - lo) - 2.0 * margin);
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = Rng::for_pixel_sample(seed, i as u32, (i >> 32) as u32, 1);
+            let origin =
+                lo + size * glam::Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let z = 2.0 * rng.next_f32() - 1.0;
+            let phi = 2.0 * std::f32::consts::PI * rng.next_f32();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let (sin, cos) = phi.sin_cos();
+            Ray::new(origin, glam::Vec3::new(r * cos, r * sin, z))
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -340,5 +413,63 @@ mod tests {
             let end = r.at(t);
             assert!((end - s.light.position).length() < 1e-3);
         }
+    }
+
+    #[test]
+    fn bounce_rays_leave_their_hits_cosine_distributed() {
+        let scene = cornell_box();
+        let s = lab_settings(32, 32);
+        let primary = primary_rays(&s.camera);
+        let rays = bounce_rays(&scene, &primary, 7);
+        // Every camera ray hits the closed box, so each casts one bounce ray.
+        assert_eq!(rays.len(), primary.len());
+        assert_eq!(rays, bounce_rays(&scene, &primary, 7), "deterministic");
+        assert_ne!(rays, bounce_rays(&scene, &primary, 8), "the seed matters");
+        let (mut cos_sum, mut hits) = (0.0, 0);
+        for (ray, camera_ray) in rays.iter().zip(&primary) {
+            let hit = scene
+                .closest_intersection(camera_ray, f32::INFINITY)
+                .unwrap();
+            let mut n = scene.triangles[hit.triangle_index].normal;
+            if n.dot(camera_ray.direction) > 0.0 {
+                n = -n;
+            }
+            assert!((ray.direction.length() - 1.0).abs() < 1e-5);
+            let cos = ray.direction.dot(n);
+            assert!(cos >= 0.0, "into the surface: {cos}");
+            assert!((ray.origin - hit.position).length() < 1e-3);
+            hits += usize::from(scene.closest_intersection(ray, f32::INFINITY).is_some());
+            cos_sum += cos;
+        }
+        // The box is open only at the front, behind the camera: most bounces hit it.
+        assert!(hits > rays.len() / 2, "{hits}");
+        // E[cos θ] under the density cos θ / π is 2/3.
+        let mean = cos_sum / rays.len() as f32;
+        assert!((mean - 2.0 / 3.0).abs() < 0.03, "{mean}");
+    }
+
+    #[test]
+    fn random_rays_start_inside_the_room_in_every_direction() {
+        let scene = cornell_box();
+        let (lo, hi) = scene_bounds(&scene);
+        assert!(lo.cmplt(hi).all());
+        let rays = random_rays_in_room(lo, hi, 4000, 3);
+        assert_eq!(rays.len(), 4000);
+        assert_eq!(rays, random_rays_in_room(lo, hi, 4000, 3), "deterministic");
+        let (mut mean, mut hits) = (glam::Vec3::ZERO, 0);
+        for ray in &rays {
+            assert!(ray.origin.cmpgt(lo).all() && ray.origin.cmplt(hi).all());
+            assert!((ray.direction.length() - 1.0).abs() < 1e-5);
+            mean += ray.direction;
+            hits += usize::from(scene.closest_intersection(ray, f32::INFINITY).is_some());
+        }
+        // Only the front of the box is open.
+        assert!(hits > rays.len() / 2, "{hits}");
+        // Uniform on the sphere: the mean direction is near zero (σ ≈ 0.009 per axis).
+        assert!((mean / rays.len() as f32).length() < 0.05, "{mean}");
+        assert_eq!(
+            scene_bounds(&Scene::default()),
+            (glam::Vec3::ZERO, glam::Vec3::ZERO)
+        );
     }
 }

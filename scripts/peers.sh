@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# raylab beside Mitsuba 3 on the lab's Cornell box at 512², alternating, a few rounds.
+#
+#   scripts/peers.sh [--threads N] [--rounds R] [--launches L]
+#
+# Each round runs `raylab bench --scene cornell --stage path --threads N --json` (the lab pass
+# and the path pass, medians of 15 passes), `raylab render --stage shadows --samples 64` (the
+# `direct` integrator's equivalent, at Mitsuba's 64 samples a pixel in one go; the render alone
+# is timed, not writing the file) and then scripts/mitsuba/time.py --threads N (the `direct` and
+# `path` integrators, 64 samples per pixel a launch, L launches of which the first, the JIT
+# compilation, is left out), so both see the same minute of this shared machine. Prints one line
+# per round and pair:
+#
+#   lab pass (figure 7, one sample a pixel) samples/s  vs  Mitsuba `direct` samples/s
+#   shadows stage, 64 spp render, samples/s            vs  Mitsuba `direct` samples/s
+#   path pass samples/s                                vs  Mitsuba `path` samples/s
+#
+# A sample is one camera ray's whole estimate (a path, for `path`). Mitsuba must be installed
+# (scripts/mitsuba/install.sh); the release binary is built if missing.
+# BVH-level comparison with another Rust library: `cargo bench --bench peers` (PERFORMANCE.md).
+set -euo pipefail
+
+cd "$(dirname "$0")/.."
+THREADS=2
+ROUNDS=3
+LAUNCHES=5
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --threads) THREADS=$2; shift 2 ;;
+        --rounds) ROUNDS=$2; shift 2 ;;
+        --launches) LAUNCHES=$2; shift 2 ;;
+        *) echo "usage: $0 [--threads N] [--rounds R] [--launches L]" >&2; exit 2 ;;
+    esac
+done
+PY=${PYTHON:-python3}
+RAYLAB=target/release/raylab
+[ -x "$RAYLAB" ] || cargo build --release --quiet
+"$PY" -c "import mitsuba" 2>/dev/null || {
+    echo "peers.sh: Mitsuba is not installed: scripts/mitsuba/install.sh" >&2
+    exit 1
+}
+
+echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), family" \
+    "$(grep -m1 'cpu family' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) CPUs;" \
+    "$THREADS thread(s), 512x512, $(date -u +%Y-%m-%dT%H:%MZ)"
+printf '%-6s %-24s %14s %14s %8s\n' round pair "raylab/s" "mitsuba/s" ratio
+for round in $(seq 1 "$ROUNDS"); do
+    raylab_json=$("$RAYLAB" bench --scene cornell --stage path --threads "$THREADS" --json)
+    out=$(mktemp --suffix=.exr)
+    raylab_render=$("$RAYLAB" render --stage shadows --samples 64 --threads "$THREADS" \
+        --out "$out")
+    rm -f "$out"
+    mitsuba_json=$("$PY" scripts/mitsuba/time.py --threads "$THREADS" --launches "$LAUNCHES" \
+        | tail -n 1)
+    RAYLAB_JSON=$raylab_json RAYLAB_RENDER=$raylab_render MITSUBA_JSON=$mitsuba_json ROUND=$round "$PY" - <<'EOF'
+import json, os, re
+r = json.loads(os.environ["RAYLAB_JSON"])
+render_ms = float(re.search(r"64 spp\) in ([0-9.]+) ms", os.environ["RAYLAB_RENDER"]).group(1))
+m = json.loads(os.environ["MITSUBA_JSON"])
+pixels = r["width"] * r["height"]
+lab = pixels / (r["lab_pass_ms"] / 1e3)
+rows = [("lab pass / direct", lab, m["direct"]["median_paths_per_s"]),
+        ("shadows 64 spp / direct", 64 * pixels / (render_ms / 1e3),
+         m["direct"]["median_paths_per_s"]),
+        ("path / path", r["path_samples_per_s"], m["path"]["median_paths_per_s"])]
+for name, a, b in rows:
+    print(f"{os.environ['ROUND']:<6} {name:<24} {a / 1e6:12.2f} M {b / 1e6:12.2f} M {a / b:7.2f}x")
+EOF
+done
