@@ -5,8 +5,8 @@
 //! * [`wide`]: the fast path — an 8-wide BVH collapsed from it, triangles in 8-wide packets —
 //!   and the flat packet list (a SIMD loop over every triangle).
 //! * [`simd`]: the box and triangle kernels, AVX2 with a scalar twin.
-//! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) sixteen at a
-//!   time through the wide BVH, one AVX-512 lane a ray.
+//! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) through the wide
+//!   BVH as packets, one SIMD lane a ray: sixteen at a time with AVX-512, eight with AVX2.
 //! * [`calibrate`]: which kernel set is fastest on this CPU, measured at start-up.
 //!
 //! [`Accel::build`] picks per scene ([`AccelKind::Auto`]): the flat list for tiny scenes (the
@@ -163,7 +163,8 @@ pub enum Isa {
     Scalar,
     /// AVX2 + FMA: 8-wide everything.
     Avx2(Avx2),
-    /// AVX-512: the flat list 16 wide; the 8-wide BVH keeps its AVX2 kernels.
+    /// AVX-512: the flat list 16 wide; the 8-wide BVH keeps its AVX2 kernels for single rays
+    /// and traces coherent batches as packets of 16 rays.
     Avx512(Avx512),
 }
 

@@ -1020,29 +1020,22 @@ mod tests {
         let rays: Vec<Ray> = (0..5)
             .map(|i| Ray::new(Vec3::new(i as f32, 1.0, 2.0), Vec3::new(1.0, i as f32, 0.5)))
             .collect();
-        let want = |lane: usize, c: usize| {
-            let r = rays[lane.min(rays.len() - 1)];
-            [r.origin, r.direction][c / 3][c % 3]
-        };
-        if let Some(k) = Avx2::detect() {
-            let got = k.rays(&rays);
-            for (c, v) in got.into_iter().enumerate() {
-                let mut a = [0.0; MAX_WIDTH];
-                k.store(&mut a, v);
-                for lane in 0..8 {
-                    assert_eq!(a[lane].to_bits(), want(lane, c).to_bits());
+        fn check<P: PacketIsa>(k: P, rays: &[Ray]) {
+            for (c, v) in k.rays(rays).into_iter().enumerate() {
+                let mut got = [0.0; MAX_WIDTH];
+                k.store(&mut got, v);
+                for (lane, got) in got[..P::WIDTH].iter().enumerate() {
+                    let r = rays[lane.min(rays.len() - 1)];
+                    let want = [r.origin, r.direction][c / 3][c % 3];
+                    assert_eq!(got.to_bits(), want.to_bits(), "lane {lane}, float {c}");
                 }
             }
         }
+        if let Some(k) = Avx2::detect() {
+            check(k, &rays);
+        }
         if let Some(k) = Avx512::detect() {
-            let got = k.rays(&rays);
-            for (c, v) in got.into_iter().enumerate() {
-                let mut a = [0.0; MAX_WIDTH];
-                k.store(&mut a, v);
-                for lane in 0..16 {
-                    assert_eq!(a[lane].to_bits(), want(lane, c).to_bits());
-                }
-            }
+            check(k, &rays);
         }
     }
 }
