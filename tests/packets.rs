@@ -1,4 +1,4 @@
-//! Coherent rays traced together (ray packets, where the CPU has AVX-512) against the
+//! Coherent rays traced together (ray packets: 16 rays with AVX-512, 8 with AVX2) against the
 //! brute-force oracle: every camera ray of the default view and every shadow ray the lab stage
 //! casts from their hits (at 256², 512² for the Cornell box), through the batched queries the integrators use, for every structure
 //! and kernel set this CPU runs. The answers must be exactly the brute-force loop's (same
@@ -119,7 +119,8 @@ fn packets_of_every_size_and_mixed_directions_equal_single_rays() {
 
 #[test]
 fn the_lab_image_is_the_same_whatever_the_kernels() {
-    // AVX-512 traces packets, AVX2 and scalar ray by ray: the same image, bit for bit.
+    // AVX-512 and AVX2 trace packets (16 and 8 rays), scalar ray by ray: the same image, bit
+    // for bit.
     let scene = SceneChoice::Bunny.load().unwrap();
     let settings = lab_settings(128, 128);
     let images: Vec<_> = Isa::available()

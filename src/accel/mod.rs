@@ -5,8 +5,8 @@
 //! * [`wide`]: the fast path — an 8-wide BVH collapsed from it, triangles in 8-wide packets —
 //!   and the flat packet list (a SIMD loop over every triangle).
 //! * [`simd`]: the box and triangle kernels, AVX2 with a scalar twin.
-//! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) sixteen at a
-//!   time through the wide BVH, one AVX-512 lane a ray.
+//! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) through the wide
+//!   BVH as packets, one SIMD lane a ray: sixteen at a time with AVX-512, eight with AVX2.
 //! * [`calibrate`]: which kernel set is fastest on this CPU, measured at start-up.
 //!
 //! [`Accel::build`] picks per scene ([`AccelKind::Auto`]): the flat list for tiny scenes (the
@@ -56,9 +56,10 @@ use crate::intersect;
 
 use self::bvh::Bvh;
 use self::calibrate::Calibration;
-/// Rays per packet where the CPU traces packets (16: one AVX-512 lane a ray), and per chunk of a
-/// batch elsewhere.
+/// Rays per packet with AVX-512 (one lane a ray), and per chunk of a batch elsewhere.
 const PACKET: usize = 16;
+/// Rays per packet with AVX2 (one lane a ray).
+const PACKET_AVX2: usize = 8;
 use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
 use self::wide::{Bvh8Big, Flat};
@@ -162,7 +163,8 @@ pub enum Isa {
     Scalar,
     /// AVX2 + FMA: 8-wide everything.
     Avx2(Avx2),
-    /// AVX-512: the flat list 16 wide; the 8-wide BVH keeps its AVX2 kernels.
+    /// AVX-512: the flat list 16 wide; the 8-wide BVH keeps its AVX2 kernels for single rays
+    /// and traces coherent batches as packets of 16 rays.
     Avx512(Avx512),
 }
 
@@ -586,18 +588,24 @@ fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mu
 
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
 fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
-    let rays_out = rays.iter().zip(out);
     match s {
         Structure::Flat(f) => {
-            for (ray, hit) in rays_out {
+            for (ray, hit) in rays.iter().zip(out) {
                 *hit = f.closest(k, &RayK::for_triangles(ray), t_max);
             }
         }
         Structure::Bvh8(b) => {
-            for (ray, hit) in rays_out {
-                let r = RayK::new(ray);
-                let best = b.big.closest(k, &r, t_max);
-                *hit = b.tree.closest(k, &r, t_max, best);
+            for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent(rays) {
+                    b.closest_packet(k, rays, t_max, out);
+                    continue;
+                }
+                for (ray, hit) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    let best = b.big.closest(k, &r, t_max);
+                    *hit = b.tree.closest(k, &r, t_max, best);
+                }
             }
         }
         Structure::BruteForce | Structure::Bvh2(_) => {}
@@ -606,17 +614,23 @@ fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mu
 
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
 fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
-    let rays_out = rays.iter().zip(out);
     match s {
         Structure::Flat(f) => {
-            for ((ray, t_max), blocked) in rays_out {
+            for ((ray, t_max), blocked) in rays.iter().zip(out) {
                 *blocked = f.occluded(k, &RayK::for_triangles(ray), *t_max);
             }
         }
         Structure::Bvh8(b) => {
-            for ((ray, t_max), blocked) in rays_out {
-                let r = RayK::new(ray);
-                *blocked = b.tree.occluded(k, &r, *t_max) || b.big.occluded(k, &r, *t_max);
+            for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent_shadows(rays) {
+                    b.occluded_packet(k, rays, out);
+                    continue;
+                }
+                for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    *blocked = b.tree.occluded(k, &r, *t_max) || b.big.occluded(k, &r, *t_max);
+                }
             }
         }
         Structure::BruteForce | Structure::Bvh2(_) => {}

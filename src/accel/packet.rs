@@ -1,22 +1,29 @@
-//! Coherent rays together: up to sixteen rays through the 8-wide BVH as one packet, one
-//! AVX-512 lane a ray.
+//! Coherent rays together: a packet of rays through the 8-wide BVH, one SIMD lane a ray —
+//! sixteen rays with AVX-512, eight with AVX2.
 //!
 //! Camera rays through neighbouring pixels, and the shadow rays from their hits towards the
 //! point light, meet the same nodes in the same order. Ray by ray, each of them loads a node's
 //! eight boxes and tests them eight lanes wide. As a packet, the node is loaded once and each
-//! child box is tested against sixteen rays in one step: for a node every ray of the packet
-//! enters, a third of the instructions (PERFORMANCE.md measures what it buys).
+//! child box is tested against all the packet's rays in one step: for a node every ray of the
+//! packet enters, a third of the instructions with AVX-512 (PERFORMANCE.md measures what it
+//! buys, for both widths).
+//!
+//! The traversal is written once, generic over [`PacketIsa`]: the lane width and the dozen
+//! operations it needs (arithmetic, comparisons to masks, blends, a masked horizontal minimum,
+//! the gather of the rays), implemented by the AVX-512 and the AVX2 kernel proof types. Every
+//! function of it is `#[inline(always)]`, so it is compiled inside the `#[target_feature]`
+//! entry points of [`super`] for each instruction set, where the intrinsics inline.
 //!
 //! Each lane computes exactly what [`super::simd::Kernels::boxes`] computes for its ray (the
 //! same planes, the same fused multiply-subtract, the same order of `max` and `min`), against
-//! its own best hit; leaves are tested ray by ray with the same triangle kernel as the single
-//! ray's traversal, with the same rule for ties. So a packet returns exactly what each ray
-//! returns alone (tests/bvh.rs checks it against the brute-force loop), whatever order the
-//! packet visits the nodes in.
+//! its own best hit; leaves are tested a triangle at a time against every lane with the same
+//! operations as the single ray's triangle kernel (no fused multiply-add), with the same rule
+//! for ties. So a packet returns exactly what each ray returns alone (tests/packets.rs checks
+//! it against the brute-force loop), whatever order the packet visits the nodes in.
 //!
 //! When few rays of a packet are left in a subtree (they diverged, or most of them found
 //! nearer hits), each goes on alone from that node with the single-ray traversal: a packet's
-//! step costs the same for one ray as for sixteen. Rays that point in very different
+//! step costs the same for one ray as for all of them. Rays that point in very different
 //! directions (the path tracer's bounces) never form a packet: see [`coherent`].
 
 use std::arch::x86_64::*;
@@ -24,18 +31,25 @@ use std::arch::x86_64::*;
 use super::Hit;
 use super::bvh::BOX_T_SLACK;
 use super::bvh::INV_HUGE;
-use super::simd::{Avx512, Node8, Packet, RayK};
+use super::simd::{Avx2, Avx512, Node8, Packet, RayK};
 use super::wide::{Bvh8, Bvh8Big, EMPTY, LEAF, STACK_INLINE};
 use crate::geometry::Ray;
 use crate::intersect::EDGE_TOLERANCE;
 
-/// Rays in a packet: one AVX-512 register of `f32`.
-pub const PACKET: usize = 16;
-const _: () = assert!(PACKET == super::PACKET);
+/// The most rays in a packet (AVX-512's sixteen lanes of `f32`): the length of the per-lane
+/// arrays, whatever the width.
+pub const MAX_WIDTH: usize = 16;
+const _: () = assert!(<Avx512 as PacketIsa>::WIDTH == super::PACKET);
+const _: () = assert!(<Avx2 as PacketIsa>::WIDTH == super::PACKET_AVX2);
+const _: () = assert!(<Avx512 as PacketIsa>::WIDTH <= MAX_WIDTH);
+
+/// A ray is six `f32` (origin, direction): lane i gathers floats 6i + c.
+const RAY_FLOATS: i32 = (size_of::<Ray>() / size_of::<f32>()) as i32;
+const _: () = assert!(RAY_FLOATS == 6 && align_of::<Ray>() == align_of::<f32>());
 
 /// A packet with at most this many rays left in a subtree lets each go on alone. Measured
 /// (whole `raylab bench --threads 1` runs, bunny and terrain, alternating binaries): 1, 2 and 4
-/// are level within 1 %.
+/// are level within 1 % (AVX-512).
 const ALONE: u32 = 2;
 
 /// Directions within about 18° of the first ray's (cosine 0.95) travel together.
@@ -68,58 +82,451 @@ pub fn coherent_shadows(rays: &[(Ray, f32)]) -> bool {
             .all(|(r, _)| r.direction.dot(first.direction) >= COHERENT_COS)
 }
 
-/// The packet's rays, one per lane: what the box test needs (as in [`RayK`]).
-struct Lanes {
-    origin: [__m512; 3],
-    direction: [__m512; 3],
-    inv: [__m512; 3],
-    origin_inv: [__m512; 3],
-    /// Per axis, the lanes whose ray goes towards negative coordinates (near plane = max).
-    negative: [__mmask16; 3],
+/// What the packet traversal needs of a SIMD instruction set: one register of `f32` with a lane
+/// per ray, a register of `u32` (the best triangle's index), a comparison's result, and the few
+/// operations below, each one instruction or a short fixed sequence. Implemented by the kernel
+/// proof types, whose values exist only on a CPU that runs them: [`Avx512`] (sixteen rays,
+/// masks in mask registers) and [`Avx2`] (eight rays, masks as all-ones lanes).
+///
+/// Every method is `#[inline(always)]` and every caller in this module too: the traversal is
+/// compiled inside the `#[target_feature]` entry points of [`super`] (`closest_batch_avx512`,
+/// `closest_batch_avx2`, ...), where the intrinsics inline.
+pub(super) trait PacketIsa: Copy {
+    /// Lanes, so rays in a packet.
+    const WIDTH: usize;
+    /// `WIDTH` lanes of `f32`.
+    type F: Copy;
+    /// `WIDTH` lanes of `u32`.
+    type U: Copy;
+    /// A comparison's result, lane by lane.
+    type Mask: Copy;
+
+    /// The single-ray kernels, for the rays that go on alone.
+    fn avx2(self) -> Avx2;
+
+    /// The rays' origins and directions (x, y, z, dx, dy, dz), one ray a lane; lanes past
+    /// `rays.len()` (at least one, at most `WIDTH`) repeat the last ray.
+    fn rays(self, rays: &[Ray]) -> [Self::F; 6];
+
+    fn splat(self, x: f32) -> Self::F;
+    /// The first `WIDTH` floats of `a`.
+    fn load(self, a: &[f32; MAX_WIDTH]) -> Self::F;
+    /// Into the first `WIDTH` floats of `a`.
+    fn store(self, a: &mut [f32; MAX_WIDTH], v: Self::F);
+    fn add(self, a: Self::F, b: Self::F) -> Self::F;
+    fn sub(self, a: Self::F, b: Self::F) -> Self::F;
+    fn mul(self, a: Self::F, b: Self::F) -> Self::F;
+    fn div(self, a: Self::F, b: Self::F) -> Self::F;
+    /// `a·b − c` in one rounding.
+    fn fmsub(self, a: Self::F, b: Self::F, c: Self::F) -> Self::F;
+    fn max(self, a: Self::F, b: Self::F) -> Self::F;
+    fn min(self, a: Self::F, b: Self::F) -> Self::F;
+    fn and(self, a: Self::F, b: Self::F) -> Self::F;
+    fn or(self, a: Self::F, b: Self::F) -> Self::F;
+    fn xor(self, a: Self::F, b: Self::F) -> Self::F;
+    /// `|a|`: the sign bit cleared.
+    fn abs(self, a: Self::F) -> Self::F;
+
+    /// Lane by lane `a <C> b`, `C` one of the `_CMP_*` predicates.
+    fn cmp<const C: i32>(self, a: Self::F, b: Self::F) -> Self::Mask;
+    fn both(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
+    fn either(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
+    /// Lane `i` set: bit `i`.
+    fn bits(self, m: Self::Mask) -> u32;
+    /// Bit `i` (below `WIDTH`) set: lane `i`.
+    fn mask(self, bits: u32) -> Self::Mask;
+    /// `b` in the lanes of `m`, `a` elsewhere.
+    fn blend(self, m: Self::Mask, a: Self::F, b: Self::F) -> Self::F;
+    /// The least of the lanes of `m` (at least one).
+    fn min_of(self, m: Self::Mask, v: Self::F) -> f32;
+
+    fn splat_u32(self, x: u32) -> Self::U;
+    fn load_u32(self, a: &[u32; MAX_WIDTH]) -> Self::U;
+    fn store_u32(self, a: &mut [u32; MAX_WIDTH], v: Self::U);
+    /// Lane by lane `a < b`, unsigned.
+    fn lt_u32(self, a: Self::U, b: Self::U) -> Self::Mask;
+    fn blend_u32(self, m: Self::Mask, a: Self::U, b: Self::U) -> Self::U;
 }
 
-impl Lanes {
-    /// The rays' origins and directions, one lane each (lanes past `rays.len()` repeat the
-    /// first ray and are never active), and what the box test needs, computed as
-    /// [`RayK::new`] computes it, sixteen rays at a time: the same divisions, so the same bits.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    fn new(rays: &[Ray]) -> Self {
-        debug_assert!(!rays.is_empty() && rays.len() <= PACKET);
-        // A ray is six f32 (origin, direction): lane i reads floats 6i + c.
-        const FLOATS: i32 = (size_of::<Ray>() / size_of::<f32>()) as i32;
-        const _: () = assert!(FLOATS == 6 && align_of::<Ray>() == align_of::<f32>());
+// Every intrinsic below needs its instruction set enabled, which a value of the proof type
+// guarantees (it is made only by `detect`, after checking the CPU): hence the `unsafe`.
+
+impl PacketIsa for Avx512 {
+    const WIDTH: usize = 16;
+    type F = __m512;
+    type U = __m512i;
+    type Mask = __mmask16;
+
+    #[inline(always)]
+    fn avx2(self) -> Avx2 {
+        Avx512::avx2(self)
+    }
+
+    #[inline(always)]
+    fn rays(self, rays: &[Ray]) -> [__m512; 6] {
+        debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
         let last = rays.len() as i32 - 1;
-        let lane = _mm512_min_epi32(
-            _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
-            _mm512_set1_epi32(last),
-        );
-        let lane = _mm512_mullo_epi32(lane, _mm512_set1_epi32(FLOATS));
         let base = rays.as_ptr().cast::<f32>();
-        let gather = |c: i32| {
-            // SAFETY: every index is 6i + c for a ray i < rays.len() and c < 6: a float of
-            // `rays`, which is a slice of `Ray`s, each six `f32` (checked above).
-            unsafe { _mm512_i32gather_ps::<4>(_mm512_add_epi32(lane, _mm512_set1_epi32(c)), base) }
-        };
-        let origin = [gather(0), gather(1), gather(2)];
-        let direction = [gather(3), gather(4), gather(5)];
-        let mut inv = [_mm512_setzero_ps(); 3];
-        let mut origin_inv = [_mm512_setzero_ps(); 3];
-        let mut negative = [0; 3];
-        for axis in 0..3 {
-            // `RayBoxData::new`: 1/d, or ±INV_HUGE where |d| ≤ 1/INV_HUGE.
-            let d = direction[axis];
-            let huge = _mm512_or_ps(
-                _mm512_set1_ps(INV_HUGE),
-                _mm512_and_ps(d, _mm512_set1_ps(-0.0)),
+        // SAFETY: AVX-512 F (see above). Every index gathered is 6i + c for a ray i <
+        // rays.len() and c < 6: a float of `rays`, a slice of `Ray`s of six `f32` each.
+        unsafe {
+            let lane = _mm512_min_epi32(
+                _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                _mm512_set1_epi32(last),
             );
-            let small =
-                _mm512_cmp_ps_mask::<_CMP_NGT_UQ>(_mm512_abs_ps(d), _mm512_set1_ps(1.0 / INV_HUGE));
-            inv[axis] = _mm512_mask_mov_ps(_mm512_div_ps(_mm512_set1_ps(1.0), d), small, huge);
-            origin_inv[axis] = _mm512_mul_ps(origin[axis], inv[axis]);
-            negative[axis] = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(inv[axis], _mm512_setzero_ps());
+            let lane = _mm512_mullo_epi32(lane, _mm512_set1_epi32(RAY_FLOATS));
+            let mut out = [_mm512_setzero_ps(); 6];
+            for (c, out) in out.iter_mut().enumerate() {
+                let index = _mm512_add_epi32(lane, _mm512_set1_epi32(c as i32));
+                *out = _mm512_i32gather_ps::<4>(index, base);
+            }
+            out
         }
+    }
+
+    #[inline(always)]
+    fn splat(self, x: f32) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_set1_ps(x) }
+    }
+    #[inline(always)]
+    fn load(self, a: &[f32; MAX_WIDTH]) -> __m512 {
+        // SAFETY: AVX-512 F; `a` is sixteen readable f32.
+        unsafe { _mm512_loadu_ps(a.as_ptr()) }
+    }
+    #[inline(always)]
+    fn store(self, a: &mut [f32; MAX_WIDTH], v: __m512) {
+        // SAFETY: AVX-512 F; `a` is sixteen writable f32.
+        unsafe { _mm512_storeu_ps(a.as_mut_ptr(), v) }
+    }
+    #[inline(always)]
+    fn add(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_add_ps(a, b) }
+    }
+    #[inline(always)]
+    fn sub(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_sub_ps(a, b) }
+    }
+    #[inline(always)]
+    fn mul(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_mul_ps(a, b) }
+    }
+    #[inline(always)]
+    fn div(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_div_ps(a, b) }
+    }
+    #[inline(always)]
+    fn fmsub(self, a: __m512, b: __m512, c: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_fmsub_ps(a, b, c) }
+    }
+    #[inline(always)]
+    fn max(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_max_ps(a, b) }
+    }
+    #[inline(always)]
+    fn min(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_min_ps(a, b) }
+    }
+    #[inline(always)]
+    fn and(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 DQ.
+        unsafe { _mm512_and_ps(a, b) }
+    }
+    #[inline(always)]
+    fn or(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 DQ.
+        unsafe { _mm512_or_ps(a, b) }
+    }
+    #[inline(always)]
+    fn xor(self, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 DQ.
+        unsafe { _mm512_xor_ps(a, b) }
+    }
+    #[inline(always)]
+    fn abs(self, a: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_abs_ps(a) }
+    }
+
+    #[inline(always)]
+    fn cmp<const C: i32>(self, a: __m512, b: __m512) -> __mmask16 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_cmp_ps_mask::<C>(a, b) }
+    }
+    #[inline(always)]
+    fn both(self, a: __mmask16, b: __mmask16) -> __mmask16 {
+        a & b
+    }
+    #[inline(always)]
+    fn either(self, a: __mmask16, b: __mmask16) -> __mmask16 {
+        a | b
+    }
+    #[inline(always)]
+    fn bits(self, m: __mmask16) -> u32 {
+        m as u32
+    }
+    #[inline(always)]
+    fn mask(self, bits: u32) -> __mmask16 {
+        bits as __mmask16
+    }
+    #[inline(always)]
+    fn blend(self, m: __mmask16, a: __m512, b: __m512) -> __m512 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_mask_blend_ps(m, a, b) }
+    }
+    #[inline(always)]
+    fn min_of(self, m: __mmask16, v: __m512) -> f32 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_mask_reduce_min_ps(m, v) }
+    }
+
+    #[inline(always)]
+    fn splat_u32(self, x: u32) -> __m512i {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_set1_epi32(x as i32) }
+    }
+    #[inline(always)]
+    fn load_u32(self, a: &[u32; MAX_WIDTH]) -> __m512i {
+        // SAFETY: AVX-512 F; `a` is sixteen readable u32.
+        unsafe { _mm512_loadu_si512(a.as_ptr().cast()) }
+    }
+    #[inline(always)]
+    fn store_u32(self, a: &mut [u32; MAX_WIDTH], v: __m512i) {
+        // SAFETY: AVX-512 F; `a` is sixteen writable u32.
+        unsafe { _mm512_storeu_si512(a.as_mut_ptr().cast(), v) }
+    }
+    #[inline(always)]
+    fn lt_u32(self, a: __m512i, b: __m512i) -> __mmask16 {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_cmplt_epu32_mask(a, b) }
+    }
+    #[inline(always)]
+    fn blend_u32(self, m: __mmask16, a: __m512i, b: __m512i) -> __m512i {
+        // SAFETY: AVX-512 F.
+        unsafe { _mm512_mask_blend_epi32(m, a, b) }
+    }
+}
+
+impl PacketIsa for Avx2 {
+    const WIDTH: usize = 8;
+    type F = __m256;
+    type U = __m256i;
+    /// All ones in the lanes set (a comparison's result).
+    type Mask = __m256;
+
+    #[inline(always)]
+    fn avx2(self) -> Avx2 {
+        self
+    }
+
+    #[inline(always)]
+    fn rays(self, rays: &[Ray]) -> [__m256; 6] {
+        debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
+        let last = rays.len() as i32 - 1;
+        let base = rays.as_ptr().cast::<f32>();
+        // SAFETY: AVX2. Every index gathered is 6i + c for a ray i < rays.len() and c < 6: a
+        // float of `rays`, a slice of `Ray`s of six `f32` each.
+        unsafe {
+            let lane = _mm256_min_epi32(
+                _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+                _mm256_set1_epi32(last),
+            );
+            let lane = _mm256_mullo_epi32(lane, _mm256_set1_epi32(RAY_FLOATS));
+            let mut out = [_mm256_setzero_ps(); 6];
+            for (c, out) in out.iter_mut().enumerate() {
+                let index = _mm256_add_epi32(lane, _mm256_set1_epi32(c as i32));
+                *out = _mm256_i32gather_ps::<4>(base, index);
+            }
+            out
+        }
+    }
+
+    #[inline(always)]
+    fn splat(self, x: f32) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_set1_ps(x) }
+    }
+    #[inline(always)]
+    fn load(self, a: &[f32; MAX_WIDTH]) -> __m256 {
+        // SAFETY: AVX; `a` holds at least eight readable f32.
+        unsafe { _mm256_loadu_ps(a.as_ptr()) }
+    }
+    #[inline(always)]
+    fn store(self, a: &mut [f32; MAX_WIDTH], v: __m256) {
+        // SAFETY: AVX; `a` holds at least eight writable f32.
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) }
+    }
+    #[inline(always)]
+    fn add(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_add_ps(a, b) }
+    }
+    #[inline(always)]
+    fn sub(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_sub_ps(a, b) }
+    }
+    #[inline(always)]
+    fn mul(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_mul_ps(a, b) }
+    }
+    #[inline(always)]
+    fn div(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_div_ps(a, b) }
+    }
+    #[inline(always)]
+    fn fmsub(self, a: __m256, b: __m256, c: __m256) -> __m256 {
+        // SAFETY: FMA.
+        unsafe { _mm256_fmsub_ps(a, b, c) }
+    }
+    #[inline(always)]
+    fn max(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_max_ps(a, b) }
+    }
+    #[inline(always)]
+    fn min(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_min_ps(a, b) }
+    }
+    #[inline(always)]
+    fn and(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_and_ps(a, b) }
+    }
+    #[inline(always)]
+    fn or(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_or_ps(a, b) }
+    }
+    #[inline(always)]
+    fn xor(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_xor_ps(a, b) }
+    }
+    #[inline(always)]
+    fn abs(self, a: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), a) }
+    }
+
+    #[inline(always)]
+    fn cmp<const C: i32>(self, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_cmp_ps::<C>(a, b) }
+    }
+    #[inline(always)]
+    fn both(self, a: __m256, b: __m256) -> __m256 {
+        self.and(a, b)
+    }
+    #[inline(always)]
+    fn either(self, a: __m256, b: __m256) -> __m256 {
+        self.or(a, b)
+    }
+    #[inline(always)]
+    fn bits(self, m: __m256) -> u32 {
+        // SAFETY: AVX.
+        unsafe { _mm256_movemask_ps(m) as u32 }
+    }
+    #[inline(always)]
+    fn mask(self, bits: u32) -> __m256 {
+        // SAFETY: AVX2.
+        unsafe {
+            let lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            let set = _mm256_and_si256(_mm256_set1_epi32(bits as i32), lane_bit);
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane_bit))
+        }
+    }
+    #[inline(always)]
+    fn blend(self, m: __m256, a: __m256, b: __m256) -> __m256 {
+        // SAFETY: AVX.
+        unsafe { _mm256_blendv_ps(a, b, m) }
+    }
+    #[inline(always)]
+    fn min_of(self, m: __m256, v: __m256) -> f32 {
+        // SAFETY: AVX.
+        unsafe {
+            let v = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), v, m);
+            let v = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+            let v = _mm256_min_ps(v, _mm256_permute_ps::<0b01_00_11_10>(v));
+            let v = _mm256_min_ps(v, _mm256_permute_ps::<0b10_11_00_01>(v));
+            _mm256_cvtss_f32(v)
+        }
+    }
+
+    #[inline(always)]
+    fn splat_u32(self, x: u32) -> __m256i {
+        // SAFETY: AVX.
+        unsafe { _mm256_set1_epi32(x as i32) }
+    }
+    #[inline(always)]
+    fn load_u32(self, a: &[u32; MAX_WIDTH]) -> __m256i {
+        // SAFETY: AVX; `a` holds at least eight readable u32.
+        unsafe { _mm256_loadu_si256(a.as_ptr().cast()) }
+    }
+    #[inline(always)]
+    fn store_u32(self, a: &mut [u32; MAX_WIDTH], v: __m256i) {
+        // SAFETY: AVX; `a` holds at least eight writable u32.
+        unsafe { _mm256_storeu_si256(a.as_mut_ptr().cast(), v) }
+    }
+    #[inline(always)]
+    fn lt_u32(self, a: __m256i, b: __m256i) -> __m256 {
+        // AVX2 compares signed only: flipping both sign bits orders u32 as i32.
+        // SAFETY: AVX2.
+        unsafe {
+            let flip = _mm256_set1_epi32(i32::MIN);
+            let lt = _mm256_cmpgt_epi32(_mm256_xor_si256(b, flip), _mm256_xor_si256(a, flip));
+            _mm256_castsi256_ps(lt)
+        }
+    }
+    #[inline(always)]
+    fn blend_u32(self, m: __m256, a: __m256i, b: __m256i) -> __m256i {
+        // SAFETY: AVX.
+        unsafe {
+            _mm256_castps_si256(_mm256_blendv_ps(
+                _mm256_castsi256_ps(a),
+                _mm256_castsi256_ps(b),
+                m,
+            ))
+        }
+    }
+}
+
+/// The packet's rays, one per lane: what the box test needs (as in [`RayK`]).
+struct Lanes<P: PacketIsa> {
+    k: P,
+    origin: [P::F; 3],
+    direction: [P::F; 3],
+    inv: [P::F; 3],
+    origin_inv: [P::F; 3],
+    /// Per axis, the lanes whose ray goes towards negative coordinates (near plane = max).
+    negative: [P::Mask; 3],
+}
+
+impl<P: PacketIsa> Lanes<P> {
+    /// The rays' origins and directions, one lane each (lanes past `rays.len()` repeat the
+    /// last ray and are never active), and what the box test needs, computed as
+    /// [`RayK::new`] computes it, a packet at a time: the same divisions, so the same bits.
+    #[inline(always)]
+    fn new(k: P, rays: &[Ray]) -> Self {
+        let [ox, oy, oz, dx, dy, dz] = k.rays(rays);
+        let (x, y, z) = (axis(k, ox, dx), axis(k, oy, dy), axis(k, oz, dz));
+        let origin = [ox, oy, oz];
+        let direction = [dx, dy, dz];
+        let inv = [x.0, y.0, z.0];
+        let origin_inv = [x.1, y.1, z.1];
+        let negative = [x.2, y.2, z.2];
         Self {
+            k,
             origin,
             direction,
             inv,
@@ -128,139 +535,159 @@ impl Lanes {
         }
     }
 
-    /// Child `slot`'s box against the `active` lanes, each up to its own `limit`: the lanes
+    /// Child `slot`'s box against the lanes of `active`, each up to its own `limit`: the lanes
     /// that enter it (as [`Kernels::boxes`] decides for each ray alone) and the nearest of
     /// their entry distances.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    fn enter(&self, node: &Node8, slot: usize, active: u16, limit: __m512) -> (u16, f32) {
-        let mut t0 = _mm512_setzero_ps();
+    ///
+    /// [`Kernels::boxes`]: super::simd::Kernels::boxes
+    #[inline(always)]
+    fn enter(&self, node: &Node8, slot: usize, active: P::Mask, limit: P::F) -> (u32, f32) {
+        let k = self.k;
+        let mut t0 = k.splat(0.0);
         let mut t1 = limit;
         for axis in 0..3 {
-            let min = _mm512_set1_ps(node.bounds[axis][slot]);
-            let max = _mm512_set1_ps(node.bounds[axis + 3][slot]);
-            let near_plane = _mm512_mask_blend_ps(self.negative[axis], min, max);
-            let far_plane = _mm512_mask_blend_ps(self.negative[axis], max, min);
-            let near = _mm512_fmsub_ps(near_plane, self.inv[axis], self.origin_inv[axis]);
-            let far = _mm512_fmsub_ps(far_plane, self.inv[axis], self.origin_inv[axis]);
-            t0 = _mm512_max_ps(t0, near);
-            t1 = _mm512_min_ps(t1, far);
+            let min = k.splat(node.bounds[axis][slot]);
+            let max = k.splat(node.bounds[axis + 3][slot]);
+            let near_plane = k.blend(self.negative[axis], min, max);
+            let far_plane = k.blend(self.negative[axis], max, min);
+            let near = k.fmsub(near_plane, self.inv[axis], self.origin_inv[axis]);
+            let far = k.fmsub(far_plane, self.inv[axis], self.origin_inv[axis]);
+            t0 = k.max(t0, near);
+            t1 = k.min(t1, far);
         }
-        let entered = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(active, t0, t1);
-        if entered == 0 {
+        let entered = k.both(active, k.cmp::<_CMP_LE_OQ>(t0, t1));
+        let bits = k.bits(entered);
+        if bits == 0 {
             return (0, 0.0);
         }
-        (entered, _mm512_mask_reduce_min_ps(entered, t0))
+        (bits, k.min_of(entered, t0))
     }
 
     /// Triangle `tri` of a leaf against every lane: `t`, `u`, `v` per lane (meaningless where
     /// missed) and the lanes of `active` that hit it with `0 < t < limit`. Each lane does
     /// exactly [`crate::intersect::intersect_triangle`]'s operations in its order, as the
     /// 8-lane kernel does (no fused multiply-add), so the same bits.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
+    #[inline(always)]
     fn triangle<const N: usize>(
         &self,
         p: &Packet<N>,
         tri: usize,
-        active: u16,
-        limit: __m512,
-    ) -> ([__m512; 3], u16) {
-        let set = |x: f32| _mm512_set1_ps(x);
+        active: P::Mask,
+        limit: P::F,
+    ) -> ([P::F; 3], P::Mask) {
+        let k = self.k;
         let [ox, oy, oz] = self.origin;
         let [dx, dy, dz] = self.direction;
-        let (e1x, e1y, e1z) = (set(p.e1[0][tri]), set(p.e1[1][tri]), set(p.e1[2][tri]));
-        let (e2x, e2y, e2z) = (set(p.e2[0][tri]), set(p.e2[1][tri]), set(p.e2[2][tri]));
-        let mul = |a, b| _mm512_mul_ps(a, b);
-        let sub = |a, b| _mm512_sub_ps(a, b);
-        let add = |a, b| _mm512_add_ps(a, b);
-        let nx = sub(mul(e1y, e2z), mul(e2y, e1z));
-        let ny = sub(mul(e1z, e2x), mul(e2z, e1x));
-        let nz = sub(mul(e1x, e2y), mul(e2x, e1y));
-        let bx = sub(ox, set(p.v0[0][tri]));
-        let by = sub(oy, set(p.v0[1][tri]));
-        let bz = sub(oz, set(p.v0[2][tri]));
-        let sign = set(-0.0);
-        let det = add(add(mul(dx, nx), mul(dy, ny)), mul(dz, nz));
-        let inv_det = _mm512_div_ps(set(1.0), _mm512_xor_ps(det, sign));
-        let t = mul(add(add(mul(bx, nx), mul(by, ny)), mul(bz, nz)), inv_det);
-        let mx = sub(mul(by, dz), mul(dy, bz));
-        let my = sub(mul(bz, dx), mul(dz, bx));
-        let mz = sub(mul(bx, dy), mul(dx, by));
-        let u = mul(add(add(mul(e2x, mx), mul(e2y, my)), mul(e2z, mz)), inv_det);
-        let e1m = add(add(mul(e1x, mx), mul(e1y, my)), mul(e1z, mz));
-        let v = mul(_mm512_xor_ps(e1m, sign), inv_det);
-        let lo = set(-EDGE_TOLERANCE);
-        let mut hit = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(active, t, _mm512_setzero_ps());
-        hit &= _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, limit);
-        hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(u, lo);
-        hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, lo);
-        hit &= _mm512_cmp_ps_mask::<_CMP_LE_OQ>(add(u, v), set(1.0 + EDGE_TOLERANCE));
+        let e1x = k.splat(p.e1[0][tri]);
+        let e1y = k.splat(p.e1[1][tri]);
+        let e1z = k.splat(p.e1[2][tri]);
+        let e2x = k.splat(p.e2[0][tri]);
+        let e2y = k.splat(p.e2[1][tri]);
+        let e2z = k.splat(p.e2[2][tri]);
+        let nx = k.sub(k.mul(e1y, e2z), k.mul(e2y, e1z));
+        let ny = k.sub(k.mul(e1z, e2x), k.mul(e2z, e1x));
+        let nz = k.sub(k.mul(e1x, e2y), k.mul(e2x, e1y));
+        let bx = k.sub(ox, k.splat(p.v0[0][tri]));
+        let by = k.sub(oy, k.splat(p.v0[1][tri]));
+        let bz = k.sub(oz, k.splat(p.v0[2][tri]));
+        let sign = k.splat(-0.0);
+        let det = k.add(k.add(k.mul(dx, nx), k.mul(dy, ny)), k.mul(dz, nz));
+        let inv_det = k.div(k.splat(1.0), k.xor(det, sign));
+        let t = k.mul(
+            k.add(k.add(k.mul(bx, nx), k.mul(by, ny)), k.mul(bz, nz)),
+            inv_det,
+        );
+        let mx = k.sub(k.mul(by, dz), k.mul(dy, bz));
+        let my = k.sub(k.mul(bz, dx), k.mul(dz, bx));
+        let mz = k.sub(k.mul(bx, dy), k.mul(dx, by));
+        let u = k.mul(
+            k.add(k.add(k.mul(e2x, mx), k.mul(e2y, my)), k.mul(e2z, mz)),
+            inv_det,
+        );
+        let e1m = k.add(k.add(k.mul(e1x, mx), k.mul(e1y, my)), k.mul(e1z, mz));
+        let v = k.mul(k.xor(e1m, sign), inv_det);
+        let lo = k.splat(-EDGE_TOLERANCE);
+        let mut hit = k.both(active, k.cmp::<_CMP_GT_OQ>(t, k.splat(0.0)));
+        hit = k.both(hit, k.cmp::<_CMP_LT_OQ>(t, limit));
+        hit = k.both(hit, k.cmp::<_CMP_GE_OQ>(u, lo));
+        hit = k.both(hit, k.cmp::<_CMP_GE_OQ>(v, lo));
+        let uv = k.add(u, v);
+        hit = k.both(hit, k.cmp::<_CMP_LE_OQ>(uv, k.splat(1.0 + EDGE_TOLERANCE)));
         ([t, u, v], hit)
     }
 
     /// A leaf's triangles against the `active` lanes, one triangle at a time: each lane keeps
     /// the nearest hit, the lowest triangle index among equal `t` (as the brute-force loop).
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    fn leaf_nearest<const N: usize>(&self, p: &Packet<N>, active: u16, b: &mut Best, t_max: f32) {
-        let limit = _mm512_set1_ps(t_max);
-        // SAFETY: each row of `b` is sixteen readable f32 or u32.
-        let (mut best_t, mut best_i, mut best_u, mut best_v) = unsafe {
-            (
-                _mm512_loadu_ps(b.t.as_ptr()),
-                _mm512_loadu_si512(b.index.as_ptr().cast()),
-                _mm512_loadu_ps(b.u.as_ptr()),
-                _mm512_loadu_ps(b.v.as_ptr()),
-            )
-        };
+    #[inline(always)]
+    fn leaf_nearest<const N: usize>(&self, p: &Packet<N>, active: u32, b: &mut Best, t_max: f32) {
+        let k = self.k;
+        let limit = k.splat(t_max);
+        let active = k.mask(active);
+        let mut best_t = k.load(&b.t);
+        let mut best_i = k.load_u32(&b.index);
+        let mut best_u = k.load(&b.u);
+        let mut best_v = k.load(&b.v);
         for (tri, &index) in p.index.iter().enumerate() {
             if index == u32::MAX {
                 continue; // an unused lane of the packet
             }
             let ([t, u, v], hit) = self.triangle(p, tri, active, limit);
-            if hit == 0 {
+            if k.bits(hit) == 0 {
                 continue;
             }
-            let index_v = _mm512_set1_epi32(index as i32);
+            let index_v = k.splat_u32(index);
             // Nearer, or as near with a lower index (a lane without a hit has best_t = t_max,
             // which no hit reaches, so the index test only ever compares real hits).
-            let nearer = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(hit, t, best_t);
-            let tie = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(hit, t, best_t)
-                & _mm512_cmplt_epu32_mask(index_v, best_i);
-            let better = nearer | tie;
-            best_t = _mm512_mask_mov_ps(best_t, better, t);
-            best_i = _mm512_mask_mov_epi32(best_i, better, index_v);
-            best_u = _mm512_mask_mov_ps(best_u, better, u);
-            best_v = _mm512_mask_mov_ps(best_v, better, v);
+            let nearer = k.both(hit, k.cmp::<_CMP_LT_OQ>(t, best_t));
+            let tie = k.both(hit, k.cmp::<_CMP_EQ_OQ>(t, best_t));
+            let tie = k.both(tie, k.lt_u32(index_v, best_i));
+            let better = k.either(nearer, tie);
+            best_t = k.blend(better, best_t, t);
+            best_i = k.blend_u32(better, best_i, index_v);
+            best_u = k.blend(better, best_u, u);
+            best_v = k.blend(better, best_v, v);
         }
-        // SAFETY: each row of `b` is sixteen writable f32 or u32.
-        unsafe {
-            _mm512_storeu_ps(b.t.as_mut_ptr(), best_t);
-            _mm512_storeu_si512(b.index.as_mut_ptr().cast(), best_i);
-            _mm512_storeu_ps(b.u.as_mut_ptr(), best_u);
-            _mm512_storeu_ps(b.v.as_mut_ptr(), best_v);
-        }
+        k.store(&mut b.t, best_t);
+        k.store_u32(&mut b.index, best_i);
+        k.store(&mut b.u, best_u);
+        k.store(&mut b.v, best_v);
     }
 
     /// The lanes of `active` that hit any triangle of a leaf with `0 < t < limit` (per lane).
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    fn leaf_any<const N: usize>(&self, p: &Packet<N>, active: u16, limit: __m512) -> u16 {
-        let mut blocked = 0;
+    #[inline(always)]
+    fn leaf_any<const N: usize>(&self, p: &Packet<N>, active: u32, limit: P::F) -> u32 {
+        let k = self.k;
+        // The lanes not yet blocked, as bits and as a mask.
+        let mut left = active;
+        let mut left_mask = k.mask(left);
         for (tri, &index) in p.index.iter().enumerate() {
-            if index == u32::MAX || blocked == active {
+            if index == u32::MAX || left == 0 {
                 continue;
             }
-            blocked |= self.triangle(p, tri, active & !blocked, limit).1;
+            let blocked = k.bits(self.triangle(p, tri, left_mask, limit).1);
+            if blocked != 0 {
+                left &= !blocked;
+                left_mask = k.mask(left);
+            }
         }
-        blocked
+        active & !left
     }
+}
+
+/// Along one axis, from the origins `o` and directions `d`: the reciprocal direction as
+/// `RayBoxData::new` computes it (1/d, or ±INV_HUGE where |d| ≤ 1/INV_HUGE), origin times it,
+/// and the lanes going towards negative coordinates.
+#[inline(always)]
+fn axis<P: PacketIsa>(k: P, o: P::F, d: P::F) -> (P::F, P::F, P::Mask) {
+    let huge = k.or(k.splat(INV_HUGE), k.and(d, k.splat(-0.0)));
+    let small = k.cmp::<_CMP_NGT_UQ>(k.abs(d), k.splat(1.0 / INV_HUGE));
+    let inv = k.blend(small, k.div(k.splat(1.0), d), huge);
+    (inv, k.mul(o, inv), k.cmp::<_CMP_LT_OQ>(inv, k.splat(0.0)))
 }
 
 /// The lanes set in `mask`, lowest first.
 #[inline(always)]
-fn lanes_of(mut mask: u16) -> impl Iterator<Item = usize> {
+fn lanes_of(mut mask: u32) -> impl Iterator<Item = usize> {
     std::iter::from_fn(move || {
         (mask != 0).then(|| {
             let lane = mask.trailing_zeros() as usize;
@@ -271,28 +698,31 @@ fn lanes_of(mut mask: u16) -> impl Iterator<Item = usize> {
 }
 
 /// All of the first `n` lanes.
-fn first_lanes(n: usize) -> u16 {
-    ((1u32 << n) - 1) as u16
+fn first_lanes(n: usize) -> u32 {
+    ((1u64 << n) - 1) as u32
 }
 
-/// Each lane's best hit so far, as the single-ray traversal keeps it.
+/// Each lane's best hit so far, as the single-ray traversal keeps it (the first
+/// [`PacketIsa::WIDTH`] entries).
 struct Best {
-    t: [f32; PACKET],
-    index: [u32; PACKET],
-    u: [f32; PACKET],
-    v: [f32; PACKET],
+    t: [f32; MAX_WIDTH],
+    index: [u32; MAX_WIDTH],
+    u: [f32; MAX_WIDTH],
+    v: [f32; MAX_WIDTH],
 }
 
 impl Best {
+    #[inline(always)]
     fn new(t_max: f32) -> Self {
         Self {
-            t: [t_max; PACKET],
-            index: [u32::MAX; PACKET],
-            u: [0.0; PACKET],
-            v: [0.0; PACKET],
+            t: [t_max; MAX_WIDTH],
+            index: [u32::MAX; MAX_WIDTH],
+            u: [0.0; MAX_WIDTH],
+            v: [0.0; MAX_WIDTH],
         }
     }
 
+    #[inline(always)]
     fn get(&self, lane: usize) -> Option<Hit> {
         (self.index[lane] != u32::MAX).then(|| Hit {
             index: self.index[lane],
@@ -302,6 +732,7 @@ impl Best {
         })
     }
 
+    #[inline(always)]
     fn set(&mut self, lane: usize, h: Hit) {
         self.t[lane] = h.t;
         self.index[lane] = h.index;
@@ -310,56 +741,58 @@ impl Best {
     }
 
     /// Each lane's box limit: its best `t` with the boxes' slack.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    fn box_limit(&self) -> __m512 {
-        // SAFETY: `t` is sixteen readable f32.
-        let t = unsafe { _mm512_loadu_ps(self.t.as_ptr()) };
-        _mm512_mul_ps(t, _mm512_set1_ps(BOX_T_SLACK))
+    #[inline(always)]
+    fn box_limit<P: PacketIsa>(&self, k: P) -> P::F {
+        k.mul(k.load(&self.t), k.splat(BOX_T_SLACK))
     }
 }
 
 impl Bvh8Big {
-    /// [`Bvh8Big`]'s closest hits for up to [`PACKET`] rays at once, `out[i]` for `rays[i]`:
-    /// the large triangles first (a triangle at a time against every ray), then the tree.
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    pub(super) fn closest_packet(
+    /// [`Bvh8Big`]'s closest hits for up to [`PacketIsa::WIDTH`] rays at once, `out[i]` for
+    /// `rays[i]`: the large triangles first (a triangle at a time against every ray), then the
+    /// tree.
+    #[inline(always)]
+    pub(super) fn closest_packet<P: PacketIsa>(
         &self,
-        k: Avx512,
+        k: P,
         rays: &[Ray],
         t_max: f32,
         out: &mut [Option<Hit>],
     ) {
-        debug_assert!(!rays.is_empty() && rays.len() <= PACKET && rays.len() == out.len());
-        let lanes = Lanes::new(rays);
+        debug_assert!(!rays.is_empty() && rays.len() <= P::WIDTH && rays.len() == out.len());
+        let lanes = Lanes::new(k, rays);
         let all = first_lanes(rays.len());
         let mut b = Best::new(t_max);
         for p in &self.big.packets16 {
             lanes.leaf_nearest(&p.triangles, all, &mut b, t_max);
         }
-        self.tree.closest_lanes(k, &lanes, rays, all, t_max, &mut b);
+        self.tree.closest_lanes(&lanes, rays, all, t_max, &mut b);
         for (lane, hit) in out.iter_mut().enumerate() {
             *hit = b.get(lane);
         }
     }
 
-    /// [`Bvh8Big`]'s any-hit queries for up to [`PACKET`] rays at once, each with its own
-    /// `t_max`: `blocked[i]` for `rays[i]`.
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    pub(super) fn occluded_packet(&self, k: Avx512, rays: &[(Ray, f32)], blocked: &mut [bool]) {
-        debug_assert!(!rays.is_empty() && rays.len() <= PACKET && rays.len() == blocked.len());
-        let mut only = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); PACKET];
-        let mut t_max = [0.0f32; PACKET];
+    /// [`Bvh8Big`]'s any-hit queries for up to [`PacketIsa::WIDTH`] rays at once, each with
+    /// its own `t_max`: `blocked[i]` for `rays[i]`.
+    #[inline(always)]
+    pub(super) fn occluded_packet<P: PacketIsa>(
+        &self,
+        k: P,
+        rays: &[(Ray, f32)],
+        blocked: &mut [bool],
+    ) {
+        debug_assert!(!rays.is_empty() && rays.len() <= P::WIDTH && rays.len() == blocked.len());
+        let mut only = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); MAX_WIDTH];
+        let mut t_max = [0.0f32; MAX_WIDTH];
         for (lane, (ray, t)) in rays.iter().enumerate() {
             only[lane] = *ray;
             t_max[lane] = *t;
         }
         let only = &only[..rays.len()];
-        let lanes = Lanes::new(only);
+        let lanes = Lanes::new(k, only);
         let all = first_lanes(rays.len());
-        let mut done = self.tree.occluded_lanes(k, &lanes, only, all, &t_max);
-        // SAFETY: `t_max` is sixteen readable f32.
-        let limit = unsafe { _mm512_loadu_ps(t_max.as_ptr()) };
+        let mut done = self.tree.occluded_lanes(&lanes, only, all, &t_max);
+        let limit = k.load(&t_max);
         for p in &self.big.packets16 {
             if done == all {
                 break;
@@ -375,19 +808,19 @@ impl Bvh8Big {
 impl Bvh8 {
     /// The closest-hit traversal of a packet: lanes `active` of `lanes` (made of `rays`),
     /// each keeping its best hit in `b`.
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    fn closest_lanes(
+    #[inline(always)]
+    fn closest_lanes<P: PacketIsa>(
         &self,
-        k: Avx512,
-        lanes: &Lanes,
+        lanes: &Lanes<P>,
         rays: &[Ray],
-        active: u16,
+        active: u32,
         t_max: f32,
         b: &mut Best,
     ) {
         if self.root == EMPTY {
             return;
         }
+        let k = lanes.k;
         let k8 = k.avx2();
         if self.max_stack > STACK_INLINE {
             for lane in lanes_of(active) {
@@ -397,7 +830,7 @@ impl Bvh8 {
             }
             return;
         }
-        let mut stack = [(0u32, 0u16, 0f32); STACK];
+        let mut stack = [(0u32, 0u32, 0f32); STACK];
         let mut alone = [(0u32, 0f32); STACK_INLINE];
         let mut sp = 0;
         let mut item = self.root;
@@ -416,7 +849,8 @@ impl Bvh8 {
                 lanes.leaf_nearest(&self.packets[(item & !LEAF) as usize], active, b, t_max);
             } else {
                 let node = &self.nodes[item as usize];
-                let limit = b.box_limit();
+                let limit = b.box_limit(k);
+                let active_mask = k.mask(active);
                 // Push the entered children sorted so that the nearest is on top.
                 let base = sp;
                 for slot in 0..node.child.len() {
@@ -424,7 +858,7 @@ impl Bvh8 {
                     if child == EMPTY {
                         break; // a node's children fill its first slots
                     }
-                    let (entered, t_near) = lanes.enter(node, slot, active, limit);
+                    let (entered, t_near) = lanes.enter(node, slot, active_mask, limit);
                     if entered == 0 {
                         continue;
                     }
@@ -445,11 +879,7 @@ impl Bvh8 {
                 }
                 sp -= 1;
                 let (next, entered, t_near) = stack[sp];
-                let still = _mm512_mask_cmp_ps_mask::<_CMP_GE_OQ>(
-                    entered,
-                    b.box_limit(),
-                    _mm512_set1_ps(t_near),
-                );
+                let still = entered & k.bits(k.cmp::<_CMP_GE_OQ>(b.box_limit(k), k.splat(t_near)));
                 if still != 0 {
                     item = next;
                     active = still;
@@ -460,20 +890,20 @@ impl Bvh8 {
     }
 
     /// The any-hit traversal of a packet: the lanes of `active` blocked before their `t_max`.
-    #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-    fn occluded_lanes(
+    #[inline(always)]
+    fn occluded_lanes<P: PacketIsa>(
         &self,
-        k: Avx512,
-        lanes: &Lanes,
+        lanes: &Lanes<P>,
         rays: &[Ray],
-        active: u16,
-        t_max: &[f32; PACKET],
-    ) -> u16 {
+        active: u32,
+        t_max: &[f32; MAX_WIDTH],
+    ) -> u32 {
         if self.root == EMPTY {
             return 0;
         }
+        let k = lanes.k;
         let k8 = k.avx2();
-        let mut done: u16 = 0;
+        let mut done = 0;
         if self.max_stack > STACK_INLINE {
             for lane in lanes_of(active) {
                 if self.occluded(k8, &RayK::new(&rays[lane]), t_max[lane]) {
@@ -482,10 +912,9 @@ impl Bvh8 {
             }
             return done;
         }
-        // SAFETY: `t_max` is sixteen readable f32.
-        let limit_t = unsafe { _mm512_loadu_ps(t_max.as_ptr()) };
-        let limit = _mm512_mul_ps(limit_t, _mm512_set1_ps(BOX_T_SLACK));
-        let mut stack = [(0u32, 0u16); STACK];
+        let limit_t = k.load(t_max);
+        let limit = k.mul(limit_t, k.splat(BOX_T_SLACK));
+        let mut stack = [(0u32, 0u32); STACK];
         let mut alone = [0u32; STACK_INLINE];
         let mut sp = 0;
         let mut item = self.root;
@@ -502,12 +931,13 @@ impl Bvh8 {
                 done |= lanes.leaf_any(&self.packets[(item & !LEAF) as usize], active, limit_t);
             } else {
                 let node = &self.nodes[item as usize];
+                let active_mask = k.mask(active);
                 for slot in 0..node.child.len() {
                     let child = node.child[slot];
                     if child == EMPTY {
                         break;
                     }
-                    let (entered, _) = lanes.enter(node, slot, active, limit);
+                    let (entered, _) = lanes.enter(node, slot, active_mask, limit);
                     if entered != 0 {
                         stack[sp] = (child, entered);
                         sp += 1;
@@ -527,6 +957,85 @@ impl Bvh8 {
                     break;
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The AVX2 masks: bits → lanes → bits is the identity, and a comparison's lanes are its
+    /// bits; the unsigned comparison and the masked minimum lane by lane.
+    #[test]
+    fn avx2_masks_round_trip() {
+        let Some(k) = Avx2::detect() else { return };
+        for bits in 0..256u32 {
+            assert_eq!(k.bits(k.mask(bits)), bits);
+        }
+        let mut a = [0.0f32; MAX_WIDTH];
+        let mut ua = [0u32; MAX_WIDTH];
+        let mut ub = [0u32; MAX_WIDTH];
+        let values = [3.0, -1.0, 0.0, -0.0, 7.5, f32::INFINITY, f32::NAN, 2.0];
+        let unsigned = [0, 1, u32::MAX, 0x8000_0000, 0x7fff_ffff, 5, u32::MAX - 1, 9];
+        for lane in 0..8 {
+            a[lane] = values[lane];
+            ua[lane] = unsigned[lane];
+            ub[lane] = unsigned[7 - lane];
+        }
+        let v = k.load(&a);
+        let lt = k.bits(k.cmp::<_CMP_LT_OQ>(v, k.splat(2.5)));
+        let want: u32 = (0..8).filter(|&i| values[i] < 2.5).map(|i| 1 << i).sum();
+        assert_eq!(lt, want);
+        let ult = k.bits(k.lt_u32(k.load_u32(&ua), k.load_u32(&ub)));
+        let want: u32 = (0..8).filter(|&i| ua[i] < ub[i]).map(|i| 1 << i).sum();
+        assert_eq!(ult, want);
+        for bits in 1..256u32 {
+            let want = (0..8)
+                .filter(|&i| bits & (1 << i) != 0 && !values[i].is_nan())
+                .map(|i| values[i])
+                .fold(f32::INFINITY, f32::min);
+            let got = k.min_of(k.mask(bits), v);
+            if bits & (1 << 6) == 0 {
+                assert_eq!(got, want, "{bits:08b}");
+            }
+        }
+        // Blends: the second operand where the mask is set.
+        let mut out = [0.0f32; MAX_WIDTH];
+        k.store(
+            &mut out,
+            k.blend(k.mask(0b1010_0101), k.splat(1.0), k.splat(2.0)),
+        );
+        assert_eq!(&out[..8], &[2.0, 1.0, 2.0, 1.0, 1.0, 2.0, 1.0, 2.0]);
+        let mut outu = [0u32; MAX_WIDTH];
+        let blended = k.blend_u32(k.mask(0b0000_0011), k.splat_u32(4), k.splat_u32(9));
+        k.store_u32(&mut outu, blended);
+        assert_eq!(&outu[..8], &[9, 9, 4, 4, 4, 4, 4, 4]);
+    }
+
+    /// Both widths gather the same rays into their lanes, repeating the last past the end.
+    #[test]
+    fn rays_gather_into_lanes() {
+        use glam::Vec3;
+        let rays: Vec<Ray> = (0..5)
+            .map(|i| Ray::new(Vec3::new(i as f32, 1.0, 2.0), Vec3::new(1.0, i as f32, 0.5)))
+            .collect();
+        fn check<P: PacketIsa>(k: P, rays: &[Ray]) {
+            for (c, v) in k.rays(rays).into_iter().enumerate() {
+                let mut got = [0.0; MAX_WIDTH];
+                k.store(&mut got, v);
+                for (lane, got) in got[..P::WIDTH].iter().enumerate() {
+                    let r = rays[lane.min(rays.len() - 1)];
+                    let want = [r.origin, r.direction][c / 3][c % 3];
+                    assert_eq!(got.to_bits(), want.to_bits(), "lane {lane}, float {c}");
+                }
+            }
+        }
+        if let Some(k) = Avx2::detect() {
+            check(k, &rays);
+        }
+        if let Some(k) = Avx512::detect() {
+            check(k, &rays);
         }
     }
 }
