@@ -187,13 +187,20 @@ impl Bvh {
     /// [`Bvh::build`] over every triangle but those in `excluded` (sorted indices).
     pub fn build_except(triangles: &[Triangle], excluded: &[u32]) -> Self {
         use rayon::prelude::*;
+        // One prim per triangle, collected in place (an indexed iterator: no chunks to join),
+        // then those left out removed; usually none are, and that is one read of the list.
         let mut prims: Vec<Prim> = triangles
             .par_iter()
             .enumerate()
-            .filter(|(i, _)| excluded.binary_search(&(*i as u32)).is_err())
-            .filter(|(_, t)| can_be_hit(t))
-            .filter_map(|(i, t)| Aabb::of_triangle(t).map(|b| Prim::new(&b, i as u32)))
+            .map(|(i, t)| {
+                let kept = excluded.binary_search(&(i as u32)).is_err() && can_be_hit(t);
+                match Aabb::of_triangle(t) {
+                    Some(b) if kept => Prim::new(&b, i as u32),
+                    _ => Prim::new(&Aabb::EMPTY, LEFT_OUT),
+                }
+            })
             .collect();
+        prims.retain(|p| p.index != LEFT_OUT);
         if prims.is_empty() {
             return Self::default();
         }
@@ -430,6 +437,10 @@ impl BuildBox {
     }
 }
 
+/// The index of a prim whose triangle is left out of the tree (scenes have fewer triangles:
+/// their indices are `u32`, and a hit's index is never `u32::MAX`).
+const LEFT_OUT: u32 = u32::MAX;
+
 /// A triangle as the build sees it: its padded box and its index.
 #[derive(Clone, Copy)]
 struct Prim {
@@ -635,9 +646,15 @@ impl Builder<'_> {
             return Split::Leaf { count: n };
         }
         if let Some((axis, bin, scale)) = sah.best {
-            let lo = centroids.min[axis];
-            let (mid, left_centroids, right_centroids) =
-                partition(prims, |c| bin_of(c[axis], lo, scale) <= bin);
+            // The prims binned at most `bin` on `axis`. A bin is the truncation of a value from 0
+            // up, which is at most `bin` exactly when the value is below `bin + 1`: the same
+            // operations as binning, compared without converting (on all three lanes at once,
+            // the one of `axis` kept).
+            let (lo, scale) = (centroids.min, Vec3A::splat(scale));
+            let (end, lane) = (Vec3A::splat((bin + 1) as f32), 1 << axis);
+            let (mid, left_centroids, right_centroids) = partition(prims, |c| {
+                ((c - lo) * scale).cmplt(end).bitmask() & lane != 0
+            });
             if mid != 0 && mid != n {
                 return Split::Halves {
                     mid,
@@ -708,13 +725,31 @@ impl Default for Sah {
     }
 }
 
-/// The last bin, as a float: positions are clamped to it before they are truncated.
+/// The last bin, as a float: a centroid's position in bins is clamped to it, then truncated.
 const LAST_BIN: f32 = (BINS - 1) as f32;
 
-/// The bin of centroid coordinate `c` on an axis whose bins start at `lo`.
+/// The three lanes of `v` truncated towards zero, as `as usize` does for the values binning
+/// gives (from 0 to [`LAST_BIN`]), in one instruction for the three (`cvttps2dq`) instead of
+/// three conversions that each check for overflow.
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
-    ((c - lo) * scale).min(LAST_BIN) as usize
+fn truncate(v: Vec3A) -> [usize; 3] {
+    use std::arch::x86_64::{_mm_cvtsi128_si32, _mm_cvttps_epi32, _mm_shuffle_epi32};
+    // SAFETY: register-only SSE2 instructions, which every x86-64 processor has.
+    unsafe {
+        let i = _mm_cvttps_epi32(v.into());
+        [
+            _mm_cvtsi128_si32(i) as usize,
+            _mm_cvtsi128_si32(_mm_shuffle_epi32::<1>(i)) as usize,
+            _mm_cvtsi128_si32(_mm_shuffle_epi32::<2>(i)) as usize,
+        ]
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn truncate(v: Vec3A) -> [usize; 3] {
+    v.to_array().map(|x| x as usize)
 }
 
 /// One bin of one axis: how many prims, and the box around them.
@@ -744,11 +779,13 @@ fn sah_split(prims: &[Prim], bounds: &BuildBox, centroids: &BuildBox) -> Sah {
     };
     let mut bins = [[empty; BINS]; 3];
     let lo = centroids.min;
+    let last = Vec3A::splat(LAST_BIN);
     for p in prims {
-        // `bin_of` on the three axes at once: the same operations, lane by lane.
-        let at = ((p.centroid() - lo) * scale).min(Vec3A::splat(LAST_BIN));
+        // The centroid's bin on each axis, `(c − lo) · scale` clamped to the last bin and
+        // truncated, three lanes at once. (`Split` decides sides by the same arithmetic.)
+        let at = truncate(((p.centroid() - lo) * scale).min(last));
         for (axis, bins) in bins.iter_mut().enumerate() {
-            let bin = &mut bins[at[axis] as usize];
+            let bin = &mut bins[at[axis] & (BINS - 1)];
             bin.count += 1;
             bin.bounds.grow(p.min, p.max);
         }
@@ -758,26 +795,37 @@ fn sah_split(prims: &[Prim], bounds: &BuildBox, centroids: &BuildBox) -> Sah {
         if scale[axis] == 0.0 {
             continue;
         }
-        // Right-to-left sweep: area × count of everything right of each boundary.
+        // Only the bins that hold prims: a split after an empty bin has the same two sides,
+        // so the same cost, as the split after the last bin before it that holds any, and that
+        // one comes first (ties go to the first). Small nodes fill few of the bins.
+        let mut filled = [0; BINS];
+        let mut len = 0;
+        for (b, bin) in bins.iter().enumerate() {
+            if bin.count > 0 {
+                filled[len] = b;
+                len += 1;
+            }
+        }
+        // Right-to-left sweep: area × count of everything from each filled bin on.
         let mut right_cost = [0.0f32; BINS];
         let mut acc = BuildBox::EMPTY;
         let mut count = 0u32;
-        for b in (1..BINS).rev() {
-            acc = acc.union(&bins[b].bounds);
-            count += bins[b].count;
-            right_cost[b] = acc.half_area() * count as f32;
+        for j in (1..len).rev() {
+            let bin = &bins[filled[j]];
+            acc = acc.union(&bin.bounds);
+            count += bin.count;
+            right_cost[j] = acc.half_area() * count as f32;
         }
+        // Left to right: a split after each filled bin but the last.
         let mut acc = BuildBox::EMPTY;
         let mut count = 0u32;
-        for b in 0..BINS - 1 {
-            acc = acc.union(&bins[b].bounds);
-            count += bins[b].count;
-            if count == 0 || count as usize == prims.len() {
-                continue;
-            }
-            let cost = acc.half_area() * count as f32 + right_cost[b + 1];
+        for j in 0..len.saturating_sub(1) {
+            let bin = &bins[filled[j]];
+            acc = acc.union(&bin.bounds);
+            count += bin.count;
+            let cost = acc.half_area() * count as f32 + right_cost[j + 1];
             if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, b));
+                best = Some((cost, axis, filled[j]));
             }
         }
     }
@@ -801,22 +849,38 @@ fn sah_split(prims: &[Prim], bounds: &BuildBox, centroids: &BuildBox) -> Sah {
 }
 
 /// Moves the prims whose centroid satisfies `left` to the front; returns how many there are
-/// and the boxes of the centroids on each side.
+/// and the boxes of the centroids on each side. Scans from both ends and swaps only the pairs
+/// on the wrong sides.
 fn partition(prims: &mut [Prim], left: impl Fn(Vec3A) -> bool) -> (usize, BuildBox, BuildBox) {
     let mut left_centroids = BuildBox::EMPTY;
     let mut right_centroids = BuildBox::EMPTY;
     let mut i = 0;
     let mut j = prims.len();
-    while i < j {
-        let c = prims[i].centroid();
-        if left(c) {
+    loop {
+        while i < j {
+            let c = prims[i].centroid();
+            if !left(c) {
+                break;
+            }
             left_centroids.grow_point(c);
             i += 1;
-        } else {
+        }
+        while i < j {
+            let c = prims[j - 1].centroid();
+            if left(c) {
+                break;
+            }
             right_centroids.grow_point(c);
             j -= 1;
-            prims.swap(i, j);
         }
+        if i == j {
+            return (i, left_centroids, right_centroids);
+        }
+        // `prims[i]` goes right and `prims[j - 1]` left.
+        right_centroids.grow_point(prims[i].centroid());
+        left_centroids.grow_point(prims[j - 1].centroid());
+        prims.swap(i, j - 1);
+        i += 1;
+        j -= 1;
     }
-    (i, left_centroids, right_centroids)
 }
