@@ -85,6 +85,27 @@ impl Aabb {
     /// The padded box of a triangle, or `None` when a vertex is not finite (such a triangle
     /// can never be hit, see [`intersect_triangle`], and is left out of the tree).
     pub fn of_triangle(t: &Triangle) -> Option<Aabb> {
+        if !(t.v0.is_finite() && t.v1.is_finite() && t.v2.is_finite()) {
+            return Self::of_non_finite_triangle(t);
+        }
+        // Finite corners: min and max are exact, so SIMD registers give the very same box.
+        let [a, b, c] = [t.v0, t.v1, t.v2].map(Vec3A::from);
+        let (min, max) = (a.min(b).min(c), a.max(b).max(c));
+        let extent = (max - min).max_element();
+        let magnitude = min.abs().max(max.abs()).max_element();
+        let pad =
+            Vec3A::splat(4.0 * EDGE_TOLERANCE * extent + BOX_PAD_RELATIVE * magnitude + 1e-30);
+        Some(Aabb {
+            min: (min - pad).into(),
+            max: (max + pad).into(),
+        })
+    }
+
+    /// [`Aabb::of_triangle`] when a corner is not finite: `f32::min` and `max` pass over NaN,
+    /// so the box is that of the other corners when they are finite (the triangle is still
+    /// never hit).
+    #[cold]
+    fn of_non_finite_triangle(t: &Triangle) -> Option<Aabb> {
         let min = t.v0.min(t.v1).min(t.v2);
         let max = t.v0.max(t.v1).max(t.v2);
         if !(min.is_finite() && max.is_finite()) {
@@ -186,20 +207,25 @@ impl Bvh {
 
     /// [`Bvh::build`] over every triangle but those in `excluded` (sorted indices).
     pub fn build_except(triangles: &[Triangle], excluded: &[u32]) -> Self {
+        Self::build_prims(triangles, prims_of(triangles, excluded))
+    }
+
+    /// [`Bvh::build`] over every triangle but the largest: at most `most` of those whose box's
+    /// surface area is at least `fraction` of the whole scene's box's (the largest first, ties
+    /// to the lower index). Returns the tree and the triangles set apart (ascending).
+    pub fn build_apart(triangles: &[Triangle], most: usize, fraction: f32) -> (Self, Vec<u32>) {
+        let mut prims = prims_of(triangles, &[]);
+        let apart = largest(&prims, most, fraction);
+        for &i in &apart {
+            prims[i as usize].index = LEFT_OUT;
+        }
+        (Self::build_prims(triangles, prims), apart)
+    }
+
+    /// The tree over the `prims` not [`LEFT_OUT`].
+    fn build_prims(triangles: &[Triangle], mut prims: Vec<Prim>) -> Self {
         use rayon::prelude::*;
-        // One prim per triangle, collected in place (an indexed iterator: no chunks to join),
-        // then those left out removed; usually none are, and that is one read of the list.
-        let mut prims: Vec<Prim> = triangles
-            .par_iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let kept = excluded.binary_search(&(i as u32)).is_err() && can_be_hit(t);
-                match Aabb::of_triangle(t) {
-                    Some(b) if kept => Prim::new(&b, i as u32),
-                    _ => Prim::new(&Aabb::EMPTY, LEFT_OUT),
-                }
-            })
-            .collect();
+        // Usually none is left out, and this is one read of the list.
         prims.retain(|p| p.index != LEFT_OUT);
         if prims.is_empty() {
             return Self::default();
@@ -463,6 +489,60 @@ impl Prim {
     fn centroid(&self) -> Vec3A {
         0.5 * (self.min + self.max)
     }
+}
+
+/// One prim per triangle, in order, collected in place (an indexed iterator: no chunks to
+/// join). A triangle excluded or that no ray can hit is [`LEFT_OUT`]; one whose box is not
+/// finite also has an empty box.
+fn prims_of(triangles: &[Triangle], excluded: &[u32]) -> Vec<Prim> {
+    use rayon::prelude::*;
+    triangles
+        .par_iter()
+        .enumerate()
+        .map(|(i, t)| match Aabb::of_triangle(t) {
+            Some(b) => {
+                let kept = excluded.binary_search(&(i as u32)).is_err() && can_be_hit(t);
+                Prim::new(&b, if kept { i as u32 } else { LEFT_OUT })
+            }
+            None => Prim::new(&Aabb::EMPTY, LEFT_OUT),
+        })
+        .collect()
+}
+
+/// The indices (ascending) of at most `most` of the largest triangles among `prims` (one per
+/// triangle, [`prims_of`]): those whose box has at least `fraction` of the surface area of the
+/// box around every triangle's box, the largest first, ties to the lower index. Triangles no
+/// ray can hit count too, as long as their box is finite.
+fn largest(prims: &[Prim], most: usize, fraction: f32) -> Vec<u32> {
+    use rayon::prelude::*;
+    let finite = |p: &Prim| p.min.x <= p.max.x;
+    // Min and max are exact: the same box whatever the split into chunks.
+    let scene = prims
+        .par_iter()
+        .map(|p| BuildBox {
+            min: p.min,
+            max: p.max,
+        })
+        .reduce(|| BuildBox::EMPTY, |a, b| a.union(&b));
+    let threshold = fraction * scene.half_area();
+    let mut large: Vec<(f32, u32)> = prims
+        .par_iter()
+        .enumerate()
+        .filter(|(_, p)| finite(p))
+        .map(|(i, p)| {
+            let b = BuildBox {
+                min: p.min,
+                max: p.max,
+            };
+            (b.half_area(), i as u32)
+        })
+        .filter(|&(a, _)| a >= threshold)
+        .collect();
+    large.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    large.truncate(most);
+    let mut large: Vec<u32> = large.into_iter().map(|(_, i)| i).collect();
+    large.sort_unstable();
+    large
 }
 
 /// The box of `prims`' boxes and the box of their centroids.

@@ -521,31 +521,8 @@ pub const BIG_AREA_FRACTION: f32 = 0.15;
 
 impl Bvh8Big {
     pub fn build(triangles: &[Triangle]) -> Self {
-        use super::bvh::Aabb;
-        use rayon::prelude::*;
-        // Two parallel passes over the triangles' boxes (computing a box costs less than
-        // storing a million of them); min and max are exact, so the scene's box is the same
-        // whatever the split into chunks.
-        let scene = triangles.par_iter().filter_map(Aabb::of_triangle).reduce(
-            || Aabb::EMPTY,
-            |mut a, b| {
-                a.grow(&b);
-                a
-            },
-        );
-        let threshold = BIG_AREA_FRACTION * scene.half_area();
-        let mut big: Vec<(f32, u32)> = triangles
-            .par_iter()
-            .enumerate()
-            .filter_map(|(i, t)| Aabb::of_triangle(t).map(|b| (b.half_area(), i as u32)))
-            .filter(|&(a, _)| a >= threshold)
-            .collect();
-        // Largest first, ties to the lower index (the order the collection may not keep).
-        big.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        big.truncate(MAX_BIG);
-        let mut big: Vec<u32> = big.into_iter().map(|(_, i)| i).collect();
-        big.sort_unstable();
-        let tree = Bvh8::collapsed(&Bvh::build_except(triangles, &big), triangles);
+        let (bvh, big) = Bvh::build_apart(triangles, MAX_BIG, BIG_AREA_FRACTION);
+        let tree = Bvh8::collapsed(&bvh, triangles);
         Self {
             big: Flat::of(triangles, &big),
             tree,
