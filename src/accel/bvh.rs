@@ -732,7 +732,7 @@ impl Builder<'_> {
             // the one of `axis` kept).
             let (lo, scale) = (centroids.min, Vec3A::splat(scale));
             let (end, lane) = (Vec3A::splat((bin + 1) as f32), 1 << axis);
-            let (mid, left_centroids, right_centroids) = partition(prims, |c| {
+            let (mid, left_centroids, right_centroids) = partition(prims, &|c| {
                 ((c - lo) * scale).cmplt(end).bitmask() & lane != 0
             });
             if mid != 0 && mid != n {
@@ -839,6 +839,58 @@ struct Bin {
     count: u32,
 }
 
+/// The bins of every axis.
+type Bins = [[Bin; BINS]; 3];
+
+const NO_BINS: Bins = [[Bin {
+    bounds: BuildBox::EMPTY,
+    count: 0,
+}; BINS]; 3];
+
+/// Sorts `prims` into bins by centroid: `(c − lo) · scale` clamped to the last bin and
+/// truncated, on each axis. Large nodes (the few near the root, which would otherwise keep one
+/// thread busy while the other waits) are binned in parallel chunks: counts add and boxes
+/// unite exactly, so the bins are the same whatever the number of threads.
+fn bin_prims(prims: &[Prim], lo: Vec3A, scale: Vec3A, bins: &mut Bins) {
+    use rayon::prelude::*;
+    if prims.len() >= 2 * PARALLEL_MIN {
+        let chunks = prims
+            .par_chunks(PARALLEL_MIN)
+            .map(|chunk| {
+                let mut bins = NO_BINS;
+                bin_prims(chunk, lo, scale, &mut bins);
+                bins
+            })
+            .reduce(
+                || NO_BINS,
+                |mut a, b| {
+                    merge_bins(&mut a, &b);
+                    a
+                },
+            );
+        merge_bins(bins, &chunks);
+        return;
+    }
+    let last = Vec3A::splat(LAST_BIN);
+    for p in prims {
+        // Three lanes at once. (`Builder::split` decides sides by the same arithmetic.)
+        let at = truncate(((p.centroid() - lo) * scale).min(last));
+        for (axis, bins) in bins.iter_mut().enumerate() {
+            let bin = &mut bins[at[axis] & (BINS - 1)];
+            bin.count += 1;
+            bin.bounds.grow(p.min, p.max);
+        }
+    }
+}
+
+/// Adds the prims of bins `b` to bins `a`.
+fn merge_bins(a: &mut Bins, b: &Bins) {
+    for (a, b) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+        a.count += b.count;
+        a.bounds = a.bounds.union(&b.bounds);
+    }
+}
+
 /// The cheapest binned SAH split, and whether keeping the node whole is cheaper still. No
 /// split when the centroids have no extent to bin.
 fn sah_split(prims: &[Prim], bounds: &BuildBox, centroids: &BuildBox) -> Sah {
@@ -853,23 +905,9 @@ fn sah_split(prims: &[Prim], bounds: &BuildBox, centroids: &BuildBox) -> Sah {
     if scale == Vec3A::ZERO || !scale.is_finite() {
         return Sah::default();
     }
-    let empty = Bin {
-        bounds: BuildBox::EMPTY,
-        count: 0,
-    };
-    let mut bins = [[empty; BINS]; 3];
-    let lo = centroids.min;
-    let last = Vec3A::splat(LAST_BIN);
-    for p in prims {
-        // The centroid's bin on each axis, `(c − lo) · scale` clamped to the last bin and
-        // truncated, three lanes at once. (`Split` decides sides by the same arithmetic.)
-        let at = truncate(((p.centroid() - lo) * scale).min(last));
-        for (axis, bins) in bins.iter_mut().enumerate() {
-            let bin = &mut bins[at[axis] & (BINS - 1)];
-            bin.count += 1;
-            bin.bounds.grow(p.min, p.max);
-        }
-    }
+    // (Filled in place: the bins are 2 kB, and small nodes are many.)
+    let mut bins = NO_BINS;
+    bin_prims(prims, centroids.min, scale, &mut bins);
     let mut best: Option<(f32, usize, usize)> = None;
     for (axis, bins) in bins.iter().enumerate() {
         if scale[axis] == 0.0 {
@@ -929,9 +967,44 @@ fn sah_split(prims: &[Prim], bounds: &BuildBox, centroids: &BuildBox) -> Sah {
 }
 
 /// Moves the prims whose centroid satisfies `left` to the front; returns how many there are
-/// and the boxes of the centroids on each side. Scans from both ends and swaps only the pairs
-/// on the wrong sides.
-fn partition(prims: &mut [Prim], left: impl Fn(Vec3A) -> bool) -> (usize, BuildBox, BuildBox) {
+/// and the boxes of the centroids on each side.
+///
+/// Large nodes are partitioned in parallel: each half on its own, then the right part of the
+/// first half and the left part of the second trade places. The halves are cut by size alone,
+/// so the order is the same whatever the number of threads.
+fn partition(
+    prims: &mut [Prim],
+    left: &(impl Fn(Vec3A) -> bool + Sync),
+) -> (usize, BuildBox, BuildBox) {
+    if prims.len() < 2 * PARALLEL_MIN {
+        return partition_serial(prims, left);
+    }
+    let half = prims.len() / 2;
+    let (a, b) = prims.split_at_mut(half);
+    let ((in_a, left_a, right_a), (in_b, left_b, right_b)) =
+        rayon::join(|| partition(a, left), || partition(b, left));
+    // [a's left | a's right | b's left | b's right]: swap the shorter of the middle two with
+    // the far end of the other.
+    let swapped = (half - in_a).min(in_b);
+    let (front, back) = prims.split_at_mut(half + in_b - swapped);
+    swap_slices(&mut front[in_a..in_a + swapped], &mut back[..swapped]);
+    (in_a + in_b, left_a.union(&left_b), right_a.union(&right_b))
+}
+
+/// Swaps the contents of two slices of the same length, in parallel chunks.
+fn swap_slices(a: &mut [Prim], b: &mut [Prim]) {
+    use rayon::prelude::*;
+    a.par_chunks_mut(PARALLEL_MIN)
+        .zip(b.par_chunks_mut(PARALLEL_MIN))
+        .for_each(|(a, b)| a.swap_with_slice(b));
+}
+
+/// [`partition`] on one thread: scans from both ends and swaps only the pairs on the wrong
+/// sides.
+fn partition_serial(
+    prims: &mut [Prim],
+    left: impl Fn(Vec3A) -> bool,
+) -> (usize, BuildBox, BuildBox) {
     let mut left_centroids = BuildBox::EMPTY;
     let mut right_centroids = BuildBox::EMPTY;
     let mut i = 0;
@@ -962,5 +1035,78 @@ fn partition(prims: &mut [Prim], left: impl Fn(Vec3A) -> bool) -> (usize, BuildB
         prims.swap(i, j - 1);
         i += 1;
         j -= 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    fn random_prims(n: usize, seed: u64) -> Vec<Prim> {
+        let mut rng = Rng::new(seed);
+        (0..n)
+            .map(|i| {
+                let c = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+                let b = Aabb {
+                    min: c - 0.01,
+                    max: c + 0.02,
+                };
+                Prim::new(&b, i as u32)
+            })
+            .collect()
+    }
+
+    /// The parallel partition (nodes of 32,768 prims and more) against the plain definition:
+    /// the same prims on each side and the same centroid boxes, at several sizes around where
+    /// it starts splitting, with sides of every proportion.
+    #[test]
+    fn partition_puts_each_prim_on_its_side_and_bounds_each_side() {
+        for (n, cut) in [
+            (100, 0.5),
+            (40_000, 0.5),
+            (70_001, 0.1),
+            (70_001, 0.97),
+            (140_000, 0.0),
+        ] {
+            let mut prims = random_prims(n, n as u64);
+            let left = |c: Vec3A| c.x < cut;
+            let (mid, left_box, right_box) = partition(&mut prims, &left);
+            assert!(prims[..mid].iter().all(|p| left(p.centroid())), "{n} {cut}");
+            assert!(
+                prims[mid..].iter().all(|p| !left(p.centroid())),
+                "{n} {cut}"
+            );
+            let mut indices: Vec<u32> = prims.iter().map(|p| p.index).collect();
+            indices.sort_unstable();
+            assert!(indices.iter().enumerate().all(|(i, &j)| i as u32 == j));
+            assert_eq!(
+                bounds_of(&prims[..mid]).1.aabb(),
+                left_box.aabb(),
+                "{n} {cut}"
+            );
+            assert_eq!(
+                bounds_of(&prims[mid..]).1.aabb(),
+                right_box.aabb(),
+                "{n} {cut}"
+            );
+        }
+    }
+
+    /// Binning in parallel chunks gives exactly the bins of one pass.
+    #[test]
+    fn parallel_binning_equals_one_pass() {
+        let prims = random_prims(100_000, 7);
+        let (lo, scale) = (Vec3A::ZERO, Vec3A::new(16.0, 8.0, 0.0));
+        let mut parallel = NO_BINS;
+        bin_prims(&prims, lo, scale, &mut parallel);
+        let mut serial = NO_BINS;
+        for chunk in prims.chunks(PARALLEL_MIN / 2) {
+            bin_prims(chunk, lo, scale, &mut serial);
+        }
+        for (a, b) in parallel.iter().flatten().zip(serial.iter().flatten()) {
+            assert_eq!((a.count, a.bounds.aabb()), (b.count, b.bounds.aabb()));
+        }
+        assert_eq!(parallel[2][0].count, 100_000);
     }
 }
