@@ -201,3 +201,49 @@ fn wide_tree_over_many_small_triangles_is_shallow_and_fits_the_inline_stack() {
     }
     assert!(seen.iter().all(|&s| s == 1));
 }
+
+/// The trees are the same whatever the number of threads builds them: the build splits its
+/// work between threads near the root and the collapse makes packets in parallel, but what is
+/// built depends on the triangles alone (so images do not depend on the thread count either).
+/// 80,000 triangles: the root and its children are split on several threads.
+#[test]
+fn trees_are_the_same_on_any_number_of_threads() {
+    use raylab::accel::bvh::Bvh;
+    use raylab::accel::wide::Bvh8Big;
+    let scene = terrain::terrain_scene(&terrain::TerrainSpec {
+        grid: 200,
+        ..terrain::TerrainSpec::default()
+    });
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            (
+                Bvh::build(&scene.triangles),
+                Bvh8Big::build(&scene.triangles),
+            )
+        })
+    };
+    let (bvh, wide) = on(1);
+    assert!(
+        wide.tree.packets.len() > 10_000,
+        "{}",
+        wide.tree.packets.len()
+    );
+    for threads in [2, 3] {
+        let (b, w) = on(threads);
+        assert!(
+            b.nodes == bvh.nodes && b.indices == bvh.indices,
+            "{threads} threads"
+        );
+        assert!(
+            w.tree.nodes == wide.tree.nodes
+                && w.tree.packets == wide.tree.packets
+                && (w.tree.root, w.tree.max_stack) == (wide.tree.root, wide.tree.max_stack)
+                && w.big.packets == wide.big.packets,
+            "{threads} threads"
+        );
+    }
+}

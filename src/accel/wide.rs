@@ -159,6 +159,33 @@ impl CountWork for TraversalCost {
     }
 }
 
+/// A subtree of a binary [`Bvh`]: its root node, and the position of its first leaf among the
+/// binary tree's leaves (in the order of [`Bvh::nodes`]).
+#[derive(Clone, Copy, Debug)]
+struct Subtree {
+    index: usize,
+    first_leaf: u32,
+}
+
+impl Subtree {
+    /// The two children of an interior node. The left child's subtree is nodes
+    /// `index + 1..right`, and a binary tree of `2k − 1` nodes has `k` leaves: so the right
+    /// child's leaves start `(right − index) / 2` after the left child's.
+    fn children(self, bvh: &Bvh) -> [Subtree; 2] {
+        let right = bvh.nodes[self.index].first_or_right as usize;
+        [
+            Subtree {
+                index: self.index + 1,
+                first_leaf: self.first_leaf,
+            },
+            Subtree {
+                index: right,
+                first_leaf: self.first_leaf + ((right - self.index) / 2) as u32,
+            },
+        ]
+    }
+}
+
 /// An 8-wide BVH.
 #[derive(Clone, Debug)]
 pub struct Bvh8 {
@@ -188,59 +215,97 @@ impl Bvh8 {
         Self::collapsed(bvh, triangles)
     }
 
+    /// The collapse in two parts that run side by side: the wide nodes, on one thread (a
+    /// small part of the work: ~68,000 nodes for the terrain's million triangles), and the
+    /// packets, the bulk of the work and of the memory (a gather of every triangle), in
+    /// parallel. They need not wait for each other because packet `i` is the binary tree's
+    /// `i`-th leaf (in the order of [`Bvh::nodes`], depth first), which the nodes can name
+    /// without the packets being made. Both come out the same whatever the number of threads.
     fn collapsed(bvh: &Bvh, triangles: &[Triangle]) -> Self {
-        let mut out = Self::default();
+        use rayon::prelude::*;
         if bvh.nodes.is_empty() {
-            return out;
+            return Self::default();
         }
-        out.nodes.reserve(bvh.nodes.len() / 4 + 1);
-        out.packets.reserve(bvh.nodes.len() / 2 + 1);
-        let (root, need) = out.collapse(bvh, triangles, 0);
-        out.root = root;
-        out.max_stack = need + 1;
-        out
+        let ((nodes, root, need), packets) = rayon::join(
+            || {
+                let mut nodes = Vec::with_capacity(bvh.nodes.len() / 4 + 1);
+                let whole = Subtree {
+                    index: 0,
+                    first_leaf: 0,
+                };
+                let (root, need) = Self::collapse(bvh, whole, &mut nodes);
+                (nodes, root, need)
+            },
+            || {
+                let leaves: Vec<&super::bvh::Node> =
+                    bvh.nodes.iter().filter(|n| n.is_leaf()).collect();
+                leaves
+                    .par_iter()
+                    .map(|leaf| {
+                        let ids = bvh.leaf_indices(leaf);
+                        let mut sorted = [0u32; LANES];
+                        let sorted = &mut sorted[..ids.len()];
+                        sorted.copy_from_slice(ids);
+                        sorted.sort_unstable();
+                        packet(triangles, sorted)
+                    })
+                    .collect()
+            },
+        );
+        Self {
+            nodes,
+            packets,
+            root,
+            max_stack: need + 1,
+        }
     }
 
-    /// Returns the reference to binary node `index` and the stack entries its subtree needs.
-    fn collapse(&mut self, bvh: &Bvh, triangles: &[Triangle], index: usize) -> (u32, usize) {
-        let node = &bvh.nodes[index];
-        if node.is_leaf() {
-            let mut ids = bvh.leaf_indices(node).to_vec();
-            ids.sort_unstable();
-            self.packets.push(packet(triangles, &ids));
-            return (LEAF | (self.packets.len() - 1) as u32, 0);
+    /// Appends the wide nodes of binary subtree `sub` to `nodes`, depth first; returns the
+    /// reference to its root (a leaf is a reference to its packet) and the stack entries its
+    /// subtree needs.
+    fn collapse(bvh: &Bvh, sub: Subtree, nodes: &mut Vec<Node8>) -> (u32, usize) {
+        if bvh.nodes[sub.index].is_leaf() {
+            return (LEAF | sub.first_leaf, 0);
         }
-        let mut kids: Vec<usize> = bvh.children(index).to_vec();
-        while kids.len() < LANES {
-            let widest = kids
+        // The children, with the area of each interior one (`None` for a leaf).
+        let area = |s: Subtree| {
+            let n = &bvh.nodes[s.index];
+            (!n.is_leaf()).then(|| n.bounds.half_area())
+        };
+        let mut kids = [(sub, None); LANES];
+        let mut len = 0;
+        for s in sub.children(bvh) {
+            kids[len] = (s, area(s));
+            len += 1;
+        }
+        while len < LANES {
+            let widest = kids[..len]
                 .iter()
                 .enumerate()
-                .filter(|&(_, &k)| !bvh.nodes[k].is_leaf())
-                .max_by(|a, b| {
-                    let area = |k: usize| bvh.nodes[k].bounds.half_area();
-                    area(*a.1).total_cmp(&area(*b.1))
-                })
+                .filter_map(|(slot, &(_, a))| a.map(|a| (slot, a)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
                 .map(|(slot, _)| slot);
             let Some(slot) = widest else { break };
-            let [a, b] = bvh.children(kids[slot]);
-            kids[slot] = a;
-            kids.push(b);
+            let [a, b] = kids[slot].0.children(bvh);
+            kids[slot] = (a, area(a));
+            kids[len] = (b, area(b));
+            len += 1;
         }
-        let at = self.nodes.len();
-        self.nodes.push(Node8::empty());
+        let at = nodes.len();
+        nodes.push(Node8::empty());
         let mut need = 0;
-        for (slot, &k) in kids.iter().enumerate() {
-            let (reference, child_need) = self.collapse(bvh, triangles, k);
+        for (slot, &(k, _)) in kids[..len].iter().enumerate() {
+            let (reference, child_need) = Self::collapse(bvh, k, nodes);
             need = need.max(child_need);
-            let b = bvh.nodes[k].bounds;
-            let n = &mut self.nodes[at];
+            let b = bvh.nodes[k.index].bounds;
+            let n = &mut nodes[at];
             for axis in 0..3 {
                 n.bounds[axis][slot] = b.min[axis];
                 n.bounds[axis + 3][slot] = b.max[axis];
             }
             n.child[slot] = reference;
         }
-        (at as u32, need + kids.len())
+        (at as u32, need + len)
     }
 
     /// The closest hit `(triangle index, t)` with `t < t_max`, lowest index among ties.
@@ -467,24 +532,8 @@ pub const BIG_AREA_FRACTION: f32 = 0.15;
 
 impl Bvh8Big {
     pub fn build(triangles: &[Triangle]) -> Self {
-        use super::bvh::Aabb;
-        let mut scene = Aabb::EMPTY;
-        let boxes: Vec<Option<Aabb>> = triangles.iter().map(Aabb::of_triangle).collect();
-        for b in boxes.iter().flatten() {
-            scene.grow(b);
-        }
-        let threshold = BIG_AREA_FRACTION * scene.half_area();
-        let mut big: Vec<(f32, u32)> = boxes
-            .iter()
-            .enumerate()
-            .filter_map(|(i, b)| b.map(|b| (b.half_area(), i as u32)))
-            .filter(|&(a, _)| a >= threshold)
-            .collect();
-        big.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-        big.truncate(MAX_BIG);
-        let mut big: Vec<u32> = big.into_iter().map(|(_, i)| i).collect();
-        big.sort_unstable();
-        let tree = Bvh8::collapsed(&Bvh::build_except(triangles, &big), triangles);
+        let (bvh, big) = Bvh::build_apart(triangles, MAX_BIG, BIG_AREA_FRACTION);
+        let tree = Bvh8::collapsed(&bvh, triangles);
         Self {
             big: Flat::of(triangles, &big),
             tree,
