@@ -691,6 +691,30 @@ mod tests {
 
     use super::*;
 
+    #[test]
+    fn kernel_sets_are_named_only_where_the_cpu_runs_them() {
+        // A set the CPU lacks is not offered (so `--isa` refuses it) and never chosen: the
+        // choice falls back to what the CPU has.
+        assert_eq!(Isa::by_name("avx512").is_some(), Avx512::detect().is_some());
+        assert_eq!(Isa::by_name("avx2").is_some(), Avx2::detect().is_some());
+        assert!(Isa::by_name("scalar").is_some() && Isa::by_name("sse9").is_none());
+        let available: Vec<&str> = Isa::available().into_iter().map(Isa::name).collect();
+        assert!(available.contains(&Isa::best().name()), "{available:?}");
+        assert!(available.contains(&Isa::widest().name()));
+        // AVX-512 implies AVX2 (its kernels use both).
+        if Avx512::detect().is_some() {
+            assert!(available.contains(&"avx2"));
+        }
+        // Forcing the set already chosen is accepted; another one is refused.
+        assert!(Isa::best().force().is_ok());
+        if let Some(other) = Isa::available()
+            .into_iter()
+            .find(|i| i.name() != Isa::best().name())
+        {
+            assert!(other.force().is_err());
+        }
+    }
+
     /// Two layers of eight small triangles, one behind the other: triangle `i` of layer `z` has
     /// corners (i, 0, z), (i + ½, 0, z), (i, ½, z); indices 0–7 at z = 0, 8–15 at z = 1.
     ///
