@@ -96,7 +96,7 @@ pub struct TraversalCost {
 impl TraversalCost {
     /// Nodes plus triangles, unweighted: the one number the cost view maps to colour. Plain
     /// counts can be checked by hand on a small tree; weighting them (the build's SAH takes a
-    /// node visit as about three triangle tests, 1 against 0.35) would be a model of the time,
+    /// node visit as about four triangle tests, 1 against 0.25) would be a model of the time,
     /// not a count of the work.
     pub fn total(self) -> u32 {
         self.nodes + self.triangles
@@ -720,9 +720,9 @@ mod tests {
     ///
     /// The tree, by hand. Root (16): splitting the layers apart costs 2 · 8 · 3.75 = 60 (each
     /// layer's box is 7.5 × 0.5, flat), splitting in x at best 2 · 8 · 5.75 = 92 (four columns
-    /// each side, 1 deep): the layers. A layer (8): two leaves of four cost 1 + 0.35 · (2 · 4 ·
-    /// 1.75)/3.75 = 2.31 against a leaf's 0.35 · 8 = 2.8: split. Four: 1 + 0.35 · (2 · 2 ·
-    /// 0.75)/1.75 = 1.6 against 1.4: a leaf. So the binary tree is root → two layers → two
+    /// each side, 1 deep): the layers. A layer (8): two leaves of four cost 1 + 0.25 · (2 · 4 ·
+    /// 1.75)/3.75 = 1.93 against a leaf's 0.25 · 8 = 2.0: split. Four: 1 + 0.25 · (2 · 2 ·
+    /// 0.75)/1.75 = 1.43 against 1.0: a leaf. So the binary tree is root → two layers → two
     /// leaves each, and the 8-wide one a single node whose four children are the leaves
     /// {0–3}, {4–7}, {8–11}, {12–15}. No triangle is large (each 0.25 of the scene's 11.75).
     fn layers() -> Vec<Triangle> {
