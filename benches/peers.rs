@@ -217,34 +217,37 @@ fn closest(tracer: Tracer, scene: &Scene, peer: &Peer, rays: &[Ray], out: &mut [
         }
         Tracer::Cwbvh => {
             let (bvh, tris) = (&peer.cwbvh, &peer.cw_triangles);
-            for (ray, o) in rays.iter().zip(out) {
-                let mut hit = RayHit::none();
-                let ray = peer_ray(ray, f32::INFINITY);
-                *o = if bvh.ray_traverse(ray, &mut hit, |r, id| tris[id].intersect(r)) {
-                    Answer {
-                        index: bvh.primitive_indices[hit.primitive_id as usize],
-                        t: hit.t,
-                    }
-                } else {
-                    Answer::MISS
-                };
-            }
+            peer_closest(rays, out, &bvh.primitive_indices, |ray, hit| {
+                bvh.ray_traverse(ray, hit, |r, id| tris[id].intersect(r))
+            });
         }
         Tracer::Bvh2 => {
             let (bvh, tris) = (&peer.bvh2, &peer.bvh2_triangles);
-            for (ray, o) in rays.iter().zip(out) {
-                let mut hit = RayHit::none();
-                let ray = peer_ray(ray, f32::INFINITY);
-                *o = if bvh.ray_traverse(ray, &mut hit, |r, id| tris[id].intersect(r)) {
-                    Answer {
-                        index: bvh.primitive_indices[hit.primitive_id as usize],
-                        t: hit.t,
-                    }
-                } else {
-                    Answer::MISS
-                };
-            }
+            peer_closest(rays, out, &bvh.primitive_indices, |ray, hit| {
+                bvh.ray_traverse(ray, hit, |r, id| tris[id].intersect(r))
+            });
         }
+    }
+}
+
+/// Closest hits by one of obvhs's structures (`traverse`: its `ray_traverse`), as answers
+/// naming raylab's triangle indices (`indices`: the structure's `primitive_indices`).
+fn peer_closest(
+    rays: &[Ray],
+    out: &mut [Answer],
+    indices: &[u32],
+    traverse: impl Fn(PeerRay, &mut RayHit) -> bool,
+) {
+    for (ray, o) in rays.iter().zip(out) {
+        let mut hit = RayHit::none();
+        *o = if traverse(peer_ray(ray, f32::INFINITY), &mut hit) {
+            Answer {
+                index: indices[hit.primitive_id as usize],
+                t: hit.t,
+            }
+        } else {
+            Answer::MISS
+        };
     }
 }
 
@@ -267,18 +270,23 @@ fn shadow(tracer: Tracer, scene: &Scene, peer: &Peer, rays: &[(Ray, f32)], out: 
         }
         Tracer::Cwbvh => {
             let (bvh, tris) = (&peer.cwbvh, &peer.cw_triangles);
-            for ((ray, t_max), o) in rays.iter().zip(out) {
-                let ray = peer_ray(ray, *t_max);
-                *o = Answer::blocked(!bvh.ray_traverse_miss(ray, |r, id| tris[id].intersect(r)));
-            }
+            peer_shadow(rays, out, |ray| {
+                bvh.ray_traverse_miss(ray, |r, id| tris[id].intersect(r))
+            });
         }
         Tracer::Bvh2 => {
             let (bvh, tris) = (&peer.bvh2, &peer.bvh2_triangles);
-            for ((ray, t_max), o) in rays.iter().zip(out) {
-                let ray = peer_ray(ray, *t_max);
-                *o = Answer::blocked(!bvh.ray_traverse_miss(ray, |r, id| tris[id].intersect(r)));
-            }
+            peer_shadow(rays, out, |ray| {
+                bvh.ray_traverse_miss(ray, |r, id| tris[id].intersect(r))
+            });
         }
+    }
+}
+
+/// Shadow rays by one of obvhs's structures (`misses`: its `ray_traverse_miss`).
+fn peer_shadow(rays: &[(Ray, f32)], out: &mut [Answer], misses: impl Fn(PeerRay) -> bool) {
+    for ((ray, t_max), o) in rays.iter().zip(out) {
+        *o = Answer::blocked(!misses(peer_ray(ray, *t_max)));
     }
 }
 

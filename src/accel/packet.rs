@@ -62,24 +62,21 @@ const STACK: usize = 2 * STACK_INLINE;
 /// Whether `rays` point nearly the same way, so that they are worth tracing as a packet:
 /// every direction within about 18° of the first (directions are unit vectors).
 pub fn coherent(rays: &[Ray]) -> bool {
-    let Some(first) = rays.first() else {
-        return false;
-    };
-    rays.len() > ALONE as usize
-        && rays
-            .iter()
-            .all(|r| r.direction.dot(first.direction) >= COHERENT_COS)
+    directions_agree(rays.iter().map(|r| r.direction))
 }
 
 /// [`coherent`] for shadow rays (each with its `t_max`).
 pub fn coherent_shadows(rays: &[(Ray, f32)]) -> bool {
-    let Some((first, _)) = rays.first() else {
+    directions_agree(rays.iter().map(|(r, _)| r.direction))
+}
+
+/// More than [`ALONE`] directions, each within [`COHERENT_COS`] of the first.
+fn directions_agree(mut directions: impl ExactSizeIterator<Item = glam::Vec3>) -> bool {
+    let n = directions.len();
+    let Some(first) = directions.next() else {
         return false;
     };
-    rays.len() > ALONE as usize
-        && rays
-            .iter()
-            .all(|(r, _)| r.direction.dot(first.direction) >= COHERENT_COS)
+    n > ALONE as usize && directions.all(|d| d.dot(first) >= COHERENT_COS)
 }
 
 /// What the packet traversal needs of a SIMD instruction set: one register of `f32` with a lane
