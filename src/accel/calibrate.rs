@@ -17,7 +17,7 @@ use glam::Vec3;
 use super::{Accel, AccelKind, Hit, Isa};
 use crate::camera::Camera;
 use crate::geometry::{Ray, Triangle};
-use crate::light::PointLight;
+use crate::light::{PointLight, shadow_ray};
 use crate::scene::cornell_triangles;
 
 /// What [`calibrate`] measured: the best time of each kernel set on the workload, and the one
@@ -117,17 +117,16 @@ impl Workload {
             .flat_map(|y| (0..SIDE).map(move |x| (x, y)))
             .map(|(x, y)| camera.pixel_ray(x, y))
             .collect();
-        // The shadow rays from the reference traversal's hits (no kernel set chosen yet).
         let reference = Accel::build(&triangles, AccelKind::Bvh2, Isa::Scalar);
-        let light = PointLight::default().position;
+        // The lab's shadow rays (`light::shadow_ray`), from the hits of the reference
+        // traversal (no kernel set is chosen yet).
+        let light = PointLight::default();
         let shadow = primary
             .iter()
             .filter_map(|ray| {
                 let hit = reference.closest(&triangles, ray, f32::INFINITY)?;
-                let p = ray.at(hit.t);
-                let to_light = light - p;
-                let start = p + triangles[hit.index as usize].normal * 1e-4;
-                Some((Ray::new(start, to_light), to_light.length()))
+                let normal = triangles[hit.index as usize].normal;
+                shadow_ray(&light, ray.at(hit.t), normal, None)
             })
             .collect();
         Self {
