@@ -15,6 +15,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::{Accel, AccelKind, Hit, Isa};
+use crate::bench::primary_rays;
 use crate::camera::Camera;
 use crate::geometry::{Ray, Triangle};
 use crate::light::{PointLight, shadow_ray};
@@ -112,11 +113,7 @@ struct Workload {
 
 impl Workload {
     fn new(triangles: Vec<Triangle>) -> Self {
-        let camera = Camera::default_for(SIDE, SIDE);
-        let primary: Vec<Ray> = (0..SIDE)
-            .flat_map(|y| (0..SIDE).map(move |x| (x, y)))
-            .map(|(x, y)| camera.pixel_ray(x, y))
-            .collect();
+        let primary = primary_rays(&Camera::default_for(SIDE, SIDE));
         let reference = Accel::build(&triangles, AccelKind::Bvh2, Isa::Scalar);
         // The lab's shadow rays (`light::shadow_ray`), from the hits of the reference
         // traversal (no kernel set is chosen yet).
