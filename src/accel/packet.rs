@@ -55,9 +55,11 @@ const ALONE: u32 = 2;
 /// Directions within about 18° of the first ray's (cosine 0.95) travel together.
 const COHERENT_COS: f32 = 0.95;
 
-/// Stack entries of a packet traversal: the same bound as a single ray's
-/// ([`Bvh8::max_stack`]), since a node pushes at most its eight children either way.
-const STACK: usize = 2 * STACK_INLINE;
+/// Stack entries of a packet traversal: a tree whose single-ray traversal needs at most
+/// [`STACK_INLINE`] ([`Bvh8::max_stack`]) needs no more as a packet, since at every node both
+/// push at most the children they enter and pop one before going on; deeper trees are traced
+/// ray by ray.
+const STACK: usize = STACK_INLINE;
 
 /// Whether `rays` point nearly the same way, so that they are worth tracing as a packet:
 /// every direction within about 18° of the first (directions are unit vectors).
