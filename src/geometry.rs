@@ -6,7 +6,10 @@ use glam::Vec3;
 ///
 /// raylab keeps `direction` normalised, so `t` is a distance in scene units and
 /// [`crate::intersect::Intersection::distance`] means what it says.
+///
+/// `repr(C)`: the SIMD packets gather a batch's rays as six floats each, origin first.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Ray {
     pub origin: Vec3,
     pub direction: Vec3,

@@ -7,6 +7,8 @@
 //! * [`simd`]: the box and triangle kernels, AVX2 with a scalar twin.
 //! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) through the wide
 //!   BVH as packets, one SIMD lane a ray: sixteen at a time with AVX-512, eight with AVX2.
+//! * [`cull`]: a batch of camera rays, or of shadow rays to a point light, bounded by a cone:
+//!   the flat list skips the triangles outside it for the whole batch.
 //! * [`calibrate`]: which kernel set is fastest on this CPU, measured at start-up.
 //!
 //! [`Accel::build`] picks per scene ([`AccelKind::Auto`]): the flat list for tiny scenes (the
@@ -41,6 +43,7 @@
 
 pub mod bvh;
 pub mod calibrate;
+pub mod cull;
 #[cfg(target_arch = "x86_64")]
 pub mod packet;
 pub mod simd;
@@ -60,6 +63,7 @@ use self::calibrate::Calibration;
 const PACKET: usize = 16;
 /// Rays per packet with AVX2 (one lane a ray).
 const PACKET_AVX2: usize = 8;
+use self::cull::Cone;
 use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
 use self::wide::{Bvh8Big, Flat};
@@ -534,6 +538,20 @@ fn closest_batch_avx512(
     match s {
         // The flat loop 16 wide; the tree with the AVX2 kernels, its large triangles 16 wide.
         Structure::Flat(f) => {
+            // A batch in a narrow cone (a stretch of camera rays) skips what it cannot see, and
+            // goes through the few triangles left as packets of rays.
+            #[cfg(target_arch = "x86_64")]
+            if let Some(cone) = f
+                .cullable()
+                .then(|| Cone::around_rays_simd(k, rays))
+                .flatten()
+            {
+                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                    packet::closest_in_list(k, &list, rays, t_max, out);
+                }
+                return;
+            }
             for (ray, hit) in rays.iter().zip(out) {
                 *hit = f.closest16(k, &RayK::for_triangles(ray), t_max);
             }
@@ -563,6 +581,19 @@ fn closest_batch_avx512(
 fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
     match s {
         Structure::Flat(f) => {
+            // Shadow rays to a point light skip what lies outside their cone.
+            #[cfg(target_arch = "x86_64")]
+            if let Some(cone) = f
+                .cullable()
+                .then(|| Cone::around_segments_simd(k, rays))
+                .flatten()
+            {
+                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                    packet::occluded_in_list(k, &list, rays, out);
+                }
+                return;
+            }
             for ((ray, t_max), blocked) in rays.iter().zip(out) {
                 // No boxes: the ray needs no reciprocal direction.
                 *blocked = f.occluded16(k, &RayK::for_triangles(ray), *t_max);
@@ -590,6 +621,18 @@ fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mu
 fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
     match s {
         Structure::Flat(f) => {
+            #[cfg(target_arch = "x86_64")]
+            if let Some(cone) = f
+                .cullable()
+                .then(|| Cone::around_rays_simd(k, rays))
+                .flatten()
+            {
+                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
+                    packet::closest_in_list(k, &list, rays, t_max, out);
+                }
+                return;
+            }
             for (ray, hit) in rays.iter().zip(out) {
                 *hit = f.closest(k, &RayK::for_triangles(ray), t_max);
             }
@@ -616,6 +659,18 @@ fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mu
 fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
     match s {
         Structure::Flat(f) => {
+            #[cfg(target_arch = "x86_64")]
+            if let Some(cone) = f
+                .cullable()
+                .then(|| Cone::around_segments_simd(k, rays))
+                .flatten()
+            {
+                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
+                    packet::occluded_in_list(k, &list, rays, out);
+                }
+                return;
+            }
             for ((ray, t_max), blocked) in rays.iter().zip(out) {
                 *blocked = f.occluded(k, &RayK::for_triangles(ray), *t_max);
             }

@@ -46,6 +46,14 @@ const _: () = assert!(<Avx512 as PacketIsa>::WIDTH <= MAX_WIDTH);
 /// A ray is six `f32` (origin, direction): lane i gathers floats 6i + c.
 const RAY_FLOATS: i32 = (size_of::<Ray>() / size_of::<f32>()) as i32;
 const _: () = assert!(RAY_FLOATS == 6 && align_of::<Ray>() == align_of::<f32>());
+const _: () = assert!(std::mem::offset_of!(Ray, direction) == 12);
+/// A shadow ray and its `t_max` are seven `f32`, the ray's six first: lane i gathers 7i + c.
+const SEGMENT_FLOATS: i32 = (size_of::<(Ray, f32)>() / size_of::<f32>()) as i32;
+const _: () = assert!(
+    SEGMENT_FLOATS == 7
+        && std::mem::offset_of!((Ray, f32), 0) == 0
+        && std::mem::offset_of!((Ray, f32), 1) == 24
+);
 
 /// A packet with at most this many rays left in a subtree lets each go on alone. Measured
 /// (whole `raylab bench --threads 1` runs, bunny and terrain, alternating binaries): 1, 2 and 4
@@ -106,6 +114,8 @@ pub(super) trait PacketIsa: Copy {
     /// The rays' origins and directions (x, y, z, dx, dy, dz), one ray a lane; lanes past
     /// `rays.len()` (at least one, at most `WIDTH`) repeat the last ray.
     fn rays(self, rays: &[Ray]) -> [Self::F; 6];
+    /// [`PacketIsa::rays`] for shadow rays: (x, y, z, dx, dy, dz, t_max).
+    fn segments(self, segments: &[(Ray, f32)]) -> [Self::F; 7];
 
     fn splat(self, x: f32) -> Self::F;
     /// The first `WIDTH` floats of `a`.
@@ -150,6 +160,51 @@ pub(super) trait PacketIsa: Copy {
 // Every intrinsic below needs its instruction set enabled, which a value of the proof type
 // guarantees (it is made only by `detect`, after checking the CPU): hence the `unsafe`.
 
+/// Floats `stride·i + c` (`c < K`) of `len` records from `base`, record `i` in lane `i`;
+/// lanes past `len` repeat the last record.
+///
+/// # Safety
+/// AVX-512 F; `base` points to `len` (1 to 16) records of `stride ≥ K` floats.
+#[inline(always)]
+unsafe fn gather16<const K: usize>(base: *const f32, stride: i32, len: usize) -> [__m512; K] {
+    // SAFETY: every index gathered is stride·i + c for a record i < len and c < K ≤ stride.
+    unsafe {
+        let lane = _mm512_min_epi32(
+            _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+            _mm512_set1_epi32(len as i32 - 1),
+        );
+        let lane = _mm512_mullo_epi32(lane, _mm512_set1_epi32(stride));
+        let mut out = [_mm512_setzero_ps(); K];
+        for (c, out) in out.iter_mut().enumerate() {
+            let index = _mm512_add_epi32(lane, _mm512_set1_epi32(c as i32));
+            *out = _mm512_i32gather_ps::<4>(index, base);
+        }
+        out
+    }
+}
+
+/// [`gather16`] for eight lanes.
+///
+/// # Safety
+/// AVX2; `base` points to `len` (1 to 8) records of `stride ≥ K` floats.
+#[inline(always)]
+unsafe fn gather8<const K: usize>(base: *const f32, stride: i32, len: usize) -> [__m256; K] {
+    // SAFETY: every index gathered is stride·i + c for a record i < len and c < K ≤ stride.
+    unsafe {
+        let lane = _mm256_min_epi32(
+            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+            _mm256_set1_epi32(len as i32 - 1),
+        );
+        let lane = _mm256_mullo_epi32(lane, _mm256_set1_epi32(stride));
+        let mut out = [_mm256_setzero_ps(); K];
+        for (c, out) in out.iter_mut().enumerate() {
+            let index = _mm256_add_epi32(lane, _mm256_set1_epi32(c as i32));
+            *out = _mm256_i32gather_ps::<4>(base, index);
+        }
+        out
+    }
+}
+
 impl PacketIsa for Avx512 {
     const WIDTH: usize = 16;
     type F = __m512;
@@ -164,23 +219,15 @@ impl PacketIsa for Avx512 {
     #[inline(always)]
     fn rays(self, rays: &[Ray]) -> [__m512; 6] {
         debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
-        let last = rays.len() as i32 - 1;
-        let base = rays.as_ptr().cast::<f32>();
-        // SAFETY: AVX-512 F (see above). Every index gathered is 6i + c for a ray i <
-        // rays.len() and c < 6: a float of `rays`, a slice of `Ray`s of six `f32` each.
-        unsafe {
-            let lane = _mm512_min_epi32(
-                _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
-                _mm512_set1_epi32(last),
-            );
-            let lane = _mm512_mullo_epi32(lane, _mm512_set1_epi32(RAY_FLOATS));
-            let mut out = [_mm512_setzero_ps(); 6];
-            for (c, out) in out.iter_mut().enumerate() {
-                let index = _mm512_add_epi32(lane, _mm512_set1_epi32(c as i32));
-                *out = _mm512_i32gather_ps::<4>(index, base);
-            }
-            out
-        }
+        // SAFETY: `rays` holds rays.len() records of RAY_FLOATS floats.
+        unsafe { gather16(rays.as_ptr().cast(), RAY_FLOATS, rays.len()) }
+    }
+
+    #[inline(always)]
+    fn segments(self, segments: &[(Ray, f32)]) -> [__m512; 7] {
+        debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
+        // SAFETY: `segments` holds segments.len() records of SEGMENT_FLOATS floats.
+        unsafe { gather16(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }
     }
 
     #[inline(always)]
@@ -328,23 +375,15 @@ impl PacketIsa for Avx2 {
     #[inline(always)]
     fn rays(self, rays: &[Ray]) -> [__m256; 6] {
         debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
-        let last = rays.len() as i32 - 1;
-        let base = rays.as_ptr().cast::<f32>();
-        // SAFETY: AVX2. Every index gathered is 6i + c for a ray i < rays.len() and c < 6: a
-        // float of `rays`, a slice of `Ray`s of six `f32` each.
-        unsafe {
-            let lane = _mm256_min_epi32(
-                _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
-                _mm256_set1_epi32(last),
-            );
-            let lane = _mm256_mullo_epi32(lane, _mm256_set1_epi32(RAY_FLOATS));
-            let mut out = [_mm256_setzero_ps(); 6];
-            for (c, out) in out.iter_mut().enumerate() {
-                let index = _mm256_add_epi32(lane, _mm256_set1_epi32(c as i32));
-                *out = _mm256_i32gather_ps::<4>(base, index);
-            }
-            out
-        }
+        // SAFETY: `rays` holds rays.len() records of RAY_FLOATS floats.
+        unsafe { gather8(rays.as_ptr().cast(), RAY_FLOATS, rays.len()) }
+    }
+
+    #[inline(always)]
+    fn segments(self, segments: &[(Ray, f32)]) -> [__m256; 7] {
+        debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
+        // SAFETY: `segments` holds segments.len() records of SEGMENT_FLOATS floats.
+        unsafe { gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }
     }
 
     #[inline(always)]
@@ -531,6 +570,22 @@ impl<P: PacketIsa> Lanes<P> {
             inv,
             origin_inv,
             negative,
+        }
+    }
+
+    /// Lanes for the triangle tests alone (origins and directions as gathered), without what
+    /// the box test needs: its divisions would be wasted on a list of triangles.
+    #[inline(always)]
+    fn for_triangles(k: P, [ox, oy, oz, dx, dy, dz]: [P::F; 6]) -> Self {
+        let zero = k.splat(0.0);
+        let none = k.mask(0);
+        Self {
+            k,
+            origin: [ox, oy, oz],
+            direction: [dx, dy, dz],
+            inv: [zero; 3],
+            origin_inv: [zero; 3],
+            negative: [none; 3],
         }
     }
 
@@ -801,6 +856,56 @@ impl Bvh8Big {
         for (lane, out) in blocked.iter_mut().enumerate() {
             *out = done & (1 << lane) != 0;
         }
+    }
+}
+
+/// Closest hits of up to [`PacketIsa::WIDTH`] rays against a short list of triangles (the
+/// flat list culled for a batch, [`super::cull`]), a triangle at a time against every ray:
+/// `out[i]` for `rays[i]`, as the brute-force loop finds it (lowest index among equal `t`).
+/// With a few triangles this beats a ray at a time, whose sixteen-lane minimum and lane
+/// extraction are a chain of dependent steps per ray.
+#[inline(always)]
+pub(super) fn closest_in_list<P: PacketIsa, const N: usize>(
+    k: P,
+    packets: &[Packet<N>],
+    rays: &[Ray],
+    t_max: f32,
+    out: &mut [Option<Hit>],
+) {
+    debug_assert!(!rays.is_empty() && rays.len() <= P::WIDTH && rays.len() == out.len());
+    let lanes = Lanes::for_triangles(k, k.rays(rays));
+    let all = first_lanes(rays.len());
+    let mut b = Best::new(t_max);
+    for p in packets {
+        lanes.leaf_nearest(p, all, &mut b, t_max);
+    }
+    for (lane, hit) in out.iter_mut().enumerate() {
+        *hit = b.get(lane);
+    }
+}
+
+/// Any-hit queries of up to [`PacketIsa::WIDTH`] rays, each with its own `t_max`, against a
+/// short list of triangles, a triangle at a time (see [`closest_in_list`]).
+#[inline(always)]
+pub(super) fn occluded_in_list<P: PacketIsa, const N: usize>(
+    k: P,
+    packets: &[Packet<N>],
+    rays: &[(Ray, f32)],
+    blocked: &mut [bool],
+) {
+    debug_assert!(!rays.is_empty() && rays.len() <= P::WIDTH && rays.len() == blocked.len());
+    let [ox, oy, oz, dx, dy, dz, limit] = k.segments(rays);
+    let lanes = Lanes::for_triangles(k, [ox, oy, oz, dx, dy, dz]);
+    let all = first_lanes(rays.len());
+    let mut done = 0;
+    for p in packets {
+        if done == all {
+            break;
+        }
+        done |= lanes.leaf_any(p, all & !done, limit);
+    }
+    for (lane, out) in blocked.iter_mut().enumerate() {
+        *out = done & (1 << lane) != 0;
     }
 }
 

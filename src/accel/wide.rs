@@ -9,10 +9,14 @@
 //! beyond the best hit; shadow rays stop at the first hit. Ties at the same `t` go to the lowest
 //! triangle index, so results equal the brute-force loop's exactly.
 
+use arrayvec::ArrayVec;
+use glam::Vec3;
+
 use crate::geometry::Triangle;
 
 use super::bvh::{BOX_T_SLACK, Bvh};
-use super::simd::{Avx512, Kernels, LANES, Node8, Packet8, Packet16, RayK};
+use super::cull::Corners;
+use super::simd::{Avx512, Kernels, LANES, Node8, Packet, Packet8, Packet16, RayK};
 use super::{Hit, TraversalCost};
 
 pub const LEAF: u32 = 1 << 31;
@@ -50,7 +54,16 @@ pub fn packet(triangles: &[Triangle], indices: &[u32]) -> Packet8 {
 pub struct Flat {
     pub packets: Vec<Packet8>,
     pub packets16: Vec<Packet16>,
+    /// The triangles' corners, sixteen a group in list order: what a batch's [`Cone`] is
+    /// checked against ([`super::cull::kept`]).
+    pub corners: Vec<Corners>,
+    /// Triangles in the list.
+    pub count: usize,
 }
+
+/// The most triangles a list may hold to be culled per batch: the culled packets live on the
+/// stack ([`Flat::culled16`]).
+pub const CULL_MAX_TRIANGLES: usize = 64;
 
 impl Flat {
     pub fn build(triangles: &[Triangle]) -> Self {
@@ -69,7 +82,39 @@ impl Flat {
                 .chunks(16)
                 .map(|c| Packet16::new(triangles, c))
                 .collect(),
+            corners: indices
+                .chunks(16)
+                .map(|c| {
+                    let corners: Vec<[Vec3; 3]> = c
+                        .iter()
+                        .map(|&i| {
+                            let t = &triangles[i as usize];
+                            [t.v0, t.v1, t.v2]
+                        })
+                        .collect();
+                    Corners::new(&corners)
+                })
+                .collect(),
+            count: indices.len(),
         }
+    }
+
+    /// The list's triangles of `kept` (bit `i` for triangle `i`, as [`super::cull::kept`]
+    /// gives), sixteen a packet, in the same order, so ties still go to the lowest index.
+    /// The lanes are copied from the full packets, bit for bit.
+    #[inline(always)]
+    pub fn culled(&self, kept: u64) -> ArrayVec<Packet<16>, { CULL_MAX_TRIANGLES / 16 }> {
+        let mut out = ArrayVec::new();
+        for (n, i) in set_bits(kept).enumerate() {
+            if n % 16 == 0 {
+                out.push(Packet::EMPTY);
+            }
+            let to = out.last_mut().expect("pushed above");
+            self.packets16[i / 16]
+                .triangles
+                .copy_lane(i % 16, to, n % 16);
+        }
+        out
     }
 
     /// How many triangles the list holds: what every closest-hit query tests (the loop skips
@@ -78,23 +123,15 @@ impl Flat {
         self.packets.iter().map(|p| real_triangles(&p.index)).sum()
     }
 
+    /// Whether the list is short enough to be culled per batch.
+    pub fn cullable(&self) -> bool {
+        self.count <= CULL_MAX_TRIANGLES
+    }
+
     /// [`Flat::closest`] on 16-wide packets with the AVX-512 kernels.
     #[inline(always)]
     pub fn closest16(&self, k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
-        let mut best = None;
-        let mut limit = t_max;
-        for p in &self.packets16 {
-            if let Some(h) = k.nearest16(p, r, limit) {
-                best = Some(Hit {
-                    index: p.index[h.lane],
-                    t: h.t,
-                    u: h.u,
-                    v: h.v,
-                });
-                limit = h.t;
-            }
-        }
-        best
+        closest16_in(&self.packets16, k, r, t_max)
     }
 
     /// [`Flat::occluded`] on 16-wide packets with the AVX-512 kernels.
@@ -105,28 +142,64 @@ impl Flat {
 
     #[inline(always)]
     pub fn closest<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> Option<Hit> {
-        let mut best = None;
-        let mut limit = t_max;
-        // Packets and lanes are in index order and the limit is strict: the first of equal
-        // hits wins, as in the brute-force loop.
-        for p in &self.packets {
-            if let Some(h) = k.nearest(p, r, limit) {
-                best = Some(Hit {
-                    index: p.index[h.lane],
-                    t: h.t,
-                    u: h.u,
-                    v: h.v,
-                });
-                limit = h.t;
-            }
-        }
-        best
+        closest_in(&self.packets, k, r, t_max)
     }
 
     #[inline(always)]
     pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
         self.packets.iter().any(|p| k.any(p, r, t_max))
     }
+}
+
+/// The positions of the set bits of `bits`, lowest first.
+fn set_bits(mut bits: u64) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            i
+        })
+    })
+}
+
+/// The nearest hit among 16-wide `packets` (the flat list, or its culled copy).
+#[inline(always)]
+pub fn closest16_in(packets: &[Packet16], k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
+    let mut best = None;
+    let mut limit = t_max;
+    for p in packets {
+        if let Some(h) = k.nearest16(p, r, limit) {
+            best = Some(Hit {
+                index: p.index[h.lane],
+                t: h.t,
+                u: h.u,
+                v: h.v,
+            });
+            limit = h.t;
+        }
+    }
+    best
+}
+
+/// The nearest hit among 8-wide `packets` (the flat list, or its culled copy).
+#[inline(always)]
+pub fn closest_in<K: Kernels>(packets: &[Packet8], k: K, r: &RayK, t_max: f32) -> Option<Hit> {
+    let mut best = None;
+    let mut limit = t_max;
+    // Packets and lanes are in index order and the limit is strict: the first of equal
+    // hits wins, as in the brute-force loop.
+    for p in packets {
+        if let Some(h) = k.nearest(p, r, limit) {
+            best = Some(Hit {
+                index: p.index[h.lane],
+                t: h.t,
+                u: h.u,
+                v: h.v,
+            });
+            limit = h.t;
+        }
+    }
+    best
 }
 
 /// How many of a packet's lanes hold a triangle (the others are [`Packet8::EMPTY`]'s padding).
