@@ -377,15 +377,25 @@ mod lanes {
         #[inline(always)]
         pub(in crate::accel) fn around_rays_simd<P: PacketIsa>(k: P, rays: &[Ray]) -> Option<Cone> {
             let first = rays.first()?;
-            if rays.len() < MIN_RAYS || rays.iter().any(|r| r.origin != first.origin) {
+            if rays.len() < MIN_RAYS {
                 return None;
             }
             let last = rays[rays.len() - 1].direction;
             let cone = Self::frame(first.origin, first.direction + last, 0.0);
+            let apex = splat3(k, first.origin);
             let mut acc = Acc::new(k);
             for chunk in rays.chunks(P::WIDTH) {
                 // Lanes past the end repeat the last ray: the bounds do not change.
-                let [_, _, _, dx, dy, dz] = k.rays(chunk);
+                let [ox, oy, oz, dx, dy, dz] = k.rays(chunk);
+                // Every origin the apex (`==` as `Vec3`'s: a NaN is never equal).
+                let same = k.both(
+                    k.cmp::<_CMP_EQ_OQ>(ox, apex[0]),
+                    k.both(
+                        k.cmp::<_CMP_EQ_OQ>(oy, apex[1]),
+                        k.cmp::<_CMP_EQ_OQ>(oz, apex[2]),
+                    ),
+                );
+                acc.bad |= !k.bits(same) & ((1 << P::WIDTH) - 1);
                 acc.add(k, local(k, &cone, [dx, dy, dz]));
                 if acc.bad != 0 {
                     return None;
