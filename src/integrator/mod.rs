@@ -38,6 +38,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::accel::Isa;
 use crate::accel::simd::{Avx2, Avx512};
+use crate::camera::ImagePoints;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{M16, Mask, MaskOf, Real, Vec3x16, Vector};
@@ -695,6 +696,14 @@ pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3, at_edge: Opti
     Ray { origin, direction }
 }
 
+/// What a batch of rays starts from, handed to the code compiled for the CPU as data.
+#[derive(Clone, Copy)]
+enum Primary<'a> {
+    Rays(&'a [Ray]),
+    /// Camera rays, made from their image points ([`ImagePoints::rays`]).
+    Camera(&'a ImagePoints<'a>),
+}
+
 /// Everything an integrator needs for one pass: the scene, its materials with the preset
 /// applied, the light and the shading switches.
 #[derive(Debug)]
@@ -794,35 +803,74 @@ impl<'a> Tracer<'a> {
     /// the path tracer runs faster (PERFORMANCE.md).
     pub fn trace(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         debug_assert_eq!(rays.len(), out.len());
+        self.trace_for_cpu(Primary::Rays(rays), rngs, out);
+    }
+
+    /// [`Tracer::trace`] for the camera rays through `points`, made here
+    /// ([`ImagePoints::rays`]) so that they too are made with the CPU's instruction set,
+    /// sixteen at a time. The same rays as [`crate::Camera::primary_ray_rotated`] (or
+    /// [`crate::Camera::lens_ray_rotated`]) makes one at a time, bit for bit.
+    pub fn trace_camera(&self, points: &ImagePoints, rngs: &mut [Rng], out: &mut [Vec3]) {
+        debug_assert_eq!(points.len(), out.len());
+        self.trace_for_cpu(Primary::Camera(points), rngs, out);
+    }
+
+    /// [`Tracer::trace_primary`] in the code compiled for the CPU.
+    #[inline(always)]
+    fn trace_for_cpu(&self, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
         match self.scene.accel().isa() {
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2(k) => {
                 // SAFETY: `k` proves the CPU has AVX2 and FMA.
-                unsafe { self.trace_avx2(k, rays, rngs, out) }
+                unsafe { self.trace_avx2(k, primary, rngs, out) }
             }
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512(k) => {
                 // SAFETY: `k` proves the CPU has AVX-512 F, DQ and VL, AVX2 and FMA.
-                unsafe { self.trace_avx512(k, rays, rngs, out) }
+                unsafe { self.trace_avx512(k, primary, rngs, out) }
             }
-            _ => self.trace_portable(rays, rngs, out),
+            _ => self.trace_primary(primary, rngs, out),
         }
     }
 
-    /// [`Tracer::trace_portable`] compiled with AVX-512 as well: 32 vector registers instead of
+    /// [`Tracer::trace_primary`] compiled with AVX-512 as well: 32 vector registers instead of
     /// 16, which the long body of a path vertex spills less with.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
-    fn trace_avx512(&self, _proof: Avx512, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_portable(rays, rngs, out);
+    fn trace_avx512(&self, _proof: Avx512, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+        self.trace_primary(primary, rngs, out);
     }
 
-    /// [`Tracer::trace_portable`] compiled with AVX2 and FMA. (Passing a closure to one such
-    /// function instead left the closure out of line, compiled without them: measured.)
+    /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (Passing a closure to one such
+    /// function instead left the closure out of line, compiled without them: measured. So the
+    /// camera rays come as data, [`Primary::Camera`].)
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn trace_avx2(&self, _proof: Avx2, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_portable(rays, rngs, out);
+    fn trace_avx2(&self, _proof: Avx2, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+        self.trace_primary(primary, rngs, out);
+    }
+
+    /// The rays of `primary`, made in batches of [`BATCH`] if they come as image points, traced
+    /// by [`Tracer::trace_portable`].
+    #[inline(always)]
+    fn trace_primary(&self, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+        match primary {
+            Primary::Rays(rays) => self.trace_portable(rays, rngs, out),
+            Primary::Camera(points) => {
+                let mut rays = [Ray {
+                    origin: Vec3::ZERO,
+                    direction: Vec3::ZERO,
+                }; BATCH];
+                for (c, out) in out.chunks_mut(BATCH).enumerate() {
+                    let rays = &mut rays[..out.len()];
+                    points.rays(c * BATCH, rays);
+                    // Each ray's generator; none if nothing is random.
+                    let start = (c * BATCH).min(rngs.len());
+                    let end = (start + BATCH).min(rngs.len());
+                    self.trace_portable(rays, &mut rngs[start..end], out);
+                }
+            }
+        }
     }
 
     /// [`Tracer::trace`] for any CPU; inlined into the AVX2 version.
