@@ -27,6 +27,7 @@ pub mod geometry;
 pub mod inspect;
 pub mod integrator;
 pub mod intersect;
+pub mod lanes;
 pub mod light;
 pub mod material;
 pub mod memory;

@@ -6,6 +6,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{Ray, Triangle};
+use crate::lanes::{Mask, MaskOf, Real, Vector};
 use crate::sampling::{orthonormal_basis, uniform_cone};
 use crate::scene::Scene;
 
@@ -146,18 +147,23 @@ pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
 
 /// Equation 27 with its parts, as [`direct_light`] computes them (it is this, keeping only
 /// `d`): the pixel inspector shows r, r̂·n̂ and 4πr² from here.
+///
+/// Generic over [`Vector`]: `DirectLight` (at `Vec3`) is one hit's, `DirectLight<Vec3x16>`
+/// sixteen hits' side by side, computed by the same code ([`DirectLight::at`]).
+///
+/// [`Vec3x16`]: crate::lanes::Vec3x16
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DirectLight {
+pub struct DirectLight<V: Vector = Vec3> {
     /// r, from the surface point to the light.
-    pub to_light: Vec3,
+    pub to_light: V,
     /// r², or [`MIN_LIGHT_DISTANCE`]² for a light closer than that.
-    pub r2: f32,
+    pub r2: V::Real,
     /// r̂·n̂ (not yet clamped at 0).
-    pub cos: f32,
+    pub cos: V::Real,
     /// 4πr².
-    pub four_pi_r2: f32,
+    pub four_pi_r2: V::Real,
     /// D.
-    pub d: Vec3,
+    pub d: V,
 }
 
 impl DirectLight {
@@ -165,24 +171,27 @@ impl DirectLight {
     pub fn distance(&self) -> f32 {
         self.r2.sqrt()
     }
+}
 
+impl<V: Vector> DirectLight<V> {
+    /// Equation 27 at `position` (one point, or a lane of them) with the shading `normal`.
+    /// Both sides of the [`MIN_LIGHT_DISTANCE`] test are computed and each lane takes its own
+    /// (see [`crate::lanes`]): the same bits as a branch.
     #[inline(always)]
-    pub fn at(light: &PointLight, position: Vec3, normal: Vec3) -> Self {
-        let to_light = light.position - position;
+    pub fn at(light: &PointLight, position: V, normal: V) -> Self {
+        let to_light = V::splat(light.position) - position;
         let r2 = to_light.length_squared();
-        let min_r2 = MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE;
-        let (r2, cos) = if r2 < min_r2 {
-            (min_r2, normal.length())
-        } else {
-            (r2, (to_light / r2.sqrt()).dot(normal))
-        };
-        let four_pi_r2 = 4.0 * PI * r2;
+        let min_r2 = V::Real::splat(MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE);
+        let near = r2.simd_lt(min_r2);
+        let cos = V::Real::select(near, normal.length(), (to_light / r2.sqrt()).dot(normal));
+        let r2 = V::Real::select(near, min_r2, r2);
+        let four_pi_r2 = V::Real::splat(4.0 * PI) * r2;
         Self {
             to_light,
             r2,
             cos,
             four_pi_r2,
-            d: light.channel_power() * cos.max(0.0) / four_pi_r2,
+            d: V::splat(light.channel_power()) * cos.simd_max(V::Real::splat(0.0)) / four_pi_r2,
         }
     }
 }
@@ -257,7 +266,8 @@ pub fn shadow_ray(
     shadow_ray_to(light.position, position, normal, at_edge)
 }
 
-/// [`shadow_ray`] toward any point `target` of the light (see [`PointLight::sample_point`]).
+/// [`shadow_ray`] toward any point `target` of the light (see [`PointLight::sample_point`]):
+/// [`shadow_rays_to`] for one point.
 #[inline]
 pub fn shadow_ray_to(
     target: Vec3,
@@ -265,40 +275,85 @@ pub fn shadow_ray_to(
     normal: Vec3,
     at_edge: Option<Vec3>,
 ) -> Option<(Ray, f32)> {
-    let side = if (target - position).dot(normal) >= 0.0 {
-        1.0
-    } else {
-        -1.0
+    let near_edge = at_edge.is_some();
+    let rays = shadow_rays_to(
+        target,
+        position,
+        normal,
+        near_edge,
+        at_edge.unwrap_or(Vec3::ZERO),
+    );
+    rays.cast.then_some((
+        Ray {
+            origin: rays.origin,
+            direction: rays.direction,
+        },
+        rays.t_max,
+    ))
+}
+
+/// Shadow rays of one point or a lane of points ([`shadow_rays_to`]): where each starts, its
+/// direction and the distance it stops at, and whether it is cast at all.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowRays<V: Vector> {
+    pub origin: V,
+    pub direction: V,
+    pub t_max: V::Real,
+    /// False where no ray is cast: the light is at the surface, or a coordinate is not
+    /// finite (and, from [`crate::integrator::Lighting`], where there is no light to block).
+    pub cast: MaskOf<V>,
+}
+
+impl<V: Vector> ShadowRays<V> {
+    /// No ray cast in any lane.
+    pub const NONE: Self = Self {
+        origin: V::ZERO,
+        direction: V::ZERO,
+        t_max: <V::Real as Real>::ZERO,
+        cast: <MaskOf<V> as Mask>::NONE,
     };
-    let lifted = position + side * SHADOW_OFFSET * normal;
+}
+
+/// [`shadow_ray_to`] for one point or a lane of points: `near_edge` and `incoming` are its
+/// `at_edge` (`Some(incoming)` where `near_edge` holds). Every lane computes both starts (off
+/// an edge, at an edge) and takes its own.
+#[inline(always)]
+pub fn shadow_rays_to<V: Vector>(
+    target: V,
+    position: V,
+    normal: V,
+    near_edge: MaskOf<V>,
+    incoming: V,
+) -> ShadowRays<V> {
+    let (zero, offset) = (V::Real::splat(0.0), V::Real::splat(SHADOW_OFFSET));
+    let toward = (target - position).dot(normal).simd_ge(zero);
+    let side = V::Real::select(toward, V::Real::splat(1.0), V::Real::splat(-1.0));
+    let lifted = position + V::scale(side * offset, normal);
     // Off an edge the ray starts back toward the viewer and skips nothing; elsewhere it starts
     // at the lifted point and skips its first SHADOW_OFFSET.
-    let (start, skip) = match at_edge {
-        Some(incoming) => (edge_start(lifted, normal, incoming), 0.0),
-        None => (lifted, SHADOW_OFFSET),
-    };
+    let start = V::select(near_edge, edge_start(lifted, normal, incoming), lifted);
+    let skip = V::Real::select(near_edge, zero, offset);
     let to_light = target - start;
     let distance = to_light.length();
-    if !(distance > 3.0 * SHADOW_OFFSET) {
-        // The light is at the surface, or a coordinate is not finite.
-        return None;
-    }
     let direction = to_light / distance;
-    let ray = Ray {
-        origin: start + skip * direction,
+    ShadowRays {
+        origin: start + V::scale(skip, direction),
         direction,
-    };
-    // `skip + SHADOW_OFFSET` is exactly 2·SHADOW_OFFSET or SHADOW_OFFSET: the same stops as
-    // before, bit for bit.
-    Some((ray, distance - (skip + SHADOW_OFFSET)))
+        // `skip + SHADOW_OFFSET` is exactly 2·SHADOW_OFFSET or SHADOW_OFFSET: the same stops as
+        // before, bit for bit.
+        t_max: distance - (skip + offset),
+        // Not cast where the light is at the surface, or a coordinate is not finite.
+        cast: distance.simd_gt(V::Real::splat(3.0 * SHADOW_OFFSET)),
+    }
 }
 
 /// Where a ray leaving a point at an edge starts (see [`shadow_ray_to`]): the point `lifted`
 /// off its surface, moved [`SHADOW_OFFSET`] along the surface back toward where the ray that
 /// found it came from (`incoming`'s part along the surface, reversed).
 #[inline(always)]
-pub fn edge_start(lifted: Vec3, normal: Vec3, incoming: Vec3) -> Vec3 {
-    lifted + SHADOW_OFFSET * (incoming.dot(normal) * normal - incoming)
+pub fn edge_start<V: Vector>(lifted: V, normal: V, incoming: V) -> V {
+    let along = V::scale(incoming.dot(normal), normal) - incoming;
+    lifted + V::scale(V::Real::splat(SHADOW_OFFSET), along)
 }
 
 /// Whether the segment from a surface point to the light is blocked (lab section 5.1): a shadow

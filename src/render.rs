@@ -12,6 +12,7 @@
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
+use crate::camera::ImagePoints;
 #[cfg(doc)]
 use crate::film::Film;
 use crate::film::Image;
@@ -66,6 +67,28 @@ pub(crate) fn camera_sample(
     ray: &mut Ray,
     rng: &mut Rng,
 ) -> ((f32, f32), Option<glam::Vec2>) {
+    let ((px, py), lens) = image_point(tracer, settings, x, y, sample, rng);
+    let camera = &settings.camera;
+    *ray = match lens {
+        Some(lens) => camera.lens_ray_rotated(rotation, px, py, lens),
+        None => camera.primary_ray_rotated(rotation, px, py),
+    };
+    ((px, py), lens)
+}
+
+/// Where sample `sample` of pixel `(x, y)` crosses the image plane (the pixel's centre for
+/// sample 0, else jittered) and the lens (when the camera has an aperture; drawn from the
+/// sample's stream), and, if anything draws random numbers, the generator the integrator
+/// continues with: [`camera_sample`] before its ray is made.
+#[inline(always)]
+fn image_point(
+    tracer: &Tracer,
+    settings: &RenderSettings,
+    x: u32,
+    y: u32,
+    sample: u32,
+    rng: &mut Rng,
+) -> ((f32, f32), Option<glam::Vec2>) {
     let (dx, dy) = if tracer.uses_random_numbers() {
         let (offset, stream) = pixel_sample(settings.seed, x, y, sample);
         *rng = stream;
@@ -73,16 +96,12 @@ pub(crate) fn camera_sample(
     } else {
         pixel_offset(settings.seed, x, y, sample)
     };
-    let camera = &settings.camera;
-    let (px, py) = (x as f32 + dx, y as f32 + dy);
-    if camera.aperture > 0.0 {
+    let point = (x as f32 + dx, y as f32 + dy);
+    if settings.camera.aperture > 0.0 {
         // Depth of field: a point of the lens, from the sample's own stream.
-        let lens = concentric_disk(rng.next_f32(), rng.next_f32());
-        *ray = camera.lens_ray_rotated(rotation, px, py, lens);
-        ((px, py), Some(lens))
+        (point, Some(concentric_disk(rng.next_f32(), rng.next_f32())))
     } else {
-        *ray = camera.primary_ray_rotated(rotation, px, py);
-        ((px, py), None)
+        (point, None)
     }
 }
 
@@ -181,33 +200,34 @@ impl<'a> Rows<'a> {
         }
     }
 
-    /// Traces row `y` in batches ([`Tracer::trace`]) and hands each pixel of `row` its value.
+    /// Traces row `y` in batches ([`Tracer::trace_camera`]: the image points are found here,
+    /// the rays made by the tracer) and hands each pixel of `row` its value.
     #[inline(always)]
     fn trace(&self, y: u32, row: &mut [Vec3], mut put: impl FnMut(&mut Vec3, Vec3)) {
-        let mut rays = [Ray {
-            origin: Vec3::ZERO,
-            direction: Vec3::ZERO,
-        }; BATCH];
+        let (mut px, mut py) = ([0.0; BATCH], [0.0; BATCH]);
+        let (mut lens_x, mut lens_y) = ([0.0; BATCH], [0.0; BATCH]);
         let mut rngs = [Rng::UNUSED; BATCH];
         let mut values = [Vec3::ZERO; BATCH];
         for (c, chunk) in row.chunks_mut(BATCH).enumerate() {
             let n = chunk.len();
-            for (i, (ray, rng)) in rays[..n].iter_mut().zip(&mut rngs[..n]).enumerate() {
+            for (i, rng) in rngs[..n].iter_mut().enumerate() {
                 let x = (c * BATCH + i) as u32;
-                let (tracer, settings) = (self.tracer, self.settings);
-                camera_sample(
-                    tracer,
-                    settings,
-                    &self.rotation,
-                    x,
-                    y,
-                    self.sample,
-                    ray,
-                    rng,
-                );
+                let ((x, y), lens) =
+                    image_point(self.tracer, self.settings, x, y, self.sample, rng);
+                (px[i], py[i]) = (x, y);
+                let lens = lens.unwrap_or_default();
+                (lens_x[i], lens_y[i]) = (lens.x, lens.y);
             }
+            let points = ImagePoints {
+                camera: &self.settings.camera,
+                rotation: &self.rotation,
+                px: &px[..n],
+                py: &py[..n],
+                lens_x: &lens_x[..n],
+                lens_y: &lens_y[..n],
+            };
             self.tracer
-                .trace(&rays[..n], &mut rngs[..n], &mut values[..n]);
+                .trace_camera(&points, &mut rngs[..n], &mut values[..n]);
             for (pixel, value) in chunk.iter_mut().zip(&values[..n]) {
                 put(pixel, *value);
             }

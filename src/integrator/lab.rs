@@ -12,12 +12,15 @@
 //! [`Material::specular_branches`]: crate::material::Material::specular_branches
 //! [`Shading::specular_depth`]: super::Shading::specular_depth
 
-use arrayvec::ArrayVec;
 use glam::Vec3;
 
-use super::{BATCH, HitTerms, Recorder, Tracer, cast_shadow_rays, continue_ray, light_point};
+use super::{
+    BATCH, HitTerms, Lighting, Recorder, Surface, Surfaces, Tracer, continue_ray, light_point,
+    shaded_value, shadow_rays_blocked,
+};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
+use crate::lanes::{LANES, M16, Vec3x16, Vector};
 use crate::sampling::Rng;
 
 /// Where a specular branch's value goes and what it is multiplied by.
@@ -89,9 +92,48 @@ fn wave_for_light<R: Recorder>(
     }
 }
 
+/// The diffuse hits of a wave, sixteen to a lane group, and the ray each belongs to: the lab's
+/// terms are computed for sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`]).
+struct DiffuseHits {
+    surfaces: [Surfaces<Vec3x16>; BATCH / LANES],
+    /// Index of each hit's ray within the wave.
+    owner: [u8; BATCH],
+    len: usize,
+}
+
+impl DiffuseHits {
+    #[inline(always)]
+    fn new() -> Self {
+        Self {
+            surfaces: [Surfaces::ZERO; BATCH / LANES],
+            owner: [0; BATCH],
+            len: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, surface: Surface, owner: usize) {
+        let k = self.len;
+        self.surfaces[k / LANES].set(k % LANES, surface);
+        self.owner[k] = owner as u8;
+        self.len += 1;
+    }
+
+    /// The lane groups holding hits, with how many each holds.
+    #[inline(always)]
+    fn groups(&self) -> impl Iterator<Item = (usize, &Surfaces<Vec3x16>)> {
+        let len = self.len;
+        self.surfaces
+            .iter()
+            .enumerate()
+            .take(len.div_ceil(LANES))
+            .map(move |(g, s)| ((len - g * LANES).min(LANES), s))
+    }
+}
+
 /// One phase-batched step for up to [`BATCH`] rays: closest hits, the lab's terms at the
-/// diffuse hits, their shadow rays, the sums into `out`; the specular hits' branches go to
-/// `next`. Each step is told to `rec` (nothing is, for `()`).
+/// diffuse hits (sixteen at a time), their shadow rays, the sums into `out`; the specular hits'
+/// branches go to `next`. Each step is told to `rec` (nothing is, for `()`).
 #[inline(always)]
 fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     tracer: &Tracer,
@@ -107,9 +149,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     let shading = &tracer.shading;
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
     scene.closest_intersections(rays, f32::INFINITY, &mut hits[..rays.len()]);
-    // The diffuse hits' terms, and which ray each belongs to.
-    let mut terms: ArrayVec<HitTerms, BATCH> = ArrayVec::new();
-    let mut owner: ArrayVec<u8, BATCH> = ArrayVec::new();
+    let mut diffuse = DiffuseHits::new();
     for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
         if R::ENABLED {
             let (weight, depth) = match wave {
@@ -121,27 +161,8 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         let Some(hit) = hit else { continue };
         let material = tracer.material_of(hit.triangle_index);
         let normal = scene.triangles[hit.triangle_index].normal;
-        let pixel = match wave {
-            Wave::Camera => i,
-            Wave::Branches(b) => b[i].pixel as usize,
-        };
         if material.is_diffuse() {
-            let surface = tracer.surface(hit, material, ray.direction);
-            let light = &tracer.light;
-            terms.push(HitTerms::at(
-                light,
-                shading.stage,
-                shading.shadows,
-                surface,
-                |p| {
-                    if SPHERE_LIGHT {
-                        light_point(light, p, &mut rngs[pixel])
-                    } else {
-                        light.position
-                    }
-                },
-            ));
-            owner.push(i as u8);
+            diffuse.push(tracer.surface(hit, material, ray.direction), i);
             continue;
         }
         let branch = match wave {
@@ -172,21 +193,76 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             rec.specular_hit(hit, branch.weight, branch.depth, &[]);
         }
     }
-    cast_shadow_rays(scene, &mut terms);
+    // The light at the diffuse hits, sixteen at a time, in the order of the hits (a spherical
+    // light draws from each pixel's generator in that order).
+    let light = &tracer.light;
+    let pixel_of = |i: u8| match wave {
+        Wave::Camera => i as usize,
+        Wave::Branches(b) => b[i as usize].pixel as usize,
+    };
+    let mut lit = [Lighting::NONE; BATCH / LANES];
+    for (g, (len, surfaces)) in diffuse.groups().enumerate() {
+        let owner = &diffuse.owner[g * LANES..][..len];
+        lit[g] = Lighting::at(
+            light,
+            shading.stage,
+            shading.shadows,
+            surfaces,
+            |positions, wanted| {
+                let mut target = Vec3x16::splat(light.position);
+                if SPHERE_LIGHT {
+                    for (k, &i) in owner.iter().enumerate() {
+                        if wanted.0[k] {
+                            let rng = &mut rngs[pixel_of(i)];
+                            target.set_lane(k, light_point(light, positions.lane(k), rng));
+                        }
+                    }
+                }
+                target
+            },
+        );
+    }
+    let blocked = shadow_rays_blocked(scene, diffuse.len, |k| {
+        lit[k / LANES].shadow.lane(k % LANES)
+    });
     let indirect = shading.indirect_term();
-    for (t, &i) in terms.iter().zip(&owner) {
-        let value = t.value(shading.stage, indirect);
+    let mut values = [Vec3x16::ZERO; BATCH / LANES];
+    for (g, (_, surfaces)) in diffuse.groups().enumerate() {
+        let blocked = M16(blocked[g * LANES..][..LANES].try_into().unwrap());
+        values[g] = shaded_value(
+            shading.stage,
+            surfaces.rho,
+            lit[g].d,
+            blocked,
+            Vec3x16::splat(indirect),
+        );
+    }
+    for (k, &i) in diffuse.owner[..diffuse.len].iter().enumerate() {
+        let (g, lane) = (k / LANES, k % LANES);
+        let value = values[g].lane(lane);
+        // What the inspector is told: this hit's terms, as `HitTerms::at` gives them.
+        let terms = || {
+            let s = &diffuse.surfaces[g];
+            HitTerms {
+                position: s.position.lane(lane),
+                normal: s.normal.lane(lane),
+                rho: s.rho.lane(lane),
+                d: lit[g].d.lane(lane),
+                shadow_ray: lit[g].shadow.lane(lane),
+                blocked: blocked[k],
+            }
+        };
         match wave {
             Wave::Camera => {
                 if R::ENABLED {
-                    rec.shaded(t, indirect, value, Vec3::ONE);
+                    rec.shaded(&terms(), indirect, value, Vec3::ONE);
                 }
                 out[i as usize] = value;
             }
             Wave::Branches(b) => {
                 let b = &b[i as usize];
                 if R::ENABLED {
-                    rec.shaded(t, indirect, value, b.weight);
+                    rec.shaded(&terms(), indirect, value, b.weight);
                 }
                 out[b.pixel as usize] += b.weight * value;
             }

@@ -38,9 +38,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::accel::Isa;
 use crate::accel::simd::{Avx2, Avx512};
+use crate::camera::ImagePoints;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::{PointLight, SHADOW_OFFSET, direct_light, shadow_ray_to};
+use crate::lanes::{M16, Mask, MaskOf, Real, Vec3x16, Vector};
+use crate::light::{DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -347,17 +349,11 @@ impl HitTerms {
         blocked: false,
     };
 
-    /// The terms at a diffuse hit. The flat stage needs only ρ: D is left 0 and no shadow ray
-    /// is made.
+    /// The terms at a diffuse hit: [`Lighting::at`] for one hit (see there). The flat stage
+    /// needs only ρ: D is left 0 and no shadow ray is made.
     ///
-    /// D is equation 27 with the light's centre. A spherical light (radius above 0) gives a
-    /// point of the sphere an unoccluded point sees exactly the same irradiance as its centre
-    /// would; what changes is how much of it is hidden, so the shadow ray goes to a point of
-    /// the sphere, `light_point(position)` ([`light_point`]): averaged over samples, D is
-    /// multiplied by the fraction of the light seen (soft shadows). It is called only when a
-    /// shadow ray is cast. For the lab's point light it returns the light's position and draws
-    /// nothing; the lab stages pass that alone, so their loop carries no random numbers (with
-    /// them it ran half as slow again: PERFORMANCE.md).
+    /// `light_point(position)` is the point of the light the shadow ray goes to
+    /// ([`light_point`]), called only when a shadow ray is cast.
     #[inline(always)]
     pub fn at(
         light: &PointLight,
@@ -366,40 +362,29 @@ impl HitTerms {
         surface: Surface,
         light_point: impl FnOnce(Vec3) -> Vec3,
     ) -> Self {
-        let Surface {
-            position,
-            normal,
-            geometric,
-            rho,
-            at_edge,
-        } = surface;
-        let mut terms = Self {
-            position,
-            normal,
-            rho,
-            d: Vec3::ZERO,
-            shadow_ray: None,
+        let lit = Lighting::at(light, stage, shadows, &Surfaces::from(surface), |p, _| {
+            light_point(p)
+        });
+        Self {
+            position: surface.position,
+            normal: surface.normal,
+            rho: surface.rho,
+            d: lit.d,
+            shadow_ray: lit.shadow.cast.then_some((
+                Ray {
+                    origin: lit.shadow.origin,
+                    direction: lit.shadow.direction,
+                },
+                lit.shadow.t_max,
+            )),
             blocked: false,
-        };
-        if stage != Stage::Flat {
-            terms.d = direct_light(light, position, normal);
-            // With a smooth normal, the surface itself still decides which side is lit.
-            if normal != geometric && (light.position - position).dot(geometric) <= 0.0 {
-                terms.d = Vec3::ZERO;
-            }
-            // A shadow ray only matters where there is light to block.
-            if shadows && terms.d != Vec3::ZERO {
-                let target = light_point(position);
-                terms.shadow_ray = shadow_ray_to(target, position, geometric, at_edge);
-            }
         }
-        terms
     }
 
     /// D after shadows: 0 where the shadow ray was blocked.
     #[inline]
     pub fn d_after_shadows(&self) -> Vec3 {
-        if self.blocked { Vec3::ZERO } else { self.d }
+        after_shadows(self.d, self.blocked)
     }
 
     /// The value of the hit (`n` is N, the constant indirect term, or 0):
@@ -410,12 +395,170 @@ impl HitTerms {
     ///   which is equation 28 for N = 0)
     #[inline(always)]
     pub fn value(&self, stage: Stage, n: Vec3) -> Vec3 {
-        let d = self.d_after_shadows();
-        match stage {
-            Stage::Flat => self.rho,
-            Stage::Incoming => d + n,
-            _ => self.rho * (d + n),
+        shaded_value(stage, self.rho, self.d, self.blocked, n)
+    }
+}
+
+/// D after shadows, for one hit or a lane of hits: 0 where the shadow ray was blocked.
+#[inline(always)]
+pub fn after_shadows<V: Vector>(d: V, blocked: MaskOf<V>) -> V {
+    V::select(blocked, V::ZERO, d)
+}
+
+/// [`HitTerms::value`] for one hit or a lane of hits: ρ, D, whether the shadow ray was blocked
+/// and N as equations 28–30 combine them.
+#[inline(always)]
+pub fn shaded_value<V: Vector>(stage: Stage, rho: V, d: V, blocked: MaskOf<V>, n: V) -> V {
+    let d = after_shadows(d, blocked);
+    match stage {
+        Stage::Flat => rho,
+        Stage::Incoming => d + n,
+        _ => rho * (d + n),
+    }
+}
+
+/// [`Surface`]s for [`Lighting::at`]: one (`Surfaces<Vec3>`, from a [`Surface`]) or sixteen
+/// side by side (`Surfaces<Vec3x16>`, filled a lane at a time by [`Surfaces::set`]).
+/// `at_edge` is split into whether it is `Some` and the direction it holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surfaces<V: Vector> {
+    pub position: V,
+    pub normal: V,
+    pub geometric: V,
+    pub rho: V,
+    /// `at_edge.is_some()`.
+    pub near_edge: MaskOf<V>,
+    /// What `at_edge` holds (0 where it is `None`).
+    pub incoming: V,
+}
+
+impl From<Surface> for Surfaces<Vec3> {
+    #[inline(always)]
+    fn from(s: Surface) -> Self {
+        Self {
+            position: s.position,
+            normal: s.normal,
+            geometric: s.geometric,
+            rho: s.rho,
+            near_edge: s.at_edge.is_some(),
+            incoming: s.at_edge.unwrap_or(Vec3::ZERO),
         }
+    }
+}
+
+impl Surfaces<Vec3x16> {
+    /// All lanes 0, none near an edge.
+    pub const ZERO: Self = Self {
+        position: Vec3x16::ZERO,
+        normal: Vec3x16::ZERO,
+        geometric: Vec3x16::ZERO,
+        rho: Vec3x16::ZERO,
+        near_edge: M16::NONE,
+        incoming: Vec3x16::ZERO,
+    };
+
+    /// Puts `s` in lane `i`.
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, s: Surface) {
+        self.position.set_lane(i, s.position);
+        self.normal.set_lane(i, s.normal);
+        self.geometric.set_lane(i, s.geometric);
+        self.rho.set_lane(i, s.rho);
+        self.near_edge.0[i] = s.at_edge.is_some();
+        self.incoming.set_lane(i, s.at_edge.unwrap_or(Vec3::ZERO));
+    }
+}
+
+/// The light at one diffuse hit or at a lane of them: D (equation 27) and the shadow rays
+/// (section 5.1). The one place they are computed: [`HitTerms::at`] is this at `Vec3`, the
+/// lab's stages take it sixteen hits at a time ([`crate::lanes`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lighting<V: Vector> {
+    /// D, the light arriving ignoring anything in between (0 in the flat stage).
+    pub d: V,
+    /// The shadow rays, cast where `shadow.cast` holds: shadows on and light arriving.
+    pub shadow: ShadowRays<V>,
+}
+
+impl<V: Vector> Lighting<V> {
+    /// The light at `surface`. The flat stage needs only ρ: D is left 0 and no shadow ray is
+    /// made.
+    ///
+    /// D is equation 27 with the light's centre. A spherical light (radius above 0) gives a
+    /// point of the sphere an unoccluded point sees exactly the same irradiance as its centre
+    /// would; what changes is how much of it is hidden, so the shadow ray goes to a point of
+    /// the sphere, `light_point(positions, wanted)` ([`light_point`], for the lanes where
+    /// `wanted` holds): averaged over samples, D is multiplied by the fraction of the light
+    /// seen (soft shadows). It is called only when some shadow ray is cast. For the lab's point
+    /// light it returns the light's position and draws nothing; the lab stages pass that alone,
+    /// so their loop carries no random numbers (with them it ran half as slow again:
+    /// PERFORMANCE.md).
+    ///
+    /// Where the scalar code would branch per hit (a smooth normal on the unlit side, no light
+    /// to block), every lane computes both sides and takes its own: the same bits.
+    #[inline(always)]
+    pub fn at(
+        light: &PointLight,
+        stage: Stage,
+        shadows: bool,
+        surface: &Surfaces<V>,
+        light_point: impl FnOnce(V, MaskOf<V>) -> V,
+    ) -> Self {
+        let Surfaces {
+            position,
+            normal,
+            geometric,
+            near_edge,
+            incoming,
+            ..
+        } = *surface;
+        if stage == Stage::Flat {
+            return Self {
+                d: V::ZERO,
+                shadow: ShadowRays::NONE,
+            };
+        }
+        let d = DirectLight::at(light, position, normal).d;
+        // With a smooth normal, the surface itself still decides which side is lit.
+        let unlit_side = normal.simd_ne(geometric)
+            & (V::splat(light.position) - position)
+                .dot(geometric)
+                .simd_le(V::Real::ZERO);
+        let d = V::select(unlit_side, V::ZERO, d);
+        // A shadow ray only matters where there is light to block.
+        let wanted = MaskOf::<V>::splat(shadows) & d.simd_ne(V::ZERO);
+        if !wanted.any() {
+            return Self {
+                d,
+                shadow: ShadowRays::NONE,
+            };
+        }
+        let target = light_point(position, wanted);
+        let mut shadow = shadow_rays_to(target, position, geometric, near_edge, incoming);
+        shadow.cast = shadow.cast & wanted;
+        Self { d, shadow }
+    }
+}
+
+impl Lighting<Vec3x16> {
+    /// No light in any lane.
+    pub const NONE: Self = Self {
+        d: Vec3x16::ZERO,
+        shadow: ShadowRays::NONE,
+    };
+}
+
+impl ShadowRays<Vec3x16> {
+    /// Lane `i`'s shadow ray and its length, if it is cast.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Option<(Ray, f32)> {
+        self.cast.0[i].then(|| {
+            let ray = Ray {
+                origin: self.origin.lane(i),
+                direction: self.direction.lane(i),
+            };
+            (ray, self.t_max.0[i])
+        })
     }
 }
 
@@ -493,22 +636,40 @@ pub fn light_point(light: &PointLight, position: Vec3, rng: &mut Rng) -> Vec3 {
 /// Traces the shadow rays of a batch of hit terms (at most [`BATCH`]) together and records
 /// which are blocked.
 pub fn cast_shadow_rays(scene: &Scene, terms: &mut [HitTerms]) {
-    debug_assert!(terms.len() <= BATCH);
-    let mut rays = [(Ray::new(Vec3::ZERO, Vec3::Z), 0.0); BATCH];
-    let mut owner = [0u8; BATCH];
-    let mut n = 0;
-    for (i, t) in terms.iter().enumerate() {
-        if let Some(ray) = t.shadow_ray {
-            rays[n] = ray;
-            owner[n] = i as u8;
-            n += 1;
+    let blocked = shadow_rays_blocked(scene, terms.len(), |k| terms[k].shadow_ray);
+    for (t, b) in terms.iter_mut().zip(blocked) {
+        if t.shadow_ray.is_some() {
+            t.blocked = b;
         }
     }
-    let mut blocked = [false; BATCH];
-    scene.occluded_many(&rays[..n], &mut blocked[..n]);
-    for (&i, &b) in owner[..n].iter().zip(&blocked[..n]) {
-        terms[i as usize].blocked = b;
+}
+
+/// Traces the shadow rays of `n` hits (at most [`BATCH`]) together: `ray(k)` is hit `k`'s
+/// (`None`: none cast). Whether each is blocked, by hit (false where none is cast).
+#[inline(always)]
+pub fn shadow_rays_blocked(
+    scene: &Scene,
+    n: usize,
+    ray: impl Fn(usize) -> Option<(Ray, f32)>,
+) -> [bool; BATCH] {
+    debug_assert!(n <= BATCH);
+    let mut rays = [(Ray::new(Vec3::ZERO, Vec3::Z), 0.0); BATCH];
+    let mut owner = [0u8; BATCH];
+    let mut cast = 0;
+    for k in 0..n {
+        if let Some(r) = ray(k) {
+            rays[cast] = r;
+            owner[cast] = k as u8;
+            cast += 1;
+        }
     }
+    let mut answers = [false; BATCH];
+    scene.occluded_many(&rays[..cast], &mut answers[..cast]);
+    let mut blocked = [false; BATCH];
+    for (&k, &b) in owner[..cast].iter().zip(&answers[..cast]) {
+        blocked[k as usize] = b;
+    }
+    blocked
 }
 
 /// A ray leaving a surface point along `direction`, started [`SHADOW_OFFSET`] off the surface
@@ -533,6 +694,14 @@ pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3, at_edge: Opti
         None => lifted,
     };
     Ray { origin, direction }
+}
+
+/// What a batch of rays starts from, handed to the code compiled for the CPU as data.
+#[derive(Clone, Copy)]
+enum Primary<'a> {
+    Rays(&'a [Ray]),
+    /// Camera rays, made from their image points ([`ImagePoints::rays`]).
+    Camera(&'a ImagePoints<'a>),
 }
 
 /// Everything an integrator needs for one pass: the scene, its materials with the preset
@@ -634,35 +803,74 @@ impl<'a> Tracer<'a> {
     /// the path tracer runs faster (PERFORMANCE.md).
     pub fn trace(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         debug_assert_eq!(rays.len(), out.len());
+        self.trace_for_cpu(Primary::Rays(rays), rngs, out);
+    }
+
+    /// [`Tracer::trace`] for the camera rays through `points`, made here
+    /// ([`ImagePoints::rays`]) so that they too are made with the CPU's instruction set,
+    /// sixteen at a time. The same rays as [`crate::Camera::primary_ray_rotated`] (or
+    /// [`crate::Camera::lens_ray_rotated`]) makes one at a time, bit for bit.
+    pub fn trace_camera(&self, points: &ImagePoints, rngs: &mut [Rng], out: &mut [Vec3]) {
+        debug_assert_eq!(points.len(), out.len());
+        self.trace_for_cpu(Primary::Camera(points), rngs, out);
+    }
+
+    /// [`Tracer::trace_primary`] in the code compiled for the CPU.
+    #[inline(always)]
+    fn trace_for_cpu(&self, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
         match self.scene.accel().isa() {
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2(k) => {
                 // SAFETY: `k` proves the CPU has AVX2 and FMA.
-                unsafe { self.trace_avx2(k, rays, rngs, out) }
+                unsafe { self.trace_avx2(k, primary, rngs, out) }
             }
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512(k) => {
                 // SAFETY: `k` proves the CPU has AVX-512 F, DQ and VL, AVX2 and FMA.
-                unsafe { self.trace_avx512(k, rays, rngs, out) }
+                unsafe { self.trace_avx512(k, primary, rngs, out) }
             }
-            _ => self.trace_portable(rays, rngs, out),
+            _ => self.trace_primary(primary, rngs, out),
         }
     }
 
-    /// [`Tracer::trace_portable`] compiled with AVX-512 as well: 32 vector registers instead of
+    /// [`Tracer::trace_primary`] compiled with AVX-512 as well: 32 vector registers instead of
     /// 16, which the long body of a path vertex spills less with.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
-    fn trace_avx512(&self, _proof: Avx512, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_portable(rays, rngs, out);
+    fn trace_avx512(&self, _proof: Avx512, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+        self.trace_primary(primary, rngs, out);
     }
 
-    /// [`Tracer::trace_portable`] compiled with AVX2 and FMA. (Passing a closure to one such
-    /// function instead left the closure out of line, compiled without them: measured.)
+    /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (Passing a closure to one such
+    /// function instead left the closure out of line, compiled without them: measured. So the
+    /// camera rays come as data, [`Primary::Camera`].)
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn trace_avx2(&self, _proof: Avx2, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_portable(rays, rngs, out);
+    fn trace_avx2(&self, _proof: Avx2, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+        self.trace_primary(primary, rngs, out);
+    }
+
+    /// The rays of `primary`, made in batches of [`BATCH`] if they come as image points, traced
+    /// by [`Tracer::trace_portable`].
+    #[inline(always)]
+    fn trace_primary(&self, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+        match primary {
+            Primary::Rays(rays) => self.trace_portable(rays, rngs, out),
+            Primary::Camera(points) => {
+                let mut rays = [Ray {
+                    origin: Vec3::ZERO,
+                    direction: Vec3::ZERO,
+                }; BATCH];
+                for (c, out) in out.chunks_mut(BATCH).enumerate() {
+                    let rays = &mut rays[..out.len()];
+                    points.rays(c * BATCH, rays);
+                    // Each ray's generator; none if nothing is random.
+                    let start = (c * BATCH).min(rngs.len());
+                    let end = (start + BATCH).min(rngs.len());
+                    self.trace_portable(rays, &mut rngs[start..end], out);
+                }
+            }
+        }
     }
 
     /// [`Tracer::trace`] for any CPU; inlined into the AVX2 version.

@@ -1,0 +1,485 @@
+//! Lanes: one formula for one value or for sixteen at once.
+//!
+//! The per-hit formulas (the light at a hit, [`crate::light::DirectLight`]; its shadow ray,
+//! [`crate::light::shadow_rays_to`]; both together, [`crate::integrator::Lighting`]) are
+//! written once, generic over a [`Vector`]: [`glam::Vec3`] for one hit, [`Vec3x16`] for
+//! sixteen side by side (structure of arrays). The scalar API is that generic code at `Vec3`,
+//! so the readable form and the fast one cannot drift apart.
+//!
+//! Why: one hit's terms are a chain of dependent divisions and square roots (about nine
+//! divisions and two square roots a pixel in the lab's stage) that the processor runs one at a
+//! time; sixteen hits' take the same instructions, sixteen lanes wide. [`F32x16`]'s operations
+//! are plain loops over its lanes, which LLVM turns into vector instructions of whatever width
+//! the surrounding code is compiled for (one AVX-512 register, two AVX ones, four SSE ones).
+//!
+//! **Bit for bit.** A lane does exactly what the scalar code does, operation by operation:
+//! Rust never fuses a multiply and an add, vector division and square root are exactly rounded
+//! like scalar ones, no approximate reciprocal is used, and [`Vector`]'s methods keep glam's
+//! order of operations (`dot` is `(x·x′ + y·y′) + z·z′`, `s * v` multiplies each component
+//! by `s`). Where the scalar code
+//! branches, both sides are computed and [`Real::select`] picks each lane's: the same bits.
+//! The tests compare the two on many inputs.
+
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
+
+use glam::Vec3;
+
+/// How many values a [`F32x16`] holds.
+pub const LANES: usize = 16;
+
+/// A comparison's answer, per lane: `bool` for one value, [`M16`] for sixteen.
+pub trait Mask:
+    Copy
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + Not<Output = Self>
+    + std::fmt::Debug
+    + PartialEq
+{
+    /// False in every lane.
+    const NONE: Self;
+    fn splat(b: bool) -> Self;
+    /// Whether any lane is true.
+    fn any(self) -> bool;
+}
+
+/// A number, or sixteen: `f32` or [`F32x16`]. Every operation is the `f32` one, lane by lane.
+pub trait Real:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + std::fmt::Debug
+    + PartialEq
+{
+    type Mask: Mask;
+    const ZERO: Self;
+    fn splat(x: f32) -> Self;
+    fn sqrt(self) -> Self;
+    /// `f32::max` (a NaN gives the other value).
+    fn simd_max(self, other: Self) -> Self;
+    fn simd_lt(self, other: Self) -> Self::Mask;
+    fn simd_le(self, other: Self) -> Self::Mask;
+    fn simd_gt(self, other: Self) -> Self::Mask;
+    fn simd_ge(self, other: Self) -> Self::Mask;
+    /// `!=`: true for a NaN.
+    fn simd_ne(self, other: Self) -> Self::Mask;
+    /// `a` where `mask` is true, else `b`: a branch of the scalar code, taken lane by lane.
+    fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
+}
+
+/// The mask type of a [`Vector`]'s lanes.
+pub type MaskOf<V> = <<V as Vector>::Real as Real>::Mask;
+
+/// A 3-vector, or sixteen: [`glam::Vec3`] or [`Vec3x16`]. Generic code names its numbers
+/// `V::Real`, so a call with `Vec3` arguments needs no annotation.
+pub trait Vector:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Mul<Self::Real, Output = Self>
+    + Div<Self::Real, Output = Self>
+    + std::fmt::Debug
+    + PartialEq
+{
+    type Real: Real;
+    const ZERO: Self;
+    /// `v` in every lane.
+    fn splat(v: Vec3) -> Self;
+    fn new(x: Self::Real, y: Self::Real, z: Self::Real) -> Self;
+    fn x(self) -> Self::Real;
+    fn y(self) -> Self::Real;
+    fn z(self) -> Self::Real;
+
+    /// `s · v`, the number on the left (glam's `f32 * Vec3`).
+    #[inline(always)]
+    fn scale(s: Self::Real, v: Self) -> Self {
+        Self::new(s * v.x(), s * v.y(), s * v.z())
+    }
+
+    /// glam's `dot`: `(x·x′ + y·y′) + z·z′`.
+    #[inline(always)]
+    fn dot(self, o: Self) -> Self::Real {
+        self.x() * o.x() + self.y() * o.y() + self.z() * o.z()
+    }
+
+    #[inline(always)]
+    fn length_squared(self) -> Self::Real {
+        self.dot(self)
+    }
+
+    #[inline(always)]
+    fn length(self) -> Self::Real {
+        self.dot(self).sqrt()
+    }
+
+    /// `!=`: whether any component differs (glam's `PartialEq`, negated).
+    #[inline(always)]
+    fn simd_ne(self, o: Self) -> MaskOf<Self> {
+        self.x().simd_ne(o.x()) | self.y().simd_ne(o.y()) | self.z().simd_ne(o.z())
+    }
+
+    #[inline(always)]
+    fn select(mask: MaskOf<Self>, a: Self, b: Self) -> Self {
+        Self::new(
+            Self::Real::select(mask, a.x(), b.x()),
+            Self::Real::select(mask, a.y(), b.y()),
+            Self::Real::select(mask, a.z(), b.z()),
+        )
+    }
+}
+
+impl Mask for bool {
+    const NONE: Self = false;
+    #[inline(always)]
+    fn splat(b: bool) -> Self {
+        b
+    }
+
+    #[inline(always)]
+    fn any(self) -> bool {
+        self
+    }
+}
+
+impl Real for f32 {
+    type Mask = bool;
+    const ZERO: Self = 0.0;
+
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        x
+    }
+
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+
+    #[inline(always)]
+    fn simd_max(self, other: Self) -> Self {
+        f32::max(self, other)
+    }
+
+    #[inline(always)]
+    fn simd_lt(self, other: Self) -> bool {
+        self < other
+    }
+
+    #[inline(always)]
+    fn simd_le(self, other: Self) -> bool {
+        self <= other
+    }
+
+    #[inline(always)]
+    fn simd_gt(self, other: Self) -> bool {
+        self > other
+    }
+
+    #[inline(always)]
+    fn simd_ge(self, other: Self) -> bool {
+        self >= other
+    }
+
+    #[inline(always)]
+    fn simd_ne(self, other: Self) -> bool {
+        self != other
+    }
+
+    #[inline(always)]
+    fn select(mask: bool, a: Self, b: Self) -> Self {
+        if mask { a } else { b }
+    }
+}
+
+/// One value: glam's own operations (the generic code at `Vec3` *is* the scalar code).
+impl Vector for Vec3 {
+    type Real = f32;
+    const ZERO: Self = Vec3::ZERO;
+
+    #[inline(always)]
+    fn splat(v: Vec3) -> Self {
+        v
+    }
+
+    #[inline(always)]
+    fn new(x: f32, y: f32, z: f32) -> Self {
+        Vec3::new(x, y, z)
+    }
+
+    #[inline(always)]
+    fn x(self) -> f32 {
+        self.x
+    }
+
+    #[inline(always)]
+    fn y(self) -> f32 {
+        self.y
+    }
+
+    #[inline(always)]
+    fn z(self) -> f32 {
+        self.z
+    }
+
+    #[inline(always)]
+    fn scale(s: f32, v: Self) -> Self {
+        s * v
+    }
+
+    #[inline(always)]
+    fn dot(self, o: Self) -> f32 {
+        Vec3::dot(self, o)
+    }
+
+    #[inline(always)]
+    fn length_squared(self) -> f32 {
+        Vec3::length_squared(self)
+    }
+
+    #[inline(always)]
+    fn length(self) -> f32 {
+        Vec3::length(self)
+    }
+
+    #[inline(always)]
+    fn simd_ne(self, o: Self) -> bool {
+        self != o
+    }
+}
+
+/// Sixteen `f32`s, one per lane; every operation is the `f32` one in each lane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct F32x16(pub [f32; LANES]);
+
+/// Sixteen comparison answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct M16(pub [bool; LANES]);
+
+/// Applies `f` lane by lane.
+#[inline(always)]
+fn lanewise<T: Copy, U>(a: [T; LANES], b: [T; LANES], f: impl Fn(T, T) -> U) -> [U; LANES] {
+    std::array::from_fn(|i| f(a[i], b[i]))
+}
+
+macro_rules! lanes_op {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl $trait for F32x16 {
+            type Output = Self;
+
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                Self(lanewise(self.0, o.0, |a, b| a $op b))
+            }
+        }
+    };
+}
+
+lanes_op!(Add, add, +);
+lanes_op!(Sub, sub, -);
+lanes_op!(Mul, mul, *);
+lanes_op!(Div, div, /);
+
+macro_rules! mask_op {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl $trait for M16 {
+            type Output = Self;
+
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                Self(lanewise(self.0, o.0, |a, b| a $op b))
+            }
+        }
+    };
+}
+
+mask_op!(BitAnd, bitand, &);
+mask_op!(BitOr, bitor, |);
+
+impl Not for M16 {
+    type Output = Self;
+
+    #[inline(always)]
+    fn not(self) -> Self {
+        Self(self.0.map(|b| !b))
+    }
+}
+
+impl Mask for M16 {
+    const NONE: Self = Self([false; LANES]);
+    #[inline(always)]
+    fn splat(b: bool) -> Self {
+        Self([b; LANES])
+    }
+
+    #[inline(always)]
+    fn any(self) -> bool {
+        // `|` over all lanes, no early exit: one vector test.
+        self.0.iter().fold(false, |a, &b| a | b)
+    }
+}
+
+impl Real for F32x16 {
+    type Mask = M16;
+    const ZERO: Self = Self([0.0; LANES]);
+
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Self([x; LANES])
+    }
+
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Self(self.0.map(f32::sqrt))
+    }
+
+    #[inline(always)]
+    fn simd_max(self, other: Self) -> Self {
+        Self(lanewise(self.0, other.0, f32::max))
+    }
+
+    #[inline(always)]
+    fn simd_lt(self, other: Self) -> M16 {
+        M16(lanewise(self.0, other.0, |a, b| a < b))
+    }
+
+    #[inline(always)]
+    fn simd_le(self, other: Self) -> M16 {
+        M16(lanewise(self.0, other.0, |a, b| a <= b))
+    }
+
+    #[inline(always)]
+    fn simd_gt(self, other: Self) -> M16 {
+        M16(lanewise(self.0, other.0, |a, b| a > b))
+    }
+
+    #[inline(always)]
+    fn simd_ge(self, other: Self) -> M16 {
+        M16(lanewise(self.0, other.0, |a, b| a >= b))
+    }
+
+    #[inline(always)]
+    fn simd_ne(self, other: Self) -> M16 {
+        M16(lanewise(self.0, other.0, |a, b| a != b))
+    }
+
+    #[inline(always)]
+    fn select(mask: M16, a: Self, b: Self) -> Self {
+        Self(std::array::from_fn(
+            |i| {
+                if mask.0[i] { a.0[i] } else { b.0[i] }
+            },
+        ))
+    }
+}
+
+/// Sixteen 3-vectors as three [`F32x16`]s (structure of arrays: lane `i` is
+/// `(x[i], y[i], z[i])`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vec3x16 {
+    pub x: F32x16,
+    pub y: F32x16,
+    pub z: F32x16,
+}
+
+impl Vec3x16 {
+    /// Lane `i` as a `Vec3`.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x.0[i], self.y.0[i], self.z.0[i])
+    }
+
+    /// Sets lane `i` to `v`.
+    #[inline(always)]
+    pub fn set_lane(&mut self, i: usize, v: Vec3) {
+        self.x.0[i] = v.x;
+        self.y.0[i] = v.y;
+        self.z.0[i] = v.z;
+    }
+}
+
+macro_rules! vec_op {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl $trait for Vec3x16 {
+            type Output = Self;
+
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                Self { x: self.x $op o.x, y: self.y $op o.y, z: self.z $op o.z }
+            }
+        }
+    };
+}
+
+vec_op!(Add, add, +);
+vec_op!(Sub, sub, -);
+vec_op!(Mul, mul, *);
+
+/// `v · s`, component by component (glam's `Vec3 * f32`).
+impl Mul<F32x16> for Vec3x16 {
+    type Output = Self;
+
+    #[inline(always)]
+    fn mul(self, s: F32x16) -> Self {
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+}
+
+/// `v / s`, component by component (glam's `Vec3 / f32`).
+impl Div<F32x16> for Vec3x16 {
+    type Output = Self;
+
+    #[inline(always)]
+    fn div(self, s: F32x16) -> Self {
+        Self {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+}
+
+impl Vector for Vec3x16 {
+    type Real = F32x16;
+    const ZERO: Self = Self {
+        x: F32x16::ZERO,
+        y: F32x16::ZERO,
+        z: F32x16::ZERO,
+    };
+
+    #[inline(always)]
+    fn splat(v: Vec3) -> Self {
+        Self {
+            x: F32x16::splat(v.x),
+            y: F32x16::splat(v.y),
+            z: F32x16::splat(v.z),
+        }
+    }
+
+    #[inline(always)]
+    fn new(x: F32x16, y: F32x16, z: F32x16) -> Self {
+        Self { x, y, z }
+    }
+
+    #[inline(always)]
+    fn x(self) -> F32x16 {
+        self.x
+    }
+
+    #[inline(always)]
+    fn y(self) -> F32x16 {
+        self.y
+    }
+
+    #[inline(always)]
+    fn z(self) -> F32x16 {
+        self.z
+    }
+}
