@@ -546,9 +546,9 @@ fn closest_batch_avx512(
                 .then(|| Cone::around_rays_simd(k, rays))
                 .flatten()
             {
-                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                let kept = cull::kept(&cone, k, &f.corners, f.count);
                 for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-                    packet::closest_in_list(k, &list, rays, t_max, out);
+                    packet::closest_in_list(k, &f.packets16, kept, rays, t_max, out);
                 }
                 return;
             }
@@ -588,9 +588,9 @@ fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mu
                 .then(|| Cone::around_segments_simd(k, rays))
                 .flatten()
             {
-                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                let kept = cull::kept(&cone, k, &f.corners, f.count);
                 for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-                    packet::occluded_in_list(k, &list, rays, out);
+                    packet::occluded_in_list(k, &f.packets16, kept, rays, out);
                 }
                 return;
             }
@@ -627,9 +627,9 @@ fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mu
                 .then(|| Cone::around_rays_simd(k, rays))
                 .flatten()
             {
-                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                let kept = cull::kept(&cone, k, &f.corners, f.count);
                 for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
-                    packet::closest_in_list(k, &list, rays, t_max, out);
+                    packet::closest_in_list(k, &f.packets16, kept, rays, t_max, out);
                 }
                 return;
             }
@@ -665,9 +665,9 @@ fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [b
                 .then(|| Cone::around_segments_simd(k, rays))
                 .flatten()
             {
-                let list = f.culled(cull::kept(&cone, k, &f.corners, f.count));
+                let kept = cull::kept(&cone, k, &f.corners, f.count);
                 for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
-                    packet::occluded_in_list(k, &list, rays, out);
+                    packet::occluded_in_list(k, &f.packets16, kept, rays, out);
                 }
                 return;
             }

@@ -31,7 +31,7 @@ use std::arch::x86_64::*;
 use super::Hit;
 use super::bvh::BOX_T_SLACK;
 use super::bvh::INV_HUGE;
-use super::simd::{Avx2, Avx512, Node8, Packet, RayK};
+use super::simd::{Avx2, Avx512, Node8, Packet, Packet16, RayK};
 use super::wide::{Bvh8, Bvh8Big, EMPTY, LEAF, STACK_INLINE};
 use crate::geometry::Ray;
 use crate::intersect::EDGE_TOLERANCE;
@@ -744,6 +744,23 @@ impl<P: PacketIsa> Lanes<P> {
     /// the nearest hit, the lowest triangle index among equal `t` (as the brute-force loop).
     #[inline(always)]
     fn leaf_nearest<const N: usize>(&self, p: &Packet<N>, active: u32, b: &mut Best, t_max: f32) {
+        let triangles = (0..N)
+            .filter(|&tri| p.index[tri] != u32::MAX)
+            .map(|tri| (p, tri));
+        self.nearest_among(triangles, active, b, t_max);
+    }
+
+    /// [`Lanes::leaf_nearest`] over any triangles, each a lane `tri` of a packet `p` (unused
+    /// lanes left out): a leaf's, or those of a list that a batch's cone keeps
+    /// ([`closest_in_list`]), read where they lie, not copied.
+    #[inline(always)]
+    fn nearest_among<'p, const N: usize>(
+        &self,
+        triangles: impl Iterator<Item = (&'p Packet<N>, usize)>,
+        active: u32,
+        b: &mut Best,
+        t_max: f32,
+    ) {
         let k = self.k;
         let limit = k.splat(t_max);
         let active = k.mask(active);
@@ -751,15 +768,12 @@ impl<P: PacketIsa> Lanes<P> {
         let mut best_i = k.load_u32(&b.index);
         let mut best_u = k.load(&b.u);
         let mut best_v = k.load(&b.v);
-        for (tri, &index) in p.index.iter().enumerate() {
-            if index == u32::MAX {
-                continue; // an unused lane of the packet
-            }
+        for (p, tri) in triangles {
             let ([t, u, v], hit) = self.triangle(p, tri, active, limit);
             if k.bits(hit) == 0 {
                 continue;
             }
-            let index_v = k.splat_u32(index);
+            let index_v = k.splat_u32(p.index[tri]);
             // Nearer, or as near with a lower index (a lane without a hit has best_t = t_max,
             // which no hit reaches, so the index test only ever compares real hits).
             let nearer = k.both(hit, k.cmp::<_CMP_LT_OQ>(t, best_t));
@@ -780,13 +794,27 @@ impl<P: PacketIsa> Lanes<P> {
     /// The lanes of `active` that hit any triangle of a leaf with `0 < t < limit` (per lane).
     #[inline(always)]
     fn leaf_any<const N: usize>(&self, p: &Packet<N>, active: u32, limit: P::F) -> u32 {
+        let triangles = (0..N)
+            .filter(|&tri| p.index[tri] != u32::MAX)
+            .map(|tri| (p, tri));
+        self.any_among(triangles, active, limit)
+    }
+
+    /// [`Lanes::leaf_any`] over any triangles (see [`Lanes::nearest_among`]).
+    #[inline(always)]
+    fn any_among<'p, const N: usize>(
+        &self,
+        triangles: impl Iterator<Item = (&'p Packet<N>, usize)>,
+        active: u32,
+        limit: P::F,
+    ) -> u32 {
         let k = self.k;
         // The lanes not yet blocked, as bits and as a mask.
         let mut left = active;
         let mut left_mask = k.mask(left);
-        for (tri, &index) in p.index.iter().enumerate() {
-            if index == u32::MAX || left == 0 {
-                continue;
+        for (p, tri) in triangles {
+            if left == 0 {
+                break;
             }
             let blocked = k.bits(self.triangle(p, tri, left_mask, limit).1);
             if blocked != 0 {
@@ -929,15 +957,17 @@ impl Bvh8Big {
     }
 }
 
-/// Closest hits of up to [`PacketIsa::WIDTH`] rays against a short list of triangles (the
-/// flat list culled for a batch, [`super::cull`]), a triangle at a time against every ray:
-/// `out[i]` for `rays[i]`, as the brute-force loop finds it (lowest index among equal `t`).
-/// With a few triangles this beats a ray at a time, whose sixteen-lane minimum and lane
-/// extraction are a chain of dependent steps per ray.
+/// Closest hits of up to [`PacketIsa::WIDTH`] rays against the triangles `kept` (bit `i` for
+/// the triangle in lane `i % 16` of `packets[i / 16]`: the flat list, culled for a batch by
+/// its cone, [`super::cull`]), a triangle at a time against every ray: `out[i]` for
+/// `rays[i]`, as the brute-force loop finds it (lowest index among equal `t`). With a few
+/// triangles this beats a ray at a time, whose sixteen-lane minimum and lane extraction are a
+/// chain of dependent steps per ray.
 #[inline(always)]
-pub(super) fn closest_in_list<P: PacketIsa, const N: usize>(
+pub(super) fn closest_in_list<P: PacketIsa>(
     k: P,
-    packets: &[Packet<N>],
+    packets: &[Packet16],
+    kept: u64,
     rays: &[Ray],
     t_max: f32,
     out: &mut [Option<Hit>],
@@ -946,20 +976,19 @@ pub(super) fn closest_in_list<P: PacketIsa, const N: usize>(
     let lanes = Lanes::for_triangles(k, k.rays(rays));
     let all = first_lanes(rays.len());
     let mut b = Best::new(t_max);
-    for p in packets {
-        lanes.leaf_nearest(p, all, &mut b, t_max);
-    }
+    lanes.nearest_among(kept_triangles(packets, kept), all, &mut b, t_max);
     for (lane, hit) in out.iter_mut().enumerate() {
         *hit = b.get(lane);
     }
 }
 
-/// Any-hit queries of up to [`PacketIsa::WIDTH`] rays, each with its own `t_max`, against a
-/// short list of triangles, a triangle at a time (see [`closest_in_list`]).
+/// Any-hit queries of up to [`PacketIsa::WIDTH`] rays, each with its own `t_max`, against the
+/// triangles `kept` of `packets`, a triangle at a time (see [`closest_in_list`]).
 #[inline(always)]
-pub(super) fn occluded_in_list<P: PacketIsa, const N: usize>(
+pub(super) fn occluded_in_list<P: PacketIsa>(
     k: P,
-    packets: &[Packet<N>],
+    packets: &[Packet16],
+    kept: u64,
     rays: &[(Ray, f32)],
     blocked: &mut [bool],
 ) {
@@ -967,16 +996,25 @@ pub(super) fn occluded_in_list<P: PacketIsa, const N: usize>(
     let [ox, oy, oz, dx, dy, dz, limit] = k.segments(rays);
     let lanes = Lanes::for_triangles(k, [ox, oy, oz, dx, dy, dz]);
     let all = first_lanes(rays.len());
-    let mut done = 0;
-    for p in packets {
-        if done == all {
-            break;
-        }
-        done |= lanes.leaf_any(p, all & !done, limit);
-    }
+    let done = lanes.any_among(kept_triangles(packets, kept), all, limit);
     for (lane, out) in blocked.iter_mut().enumerate() {
         *out = done & (1 << lane) != 0;
     }
+}
+
+/// The triangles of `kept` as (packet, lane), in index order.
+#[inline(always)]
+fn kept_triangles(
+    packets: &[Packet16],
+    mut kept: u64,
+) -> impl Iterator<Item = (&Packet<16>, usize)> {
+    std::iter::from_fn(move || {
+        (kept != 0).then(|| {
+            let i = kept.trailing_zeros() as usize;
+            kept &= kept - 1;
+            (&packets[i / 16].triangles, i % 16)
+        })
+    })
 }
 
 impl Bvh8 {

@@ -9,14 +9,13 @@
 //! beyond the best hit; shadow rays stop at the first hit. Ties at the same `t` go to the lowest
 //! triangle index, so results equal the brute-force loop's exactly.
 
-use arrayvec::ArrayVec;
 use glam::Vec3;
 
 use crate::geometry::Triangle;
 
 use super::bvh::{BOX_T_SLACK, Bvh};
 use super::cull::Corners;
-use super::simd::{Avx512, Kernels, LANES, Node8, Packet, Packet8, Packet16, RayK};
+use super::simd::{Avx512, Kernels, LANES, Node8, Packet8, Packet16, RayK};
 use super::{Hit, TraversalCost};
 
 pub const LEAF: u32 = 1 << 31;
@@ -61,8 +60,8 @@ pub struct Flat {
     pub count: usize,
 }
 
-/// The most triangles a list may hold to be culled per batch: the culled packets live on the
-/// stack ([`Flat::culled16`]).
+/// The most triangles a list may hold to be culled per batch: what a batch keeps is a bit a
+/// triangle in a `u64` ([`super::cull::kept`]).
 pub const CULL_MAX_TRIANGLES: usize = 64;
 
 impl Flat {
@@ -99,24 +98,6 @@ impl Flat {
         }
     }
 
-    /// The list's triangles of `kept` (bit `i` for triangle `i`, as [`super::cull::kept`]
-    /// gives), sixteen a packet, in the same order, so ties still go to the lowest index.
-    /// The lanes are copied from the full packets, bit for bit.
-    #[inline(always)]
-    pub fn culled(&self, kept: u64) -> ArrayVec<Packet<16>, { CULL_MAX_TRIANGLES / 16 }> {
-        let mut out = ArrayVec::new();
-        for (n, i) in set_bits(kept).enumerate() {
-            if n % 16 == 0 {
-                out.push(Packet::EMPTY);
-            }
-            let to = out.last_mut().expect("pushed above");
-            self.packets16[i / 16]
-                .triangles
-                .copy_lane(i % 16, to, n % 16);
-        }
-        out
-    }
-
     /// How many triangles the list holds: what every closest-hit query tests (the loop skips
     /// none, whatever it has found).
     pub fn triangle_count(&self) -> u32 {
@@ -149,17 +130,6 @@ impl Flat {
     pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
         self.packets.iter().any(|p| k.any(p, r, t_max))
     }
-}
-
-/// The positions of the set bits of `bits`, lowest first.
-fn set_bits(mut bits: u64) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let i = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            i
-        })
-    })
 }
 
 /// The nearest hit among 16-wide `packets` (the flat list, or its culled copy).
