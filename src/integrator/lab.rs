@@ -92,6 +92,9 @@ fn wave_for_light<R: Recorder>(
     }
 }
 
+// A wave's hits fill whole lane groups.
+const _: () = assert!(BATCH.is_multiple_of(LANES));
+
 /// The diffuse hits of a wave, sixteen to a lane group, and the ray each belongs to: the lab's
 /// terms are computed for sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`]).
 struct DiffuseHits {
