@@ -294,6 +294,110 @@ impl ImagePoints<'_> {
 mod tests {
     use super::*;
 
+    /// [`ImagePoints::rays`], as the tracer calls it.
+    #[inline(always)]
+    fn rays_of(points: &ImagePoints, out: &mut [Ray]) {
+        points.rays(0, out);
+    }
+
+    /// How the test calls one build of [`rays_of`].
+    type RaysFn = fn(&ImagePoints, &mut [Ray]);
+
+    /// [`rays_of`] compiled for AVX-512, as `Tracer::trace_camera` is.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
+    fn rays_avx512(points: &ImagePoints, out: &mut [Ray]) {
+        rays_of(points, out);
+    }
+
+    /// [`rays_of`] compiled for AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn rays_avx2(points: &ImagePoints, out: &mut [Ray]) {
+        rays_of(points, out);
+    }
+
+    /// The camera rays made a batch at a time ([`ImagePoints::rays`], compiled portably and for
+    /// each instruction set the CPU has) are the rays [`Camera::primary_ray_rotated`] and
+    /// [`Camera::lens_ray_rotated`] make one at a time, bit for bit: pixel centres, jittered
+    /// points, points far outside the image and the image's centre (a zero direction for a
+    /// zero focal length), batches of every length up to 64.
+    #[test]
+    fn camera_rays_a_batch_at_a_time_equal_one_at_a_time() {
+        let mut builds: Vec<(&str, RaysFn)> = vec![("portable", rays_of)];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if is_x86_feature_detected!("avx512f")
+                && is_x86_feature_detected!("avx512dq")
+                && is_x86_feature_detected!("avx512vl")
+                && is_x86_feature_detected!("avx2")
+                && is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU has every feature the function is compiled with.
+                builds.push(("avx512", |p, o| unsafe { rays_avx512(p, o) }));
+            }
+            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+                // SAFETY: the CPU has every feature the function is compiled with.
+                builds.push(("avx2", |p, o| unsafe { rays_avx2(p, o) }));
+            }
+        }
+        let mut rng = crate::sampling::Rng::for_pixel_sample(3, 1, 4, 1);
+        let mut turned = Camera::default_for(61, 47);
+        turned.yaw = 0.7;
+        turned.pitch = -0.3;
+        let mut lens = turned;
+        lens.aperture = 0.2;
+        lens.focus_distance = 2.5;
+        let mut flat = Camera::default_for(8, 8);
+        flat.focal_length = 0.0;
+        for camera in [Camera::default(), turned, lens, flat] {
+            let rotation = camera.rotation();
+            let (w, h) = (camera.width as f32, camera.height as f32);
+            for n in [1, 15, 16, 17, 61, 64] {
+                let mut px = Vec::new();
+                let mut py = Vec::new();
+                let (mut lx, mut ly) = (Vec::new(), Vec::new());
+                for k in 0..n {
+                    let (x, y) = match k % 4 {
+                        0 => ((k % 7) as f32 + 0.5, (k % 5) as f32 + 0.5),
+                        1 => (rng.next_f32() * w, rng.next_f32() * h),
+                        2 => (w / 2.0, h / 2.0),
+                        _ => (1e6 * (rng.next_f32() - 0.5), -3e5 * rng.next_f32()),
+                    };
+                    px.push(x);
+                    py.push(y);
+                    lx.push(rng.next_f32() * 2.0 - 1.0);
+                    ly.push(rng.next_f32() * 2.0 - 1.0);
+                }
+                let points = ImagePoints {
+                    camera: &camera,
+                    rotation: &rotation,
+                    px: &px,
+                    py: &py,
+                    lens_x: &lx,
+                    lens_y: &ly,
+                };
+                let bits = |r: &Ray| {
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    (bits(r.origin), bits(r.direction))
+                };
+                for &(build, rays) in &builds {
+                    let mut out = vec![Ray::new(Vec3::ZERO, Vec3::Z); n];
+                    rays(&points, &mut out);
+                    for (k, got) in out.iter().enumerate() {
+                        let one = if camera.aperture > 0.0 {
+                            let lens = glam::Vec2::new(lx[k], ly[k]);
+                            camera.lens_ray_rotated(&rotation, px[k], py[k], lens)
+                        } else {
+                            camera.primary_ray_rotated(&rotation, px[k], py[k])
+                        };
+                        assert_eq!(bits(got), bits(&one), "{build} {camera:?} {k} of {n}");
+                    }
+                }
+            }
+        }
+    }
+
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5
     }

@@ -1,7 +1,7 @@
 //! The lab's stages, with mirror and glass followed Whitted-style.
 //!
 //! For each batch of camera rays: all closest hits; every diffuse hit is shaded as the stage
-//! says ([`HitTerms`]); every mirror or glass hit spawns its specular branches
+//! says, sixteen hits at a time ([`Lighting::at`], the code behind [`HitTerms::at`]); every mirror or glass hit spawns its specular branches
 //! ([`Material::specular_branches`]), each carrying its weight (the tint, or Fresnel's F and
 //! 1 − F), which are traced the same way, up to [`Shading::specular_depth`] specular hits in a
 //! row. A branch that goes deeper, or leaves the scene, adds nothing (black).
@@ -91,6 +91,9 @@ fn wave_for_light<R: Recorder>(
         wave::<false, R>(tracer, rays, wave_kind, rngs, out, next, rec);
     }
 }
+
+// A wave's hits fill whole lane groups.
+const _: () = assert!(BATCH.is_multiple_of(LANES));
 
 /// The diffuse hits of a wave, sixteen to a lane group, and the ray each belongs to: the lab's
 /// terms are computed for sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`]).

@@ -14,11 +14,15 @@
 //! π × radiance too, so with no bounces it *is* the `shadows` stage, and each bounce adds the
 //! real indirect light that the lab's N stands in for.
 //!
-//! **One computation at a hit.** Both integrators evaluate a diffuse hit with [`HitTerms`]:
-//! [`HitTerms::at`] computes D (equation 27) and the shadow ray (section 5.1), the caller casts
+//! **One computation at a hit.** Both integrators evaluate a diffuse hit with the same code:
+//! [`Lighting::at`] computes D (equation 27) and the shadow ray (section 5.1), the caller casts
 //! the shadow rays of a whole batch together and records whether each was blocked, and
-//! [`HitTerms::value`] combines ρ, D and N as equations 28–30 say. The one-ray path
-//! ([`Tracer::trace`] with one ray) is the batched path with a batch of one.
+//! [`shaded_value`] combines ρ, D and N as equations 28–30 say. That code is generic over a
+//! lane type ([`crate::lanes`]): the path tracer takes it one hit at a time through
+//! [`HitTerms`] ([`HitTerms::at`], [`HitTerms::value`]), the lab's stages sixteen hits at a time
+//! (the same operations in every lane, so the same bits; with the divisions and square roots
+//! of a hit no longer one after another; PERFORMANCE.md).
+//! The one-ray path ([`Tracer::trace`] with one ray) is the batched path with a batch of one.
 //!
 //! **Watching a pixel.** Both integrators are generic over a [`Recorder`], told each step as it
 //! happens (every closest hit, every mirror or glass branch, every hit's terms once its shadow
@@ -914,6 +918,7 @@ mod tests {
     use super::*;
     use crate::Camera;
     use crate::bench::primary_rays;
+    use crate::lanes::LANES;
     use crate::scene::cornell_box;
 
     #[test]
@@ -999,6 +1004,202 @@ mod tests {
         assert_eq!((flat.d, flat.shadow_ray), (Vec3::ZERO, None));
         assert_eq!(flat.value(Stage::Flat, Vec3::ZERO), rho);
     }
+
+    /// Hits of every kind the lanes must get right, each with its own lit point: anywhere in
+    /// the box, smooth normals (on the lit side and the unlit one), zero normals, at edges of
+    /// their triangles, the light within [`crate::light::MIN_LIGHT_DISTANCE`] or exactly on the
+    /// point, behind the surface, and at infinity.
+    fn awkward_surfaces(light: &PointLight) -> Vec<Surface> {
+        let mut rng = Rng::for_pixel_sample(7, 3, 5, 0);
+        let mut r = move || rng.next_f32() * 2.0 - 1.0;
+        let mut surfaces = Vec::new();
+        for i in 0..4096 {
+            let mut position = Vec3::new(r(), r(), r());
+            let geometric = Vec3::new(r(), r(), r()).normalize_or_zero();
+            let mut normal = geometric;
+            match i % 8 {
+                // A smooth normal, sometimes turned far enough to face the light when the
+                // surface itself does not.
+                1 => normal = (geometric + Vec3::new(r(), r(), r())).normalize_or_zero(),
+                // Within MIN_LIGHT_DISTANCE of the light, or on it.
+                2 => position = light.position + 4e-4 * Vec3::new(r(), r(), r()),
+                3 => position = light.position,
+                // Just off the surface through the light, on either side.
+                4 => position = light.position + 1e-4 * r() * geometric,
+                5 => normal = Vec3::ZERO,
+                6 if i % 64 == 6 => position = Vec3::new(f32::INFINITY, 0.0, r()),
+                _ => {}
+            }
+            let at_edge = (i % 3 == 0).then(|| Vec3::new(r(), r(), r()).normalize_or_zero());
+            surfaces.push(Surface {
+                position,
+                normal,
+                geometric,
+                rho: Vec3::new(r(), r(), r()).abs(),
+                at_edge,
+            });
+        }
+        surfaces
+    }
+
+    /// A stand-in for a spherical light's point ([`light_point`]) that depends on the hit, so
+    /// that the lanes must hand each its own.
+    fn sphere_point(light: &PointLight, p: Vec3) -> Vec3 {
+        light.position + 0.05 * p
+    }
+
+    /// [`Lighting::at`] sixteen at a time, with [`sphere_point`] for the lanes that want it.
+    #[inline(always)]
+    fn lit_lanes(
+        light: &PointLight,
+        shading: &Shading,
+        surfaces: &Surfaces<Vec3x16>,
+        sphere: bool,
+    ) -> (Lighting<Vec3x16>, M16) {
+        let mut asked = M16::NONE;
+        let lit = Lighting::at(
+            light,
+            shading.stage,
+            shading.shadows,
+            surfaces,
+            |p, wanted| {
+                asked = wanted;
+                let mut target = Vec3x16::splat(light.position);
+                if sphere {
+                    for k in 0..LANES {
+                        target.set_lane(k, sphere_point(light, p.lane(k)));
+                    }
+                }
+                target
+            },
+        );
+        (lit, asked)
+    }
+
+    /// [`lit_lanes`] compiled for AVX-512, as the lab's wave is.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
+    fn lit_lanes_avx512(
+        light: &PointLight,
+        shading: &Shading,
+        surfaces: &Surfaces<Vec3x16>,
+        sphere: bool,
+    ) -> (Lighting<Vec3x16>, M16) {
+        lit_lanes(light, shading, surfaces, sphere)
+    }
+
+    /// [`lit_lanes`] compiled for AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn lit_lanes_avx2(
+        light: &PointLight,
+        shading: &Shading,
+        surfaces: &Surfaces<Vec3x16>,
+        sphere: bool,
+    ) -> (Lighting<Vec3x16>, M16) {
+        lit_lanes(light, shading, surfaces, sphere)
+    }
+
+    /// The lab's terms sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`], as the lab's
+    /// wave computes them, compiled portably and for each instruction set the CPU has) equal
+    /// [`HitTerms::at`] one hit at a time, bit for bit: D, the shadow ray (whether it is cast,
+    /// its origin, direction and length), the value blocked or not, in every stage with shadows
+    /// on and off, for the lab's light and a coloured one, with a point light and with a
+    /// stand-in for a spherical one's points (asked for exactly where the one-hit code asks).
+    #[test]
+    fn sixteen_hits_at_a_time_equal_one_at_a_time() {
+        let coloured = PointLight {
+            position: Vec3::new(0.3, 0.9, 0.2),
+            power: 3.5,
+            colour: Vec3::new(1.0, 0.25, 0.0),
+            radius: 0.0,
+        };
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        let mut builds: Vec<(&str, LanesFn)> = vec![("portable", lit_lanes)];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if is_x86_feature_detected!("avx512f")
+                && is_x86_feature_detected!("avx512dq")
+                && is_x86_feature_detected!("avx512vl")
+                && is_x86_feature_detected!("avx2")
+                && is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU has every feature the function is compiled with.
+                builds.push(("avx512", |l, s, x, y| unsafe {
+                    lit_lanes_avx512(l, s, x, y)
+                }));
+            }
+            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+                // SAFETY: the CPU has every feature the function is compiled with.
+                builds.push(("avx2", |l, s, x, y| unsafe { lit_lanes_avx2(l, s, x, y) }));
+            }
+        }
+        let mut cast = 0;
+        for light in [PointLight::default(), coloured] {
+            let surfaces = awkward_surfaces(&light);
+            for stage in Stage::LAB {
+                for shadows in [false, true] {
+                    let mut shading = Shading::for_stage(stage);
+                    shading.shadows = shadows;
+                    let n = shading.indirect_term();
+                    for sphere in [false, true] {
+                        for group in surfaces.chunks(LANES) {
+                            let mut lanes = Surfaces::ZERO;
+                            for (k, s) in group.iter().enumerate() {
+                                lanes.set(k, *s);
+                            }
+                            for &(build, lit_lanes) in &builds {
+                                let (lit, asked) = lit_lanes(&light, &shading, &lanes, sphere);
+                                for (k, s) in group.iter().enumerate() {
+                                    let mut one_asked = false;
+                                    let one = HitTerms::at(&light, stage, shadows, *s, |p| {
+                                        one_asked = true;
+                                        if sphere {
+                                            sphere_point(&light, p)
+                                        } else {
+                                            light.position
+                                        }
+                                    });
+                                    let what = format!("{build} {stage} {shadows} {sphere} {s:?}");
+                                    assert_eq!(bits(lit.d.lane(k)), bits(one.d), "D: {what}");
+                                    let ray = lit.shadow.lane(k);
+                                    let ray_bits = |r: Option<(Ray, f32)>| {
+                                        r.map(|(r, t)| {
+                                            (bits(r.origin), bits(r.direction), t.to_bits())
+                                        })
+                                    };
+                                    assert_eq!(ray_bits(ray), ray_bits(one.shadow_ray), "{what}");
+                                    assert_eq!(asked.0[k], one_asked, "asked: {what}");
+                                    cast += usize::from(ray.is_some());
+                                    for blocked in [false, true] {
+                                        let mut b = M16::NONE;
+                                        b.0[k] = blocked;
+                                        let value = shaded_value(
+                                            stage,
+                                            lanes.rho,
+                                            lit.d,
+                                            b,
+                                            Vec3x16::splat(n),
+                                        );
+                                        let one = HitTerms { blocked, ..one };
+                                        assert_eq!(
+                                            bits(value.lane(k)),
+                                            bits(one.value(stage, n)),
+                                            "value: {what} {blocked}"
+                                        );
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(cast > 10_000, "{cast}");
+    }
+
+    /// How the test calls one build of [`lit_lanes`].
+    type LanesFn = fn(&PointLight, &Shading, &Surfaces<Vec3x16>, bool) -> (Lighting<Vec3x16>, M16);
 
     /// The code compiled for the CPU (AVX2 and FMA, or AVX-512 where the kernels use it) gives
     /// bit for bit what the portable build gives, in every stage and with every preset (Rust
