@@ -68,15 +68,44 @@ pub trait Real:
     /// `a` where `mask` is true, else `b`: a branch of the scalar code, taken lane by lane.
     fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
 
-    /// [`Real::select`] of two sides computed only where needed: one value computes only the
-    /// side it takes, as the scalar code's branch did (the path stage, a hit at a time, lost
-    /// 3 % to computing both); sixteen compute both and take their own. The same bits either
-    /// way: the sides are plain arithmetic.
-    #[inline(always)]
-    fn select_with(mask: Self::Mask, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self {
-        Self::select(mask, a(), b())
-    }
+    /// Whether this is one value (`f32`): [`select_lazy!`] then computes only the side taken.
+    const ONE: bool;
 }
+
+/// [`Real::select`] or [`Vector::select`] of two sides — `select_lazy!(Real: T, mask, a, b)`
+/// or `select_lazy!(Vector: T, mask, a, b)` — computing only the side taken when `T` is one
+/// value, as the scalar code's branch did (the path stage, a hit at a time, lost 3 % to
+/// computing both), and both sides for sixteen lanes, each lane taking its own. The same bits
+/// either way: the sides are plain arithmetic. A macro, not closures: a closure too large to
+/// inline is compiled without the caller's instruction set (measured: the sixteen-lane sides
+/// ran as SSE code, 3 % of the lab pass).
+macro_rules! select_lazy {
+    (Real: $t:ty, $mask:expr, $a:expr, $b:expr) => {{
+        let mask = $mask;
+        if <$t as $crate::lanes::Real>::ONE {
+            if $crate::lanes::Mask::any(mask) {
+                $a
+            } else {
+                $b
+            }
+        } else {
+            <$t as $crate::lanes::Real>::select(mask, $a, $b)
+        }
+    }};
+    (Vector: $t:ty, $mask:expr, $a:expr, $b:expr) => {{
+        let mask = $mask;
+        if <<$t as $crate::lanes::Vector>::Real as $crate::lanes::Real>::ONE {
+            if $crate::lanes::Mask::any(mask) {
+                $a
+            } else {
+                $b
+            }
+        } else {
+            <$t as $crate::lanes::Vector>::select(mask, $a, $b)
+        }
+    }};
+}
+pub(crate) use select_lazy;
 
 /// The mask type of a [`Vector`]'s lanes.
 pub type MaskOf<V> = <<V as Vector>::Real as Real>::Mask;
@@ -137,12 +166,6 @@ pub trait Vector:
             Self::Real::select(mask, a.y(), b.y()),
             Self::Real::select(mask, a.z(), b.z()),
         )
-    }
-
-    /// [`Real::select_with`] for vectors.
-    #[inline(always)]
-    fn select_with(mask: MaskOf<Self>, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self {
-        Self::select(mask, a(), b())
     }
 }
 
@@ -208,10 +231,7 @@ impl Real for f32 {
         if mask { a } else { b }
     }
 
-    #[inline(always)]
-    fn select_with(mask: bool, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self {
-        if mask { a() } else { b() }
-    }
+    const ONE: bool = true;
 }
 
 /// One value: glam's own operations (the generic code at `Vec3` *is* the scalar code).
@@ -267,11 +287,6 @@ impl Vector for Vec3 {
     #[inline(always)]
     fn simd_ne(self, o: Self) -> bool {
         self != o
-    }
-
-    #[inline(always)]
-    fn select_with(mask: bool, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self {
-        if mask { a() } else { b() }
     }
 }
 
@@ -350,6 +365,7 @@ impl Mask for M16 {
 impl Real for F32x16 {
     type Mask = M16;
     const ZERO: Self = Self([0.0; LANES]);
+    const ONE: bool = false;
 
     #[inline(always)]
     fn splat(x: f32) -> Self {

@@ -6,7 +6,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{Ray, Triangle};
-use crate::lanes::{Mask, MaskOf, Real, Vector};
+use crate::lanes::{Mask, MaskOf, Real, Vector, select_lazy};
 use crate::sampling::{orthonormal_basis, uniform_cone};
 use crate::scene::Scene;
 
@@ -183,10 +183,11 @@ impl<V: Vector> DirectLight<V> {
         let r2 = to_light.length_squared();
         let min_r2 = V::Real::splat(MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE);
         let near = r2.simd_lt(min_r2);
-        let cos = V::Real::select_with(
+        let cos = select_lazy!(
+            Real: V::Real,
             near,
-            || normal.length(),
-            || (to_light / r2.sqrt()).dot(normal),
+            normal.length(),
+            (to_light / r2.sqrt()).dot(normal)
         );
         let r2 = V::Real::select(near, min_r2, r2);
         let four_pi_r2 = V::Real::splat(4.0 * PI) * r2;
@@ -335,11 +336,7 @@ pub fn shadow_rays_to<V: Vector>(
     let lifted = position + V::scale(side * offset, normal);
     // Off an edge the ray starts back toward the viewer and skips nothing; elsewhere it starts
     // at the lifted point and skips its first SHADOW_OFFSET.
-    let start = V::select_with(
-        near_edge,
-        || edge_start(lifted, normal, incoming),
-        || lifted,
-    );
+    let start = select_lazy!(Vector: V, near_edge, edge_start(lifted, normal, incoming), lifted);
     let skip = V::Real::select(near_edge, zero, offset);
     let to_light = target - start;
     let distance = to_light.length();
