@@ -231,3 +231,65 @@ fn same_image_whatever_the_kernels(scene: &Scene, sample: u32) {
         );
     }
 }
+
+#[test]
+fn shadow_rays_given_as_lanes_equal_brute_force() {
+    // The lab's shading hands its shadow rays over as lanes (`Scene::occluded_lanes`): the
+    // Cornell box's flat list culls them by their cone straight from the lanes, other
+    // structures copy them out. Every cast lane's answer is the brute-force loop's; lanes not
+    // cast are never reported blocked. Groups of four as the lab's wave makes them, some lanes
+    // left out.
+    use raylab::accel::SegmentLanes;
+    for choice in [SceneChoice::Cornell, SceneChoice::Bunny] {
+        let scene = choice.load().unwrap();
+        let settings = lab_settings(96, 96);
+        let shadow = shadow_rays(&scene, &settings.light, &primary_rays(&settings.camera));
+        let mut rng = raylab::sampling::Rng::new(17);
+        for isa in Isa::available() {
+            let scene = scene.clone().rebuilt(AccelKind::Auto, isa);
+            let mut checked = 0;
+            for batch in shadow.chunks(64) {
+                let mut soa = vec![[[0.0f32; 16]; 7]; batch.len().div_ceil(16)];
+                let mut cast = vec![0u16; soa.len()];
+                for (k, (ray, t_max)) in batch.iter().enumerate() {
+                    let (g, i) = (k / 16, k % 16);
+                    let floats = [
+                        ray.origin.x,
+                        ray.origin.y,
+                        ray.origin.z,
+                        ray.direction.x,
+                        ray.direction.y,
+                        ray.direction.z,
+                        *t_max,
+                    ];
+                    for (row, v) in soa[g].iter_mut().zip(floats) {
+                        row[i] = v;
+                    }
+                    if rng.next_f32() < 0.9 {
+                        cast[g] |= 1 << i;
+                    }
+                }
+                let groups: Vec<SegmentLanes> = soa
+                    .iter()
+                    .zip(&cast)
+                    .map(|(s, &cast)| SegmentLanes {
+                        origin: [&s[0], &s[1], &s[2]],
+                        direction: [&s[3], &s[4], &s[5]],
+                        t_max: &s[6],
+                        cast,
+                    })
+                    .collect();
+                let mut blocked = vec![0u16; groups.len()];
+                scene.occluded_lanes(&groups, &mut blocked);
+                for (k, (ray, t_max)) in batch.iter().enumerate() {
+                    let (g, i) = (k / 16, k % 16);
+                    let want = cast[g] & (1 << i) != 0
+                        && occluded_brute_force(ray, &scene.triangles, *t_max);
+                    assert_eq!(blocked[g] & (1 << i) != 0, want, "{} {ray:?}", isa.name());
+                    checked += 1;
+                }
+            }
+            assert!(checked > 5_000, "{checked}");
+        }
+    }
+}

@@ -262,6 +262,7 @@ mod lanes {
 
     use super::super::packet::{MAX_WIDTH, PacketIsa};
 
+    use super::super::SegmentLanes;
     use super::{Cone, Corners, MARGIN, MAX_SLOPE, MIN_RAYS, Slopes};
     use crate::geometry::Ray;
 
@@ -288,7 +289,13 @@ mod lanes {
 
         /// The same tests and slopes as the readable loops, a direction `(x, y, z)` per lane.
         #[inline(always)]
-        fn add(&mut self, k: P, (x, y, z): (P::F, P::F, P::F)) {
+        fn add(&mut self, k: P, direction: (P::F, P::F, P::F)) {
+            self.add_lanes(k, direction, (1 << P::WIDTH) - 1);
+        }
+
+        /// [`Acc::add`] for the lanes of `active` only.
+        #[inline(always)]
+        fn add_lanes(&mut self, k: P, (x, y, z): (P::F, P::F, P::F), active: u32) {
             let (sx, sy) = (k.div(x, z), k.div(y, z));
             let max = k.splat(MAX_SLOPE);
             let good = k.both(
@@ -298,11 +305,13 @@ mod lanes {
                     k.cmp::<_CMP_LE_OQ>(k.abs(sy), max),
                 ),
             );
-            self.bad |= !k.bits(good) & ((1 << P::WIDTH) - 1);
-            self.x_lo = k.min(self.x_lo, sx);
-            self.x_hi = k.max(self.x_hi, sx);
-            self.y_lo = k.min(self.y_lo, sy);
-            self.y_hi = k.max(self.y_hi, sy);
+            self.bad |= !k.bits(good) & active;
+            let (m, inf) = (k.mask(active), k.splat(f32::INFINITY));
+            let neg_inf = k.splat(f32::NEG_INFINITY);
+            self.x_lo = k.min(self.x_lo, k.blend(m, inf, sx));
+            self.x_hi = k.max(self.x_hi, k.blend(m, neg_inf, sx));
+            self.y_lo = k.min(self.y_lo, k.blend(m, inf, sy));
+            self.y_hi = k.max(self.y_hi, k.blend(m, neg_inf, sy));
         }
 
         /// The slopes over all lanes, or `None` if any lane failed.
@@ -449,6 +458,71 @@ mod lanes {
                 acc.add(k, local(k, &cone, start));
                 if acc.bad != 0 {
                     return None; // the path tracer's scattered shadow rays stop here
+                }
+            }
+            cone.delta = Self::spread_delta(greatest(k, spread2), least(k, near2))?;
+            Some(cone.with(acc.finish(k)?))
+        }
+
+        /// [`Cone::around_segments`] for shadow rays given as lanes ([`SegmentLanes`], the
+        /// lanes of `cast` only): the apex is the first ray's end, the frame from the first and
+        /// the last ray's starts, as for a slice of the same rays in the same order.
+        #[inline(always)]
+        pub(in crate::accel) fn around_segment_lanes<P: PacketIsa>(
+            k: P,
+            groups: &[SegmentLanes],
+        ) -> Option<Cone> {
+            let count: u32 = groups.iter().map(|g| g.cast.count_ones()).sum();
+            if (count as usize) < MIN_RAYS {
+                return None;
+            }
+            let ray = |g: &SegmentLanes, lane: usize| {
+                let v = |a: [&[f32; 16]; 3]| glam::Vec3::new(a[0][lane], a[1][lane], a[2][lane]);
+                (
+                    Ray {
+                        origin: v(g.origin),
+                        direction: v(g.direction),
+                    },
+                    g.t_max[lane],
+                )
+            };
+            let first = groups.iter().find(|g| g.cast != 0)?;
+            let last = groups.iter().rev().find(|g| g.cast != 0)?;
+            let (first, t_first) = ray(first, first.cast.trailing_zeros() as usize);
+            let (last, _) = ray(last, 15 - last.cast.leading_zeros() as usize);
+            let apex = first.at(t_first);
+            let mut cone = Self::frame(apex, (first.origin - apex) + (last.origin - apex), 0.0);
+            let mut acc = Acc::new(k);
+            let (mut spread2, mut near2) = (k.splat(0.0), k.splat(f32::INFINITY));
+            let a = splat3(k, apex);
+            for g in groups {
+                for offset in (0..16).step_by(P::WIDTH) {
+                    let active = (u32::from(g.cast) >> offset) & ((1 << P::WIDTH) - 1);
+                    if active == 0 {
+                        continue;
+                    }
+                    let m = k.mask(active);
+                    let ox = load_at(k, g.origin[0], offset);
+                    let oy = load_at(k, g.origin[1], offset);
+                    let oz = load_at(k, g.origin[2], offset);
+                    let dx = load_at(k, g.direction[0], offset);
+                    let dy = load_at(k, g.direction[1], offset);
+                    let dz = load_at(k, g.direction[2], offset);
+                    let t = load_at(k, g.t_max, offset);
+                    let end = [
+                        k.add(ox, k.mul(t, dx)),
+                        k.add(oy, k.mul(t, dy)),
+                        k.add(oz, k.mul(t, dz)),
+                    ];
+                    let s2 = length2(k, sub3(k, end, a));
+                    spread2 = k.max(spread2, k.blend(m, k.splat(0.0), s2));
+                    let start = sub3(k, [ox, oy, oz], a);
+                    let n2 = length2(k, start);
+                    near2 = k.min(near2, k.blend(m, k.splat(f32::INFINITY), n2));
+                    acc.add_lanes(k, local(k, &cone, start), active);
+                    if acc.bad != 0 {
+                        return None;
+                    }
                 }
             }
             cone.delta = Self::spread_delta(greatest(k, spread2), least(k, near2))?;

@@ -520,6 +520,78 @@ impl Accel {
     }
 }
 
+/// Up to sixteen shadow rays as lanes (structure of arrays), as the lab's shading makes them:
+/// origins, directions and lengths per lane, and `cast`, bit `i` set where lane `i` holds a ray.
+/// [`Accel::occluded_lanes`] traces them without copying them into an array of rays first.
+#[derive(Clone, Copy, Debug)]
+pub struct SegmentLanes<'a> {
+    pub origin: [&'a [f32; 16]; 3],
+    pub direction: [&'a [f32; 16]; 3],
+    pub t_max: &'a [f32; 16],
+    pub cast: u16,
+}
+
+impl SegmentLanes<'_> {
+    /// Lane `i`'s ray and length.
+    pub fn ray(&self, i: usize) -> (Ray, f32) {
+        let v = |a: [&[f32; 16]; 3]| glam::Vec3::new(a[0][i], a[1][i], a[2][i]);
+        (
+            Ray {
+                origin: v(self.origin),
+                direction: v(self.direction),
+            },
+            self.t_max[i],
+        )
+    }
+}
+
+impl Accel {
+    /// [`Accel::occluded_batch`] for shadow rays given as lanes: bit `i` of `blocked[g]` set
+    /// when lane `i` of `groups[g]` is cast and blocked. The same answers: the flat list culls
+    /// the whole set by its cone ([`cull`]) and tests each group's lanes against what is kept,
+    /// straight from the lanes; anything else copies the rays into an array and asks
+    /// [`Accel::occluded_batch`].
+    pub fn occluded_lanes(
+        &self,
+        triangles: &[Triangle],
+        groups: &[SegmentLanes],
+        blocked: &mut [u16],
+    ) {
+        debug_assert_eq!(groups.len(), blocked.len());
+        #[cfg(target_arch = "x86_64")]
+        if let Structure::Flat(f) = &self.structure
+            && f.cullable()
+        {
+            let done = match self.isa {
+                // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
+                Isa::Avx512(k) => unsafe { occluded_lanes_avx512(k, f, groups, blocked) },
+                // SAFETY: `k` proves the CPU has AVX2 and FMA.
+                Isa::Avx2(k) => unsafe { occluded_lanes_avx2(k, f, groups, blocked) },
+                _ => false,
+            };
+            if done {
+                return;
+            }
+        }
+        for (g, blocked) in groups.iter().zip(blocked) {
+            let mut rays = [(Ray::new(glam::Vec3::ZERO, glam::Vec3::Z), 0.0); 16];
+            let mut lane = [0u8; 16];
+            let mut n = 0;
+            for i in (0..16).filter(|&i| g.cast & (1 << i) != 0) {
+                rays[n] = g.ray(i);
+                lane[n] = i as u8;
+                n += 1;
+            }
+            let mut answers = [false; 16];
+            self.occluded_batch(triangles, &rays[..n], &mut answers[..n]);
+            *blocked = 0;
+            for (&i, &b) in lane[..n].iter().zip(&answers[..n]) {
+                *blocked |= u16::from(b) << i;
+            }
+        }
+    }
+}
+
 // The traversals compiled with the kernels' instruction set, so the kernels inline into them.
 // Each takes a batch: the structure is matched once, and a single query is a batch of one
 // (`closest_avx2` and friends), so each traversal is written once.
@@ -690,6 +762,44 @@ fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [b
         }
         Structure::BruteForce | Structure::Bvh2(_) => {}
     }
+}
+
+/// [`Accel::occluded_lanes`] on the flat list with a cone, AVX-512; false (nothing done)
+/// when the rays have no cone.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
+fn occluded_lanes_avx512(
+    k: Avx512,
+    f: &Flat,
+    groups: &[SegmentLanes],
+    blocked: &mut [u16],
+) -> bool {
+    occluded_lanes_in(k, f, groups, blocked)
+}
+
+/// [`occluded_lanes_avx512`] with AVX2, eight lanes at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn occluded_lanes_avx2(k: Avx2, f: &Flat, groups: &[SegmentLanes], blocked: &mut [u16]) -> bool {
+    occluded_lanes_in(k, f, groups, blocked)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn occluded_lanes_in<P: packet::PacketIsa>(
+    k: P,
+    f: &Flat,
+    groups: &[SegmentLanes],
+    blocked: &mut [u16],
+) -> bool {
+    let Some(cone) = Cone::around_segment_lanes(k, groups) else {
+        return false;
+    };
+    let kept = cull::kept(&cone, k, &f.corners, f.count);
+    for (g, blocked) in groups.iter().zip(blocked) {
+        *blocked = packet::occluded_lanes_in_list(k, &f.packets16, kept, g);
+    }
+    true
 }
 
 fn closest_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {

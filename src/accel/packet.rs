@@ -1002,6 +1002,51 @@ pub(super) fn occluded_in_list<P: PacketIsa>(
     }
 }
 
+/// [`occluded_in_list`] for the cast lanes of a group of shadow rays given as lanes: bit `i`
+/// set where lane `i` is cast and blocked. The lanes are loaded as they are; nothing is copied
+/// into an array of rays.
+#[inline(always)]
+pub(super) fn occluded_lanes_in_list<P: PacketIsa>(
+    k: P,
+    packets: &[Packet16],
+    kept: u64,
+    g: &super::SegmentLanes,
+) -> u16 {
+    let mut blocked = 0u16;
+    for offset in (0..16).step_by(P::WIDTH) {
+        let active = (u32::from(g.cast) >> offset) & ((1 << P::WIDTH) - 1);
+        if active == 0 {
+            continue;
+        }
+        let lanes = Lanes::for_triangles(
+            k,
+            [
+                load_at(k, g.origin[0], offset),
+                load_at(k, g.origin[1], offset),
+                load_at(k, g.origin[2], offset),
+                load_at(k, g.direction[0], offset),
+                load_at(k, g.direction[1], offset),
+                load_at(k, g.direction[2], offset),
+            ],
+        );
+        let limit = load_at(k, g.t_max, offset);
+        let done = lanes.any_among(kept_triangles(packets, kept), active, limit);
+        blocked |= (done << offset) as u16;
+    }
+    blocked
+}
+
+/// Lanes `offset..offset + WIDTH` of `a`.
+#[inline(always)]
+fn load_at<P: PacketIsa>(k: P, a: &[f32; 16], offset: usize) -> P::F {
+    if offset == 0 {
+        return k.load(a);
+    }
+    let mut row = [0.0f32; MAX_WIDTH];
+    row[..P::WIDTH].copy_from_slice(&a[offset..offset + P::WIDTH]);
+    k.load(&row)
+}
+
 /// The triangles of `kept` as (packet, lane), in index order.
 #[inline(always)]
 fn kept_triangles(

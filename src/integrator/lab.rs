@@ -12,12 +12,14 @@
 //! [`Material::specular_branches`]: crate::material::Material::specular_branches
 //! [`Shading::specular_depth`]: super::Shading::specular_depth
 
+use arrayvec::ArrayVec;
 use glam::Vec3;
 
 use super::{
     BATCH, HitTerms, Lighting, Recorder, Surface, Surfaces, Tracer, continue_ray, light_point,
-    shaded_value, shadow_rays_blocked,
+    shaded_value,
 };
+use crate::accel::SegmentLanes;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
@@ -225,9 +227,27 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             },
         );
     }
-    let blocked = shadow_rays_blocked(scene, diffuse.len, |k| {
-        lit[k / LANES].shadow.lane(k % LANES)
-    });
+    // Their shadow rays, handed to the tracer as the lanes they are in.
+    let groups = diffuse.len.div_ceil(LANES);
+    let mut lanes = [None; BATCH / LANES];
+    for (g, lit) in lit[..groups].iter().enumerate() {
+        let s = &lit.shadow;
+        let real = (diffuse.len - g * LANES).min(LANES);
+        let cast = s.cast.0[..real]
+            .iter()
+            .enumerate()
+            .fold(0u16, |bits, (i, &c)| bits | (u16::from(c) << i));
+        lanes[g] = Some(SegmentLanes {
+            origin: [&s.origin.x.0, &s.origin.y.0, &s.origin.z.0],
+            direction: [&s.direction.x.0, &s.direction.y.0, &s.direction.z.0],
+            t_max: &s.t_max.0,
+            cast,
+        });
+    }
+    let lanes: ArrayVec<SegmentLanes, { BATCH / LANES }> = lanes.into_iter().flatten().collect();
+    let mut bits = [0u16; BATCH / LANES];
+    scene.occluded_lanes(&lanes, &mut bits[..groups]);
+    let blocked: [bool; BATCH] = std::array::from_fn(|k| bits[k / LANES] & (1 << (k % LANES)) != 0);
     let indirect = shading.indirect_term();
     let mut values = [Vec3x16::ZERO; BATCH / LANES];
     for (g, (_, surfaces)) in diffuse.groups().enumerate() {

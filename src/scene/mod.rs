@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::{Accel, AccelKind, Hit, Isa};
+use crate::accel::{Accel, AccelKind, Hit, Isa, SegmentLanes};
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{self, Intersection};
 use crate::light;
@@ -197,6 +197,26 @@ impl Scene {
                 *o = hit.map(|hit| intersection(ray, hit));
             }
         }
+    }
+
+    /// [`Scene::occluded_many`] for shadow rays given as lanes, sixteen a group (as the lab's
+    /// shading makes them): bit `i` of `blocked[g]` set when lane `i` of `groups[g]` is cast
+    /// and blocked. The same answers, without copying the rays into an array first where the
+    /// structure can take lanes ([`Accel::occluded_lanes`]).
+    pub fn occluded_lanes(&self, groups: &[SegmentLanes], blocked: &mut [u16]) {
+        if !self.accel.built_for(self.triangles.len()) {
+            for (g, blocked) in groups.iter().zip(blocked) {
+                *blocked = 0;
+                for i in (0..16).filter(|&i| g.cast & (1 << i) != 0) {
+                    let (ray, t_max) = g.ray(i);
+                    if intersect::occluded_brute_force(&ray, &self.triangles, t_max) {
+                        *blocked |= 1 << i;
+                    }
+                }
+            }
+            return;
+        }
+        self.accel.occluded_lanes(&self.triangles, groups, blocked);
     }
 
     /// [`Scene::occluded`] for many shadow rays at once, each with its own `t_max`.
