@@ -327,16 +327,12 @@ mod tests {
         let mut builds: Vec<(&str, RaysFn)> = vec![("portable", rays_of)];
         #[cfg(target_arch = "x86_64")]
         {
-            if is_x86_feature_detected!("avx512f")
-                && is_x86_feature_detected!("avx512dq")
-                && is_x86_feature_detected!("avx512vl")
-                && is_x86_feature_detected!("avx2")
-                && is_x86_feature_detected!("fma")
-            {
+            // The kernels' own detection: what the renderer checks before it calls them.
+            if crate::accel::simd::Avx512::detect().is_some() {
                 // SAFETY: the CPU has every feature the function is compiled with.
                 builds.push(("avx512", |p, o| unsafe { rays_avx512(p, o) }));
             }
-            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            if crate::accel::simd::Avx2::detect().is_some() {
                 // SAFETY: the CPU has every feature the function is compiled with.
                 builds.push(("avx2", |p, o| unsafe { rays_avx2(p, o) }));
             }

@@ -348,6 +348,23 @@ impl Not for M16 {
     }
 }
 
+impl M16 {
+    /// Lane `i` as bit `i`.
+    #[inline(always)]
+    pub fn bits(self) -> u16 {
+        self.0
+            .iter()
+            .enumerate()
+            .fold(0, |bits, (i, &b)| bits | (u16::from(b) << i))
+    }
+
+    /// Bit `i` as lane `i`.
+    #[inline(always)]
+    pub fn from_bits(bits: u16) -> Self {
+        Self(std::array::from_fn(|i| bits & (1 << i) != 0))
+    }
+}
+
 impl Mask for M16 {
     const NONE: Self = Self([false; LANES]);
     #[inline(always)]

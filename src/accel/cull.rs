@@ -96,6 +96,15 @@ impl Cone {
         }
     }
 
+    /// The apex and frame of the cone of segments whose first is `first` and whose last starts
+    /// at `last_start`: the apex is the first one's end, the frame opens toward the middle of
+    /// the starts ([`Cone::frame`]).
+    fn segments_frame((first, t_first): (Ray, f32), last_start: Vec3) -> (Vec3, Cone) {
+        let apex = first.at(t_first);
+        let middle = (first.origin - apex) + (last_start - apex);
+        (apex, Self::frame(apex, middle, 0.0))
+    }
+
     /// The cone of rays that all start at one point, or `None` if they do not, or open too
     /// wide. The readable form; the renderer's batches use the SIMD one, the same operations
     /// a ray per lane ([`Cone::around_rays_simd`]).
@@ -124,13 +133,11 @@ impl Cone {
     /// near one point — within a hundredth of the distance to their starts — such as the
     /// shadow rays to a point light; or `None`. The apex is the first one's end.
     pub fn around_segments(segments: &[(Ray, f32)]) -> Option<Cone> {
-        let (first, t_first) = *segments.first()?;
+        let first = *segments.first()?;
         if segments.len() < MIN_RAYS {
             return None;
         }
-        let apex = first.at(t_first);
-        let last = segments[segments.len() - 1].0.origin;
-        let mut cone = Self::frame(apex, (first.origin - apex) + (last - apex), 0.0);
+        let (apex, mut cone) = Self::segments_frame(first, segments[segments.len() - 1].0.origin);
         let (mut spread2, mut near2) = (0.0f32, f32::INFINITY);
         let mut slopes = Slopes::NONE;
         for (r, t) in segments {
@@ -419,13 +426,12 @@ mod lanes {
             k: P,
             segments: &[(Ray, f32)],
         ) -> Option<Cone> {
-            let (first, t_first) = *segments.first()?;
+            let first = *segments.first()?;
             if segments.len() < MIN_RAYS {
                 return None;
             }
-            let apex = first.at(t_first);
-            let last = segments[segments.len() - 1].0.origin;
-            let mut cone = Self::frame(apex, (first.origin - apex) + (last - apex), 0.0);
+            let (apex, mut cone) =
+                Self::segments_frame(first, segments[segments.len() - 1].0.origin);
             // A few starts first, one at a time: scattered shadow rays (the path tracer's
             // after its first bounce) fail here, before a whole batch is gathered. Failing
             // here means failing below too: the same test on the same starts.
@@ -476,22 +482,11 @@ mod lanes {
             if (count as usize) < MIN_RAYS {
                 return None;
             }
-            let ray = |g: &SegmentLanes, lane: usize| {
-                let v = |a: [&[f32; 16]; 3]| glam::Vec3::new(a[0][lane], a[1][lane], a[2][lane]);
-                (
-                    Ray {
-                        origin: v(g.origin),
-                        direction: v(g.direction),
-                    },
-                    g.t_max[lane],
-                )
-            };
             let first = groups.iter().find(|g| g.cast != 0)?;
             let last = groups.iter().rev().find(|g| g.cast != 0)?;
-            let (first, t_first) = ray(first, first.cast.trailing_zeros() as usize);
-            let (last, _) = ray(last, 15 - last.cast.leading_zeros() as usize);
-            let apex = first.at(t_first);
-            let mut cone = Self::frame(apex, (first.origin - apex) + (last.origin - apex), 0.0);
+            let first = first.ray(first.cast.trailing_zeros() as usize);
+            let last = last.ray(15 - last.cast.leading_zeros() as usize);
+            let (apex, mut cone) = Self::segments_frame(first, last.0.origin);
             let mut acc = Acc::new(k);
             let (mut spread2, mut near2) = (k.splat(0.0), k.splat(f32::INFINITY));
             let a = splat3(k, apex);

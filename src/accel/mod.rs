@@ -559,9 +559,7 @@ impl Accel {
     ) {
         debug_assert_eq!(groups.len(), blocked.len());
         #[cfg(target_arch = "x86_64")]
-        if let Structure::Flat(f) = &self.structure
-            && f.cullable()
-        {
+        if let Structure::Flat(f) = &self.structure {
             let done = match self.isa {
                 // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
                 Isa::Avx512(k) => unsafe { occluded_lanes_avx512(k, f, groups, blocked) },
@@ -613,15 +611,7 @@ fn closest_batch_avx512(
             // A batch in a narrow cone (a stretch of camera rays) skips what it cannot see, and
             // goes through the few triangles left as packets of rays.
             #[cfg(target_arch = "x86_64")]
-            if let Some(cone) = f
-                .cullable()
-                .then(|| Cone::around_rays_simd(k, rays))
-                .flatten()
-            {
-                let kept = cull::kept(&cone, k, &f.corners, f.count);
-                for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-                    packet::closest_in_list(k, &f.packets16, kept, rays, t_max, out);
-                }
+            if flat_closest_culled(k, f, rays, t_max, out) {
                 return;
             }
             for (ray, hit) in rays.iter().zip(out) {
@@ -655,15 +645,7 @@ fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mu
         Structure::Flat(f) => {
             // Shadow rays to a point light skip what lies outside their cone.
             #[cfg(target_arch = "x86_64")]
-            if let Some(cone) = f
-                .cullable()
-                .then(|| Cone::around_segments_simd(k, rays))
-                .flatten()
-            {
-                let kept = cull::kept(&cone, k, &f.corners, f.count);
-                for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-                    packet::occluded_in_list(k, &f.packets16, kept, rays, out);
-                }
+            if flat_occluded_culled(k, f, rays, out) {
                 return;
             }
             for ((ray, t_max), blocked) in rays.iter().zip(out) {
@@ -694,15 +676,7 @@ fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mu
     match s {
         Structure::Flat(f) => {
             #[cfg(target_arch = "x86_64")]
-            if let Some(cone) = f
-                .cullable()
-                .then(|| Cone::around_rays_simd(k, rays))
-                .flatten()
-            {
-                let kept = cull::kept(&cone, k, &f.corners, f.count);
-                for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
-                    packet::closest_in_list(k, &f.packets16, kept, rays, t_max, out);
-                }
+            if flat_closest_culled(k, f, rays, t_max, out) {
                 return;
             }
             for (ray, hit) in rays.iter().zip(out) {
@@ -732,15 +706,7 @@ fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [b
     match s {
         Structure::Flat(f) => {
             #[cfg(target_arch = "x86_64")]
-            if let Some(cone) = f
-                .cullable()
-                .then(|| Cone::around_segments_simd(k, rays))
-                .flatten()
-            {
-                let kept = cull::kept(&cone, k, &f.corners, f.count);
-                for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
-                    packet::occluded_in_list(k, &f.packets16, kept, rays, out);
-                }
+            if flat_occluded_culled(k, f, rays, out) {
                 return;
             }
             for ((ray, t_max), blocked) in rays.iter().zip(out) {
@@ -784,6 +750,54 @@ fn occluded_lanes_avx2(k: Avx2, f: &Flat, groups: &[SegmentLanes], blocked: &mut
     occluded_lanes_in(k, f, groups, blocked)
 }
 
+/// The flat list's culled closest hits for a batch of rays from one point ([`cull`]): the
+/// triangles the batch's cone may reach, a triangle at a time against a packet of rays. False
+/// (nothing done) when the list is too long to cull or the rays have no cone.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn flat_closest_culled<P: packet::PacketIsa>(
+    k: P,
+    f: &Flat,
+    rays: &[Ray],
+    t_max: f32,
+    out: &mut [Option<Hit>],
+) -> bool {
+    if !f.cullable() {
+        return false;
+    }
+    let Some(cone) = Cone::around_rays_simd(k, rays) else {
+        return false;
+    };
+    let kept = cull::kept(&cone, k, &f.corners, f.count);
+    for (rays, out) in rays.chunks(P::WIDTH).zip(out.chunks_mut(P::WIDTH)) {
+        packet::closest_in_list(k, &f.packets16, kept, rays, t_max, out);
+    }
+    true
+}
+
+/// [`flat_closest_culled`] for shadow rays ending near one point.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn flat_occluded_culled<P: packet::PacketIsa>(
+    k: P,
+    f: &Flat,
+    rays: &[(Ray, f32)],
+    out: &mut [bool],
+) -> bool {
+    if !f.cullable() {
+        return false;
+    }
+    let Some(cone) = Cone::around_segments_simd(k, rays) else {
+        return false;
+    };
+    let kept = cull::kept(&cone, k, &f.corners, f.count);
+    for (rays, out) in rays.chunks(P::WIDTH).zip(out.chunks_mut(P::WIDTH)) {
+        packet::occluded_in_list(k, &f.packets16, kept, rays, out);
+    }
+    true
+}
+
+/// [`flat_closest_culled`] for shadow rays given as lanes.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn occluded_lanes_in<P: packet::PacketIsa>(
@@ -792,6 +806,9 @@ fn occluded_lanes_in<P: packet::PacketIsa>(
     groups: &[SegmentLanes],
     blocked: &mut [u16],
 ) -> bool {
+    if !f.cullable() {
+        return false;
+    }
     let Some(cone) = Cone::around_segment_lanes(k, groups) else {
         return false;
     };

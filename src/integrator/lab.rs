@@ -228,30 +228,17 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         );
     }
     // Their shadow rays, handed to the tracer as the lanes they are in.
-    let groups = diffuse.len.div_ceil(LANES);
-    let mut lanes = [None; BATCH / LANES];
-    for (g, lit) in lit[..groups].iter().enumerate() {
-        let s = &lit.shadow;
-        let real = (diffuse.len - g * LANES).min(LANES);
-        let cast = s.cast.0[..real]
-            .iter()
-            .enumerate()
-            .fold(0u16, |bits, (i, &c)| bits | (u16::from(c) << i));
-        lanes[g] = Some(SegmentLanes {
-            origin: [&s.origin.x.0, &s.origin.y.0, &s.origin.z.0],
-            direction: [&s.direction.x.0, &s.direction.y.0, &s.direction.z.0],
-            t_max: &s.t_max.0,
-            cast,
-        });
-    }
-    let lanes: ArrayVec<SegmentLanes, { BATCH / LANES }> = lanes.into_iter().flatten().collect();
-    let mut bits = [0u16; BATCH / LANES];
-    scene.occluded_lanes(&lanes, &mut bits[..groups]);
-    let blocked: [bool; BATCH] = std::array::from_fn(|k| bits[k / LANES] & (1 << (k % LANES)) != 0);
+    let shadows: ArrayVec<SegmentLanes, { BATCH / LANES }> = diffuse
+        .groups()
+        .zip(&lit)
+        .map(|((len, _), lit)| lit.shadow.segment_lanes(len))
+        .collect();
+    let mut blocked = [0u16; BATCH / LANES];
+    scene.occluded_lanes(&shadows, &mut blocked[..shadows.len()]);
     let indirect = shading.indirect_term();
     let mut values = [Vec3x16::ZERO; BATCH / LANES];
     for (g, (_, surfaces)) in diffuse.groups().enumerate() {
-        let blocked = M16(blocked[g * LANES..][..LANES].try_into().unwrap());
+        let blocked = M16::from_bits(blocked[g]);
         values[g] = shaded_value(
             shading.stage,
             surfaces.rho,
@@ -272,7 +259,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
                 rho: s.rho.lane(lane),
                 d: lit[g].d.lane(lane),
                 shadow_ray: lit[g].shadow.lane(lane),
-                blocked: blocked[k],
+                blocked: blocked[g] & (1 << lane) != 0,
             }
         };
         match wave {

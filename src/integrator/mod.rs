@@ -40,8 +40,8 @@ use std::str::FromStr;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::accel::Isa;
 use crate::accel::simd::{Avx2, Avx512};
+use crate::accel::{Isa, SegmentLanes};
 use crate::camera::ImagePoints;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
@@ -563,6 +563,22 @@ impl ShadowRays<Vec3x16> {
             };
             (ray, self.t_max.0[i])
         })
+    }
+
+    /// The first `len` lanes, as the tracer takes shadow rays in lanes
+    /// ([`crate::scene::Scene::occluded_lanes`]): the lanes past `len` are never cast.
+    #[inline(always)]
+    pub fn segment_lanes(&self, len: usize) -> SegmentLanes<'_> {
+        SegmentLanes {
+            origin: [&self.origin.x.0, &self.origin.y.0, &self.origin.z.0],
+            direction: [
+                &self.direction.x.0,
+                &self.direction.y.0,
+                &self.direction.z.0,
+            ],
+            t_max: &self.t_max.0,
+            cast: self.cast.bits() & ((1u32 << len.min(16)) - 1) as u16,
+        }
     }
 }
 
@@ -1118,18 +1134,14 @@ mod tests {
         let mut builds: Vec<(&str, LanesFn)> = vec![("portable", lit_lanes)];
         #[cfg(target_arch = "x86_64")]
         {
-            if is_x86_feature_detected!("avx512f")
-                && is_x86_feature_detected!("avx512dq")
-                && is_x86_feature_detected!("avx512vl")
-                && is_x86_feature_detected!("avx2")
-                && is_x86_feature_detected!("fma")
-            {
+            // The kernels' own detection: what the renderer checks before it calls them.
+            if crate::accel::simd::Avx512::detect().is_some() {
                 // SAFETY: the CPU has every feature the function is compiled with.
                 builds.push(("avx512", |l, s, x, y| unsafe {
                     lit_lanes_avx512(l, s, x, y)
                 }));
             }
-            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            if crate::accel::simd::Avx2::detect().is_some() {
                 // SAFETY: the CPU has every feature the function is compiled with.
                 builds.push(("avx2", |l, s, x, y| unsafe { lit_lanes_avx2(l, s, x, y) }));
             }
