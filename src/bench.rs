@@ -290,7 +290,7 @@ pub fn bench_scene(
 /// Deterministic: ray `i`'s direction comes from its own generator, started from `seed` and `i`
 /// alone, so the set is the same on any number of threads.
 pub fn bounce_rays(scene: &Scene, primary: &[Ray], seed: u64) -> Vec<Ray> {
-    use crate::sampling::{Rng, cosine_hemisphere_by_rejection, orthonormal_basis};
+    use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
     primary
         .par_iter()
         .enumerate()
@@ -304,9 +304,8 @@ pub fn bounce_rays(scene: &Scene, primary: &[Ray], seed: u64) -> Vec<Ray> {
                 normal = -normal;
             }
             let mut rng = Rng::for_pixel_sample(seed, i as u32, (i >> 32) as u32, 0);
-            let local = cosine_hemisphere_by_rejection(&mut rng);
-            let (t, b) = orthonormal_basis(normal);
-            let direction = (local.x * t + local.y * b + local.z * normal).normalize();
+            let local = cosine_hemisphere_by_rejection(&mut rng, true);
+            let direction = hemisphere_around(normal, local);
             let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction);
             Some(crate::integrator::continue_ray(
                 hit.position,

@@ -20,7 +20,7 @@
 //! branches, both sides are computed and [`Real::select`] picks each lane's: the same bits.
 //! The tests compare the two on many inputs.
 
-use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use glam::Vec3;
 
@@ -50,6 +50,7 @@ pub trait Real:
     + Sub<Output = Self>
     + Mul<Output = Self>
     + Div<Output = Self>
+    + Neg<Output = Self>
     + std::fmt::Debug
     + PartialEq
 {
@@ -59,6 +60,10 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// `f32::max` (a NaN gives the other value).
     fn simd_max(self, other: Self) -> Self;
+    /// `f32::min` (a NaN gives the other value).
+    fn simd_min(self, other: Self) -> Self;
+    /// `f32::copysign`: the magnitude of `self` with the sign of `sign`.
+    fn copysign(self, sign: Self) -> Self;
     fn simd_lt(self, other: Self) -> Self::Mask;
     fn simd_le(self, other: Self) -> Self::Mask;
     fn simd_gt(self, other: Self) -> Self::Mask;
@@ -153,6 +158,14 @@ pub trait Vector:
         self.dot(self).sqrt()
     }
 
+    /// glam's `max_element`: `max(x, max(y, z))`, where `max(a, b)` is `a` if `a > b`, else `b`.
+    #[inline(always)]
+    fn max_element(self) -> Self::Real {
+        let (x, y, z) = (self.x(), self.y(), self.z());
+        let yz = Self::Real::select(y.simd_gt(z), y, z);
+        Self::Real::select(x.simd_gt(yz), x, yz)
+    }
+
     /// `!=`: whether any component differs (glam's `PartialEq`, negated).
     #[inline(always)]
     fn simd_ne(self, o: Self) -> MaskOf<Self> {
@@ -199,6 +212,16 @@ impl Real for f32 {
     #[inline(always)]
     fn simd_max(self, other: Self) -> Self {
         f32::max(self, other)
+    }
+
+    #[inline(always)]
+    fn simd_min(self, other: Self) -> Self {
+        f32::min(self, other)
+    }
+
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        f32::copysign(self, sign)
     }
 
     #[inline(always)]
@@ -285,6 +308,11 @@ impl Vector for Vec3 {
     }
 
     #[inline(always)]
+    fn max_element(self) -> f32 {
+        Vec3::max_element(self)
+    }
+
+    #[inline(always)]
     fn simd_ne(self, o: Self) -> bool {
         self != o
     }
@@ -338,6 +366,15 @@ macro_rules! mask_op {
 
 mask_op!(BitAnd, bitand, &);
 mask_op!(BitOr, bitor, |);
+
+impl Neg for F32x16 {
+    type Output = Self;
+
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self(self.0.map(|x| -x))
+    }
+}
 
 impl Not for M16 {
     type Output = Self;
@@ -397,6 +434,16 @@ impl Real for F32x16 {
     #[inline(always)]
     fn simd_max(self, other: Self) -> Self {
         Self(lanewise(self.0, other.0, f32::max))
+    }
+
+    #[inline(always)]
+    fn simd_min(self, other: Self) -> Self {
+        Self(lanewise(self.0, other.0, f32::min))
+    }
+
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        Self(lanewise(self.0, sign.0, f32::copysign))
     }
 
     #[inline(always)]
@@ -539,5 +586,52 @@ impl Vector for Vec3x16 {
     #[inline(always)]
     fn z(self) -> F32x16 {
         self.z
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane operations the path tracer's roulette uses, lane by lane as glam and `f32`
+    /// compute them: `max_element` (ties, zeros of both signs), `simd_min` and `copysign`.
+    #[test]
+    fn lanes_reduce_and_compare_as_one_value_does() {
+        let values = [
+            0.0,
+            -0.0,
+            0.5,
+            0.95,
+            1.0,
+            0.25,
+            3.0,
+            -2.0,
+            f32::MIN_POSITIVE,
+        ];
+        let mut v = Vec3x16::ZERO;
+        let mut lane = 0;
+        let mut expected = Vec::new();
+        for &x in &values {
+            for &y in &values {
+                for &z in &[0.5, -0.0, 3.0] {
+                    let one = Vec3::new(x, y, z);
+                    v.set_lane(lane, one);
+                    expected.push(one);
+                    lane += 1;
+                    if lane == LANES {
+                        let max = v.max_element();
+                        let min = max.simd_min(F32x16::splat(0.95));
+                        let sign = F32x16::splat(1.0).copysign(v.z);
+                        for (i, e) in expected.iter().enumerate() {
+                            assert_eq!(max.0[i].to_bits(), e.max_element().to_bits(), "{e}");
+                            assert_eq!(min.0[i].to_bits(), e.max_element().min(0.95).to_bits());
+                            assert_eq!(sign.0[i].to_bits(), 1f32.copysign(e.z).to_bits());
+                        }
+                        lane = 0;
+                        expected.clear();
+                    }
+                }
+            }
+        }
     }
 }

@@ -23,7 +23,7 @@ use std::str::FromStr;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::sampling::{Rng, cosine_hemisphere_by_rejection, orthonormal_basis};
+use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
 use crate::texture::Texture;
 
 /// How a surface scatters light.
@@ -136,13 +136,9 @@ impl Material {
     pub fn sample(&self, direction: Vec3, normal: Vec3, rng: &mut Rng) -> Scatter {
         match self.kind {
             MaterialKind::Diffuse => {
-                let facing = facing(normal, direction);
-                let local = cosine_hemisphere_by_rejection(rng);
-                let (t, b) = orthonormal_basis(facing);
-                // Unit length up to rounding: the basis is orthonormal and `local` a unit
-                // vector, so no normalisation (a square root and a division) is needed.
+                let local = cosine_hemisphere_by_rejection(rng, true);
                 Scatter {
-                    direction: t * local.x + b * local.y + facing * local.z,
+                    direction: hemisphere_around(facing(normal, direction), local),
                     weight: self.reflectance,
                 }
             }

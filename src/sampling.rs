@@ -4,6 +4,8 @@
 //! `(seed, pixel, sample index)` alone: any pixel of any pass can be re-rendered by itself, and
 //! the image is the same whatever the number of threads or the order rows are traced in.
 
+use crate::lanes::{F32x16, LANES, M16, Mask, MaskOf, Real, Vector};
+
 /// A small, fast generator (PCG-XSH-RR 32 on a 64-bit state).
 #[derive(Clone, Debug)]
 pub struct Rng {
@@ -42,23 +44,90 @@ impl Rng {
 
     #[inline(always)]
     pub fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old.wrapping_mul(PCG_MULTIPLIER).wrapping_add(PCG_INCREMENT);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
+        let (state, out) = pcg_step(self.state);
+        self.state = state;
+        out
     }
 
     /// Uniform in [0, 1): the top 24 bits, so every value is exactly representable and 1.0 is
     /// never returned.
     #[inline(always)]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        unit_f32(self.next_u32())
     }
 
     /// Uniform in [lo, hi).
     pub fn uniform(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.next_f32()
+    }
+}
+
+/// One step of PCG-XSH-RR: the next state and the output of this one.
+#[inline(always)]
+fn pcg_step(old: u64) -> (u64, u32) {
+    let state = old.wrapping_mul(PCG_MULTIPLIER).wrapping_add(PCG_INCREMENT);
+    let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+    let rot = (old >> 59) as u32;
+    (state, xorshifted.rotate_right(rot))
+}
+
+/// [`Rng::next_f32`]'s number from a generator's output.
+#[inline(always)]
+fn unit_f32(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Uniform numbers for one lane or sixteen: [`Rng`] for one, [`Rng16`] for sixteen.
+pub trait Uniform<R: Real> {
+    /// [`Rng::next_f32`] in the lanes where `wanted` holds; the other lanes draw nothing (and
+    /// hold 0).
+    fn draw(&mut self, wanted: R::Mask) -> R;
+}
+
+impl Uniform<f32> for Rng {
+    #[inline(always)]
+    fn draw(&mut self, wanted: bool) -> f32 {
+        if wanted { self.next_f32() } else { 0.0 }
+    }
+}
+
+/// Sixteen generators side by side, one a lane, each drawing exactly the numbers it would
+/// draw alone ([`Rng`]): the path tracer's vertices draw their bounces and roulette sixteen
+/// paths at a time. The generators are copied in and back out ([`Rng16::set`],
+/// [`Rng16::get`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Rng16 {
+    state: [u64; LANES],
+}
+
+impl Rng16 {
+    pub const UNUSED: Self = Self { state: [0; LANES] };
+
+    /// Lane `i` becomes `rng`.
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, rng: &Rng) {
+        self.state[i] = rng.state;
+    }
+
+    /// The generator of lane `i`, as far as it has drawn.
+    #[inline(always)]
+    pub fn get(&self, i: usize) -> Rng {
+        Rng {
+            state: self.state[i],
+        }
+    }
+}
+
+impl Uniform<F32x16> for Rng16 {
+    #[inline(always)]
+    fn draw(&mut self, wanted: M16) -> F32x16 {
+        // Every lane steps (one vector step); the lanes not wanted keep their state.
+        F32x16(std::array::from_fn(|i| {
+            let (state, bits) = pcg_step(self.state[i]);
+            let wanted = wanted.0[i];
+            self.state[i] = if wanted { state } else { self.state[i] };
+            if wanted { unit_f32(bits) } else { 0.0 }
+        }))
     }
 }
 
@@ -100,16 +169,27 @@ pub fn cosine_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
 /// disk by rejection from the square around it (π/4 of the tries are kept, so 2.5 numbers are
 /// drawn on average), lifted onto the hemisphere. The path tracer's diffuse bounces use it:
 /// it is faster, and exactly as cosine-distributed.
+///
+/// Generic over [`Uniform`]: one direction (`rng` an [`Rng`], `wanted` true), or sixteen
+/// ([`Rng16`]: each lane draws until its own point falls inside, exactly the numbers it would
+/// draw alone). The lanes not `wanted` draw nothing and hold 0.
 #[inline(always)]
-pub fn cosine_hemisphere_by_rejection(rng: &mut Rng) -> glam::Vec3 {
-    loop {
-        let x = 2.0 * rng.next_f32() - 1.0;
-        let y = 2.0 * rng.next_f32() - 1.0;
+pub fn cosine_hemisphere_by_rejection<V: Vector>(
+    rng: &mut impl Uniform<V::Real>,
+    wanted: MaskOf<V>,
+) -> V {
+    let (one, two) = (V::Real::splat(1.0), V::Real::splat(2.0));
+    let mut todo = wanted;
+    let mut local = V::ZERO;
+    while todo.any() {
+        let x = two * rng.draw(todo) - one;
+        let y = two * rng.draw(todo) - one;
         let r2 = x * x + y * y;
-        if r2 < 1.0 {
-            return glam::Vec3::new(x, y, (1.0 - r2).sqrt());
-        }
+        let inside = todo & r2.simd_lt(one);
+        local = V::select(inside, V::new(x, y, (one - r2).sqrt()), local);
+        todo = todo & !inside;
     }
+    local
 }
 
 /// A direction on the hemisphere around +z with constant density 1 / (2π).
@@ -156,16 +236,29 @@ pub fn concentric_disk(u1: f32, u2: f32) -> glam::Vec2 {
 
 /// Two unit vectors that make a right-handed orthonormal basis with the unit vector `n`
 /// (Duff et al., "Building an Orthonormal Basis, Revisited", 2017: no branch on a near-axis
-/// `n` apart from its sign).
+/// `n` apart from its sign). Generic over [`Vector`]: one normal, or sixteen side by side (the
+/// path tracer's vertices), the same bits.
 #[inline(always)]
-pub fn orthonormal_basis(n: glam::Vec3) -> (glam::Vec3, glam::Vec3) {
-    let sign = 1.0f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
+pub fn orthonormal_basis<V: Vector>(n: V) -> (V, V) {
+    let (x, y, z) = (n.x(), n.y(), n.z());
+    let one = V::Real::splat(1.0);
+    let sign = one.copysign(z);
+    let a = V::Real::splat(-1.0) / (sign + z);
+    let b = x * y * a;
     (
-        glam::Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        glam::Vec3::new(b, sign + n.y * n.y * a, -n.y),
+        V::new(one + sign * x * x * a, sign * b, -sign * x),
+        V::new(b, sign + y * y * a, -y),
     )
+}
+
+/// `local`, a direction in the frame where `normal` is +z (as [`cosine_hemisphere`] and
+/// [`cosine_hemisphere_by_rejection`] give them), in the scene's frame
+/// ([`orthonormal_basis`]). Unit length up to rounding: the basis is orthonormal and `local` a
+/// unit vector, so no normalisation (a square root and a division) is needed.
+#[inline(always)]
+pub fn hemisphere_around<V: Vector>(normal: V, local: V) -> V {
+    let (t, b) = orthonormal_basis(normal);
+    t * local.x() + b * local.y() + normal * local.z()
 }
 
 #[cfg(test)]
@@ -266,7 +359,7 @@ mod tests {
             let (mut by_cos, mut by_phi) = ([0u32; 20], [0u32; 20]);
             for _ in 0..n {
                 let d = if rejection {
-                    cosine_hemisphere_by_rejection(&mut rng)
+                    cosine_hemisphere_by_rejection(&mut rng, true)
                 } else {
                     cosine_hemisphere(rng.next_f32(), rng.next_f32())
                 };
@@ -353,5 +446,106 @@ mod tests {
         }
         // Binomial, p = 1/4: standard deviation 137 of 100,000; 4σ.
         assert!((inner - n / 4).abs() < 548, "{inner}");
+    }
+    /// Sixteen random masks, one a round.
+    fn masks(rng: &mut Rng, rounds: usize) -> Vec<M16> {
+        (0..rounds)
+            .map(|_| M16::from_bits(rng.next_u32() as u16))
+            .collect()
+    }
+
+    /// Each lane of [`Rng16`] draws what its generator draws alone, and only where wanted.
+    #[test]
+    fn sixteen_generators_draw_what_each_draws_alone() {
+        let mut alone: Vec<Rng> = (0..16).map(|i| Rng::new(1000 + i)).collect();
+        let mut lanes = Rng16::UNUSED;
+        for (i, rng) in alone.iter().enumerate() {
+            lanes.set(i, rng);
+        }
+        for wanted in masks(&mut Rng::new(5), 200) {
+            let drawn = lanes.draw(wanted);
+            for (i, rng) in alone.iter_mut().enumerate() {
+                let expected = rng.draw(wanted.0[i]);
+                assert_eq!(drawn.0[i].to_bits(), expected.to_bits(), "lane {i}");
+            }
+        }
+        for (i, rng) in alone.iter_mut().enumerate() {
+            assert_eq!(
+                lanes.get(i).next_u32(),
+                rng.next_u32(),
+                "lane {i} ends where it would"
+            );
+        }
+    }
+
+    /// Directions by rejection sixteen at a time: each lane the very direction, and the very
+    /// numbers drawn, of its generator alone; lanes not wanted draw nothing.
+    #[test]
+    fn cosine_directions_sixteen_at_a_time_equal_one_at_a_time() {
+        let mut alone: Vec<Rng> = (0..16).map(|i| Rng::new(77 + i)).collect();
+        let mut lanes = Rng16::UNUSED;
+        for (i, rng) in alone.iter().enumerate() {
+            lanes.set(i, rng);
+        }
+        for wanted in masks(&mut Rng::new(6), 500) {
+            let local: crate::lanes::Vec3x16 = cosine_hemisphere_by_rejection(&mut lanes, wanted);
+            for (i, rng) in alone.iter_mut().enumerate() {
+                let expected = if wanted.0[i] {
+                    cosine_hemisphere_by_rejection(rng, true)
+                } else {
+                    glam::Vec3::ZERO
+                };
+                assert_eq!(
+                    local.lane(i).to_array().map(f32::to_bits),
+                    expected.to_array().map(f32::to_bits)
+                );
+            }
+        }
+        for (i, rng) in alone.iter_mut().enumerate() {
+            assert_eq!(lanes.get(i).next_u32(), rng.next_u32(), "lane {i}");
+        }
+    }
+
+    /// The basis and [`hemisphere_around`] for sixteen normals at a time, bit for bit one at a
+    /// time, including normals along ±z and with a negative zero.
+    #[test]
+    fn bases_sixteen_at_a_time_equal_one_at_a_time() {
+        use crate::lanes::Vec3x16;
+        let mut rng = Rng::new(12);
+        let special = [
+            glam::Vec3::Z,
+            -glam::Vec3::Z,
+            glam::Vec3::new(0.0, 0.0, -0.0),
+            glam::Vec3::new(1.0, 0.0, -0.0),
+            glam::Vec3::X,
+            -glam::Vec3::Y,
+        ];
+        for round in 0..200 {
+            let (mut normals, mut locals) = (Vec3x16::ZERO, Vec3x16::ZERO);
+            for i in 0..16 {
+                let random = glam::Vec3::new(
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                )
+                .normalize();
+                let n = if round == 0 && i < special.len() {
+                    special[i]
+                } else {
+                    random
+                };
+                normals.set_lane(i, n);
+                locals.set_lane(i, cosine_hemisphere_by_rejection(&mut rng, true));
+            }
+            let (t, b) = orthonormal_basis(normals);
+            let around = hemisphere_around(normals, locals);
+            for i in 0..16 {
+                let bits = |v: glam::Vec3| v.to_array().map(f32::to_bits);
+                let (t1, b1) = orthonormal_basis(normals.lane(i));
+                assert_eq!((bits(t.lane(i)), bits(b.lane(i))), (bits(t1), bits(b1)));
+                let one = hemisphere_around(normals.lane(i), locals.lane(i));
+                assert_eq!(bits(around.lane(i)), bits(one));
+            }
+        }
     }
 }

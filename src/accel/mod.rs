@@ -571,20 +571,23 @@ impl Accel {
                 return;
             }
         }
-        for (g, blocked) in groups.iter().zip(blocked) {
-            let mut rays = [(Ray::new(glam::Vec3::ZERO, glam::Vec3::Z), 0.0); 16];
-            let mut lane = [0u8; 16];
+        // Elsewhere, the rays copied out, up to four groups' in one batch.
+        for (groups, blocked) in groups.chunks(4).zip(blocked.chunks_mut(4)) {
+            let mut rays = [(Ray::new(glam::Vec3::ZERO, glam::Vec3::Z), 0.0); 64];
+            let mut whose = [(0u8, 0u8); 64];
             let mut n = 0;
-            for i in (0..16).filter(|&i| g.cast & (1 << i) != 0) {
-                rays[n] = g.ray(i);
-                lane[n] = i as u8;
-                n += 1;
+            for (g, group) in groups.iter().enumerate() {
+                for i in (0..16).filter(|&i| group.cast & (1 << i) != 0) {
+                    rays[n] = group.ray(i);
+                    whose[n] = (g as u8, i as u8);
+                    n += 1;
+                }
             }
-            let mut answers = [false; 16];
+            let mut answers = [false; 64];
             self.occluded_batch(triangles, &rays[..n], &mut answers[..n]);
-            *blocked = 0;
-            for (&i, &b) in lane[..n].iter().zip(&answers[..n]) {
-                *blocked |= u16::from(b) << i;
+            blocked.fill(0);
+            for (&(g, i), &b) in whose[..n].iter().zip(&answers[..n]) {
+                blocked[g as usize] |= u16::from(b) << i;
             }
         }
     }
@@ -809,10 +812,12 @@ fn occluded_lanes_in<P: packet::PacketIsa>(
     if !f.cullable() {
         return false;
     }
-    let Some(cone) = Cone::around_segment_lanes(k, groups) else {
-        return false;
+    // Without a cone (rays from all over the scene, as the path tracer's), every triangle,
+    // still tested straight from the lanes.
+    let kept = match Cone::around_segment_lanes(k, groups) {
+        Some(cone) => cull::kept(&cone, k, &f.corners, f.count),
+        None => u64::MAX.checked_shr(64 - f.count as u32).unwrap_or(0),
     };
-    let kept = cull::kept(&cone, k, &f.corners, f.count);
     for (g, blocked) in groups.iter().zip(blocked) {
         *blocked = packet::occluded_lanes_in_list(k, &f.packets16, kept, g);
     }

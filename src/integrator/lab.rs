@@ -12,14 +12,9 @@
 //! [`Material::specular_branches`]: crate::material::Material::specular_branches
 //! [`Shading::specular_depth`]: super::Shading::specular_depth
 
-use arrayvec::ArrayVec;
 use glam::Vec3;
 
-use super::{
-    BATCH, HitTerms, Lighting, Recorder, Surface, Surfaces, Tracer, continue_ray, light_point,
-    shaded_value,
-};
-use crate::accel::SegmentLanes;
+use super::{BATCH, DiffuseHits, Recorder, Tracer, continue_ray, shaded_value};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
@@ -94,48 +89,6 @@ fn wave_for_light<R: Recorder>(
     }
 }
 
-// A wave's hits fill whole lane groups.
-const _: () = assert!(BATCH.is_multiple_of(LANES));
-
-/// The diffuse hits of a wave, sixteen to a lane group, and the ray each belongs to: the lab's
-/// terms are computed for sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`]).
-struct DiffuseHits {
-    surfaces: [Surfaces<Vec3x16>; BATCH / LANES],
-    /// Index of each hit's ray within the wave.
-    owner: [u8; BATCH],
-    len: usize,
-}
-
-impl DiffuseHits {
-    #[inline(always)]
-    fn new() -> Self {
-        Self {
-            surfaces: [Surfaces::ZERO; BATCH / LANES],
-            owner: [0; BATCH],
-            len: 0,
-        }
-    }
-
-    #[inline(always)]
-    fn push(&mut self, surface: Surface, owner: usize) {
-        let k = self.len;
-        self.surfaces[k / LANES].set(k % LANES, surface);
-        self.owner[k] = owner as u8;
-        self.len += 1;
-    }
-
-    /// The lane groups holding hits, with how many each holds.
-    #[inline(always)]
-    fn groups(&self) -> impl Iterator<Item = (usize, &Surfaces<Vec3x16>)> {
-        let len = self.len;
-        self.surfaces
-            .iter()
-            .enumerate()
-            .take(len.div_ceil(LANES))
-            .map(move |(g, s)| ((len - g * LANES).min(LANES), s))
-    }
-}
-
 /// One phase-batched step for up to [`BATCH`] rays: closest hits, the lab's terms at the
 /// diffuse hits (sixteen at a time), their shadow rays, the sums into `out`; the specular hits'
 /// branches go to `next`. Each step is told to `rec` (nothing is, for `()`).
@@ -199,42 +152,14 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         }
     }
     // The light at the diffuse hits, sixteen at a time, in the order of the hits (a spherical
-    // light draws from each pixel's generator in that order).
-    let light = &tracer.light;
+    // light draws from each pixel's generator in that order), and their shadow rays, handed to
+    // the tracer as the lanes they are in.
     let pixel_of = |i: u8| match wave {
         Wave::Camera => i as usize,
         Wave::Branches(b) => b[i as usize].pixel as usize,
     };
-    let mut lit = [Lighting::NONE; BATCH / LANES];
-    for (g, (len, surfaces)) in diffuse.groups().enumerate() {
-        let owner = &diffuse.owner[g * LANES..][..len];
-        lit[g] = Lighting::at(
-            light,
-            shading.stage,
-            shading.shadows,
-            surfaces,
-            |positions, wanted| {
-                let mut target = Vec3x16::splat(light.position);
-                if SPHERE_LIGHT {
-                    for (k, &i) in owner.iter().enumerate() {
-                        if wanted.0[k] {
-                            let rng = &mut rngs[pixel_of(i)];
-                            target.set_lane(k, light_point(light, positions.lane(k), rng));
-                        }
-                    }
-                }
-                target
-            },
-        );
-    }
-    // Their shadow rays, handed to the tracer as the lanes they are in.
-    let shadows: ArrayVec<SegmentLanes, { BATCH / LANES }> = diffuse
-        .groups()
-        .zip(&lit)
-        .map(|((len, _), lit)| lit.shadow.segment_lanes(len))
-        .collect();
-    let mut blocked = [0u16; BATCH / LANES];
-    scene.occluded_lanes(&shadows, &mut blocked[..shadows.len()]);
+    let lit = diffuse.light::<SPHERE_LIGHT>(tracer, rngs, pixel_of);
+    let blocked = diffuse.blocked(scene, &lit);
     let indirect = shading.indirect_term();
     let mut values = [Vec3x16::ZERO; BATCH / LANES];
     for (g, (_, surfaces)) in diffuse.groups().enumerate() {
@@ -251,17 +176,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         let (g, lane) = (k / LANES, k % LANES);
         let value = values[g].lane(lane);
         // What the inspector is told: this hit's terms, as `HitTerms::at` gives them.
-        let terms = || {
-            let s = &diffuse.surfaces[g];
-            HitTerms {
-                position: s.position.lane(lane),
-                normal: s.normal.lane(lane),
-                rho: s.rho.lane(lane),
-                d: lit[g].d.lane(lane),
-                shadow_ray: lit[g].shadow.lane(lane),
-                blocked: blocked[g] & (1 << lane) != 0,
-            }
-        };
+        let terms = || diffuse.terms(g, lane, &lit[g], blocked[g]);
         match wave {
             Wave::Camera => {
                 if R::ENABLED {

@@ -37,6 +37,7 @@ use std::borrow::Cow;
 use std::fmt;
 use std::str::FromStr;
 
+use arrayvec::ArrayVec;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -45,7 +46,7 @@ use crate::accel::{Isa, SegmentLanes};
 use crate::camera::ImagePoints;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::lanes::{M16, Mask, MaskOf, Real, Vec3x16, Vector};
+use crate::lanes::{LANES, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
 use crate::light::{DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::sampling::Rng;
@@ -582,6 +583,131 @@ impl ShadowRays<Vec3x16> {
     }
 }
 
+// A wave's hits fill whole lane groups.
+const _: () = assert!(BATCH.is_multiple_of(LANES));
+
+/// Lane groups in a batch.
+const GROUPS: usize = BATCH / LANES;
+
+/// The diffuse hits of a batch, sixteen to a lane group, and whose each is: both integrators
+/// compute the lab's terms sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`]) and hand
+/// their shadow rays to the tracer as lanes ([`Scene::occluded_lanes`]).
+pub(crate) struct DiffuseHits {
+    pub surfaces: [Surfaces<Vec3x16>; GROUPS],
+    /// Whose each hit is: the index of its ray (lab) or path (path) within the batch.
+    pub owner: [u8; BATCH],
+    pub len: usize,
+}
+
+impl DiffuseHits {
+    #[inline(always)]
+    pub fn new() -> Self {
+        Self {
+            surfaces: [Surfaces::ZERO; GROUPS],
+            owner: [0; BATCH],
+            len: 0,
+        }
+    }
+
+    /// No hits; the lanes keep what they held, never read again (cheaper than zeroing them).
+    #[inline(always)]
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    #[inline(always)]
+    pub fn push(&mut self, surface: Surface, owner: usize) {
+        let k = self.len;
+        self.surfaces[k / LANES].set(k % LANES, surface);
+        self.owner[k] = owner as u8;
+        self.len += 1;
+    }
+
+    /// The lane groups holding hits, with how many each holds.
+    #[inline(always)]
+    pub fn groups(&self) -> impl Iterator<Item = (usize, &Surfaces<Vec3x16>)> {
+        let len = self.len;
+        self.surfaces
+            .iter()
+            .enumerate()
+            .take(len.div_ceil(LANES))
+            .map(move |(g, s)| ((len - g * LANES).min(LANES), s))
+    }
+
+    /// The owners of group `g`'s hits.
+    #[inline(always)]
+    pub fn owners(&self, g: usize) -> &[u8] {
+        &self.owner[g * LANES..self.len.min((g + 1) * LANES)]
+    }
+
+    /// The light at every hit, sixteen at a time, in the order of the hits. With `SPHERE`
+    /// (a spherical light) the shadow rays go to points of the light drawn from
+    /// `rngs[rng_of(owner)]` ([`light_point`]), in that order; otherwise nothing is drawn.
+    /// `SPHERE` is a constant so that, for a point light, the closure that finds the points
+    /// is small enough to inline into the code compiled for the CPU (as a run-time flag it was
+    /// not, and the lab pass took 8 % longer: measured).
+    #[inline(always)]
+    pub fn light<const SPHERE: bool>(
+        &self,
+        tracer: &Tracer,
+        rngs: &mut [Rng],
+        rng_of: impl Fn(u8) -> usize,
+    ) -> [Lighting<Vec3x16>; GROUPS] {
+        let (light, shading) = (&tracer.light, &tracer.shading);
+        let mut lit = [Lighting::NONE; GROUPS];
+        for (g, (_, surfaces)) in self.groups().enumerate() {
+            let owners = self.owners(g);
+            lit[g] = Lighting::at(
+                light,
+                shading.stage,
+                shading.shadows,
+                surfaces,
+                |positions, wanted| {
+                    let mut target = Vec3x16::splat(light.position);
+                    if SPHERE {
+                        for (k, &i) in owners.iter().enumerate() {
+                            if wanted.0[k] {
+                                let rng = &mut rngs[rng_of(i)];
+                                target.set_lane(k, light_point(light, positions.lane(k), rng));
+                            }
+                        }
+                    }
+                    target
+                },
+            );
+        }
+        lit
+    }
+
+    /// Which shadow rays of `lit` (the hits' [`DiffuseHits::light`]) are blocked: bit `lane`
+    /// of group `g`'s mask.
+    #[inline(always)]
+    pub fn blocked(&self, scene: &Scene, lit: &[Lighting<Vec3x16>; GROUPS]) -> [u16; GROUPS] {
+        let shadows: ArrayVec<SegmentLanes, GROUPS> = self
+            .groups()
+            .zip(lit)
+            .map(|((len, _), lit)| lit.shadow.segment_lanes(len))
+            .collect();
+        let mut blocked = [0u16; GROUPS];
+        scene.occluded_lanes(&shadows, &mut blocked[..shadows.len()]);
+        blocked
+    }
+
+    /// Hit `lane` of group `g` as [`HitTerms::at`] gives it, its shadow ray answered: what the
+    /// pixel inspector is told.
+    pub fn terms(&self, g: usize, lane: usize, lit: &Lighting<Vec3x16>, blocked: u16) -> HitTerms {
+        let s = &self.surfaces[g];
+        HitTerms {
+            position: s.position.lane(lane),
+            normal: s.normal.lane(lane),
+            rho: s.rho.lane(lane),
+            d: lit.d.lane(lane),
+            shadow_ray: lit.shadow.lane(lane),
+            blocked: blocked & (1 << lane) != 0,
+        }
+    }
+}
+
 /// Told each step of a ray's computation, as the integrators take it: what the pixel inspector
 /// ([`crate::inspect`]) records to explain a pixel with the very values the renderer used.
 ///
@@ -591,9 +717,12 @@ impl ShadowRays<Vec3x16> {
 /// measured no slower with them).
 ///
 /// The order of the calls is the integrators' order: in a wave of rays (lab) or a step of the
-/// paths (path), [`Recorder::closest_hit`] for each ray, with [`Recorder::specular_hit`] or
-/// [`Recorder::scattered`] right after a hit's own; then [`Recorder::shaded`] for the diffuse
-/// hits of that wave, in the order of their `closest_hit` calls.
+/// paths (path), [`Recorder::closest_hit`] for each ray, with [`Recorder::specular_hit`] right
+/// after a hit's own (lab); then [`Recorder::scattered`] for the hits whose paths go on (path,
+/// sixteen at a time: the diffuse hits first, then mirror and glass); then
+/// [`Recorder::shaded`] for the diffuse hits of that wave, in the order of their
+/// `closest_hit` calls. For one ray (the inspector's), a step is: its hit, how it scattered,
+/// its light.
 pub trait Recorder {
     /// Whether anything is recorded; the hooks are called only when it is true.
     const ENABLED: bool;
@@ -619,7 +748,8 @@ pub trait Recorder {
     /// valued with, `value` = [`HitTerms::value`], and the pixel gets `weight · value`.
     fn shaded(&mut self, terms: &HitTerms, n: Vec3, value: Vec3, weight: Vec3);
 
-    /// Path stage: where the path goes from its latest hit ([`Material::sample`]), Russian
+    /// Path stage: where the path goes from its latest hit (a cosine-weighted bounce of
+    /// weight ρ, or [`Material::sample`] for mirror and glass), Russian
     /// roulette's survival probability (1 before [`path::ROULETTE_DEPTH`]), β after both, and
     /// whether the path goes on. Not called when the bounce cap ends the path at that hit.
     fn scattered(&mut self, scatter: &Scatter, survival: f32, beta: Vec3, survives: bool);
@@ -703,17 +833,36 @@ pub fn shadow_rays_blocked(
 /// the other surface then meets it just beyond its start, one away from it leaves it behind.
 #[inline(always)]
 pub fn continue_ray(position: Vec3, normal: Vec3, direction: Vec3, at_edge: Option<Vec3>) -> Ray {
-    let side = if direction.dot(normal) >= 0.0 {
-        1.0
-    } else {
-        -1.0
-    };
-    let lifted = position + side * SHADOW_OFFSET * normal;
-    let origin = match at_edge {
-        Some(incoming) => crate::light::edge_start(lifted, normal, incoming),
-        None => lifted,
-    };
+    let origin = departure_points(
+        position,
+        normal,
+        direction,
+        at_edge.is_some(),
+        at_edge.unwrap_or(Vec3::ZERO),
+    );
     Ray { origin, direction }
+}
+
+/// Where rays leaving surface points start, for one point or sixteen: [`continue_ray`]'s
+/// origin, with its `at_edge` split into whether it is `Some` (`near_edge`) and what it holds
+/// (`incoming`), as in [`Surfaces`].
+#[inline(always)]
+pub fn departure_points<V: Vector>(
+    position: V,
+    normal: V,
+    direction: V,
+    near_edge: MaskOf<V>,
+    incoming: V,
+) -> V {
+    let away = direction.dot(normal).simd_ge(V::Real::ZERO);
+    let side = V::Real::select(away, V::Real::splat(1.0), V::Real::splat(-1.0));
+    let lifted = position + V::scale(side * V::Real::splat(SHADOW_OFFSET), normal);
+    select_lazy!(
+        Vector: V,
+        near_edge,
+        crate::light::edge_start(lifted, normal, incoming),
+        lifted
+    )
 }
 
 /// What a batch of rays starts from, handed to the code compiled for the CPU as data.
@@ -770,14 +919,27 @@ impl<'a> Tracer<'a> {
     /// only when shadow rays are cast, which alone need it).
     #[inline(always)]
     pub fn surface(&self, hit: &Intersection, material: &Material, incoming: Vec3) -> Surface {
-        let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
-        let scene = self.scene;
-        let geometric = scene.triangles[index].normal;
         let at_edge = if self.shading.shadows {
-            scene.approach_at_edge(index, u, v, incoming)
+            let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
+            self.scene.approach_at_edge(index, u, v, incoming)
         } else {
             None
         };
+        self.surface_with(hit, material, at_edge)
+    }
+
+    /// [`Tracer::surface`] with `at_edge` given: the path tracer asks it of every hit anyway,
+    /// for the ray that leaves it ([`continue_ray`]).
+    #[inline(always)]
+    pub fn surface_with(
+        &self,
+        hit: &Intersection,
+        material: &Material,
+        at_edge: Option<Vec3>,
+    ) -> Surface {
+        let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
+        let scene = self.scene;
+        let geometric = scene.triangles[index].normal;
         if self.plain {
             // The same values as below (flat normal, constant ρ) without asking per hit:
             // 2–3 % of the lab pass (PERFORMANCE.md).
@@ -1271,6 +1433,48 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+    /// Where rays leave surfaces, sixteen at a time, bit for bit [`continue_ray`] one at a
+    /// time: on either side, at edges and not, and leaving along the surface itself.
+    #[test]
+    fn departures_sixteen_at_a_time_equal_one_at_a_time() {
+        let light = PointLight::default();
+        let surfaces = awkward_surfaces(&light);
+        let mut rng = Rng::new(31);
+        for chunk in surfaces.chunks(LANES) {
+            let mut lanes = Surfaces::<Vec3x16>::ZERO;
+            let mut directions = Vec3x16::ZERO;
+            let mut one_at_a_time = Vec::new();
+            for (i, s) in chunk.iter().enumerate() {
+                let random = Vec3::new(
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                )
+                .normalize_or_zero();
+                // Every fourth along the surface: `direction · normal` is 0.
+                let direction = if i % 4 == 0 {
+                    random.cross(s.geometric)
+                } else {
+                    random
+                };
+                lanes.set(i, *s);
+                directions.set_lane(i, direction);
+                one_at_a_time.push(continue_ray(s.position, s.geometric, direction, s.at_edge));
+            }
+            let origins = departure_points(
+                lanes.position,
+                lanes.geometric,
+                directions,
+                lanes.near_edge,
+                lanes.incoming,
+            );
+            for (i, ray) in one_at_a_time.iter().enumerate() {
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(bits(origins.lane(i)), bits(ray.origin), "lane {i}");
+                assert_eq!(bits(directions.lane(i)), bits(ray.direction));
             }
         }
     }

@@ -16,20 +16,26 @@
 //! and β is divided by q (Russian roulette), which ends paths without bias. A path of
 //! [`MAX_DEPTH`] vertices is ended anyway, a guard against rays trapped between facing mirrors.
 //!
-//! Paths run in batches of [`BATCH`], phase by phase, as the lab stages do. Each path draws only
-//! from its own generator, in the same order whatever the batch: a pixel computed alone is the
-//! same as in an image, and with the bounces capped at B the first B bounces draw the same
-//! numbers as with more, so adding bounces only ever adds light.
+//! Paths run in batches of [`BATCH`], phase by phase, as the lab stages do, and each phase of a
+//! vertex runs sixteen paths at a time, a path a lane ([`crate::lanes`]): the direct term
+//! ([`DiffuseHits::light`], the lab's own code), the diffuse bounce's direction
+//! ([`hemisphere_around`]), the throughput, Russian roulette and the next ray
+//! ([`departure_points`]). Only what differs from path to path in control flow stays one path
+//! at a time: the hit's material, the random numbers (drawn by rejection), and mirror and glass
+//! sampling ([`crate::material::Material::sample`]).
+//!
+//! Each path draws only from its own generator, in the same order whatever the batch: a pixel
+//! computed alone is the same as in an image, and with the bounces capped at B the first B
+//! bounces draw the same numbers as with more, so adding bounces only ever adds light.
 
 use glam::Vec3;
 
-use super::{
-    BATCH, HitTerms, Recorder, Stage, Tracer, cast_shadow_rays, continue_ray, light_point,
-};
+use super::{BATCH, DiffuseHits, GROUPS, Recorder, Stage, Tracer, departure_points, shaded_value};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::material::facing;
-use crate::sampling::Rng;
+use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
+use crate::material::{Scatter, facing};
+use crate::sampling::{Rng, Rng16, Uniform, cosine_hemisphere_by_rejection, hemisphere_around};
 
 /// Vertices before Russian roulette may end a path.
 pub const ROULETTE_DEPTH: u32 = 3;
@@ -70,6 +76,124 @@ pub(super) fn trace<R: Recorder>(
     }
 }
 
+/// Up to sixteen path vertices that go on, a path a lane: where each leaves from, along which
+/// direction, and what its throughput becomes.
+#[derive(Clone, Copy)]
+struct Departures {
+    position: Vec3x16,
+    /// The triangle's normal (either side): the ray leaves on the side it goes to.
+    normal: Vec3x16,
+    /// Where the vertex lies at an edge of its triangle, and the arriving ray's direction
+    /// there ([`crate::scene::Scene::approach_at_edge`], as in [`super::Surfaces`]).
+    near_edge: M16,
+    incoming: Vec3x16,
+    direction: Vec3x16,
+    /// β before the vertex, and the scattering's weight it is multiplied by.
+    beta: Vec3x16,
+    weight: Vec3x16,
+    /// The path in each lane (an index into the batch's paths).
+    owner: [u8; LANES],
+    /// The lanes that hold a vertex.
+    active: M16,
+}
+
+impl Departures {
+    const NONE: Self = Self {
+        position: Vec3x16::ZERO,
+        normal: Vec3x16::ZERO,
+        near_edge: M16::NONE,
+        incoming: Vec3x16::ZERO,
+        direction: Vec3x16::ZERO,
+        beta: Vec3x16::ZERO,
+        weight: Vec3x16::ZERO,
+        owner: [0; LANES],
+        active: M16::NONE,
+    };
+
+    /// Puts a vertex already sampled one at a time (mirror or glass) in lane `i`.
+    #[inline(always)]
+    fn set(&mut self, i: usize, owner: usize, hit: &Intersection, normal: Vec3, beta: Vec3) {
+        self.position.set_lane(i, hit.position);
+        self.normal.set_lane(i, normal);
+        self.beta.set_lane(i, beta);
+        self.owner[i] = owner as u8;
+        self.active.0[i] = true;
+    }
+
+    #[inline(always)]
+    fn set_scatter(&mut self, i: usize, at_edge: Option<Vec3>, scatter: Scatter) {
+        self.near_edge.0[i] = at_edge.is_some();
+        self.incoming.set_lane(i, at_edge.unwrap_or(Vec3::ZERO));
+        self.direction.set_lane(i, scatter.direction);
+        self.weight.set_lane(i, scatter.weight);
+    }
+}
+
+/// The vertices of `d` go on: β times the weight, Russian roulette from [`ROULETTE_DEPTH`] on,
+/// the next ray; the paths that survive are appended to `alive[..*still]`.
+///
+/// Roulette's number is drawn at every vertex, used or not, and the outcome is computed
+/// without branches: whether a path survives is a coin toss the processor cannot predict. A
+/// path that lost all its throughput (a black surface) ends at the roulette, where its
+/// survival is 0; before it, it may go on a vertex or two adding nothing.
+#[inline(always)]
+fn go_on<R: Recorder>(
+    d: &Departures,
+    paths: &mut [PathState; BATCH],
+    rng: &mut Rng16,
+    alive: &mut [u8; BATCH],
+    still: &mut usize,
+    rec: &mut R,
+) {
+    let mut depth = [0u32; LANES];
+    let mut roulette = M16::NONE;
+    for lane in 0..LANES {
+        if d.active.0[lane] {
+            depth[lane] = paths[d.owner[lane] as usize].depth + 1;
+            roulette.0[lane] = depth[lane] >= ROULETTE_DEPTH;
+        }
+    }
+    let u = rng.draw(d.active);
+    let beta = d.beta * d.weight;
+    let survival = F32x16::select(
+        roulette,
+        beta.max_element()
+            .simd_min(F32x16::splat(ROULETTE_MAX_SURVIVAL)),
+        F32x16::splat(1.0),
+    );
+    let beta = beta * (F32x16::splat(1.0) / survival);
+    let lucky = u.simd_lt(survival);
+    let origin = departure_points(d.position, d.normal, d.direction, d.near_edge, d.incoming);
+    for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
+        let i = d.owner[lane] as usize;
+        let path = &mut paths[i];
+        path.ray = Ray {
+            origin: origin.lane(lane),
+            direction: d.direction.lane(lane),
+        };
+        path.beta = beta.lane(lane);
+        path.depth = depth[lane];
+        let keep = (path.depth < MAX_DEPTH) & lucky.0[lane];
+        if R::ENABLED {
+            let scatter = Scatter {
+                direction: d.direction.lane(lane),
+                weight: d.weight.lane(lane),
+            };
+            rec.scattered(&scatter, survival.0[lane], path.beta, keep);
+        }
+        alive[*still] = i as u8;
+        *still += usize::from(keep);
+    }
+}
+
+/// The generators of `d`'s paths, as far as they have drawn, back to `rngs`.
+#[inline(always)]
+fn give_back(d: &Departures, rng: &Rng16, rngs: &mut [Rng]) {
+    for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
+        rngs[d.owner[lane] as usize] = rng.get(lane);
+    }
+}
+
 #[inline(always)]
 fn batch<R: Recorder>(
     tracer: &Tracer,
@@ -79,8 +203,8 @@ fn batch<R: Recorder>(
     rec: &mut R,
 ) {
     let scene = tracer.scene;
-    let shading = &tracer.shading;
-    let max_bounces = shading.max_bounces();
+    let max_bounces = tracer.shading.max_bounces();
+    let sphere_light = tracer.light.radius > 0.0;
     let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
     out.fill(Vec3::ZERO);
     let mut paths = [PathState {
@@ -98,82 +222,186 @@ fn batch<R: Recorder>(
     let mut n_alive = rays.len();
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
     let mut rays_alive = [rays[0]; BATCH];
-    let mut terms = [HitTerms::NONE; BATCH];
-    // For each term: the path it belongs to and the throughput it is seen with.
-    let mut term_of = [(0u8, Vec3::ZERO); BATCH];
+    // Mirror and glass vertices, sampled one at a time.
+    let mut specular = [Departures::NONE; GROUPS];
+    let mut diffuse = DiffuseHits::new();
+    // β of each diffuse hit's path as it arrives.
+    let mut arriving = [Vec3x16::ZERO; GROUPS];
 
     while n_alive > 0 {
         for (ray, &i) in rays_alive.iter_mut().zip(&alive[..n_alive]) {
             *ray = paths[i as usize].ray;
         }
         scene.closest_intersections(&rays_alive[..n_alive], f32::INFINITY, &mut hits[..n_alive]);
-        let mut n_terms = 0;
-        let mut still = 0;
+        // Each hit to its phase: the diffuse ones into lanes for their light and bounce, the
+        // specular ones sampled here.
+        diffuse.clear();
+        let mut n_specular = 0;
         for k in 0..n_alive {
             let i = alive[k] as usize;
+            let path = &paths[i];
             if R::ENABLED {
-                let path = &paths[i];
                 rec.closest_hit(&path.ray, hits[k].as_ref(), path.beta, path.depth);
             }
             let Some(hit) = hits[k] else { continue };
-            let path = &mut paths[i];
-            let rng = &mut rngs[i];
             let triangle = &triangles[hit.triangle_index];
             let material = &materials[triangle.material as usize];
             let geometric = triangle.normal;
             let incoming = path.ray.direction;
+            let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, incoming);
             if material.is_diffuse() {
                 // Two-sided: both normals turned to face the arriving ray.
-                let mut surface = tracer.surface(&hit, material, incoming);
+                let mut surface = tracer.surface_with(&hit, material, at_edge);
                 let turned = facing(geometric, incoming);
                 if turned != geometric {
                     surface.geometric = turned;
                     surface.normal = -surface.normal;
                 }
-                terms[n_terms] =
-                    HitTerms::at(&tracer.light, Stage::Path, shading.shadows, surface, |p| {
-                        light_point(&tracer.light, p, rng)
-                    });
-                term_of[n_terms] = (i as u8, path.beta);
-                n_terms += 1;
-                if path.bounces >= max_bounces {
-                    continue;
-                }
-                path.bounces += 1;
-            }
-            let scatter = material.sample(incoming, geometric, rng);
-            path.beta *= scatter.weight;
-            let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, incoming);
-            path.ray = continue_ray(hit.position, geometric, scatter.direction, at_edge);
-            path.depth += 1;
-            // Russian roulette from ROULETTE_DEPTH on. Its number is drawn at every vertex,
-            // used or not, and the outcome is computed without branches: whether a path
-            // survives is a coin toss the processor cannot predict.
-            let u = rng.next_f32();
-            let roulette = path.depth >= ROULETTE_DEPTH;
-            let survival = if roulette {
-                path.beta.max_element().min(ROULETTE_MAX_SURVIVAL)
+                arriving[diffuse.len / LANES].set_lane(diffuse.len % LANES, path.beta);
+                diffuse.push(surface, i);
             } else {
-                1.0
-            };
-            path.beta *= survival.recip();
-            // A path that lost all its throughput (a black surface) ends at the roulette, where
-            // its survival is 0; before it, it may go on a vertex or two adding nothing.
-            let keep = (path.depth < MAX_DEPTH) & (u < survival);
-            if R::ENABLED {
-                rec.scattered(&scatter, survival, path.beta, keep);
+                let (g, lane) = (n_specular / LANES, n_specular % LANES);
+                if lane == 0 {
+                    specular[g].active = M16::NONE;
+                }
+                let scatter = material.sample(incoming, geometric, &mut rngs[i]);
+                specular[g].set(lane, i, &hit, geometric, path.beta);
+                specular[g].set_scatter(lane, at_edge, scatter);
+                n_specular += 1;
             }
-            alive[still] = i as u8;
-            still += usize::from(keep);
+        }
+        let mut still = 0;
+        // The direct term at the diffuse hits (drawing a spherical light's points first).
+        let lit = if sphere_light {
+            diffuse.light::<true>(tracer, rngs, |i| i as usize)
+        } else {
+            diffuse.light::<false>(tracer, rngs, |i| i as usize)
+        };
+        // Their bounces: a cosine-weighted direction about the turned normal, weight ρ.
+        for (g, (_, surfaces)) in diffuse.groups().enumerate() {
+            let mut d = Departures {
+                position: surfaces.position,
+                normal: surfaces.geometric,
+                near_edge: surfaces.near_edge,
+                incoming: surfaces.incoming,
+                direction: Vec3x16::ZERO,
+                beta: arriving[g],
+                weight: surfaces.rho,
+                owner: [0; LANES],
+                active: M16::NONE,
+            };
+            let mut rng = Rng16::UNUSED;
+            for (lane, &i) in diffuse.owners(g).iter().enumerate() {
+                let path = &mut paths[i as usize];
+                if path.bounces < max_bounces {
+                    path.bounces += 1;
+                    d.owner[lane] = i;
+                    d.active.0[lane] = true;
+                    rng.set(lane, &rngs[i as usize]);
+                }
+            }
+            if d.active.any() {
+                let local = cosine_hemisphere_by_rejection(&mut rng, d.active);
+                d.direction = hemisphere_around(surfaces.geometric, local);
+                go_on(&d, &mut paths, &mut rng, &mut alive, &mut still, rec);
+                give_back(&d, &rng, rngs);
+            }
+        }
+        for d in &specular[..n_specular.div_ceil(LANES)] {
+            let mut rng = Rng16::UNUSED;
+            for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
+                rng.set(lane, &rngs[d.owner[lane] as usize]);
+            }
+            go_on(d, &mut paths, &mut rng, &mut alive, &mut still, rec);
+            give_back(d, &rng, rngs);
         }
         n_alive = still;
-        cast_shadow_rays(scene, &mut terms[..n_terms]);
-        for (t, &(i, beta)) in terms[..n_terms].iter().zip(&term_of) {
-            let value = t.value(Stage::Path, Vec3::ZERO);
-            if R::ENABLED {
-                rec.shaded(t, Vec3::ZERO, value, beta);
+        // The shadow rays, and the direct term times β into each path's pixel.
+        let blocked = diffuse.blocked(scene, &lit);
+        for (g, (_, surfaces)) in diffuse.groups().enumerate() {
+            let value = shaded_value(
+                Stage::Path,
+                surfaces.rho,
+                lit[g].d,
+                M16::from_bits(blocked[g]),
+                Vec3x16::ZERO,
+            );
+            let seen = arriving[g] * value;
+            for (lane, &i) in diffuse.owners(g).iter().enumerate() {
+                if R::ENABLED {
+                    let terms = diffuse.terms(g, lane, &lit[g], blocked[g]);
+                    rec.shaded(&terms, Vec3::ZERO, value.lane(lane), arriving[g].lane(lane));
+                }
+                out[i as usize] += seen.lane(lane);
             }
-            out[i as usize] += beta * value;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::HitTerms;
+    use crate::intersect::Intersection;
+    use crate::material::{MaterialPreset, TexturePreset};
+    use crate::scene::cornell_box;
+    use crate::{Camera, RenderSettings, Shading};
+
+    /// Per path vertex: the bounce's weight, and the ρ its direct term was computed with.
+    #[derive(Default)]
+    struct Weights {
+        scattered: Vec<Vec3>,
+        shaded: Vec<Vec3>,
+    }
+
+    impl Recorder for Weights {
+        const ENABLED: bool = true;
+        fn closest_hit(&mut self, _: &Ray, _: Option<&Intersection>, _: Vec3, _: u32) {}
+        fn specular_hit(&mut self, _: &Intersection, _: Vec3, _: u32, _: &[(Vec3, Vec3)]) {}
+        fn shaded(&mut self, terms: &HitTerms, _: Vec3, _: Vec3, _: Vec3) {
+            self.shaded.push(terms.rho);
+        }
+        fn scattered(&mut self, scatter: &Scatter, _: f32, _: Vec3, _: bool) {
+            self.scattered.push(scatter.weight);
+        }
+    }
+
+    /// A diffuse bounce off a textured surface is weighted by the texture's ρ at the hit, the
+    /// same ρ as the hit's direct term: on the checker floor, both the floor's green and the
+    /// checker's light grey squares pass on their own colour.
+    #[test]
+    fn a_textured_bounce_is_weighted_by_the_texture() {
+        let scene = cornell_box();
+        let mut settings = RenderSettings::default();
+        settings.shading = Shading::for_stage(Stage::Path);
+        settings.texture_preset = TexturePreset::CheckerFloor;
+        settings.material_preset = MaterialPreset::None;
+        let tracer = Tracer::new(&scene, &settings);
+        let camera = Camera::default_for(24, 24);
+        let mut colours = Vec::new();
+        for y in 0..24 {
+            for x in 0..24 {
+                let mut rec = Weights::default();
+                let mut rng = [Rng::for_pixel_sample(3, x, y, 0)];
+                let mut out = [Vec3::ZERO];
+                tracer.trace_recorded(&[camera.pixel_ray(x, y)], &mut rng, &mut out, &mut rec);
+                // Each vertex's bounce is told before its direct term; a vertex where the
+                // path ends by roulette has both, one ended by leaving the scene neither.
+                for (weight, rho) in rec.scattered.iter().zip(&rec.shaded) {
+                    assert_eq!(weight, rho, "pixel ({x}, {y})");
+                    colours.push(*rho);
+                }
+            }
+        }
+        colours.sort_by(|a, b| a.to_array().partial_cmp(&b.to_array()).unwrap());
+        colours.dedup();
+        let floor = scene.materials.iter().find(|m| m.name == "green").unwrap();
+        assert!(colours.contains(&floor.reflectance), "{colours:?}");
+        assert!(
+            colours
+                .iter()
+                .any(|c| c.x == c.y && c.y == c.z && c.x > 0.5),
+            "a light grey square passed on its own colour: {colours:?}"
+        );
     }
 }
