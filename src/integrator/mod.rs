@@ -783,45 +783,6 @@ pub fn light_point(light: &PointLight, position: Vec3, rng: &mut Rng) -> Vec3 {
     }
 }
 
-/// Traces the shadow rays of a batch of hit terms (at most [`BATCH`]) together and records
-/// which are blocked.
-pub fn cast_shadow_rays(scene: &Scene, terms: &mut [HitTerms]) {
-    let blocked = shadow_rays_blocked(scene, terms.len(), |k| terms[k].shadow_ray);
-    for (t, b) in terms.iter_mut().zip(blocked) {
-        if t.shadow_ray.is_some() {
-            t.blocked = b;
-        }
-    }
-}
-
-/// Traces the shadow rays of `n` hits (at most [`BATCH`]) together: `ray(k)` is hit `k`'s
-/// (`None`: none cast). Whether each is blocked, by hit (false where none is cast).
-#[inline(always)]
-pub fn shadow_rays_blocked(
-    scene: &Scene,
-    n: usize,
-    ray: impl Fn(usize) -> Option<(Ray, f32)>,
-) -> [bool; BATCH] {
-    debug_assert!(n <= BATCH);
-    let mut rays = [(Ray::new(Vec3::ZERO, Vec3::Z), 0.0); BATCH];
-    let mut owner = [0u8; BATCH];
-    let mut cast = 0;
-    for k in 0..n {
-        if let Some(r) = ray(k) {
-            rays[cast] = r;
-            owner[cast] = k as u8;
-            cast += 1;
-        }
-    }
-    let mut answers = [false; BATCH];
-    scene.occluded_many(&rays[..cast], &mut answers[..cast]);
-    let mut blocked = [false; BATCH];
-    for (&k, &b) in owner[..cast].iter().zip(&answers[..cast]) {
-        blocked[k as usize] = b;
-    }
-    blocked
-}
-
 /// A ray leaving a surface point along `direction`, started [`SHADOW_OFFSET`] off the surface
 /// on the side it leaves by, so it cannot hit the surface it leaves.
 ///
