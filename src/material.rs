@@ -125,7 +125,8 @@ impl Material {
     /// weight of that sample (the BSDF times cos θ over the pdf, in π × radiance units):
     ///
     /// * diffuse: a cosine-weighted direction on the side the ray came from, weight ρ (drawn
-    ///   by rejection: 2.5 numbers on average);
+    ///   by rejection: 2.5 numbers on average); the path tracer draws its diffuse bounces
+    ///   sixteen at a time with the same functions, weighted by ρ at the hit (a texture's);
     /// * mirror: the reflection, weight `tint`;
     /// * glass: the reflection with probability F (Fresnel), else the refraction; weight 1 for
     ///   the reflection and `tint` for the refraction, so the expected weight equals the

@@ -1,7 +1,7 @@
 //! Path tracing: real light where the lab adds the constant N.
 //!
 //! A path starts with the camera ray. At every diffuse vertex it adds the lab's direct term,
-//! ρ·D with the shadow ray (next-event estimation to the point light, [`HitTerms`]), times the
+//! ρ·D with the shadow ray (next-event estimation to the point light, [`super::HitTerms`]), times the
 //! path's throughput β; then it continues in a cosine-weighted direction and β is multiplied by
 //! ρ (the sample's weight in π × radiance units, see [`crate::material`]). Mirror and glass
 //! vertices pick their reflected or refracted direction and add no direct light: a point light
