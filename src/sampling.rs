@@ -328,16 +328,21 @@ mod tests {
         }
     }
 
+    /// A unit vector from a point uniform in the cube [-1, 1)³.
+    fn random_direction(rng: &mut Rng) -> glam::Vec3 {
+        glam::Vec3::new(
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+        )
+        .normalize()
+    }
+
     #[test]
     fn bases_are_orthonormal() {
         let mut rng = Rng::new(11);
         for _ in 0..1000 {
-            let n = glam::Vec3::new(
-                rng.uniform(-1.0, 1.0),
-                rng.uniform(-1.0, 1.0),
-                rng.uniform(-1.0, 1.0),
-            )
-            .normalize();
+            let n = random_direction(&mut rng);
             let (t, b) = orthonormal_basis(n);
             for (p, q) in [(t, b), (t, n), (b, n)] {
                 assert!(p.dot(q).abs() < 1e-5);
@@ -454,14 +459,20 @@ mod tests {
             .collect()
     }
 
-    /// Each lane of [`Rng16`] draws what its generator draws alone, and only where wanted.
-    #[test]
-    fn sixteen_generators_draw_what_each_draws_alone() {
-        let mut alone: Vec<Rng> = (0..16).map(|i| Rng::new(1000 + i)).collect();
+    /// Sixteen generators, alone and side by side in an [`Rng16`].
+    fn sixteen_generators(seed: u64) -> (Vec<Rng>, Rng16) {
+        let alone: Vec<Rng> = (0..16).map(|i| Rng::new(seed + i)).collect();
         let mut lanes = Rng16::UNUSED;
         for (i, rng) in alone.iter().enumerate() {
             lanes.set(i, rng);
         }
+        (alone, lanes)
+    }
+
+    /// Each lane of [`Rng16`] draws what its generator draws alone, and only where wanted.
+    #[test]
+    fn sixteen_generators_draw_what_each_draws_alone() {
+        let (mut alone, mut lanes) = sixteen_generators(1000);
         for wanted in masks(&mut Rng::new(5), 200) {
             let drawn = lanes.draw(wanted);
             for (i, rng) in alone.iter_mut().enumerate() {
@@ -482,11 +493,7 @@ mod tests {
     /// numbers drawn, of its generator alone; lanes not wanted draw nothing.
     #[test]
     fn cosine_directions_sixteen_at_a_time_equal_one_at_a_time() {
-        let mut alone: Vec<Rng> = (0..16).map(|i| Rng::new(77 + i)).collect();
-        let mut lanes = Rng16::UNUSED;
-        for (i, rng) in alone.iter().enumerate() {
-            lanes.set(i, rng);
-        }
+        let (mut alone, mut lanes) = sixteen_generators(77);
         for wanted in masks(&mut Rng::new(6), 500) {
             let local: crate::lanes::Vec3x16 = cosine_hemisphere_by_rejection(&mut lanes, wanted);
             for (i, rng) in alone.iter_mut().enumerate() {
@@ -523,12 +530,7 @@ mod tests {
         for round in 0..200 {
             let (mut normals, mut locals) = (Vec3x16::ZERO, Vec3x16::ZERO);
             for i in 0..16 {
-                let random = glam::Vec3::new(
-                    rng.uniform(-1.0, 1.0),
-                    rng.uniform(-1.0, 1.0),
-                    rng.uniform(-1.0, 1.0),
-                )
-                .normalize();
+                let random = random_direction(&mut rng);
                 let n = if round == 0 && i < special.len() {
                     special[i]
                 } else {
