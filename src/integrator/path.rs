@@ -49,7 +49,6 @@ pub const MAX_DEPTH: u32 = 256;
 
 #[derive(Clone, Copy, Debug)]
 struct PathState {
-    ray: Ray,
     /// β, the throughput: what light found at the next vertex is multiplied by.
     beta: Vec3,
     /// Diffuse bounces made.
@@ -130,7 +129,8 @@ impl Departures {
 }
 
 /// The vertices of `d` go on: β times the weight, Russian roulette from [`ROULETTE_DEPTH`] on,
-/// the next ray; the paths that survive are appended to `alive[..*still]`.
+/// the next ray; the paths that survive are appended to `alive[..*still]`, their next rays
+/// to `rays[..*still]`.
 ///
 /// Roulette's number is drawn at every vertex, used or not, and the outcome is computed
 /// without branches: whether a path survives is a coin toss the processor cannot predict. A
@@ -141,10 +141,11 @@ fn go_on<R: Recorder>(
     d: &Departures,
     paths: &mut [PathState; BATCH],
     rng: &mut Rng16,
-    alive: &mut [u8; BATCH],
+    next: (&mut [u8; BATCH], &mut [Ray; BATCH]),
     still: &mut usize,
     rec: &mut R,
 ) {
+    let (alive, rays) = next;
     let mut depth = [0u32; LANES];
     let mut roulette = M16::NONE;
     for lane in 0..LANES {
@@ -167,7 +168,7 @@ fn go_on<R: Recorder>(
     for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
         let i = d.owner[lane] as usize;
         let path = &mut paths[i];
-        path.ray = Ray {
+        rays[*still] = Ray {
             origin: origin.lane(lane),
             direction: d.direction.lane(lane),
         };
@@ -208,20 +209,19 @@ fn batch<R: Recorder>(
     let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
     out.fill(Vec3::ZERO);
     let mut paths = [PathState {
-        ray: rays[0],
         beta: Vec3::ONE,
         bounces: 0,
         depth: 0,
     }; BATCH];
-    // The paths still going, by index.
+    // The paths still going, by index, and the ray each goes on with.
     let mut alive = [0u8; BATCH];
+    let mut rays_alive = [rays[0]; BATCH];
     for (i, ray) in rays.iter().enumerate() {
-        paths[i].ray = *ray;
         alive[i] = i as u8;
+        rays_alive[i] = *ray;
     }
     let mut n_alive = rays.len();
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
-    let mut rays_alive = [rays[0]; BATCH];
     // Mirror and glass vertices, sampled one at a time.
     let mut specular = [Departures::NONE; GROUPS];
     let mut diffuse = DiffuseHits::new();
@@ -229,25 +229,22 @@ fn batch<R: Recorder>(
     let mut arriving = [Vec3x16::ZERO; GROUPS];
 
     while n_alive > 0 {
-        for (ray, &i) in rays_alive.iter_mut().zip(&alive[..n_alive]) {
-            *ray = paths[i as usize].ray;
-        }
         scene.closest_intersections(&rays_alive[..n_alive], f32::INFINITY, &mut hits[..n_alive]);
         // Each hit to its phase: the diffuse ones into lanes for their light and bounce, the
         // specular ones sampled here.
         diffuse.clear();
         let mut n_specular = 0;
         for k in 0..n_alive {
-            let i = alive[k] as usize;
+            let (i, ray) = (alive[k] as usize, &rays_alive[k]);
             let path = &paths[i];
             if R::ENABLED {
-                rec.closest_hit(&path.ray, hits[k].as_ref(), path.beta, path.depth);
+                rec.closest_hit(ray, hits[k].as_ref(), path.beta, path.depth);
             }
             let Some(hit) = hits[k] else { continue };
             let triangle = &triangles[hit.triangle_index];
             let material = &materials[triangle.material as usize];
             let geometric = triangle.normal;
-            let incoming = path.ray.direction;
+            let incoming = ray.direction;
             let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, incoming);
             if material.is_diffuse() {
                 // Two-sided: both normals turned to face the arriving ray.
@@ -303,7 +300,8 @@ fn batch<R: Recorder>(
             if d.active.any() {
                 let local = cosine_hemisphere_by_rejection(&mut rng, d.active);
                 d.direction = hemisphere_around(surfaces.geometric, local);
-                go_on(&d, &mut paths, &mut rng, &mut alive, &mut still, rec);
+                let next = (&mut alive, &mut rays_alive);
+                go_on(&d, &mut paths, &mut rng, next, &mut still, rec);
                 give_back(&d, &rng, rngs);
             }
         }
@@ -312,7 +310,8 @@ fn batch<R: Recorder>(
             for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
                 rng.set(lane, &rngs[d.owner[lane] as usize]);
             }
-            go_on(d, &mut paths, &mut rng, &mut alive, &mut still, rec);
+            let next = (&mut alive, &mut rays_alive);
+            go_on(d, &mut paths, &mut rng, next, &mut still, rec);
             give_back(d, &rng, rngs);
         }
         n_alive = still;
