@@ -4,7 +4,7 @@
 #   scripts/peers.sh [--threads N] [--rounds R] [--launches L]
 #
 # Each round runs `raylab bench --scene cornell --stage path --threads N --json` (the lab pass
-# and the path pass, medians of 15 passes), `raylab render --stage shadows --samples 64` (the
+# and the path pass, medians of 61 passes), `raylab render --stage shadows --samples 64` (the
 # `direct` integrator's equivalent, at Mitsuba's 64 samples a pixel in one go; the render alone
 # is timed, not writing the file) and then scripts/mitsuba/time.py --threads N (the `direct` and
 # `path` integrators, 64 samples per pixel a launch, L launches of which the first, the JIT
@@ -45,7 +45,11 @@ echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), fa
     "$THREADS thread(s), 512x512, $(date -u +%Y-%m-%dT%H:%MZ)"
 printf '%-6s %-24s %14s %14s %8s\n' round pair "raylab/s" "mitsuba/s" ratio
 for round in $(seq 1 "$ROUNDS"); do
-    raylab_json=$("$RAYLAB" bench --scene cornell --stage path --threads "$THREADS" --json)
+    # 61 passes: the median then spans seconds, as Mitsuba's launches do (a lab pass is 3-6 ms;
+    # with the default 15 the whole figure took 0.1 s, and a hiccup of the shared host that
+    # long decided the round: PERFORMANCE.md, "raylab against Mitsuba 3").
+    raylab_json=$("$RAYLAB" bench --scene cornell --stage path --threads "$THREADS" --passes 61 \
+        --json)
     out=$(mktemp --suffix=.exr)
     raylab_render=$("$RAYLAB" render --stage shadows --samples 64 --threads "$THREADS" \
         --out "$out")
