@@ -18,10 +18,11 @@
 //! [`Lighting::at`] computes D (equation 27) and the shadow ray (section 5.1), the caller casts
 //! the shadow rays of a whole batch together and records whether each was blocked, and
 //! [`shaded_value`] combines ρ, D and N as equations 28–30 say. That code is generic over a
-//! lane type ([`crate::lanes`]): the path tracer takes it one hit at a time through
-//! [`HitTerms`] ([`HitTerms::at`], [`HitTerms::value`]), the lab's stages sixteen hits at a time
-//! (the same operations in every lane, so the same bits; with the divisions and square roots
-//! of a hit no longer one after another; PERFORMANCE.md).
+//! lane type ([`crate::lanes`]): both integrators take it sixteen hits at a time through
+//! `DiffuseHits` (the same operations in every lane, so the same bits; with the divisions and
+//! square roots of a hit no longer one after another; PERFORMANCE.md), and [`HitTerms`]
+//! ([`HitTerms::at`], [`HitTerms::value`]) is the same code for one hit, which the tests and
+//! the pixel inspector's record of a hit use.
 //! The one-ray path ([`Tracer::trace`] with one ray) is the batched path with a batch of one.
 //!
 //! **Watching a pixel.** Both integrators are generic over a [`Recorder`], told each step as it
