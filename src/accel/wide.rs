@@ -53,7 +53,7 @@ pub fn packet(triangles: &[Triangle], indices: &[u32]) -> Packet8 {
 pub struct Flat {
     pub packets: Vec<Packet8>,
     pub packets16: Vec<Packet16>,
-    /// The triangles' corners, sixteen a group in list order: what a batch's [`Cone`] is
+    /// The triangles' corners, sixteen a group in list order: what a batch's [`super::cull::Cone`] is
     /// checked against ([`super::cull::kept`]).
     pub corners: Vec<Corners>,
     /// Triangles in the list.

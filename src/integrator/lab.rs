@@ -1,8 +1,9 @@
 //! The lab's stages, with mirror and glass followed Whitted-style.
 //!
 //! For each batch of camera rays: all closest hits; every diffuse hit is shaded as the stage
-//! says, sixteen hits at a time ([`Lighting::at`], the code behind [`HitTerms::at`]); every mirror or glass hit spawns its specular branches
-//! ([`Material::specular_branches`]), each carrying its weight (the tint, or Fresnel's F and
+//! says, sixteen hits at a time ([`super::Lighting::at`], the code behind
+//! [`super::HitTerms::at`], through [`DiffuseHits`]); every mirror or glass hit spawns its
+//! specular branches ([`Material::specular_branches`]), each carrying its weight (the tint, or Fresnel's F and
 //! 1 − F), which are traced the same way, up to [`Shading::specular_depth`] specular hits in a
 //! row. A branch that goes deeper, or leaves the scene, adds nothing (black).
 //!

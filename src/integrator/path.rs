@@ -187,6 +187,16 @@ fn go_on<R: Recorder>(
     }
 }
 
+/// The generators of `d`'s paths, side by side.
+#[inline(always)]
+fn take_rngs(d: &Departures, rngs: &[Rng]) -> Rng16 {
+    let mut rng = Rng16::UNUSED;
+    for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
+        rng.set(lane, &rngs[d.owner[lane] as usize]);
+    }
+    rng
+}
+
 /// The generators of `d`'s paths, as far as they have drawn, back to `rngs`.
 #[inline(always)]
 fn give_back(d: &Departures, rng: &Rng16, rngs: &mut [Rng]) {
@@ -287,17 +297,16 @@ fn batch<R: Recorder>(
                 owner: [0; LANES],
                 active: M16::NONE,
             };
-            let mut rng = Rng16::UNUSED;
             for (lane, &i) in diffuse.owners(g).iter().enumerate() {
                 let path = &mut paths[i as usize];
                 if path.bounces < max_bounces {
                     path.bounces += 1;
                     d.owner[lane] = i;
                     d.active.0[lane] = true;
-                    rng.set(lane, &rngs[i as usize]);
                 }
             }
             if d.active.any() {
+                let mut rng = take_rngs(&d, rngs);
                 let local = cosine_hemisphere_by_rejection(&mut rng, d.active);
                 d.direction = hemisphere_around(surfaces.geometric, local);
                 let next = (&mut alive, &mut rays_alive);
@@ -306,10 +315,7 @@ fn batch<R: Recorder>(
             }
         }
         for d in &specular[..n_specular.div_ceil(LANES)] {
-            let mut rng = Rng16::UNUSED;
-            for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
-                rng.set(lane, &rngs[d.owner[lane] as usize]);
-            }
+            let mut rng = take_rngs(d, rngs);
             let next = (&mut alive, &mut rays_alive);
             go_on(d, &mut paths, &mut rng, next, &mut still, rec);
             give_back(d, &rng, rngs);
