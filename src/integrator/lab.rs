@@ -16,10 +16,11 @@
 use glam::Vec3;
 
 use super::{BATCH, DiffuseHits, Recorder, Tracer, continue_ray, shaded_value};
+use crate::accel::Hit;
 use crate::geometry::Ray;
-use crate::intersect::Intersection;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
 use crate::sampling::Rng;
+use crate::scene::intersection;
 
 /// Where a specular branch's value goes and what it is multiplied by.
 #[derive(Clone, Copy, Debug)]
@@ -106,10 +107,12 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     debug_assert!(rays.len() <= BATCH);
     let scene = tracer.scene;
     let shading = &tracer.shading;
-    let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
-    scene.closest_intersections(rays, f32::INFINITY, &mut hits[..rays.len()]);
+    // The structure's hits, each made an `Intersection` only here, where it is used.
+    let mut hits: [Option<Hit>; BATCH] = [None; BATCH];
+    scene.closest_hits(rays, f32::INFINITY, &mut hits[..rays.len()]);
     let mut diffuse = DiffuseHits::new();
     for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
+        let hit = hit.map(|hit| intersection(ray, hit));
         if R::ENABLED {
             let (weight, depth) = match wave {
                 Wave::Camera => (Vec3::ONE, 0),
@@ -117,7 +120,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             };
             rec.closest_hit(ray, hit.as_ref(), weight, depth);
         }
-        let Some(hit) = hit else { continue };
+        let Some(hit) = &hit else { continue };
         let material = tracer.material_of(hit.triangle_index);
         let normal = scene.triangles[hit.triangle_index].normal;
         if material.is_diffuse() {

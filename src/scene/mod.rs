@@ -183,20 +183,37 @@ impl Scene {
         out: &mut [Option<Intersection>],
     ) {
         debug_assert_eq!(rays.len(), out.len());
-        if !self.accel.built_for(self.triangles.len()) {
-            for (ray, hit) in rays.iter().zip(out) {
-                *hit = intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
-            }
-            return;
-        }
         let mut hits = [None; 64];
         for (rays, out) in rays.chunks(64).zip(out.chunks_mut(64)) {
             let hits = &mut hits[..rays.len()];
-            self.accel.closest_batch(&self.triangles, rays, t_max, hits);
+            self.closest_hits(rays, t_max, hits);
             for ((ray, hit), o) in rays.iter().zip(hits.iter()).zip(out) {
                 *o = hit.map(|hit| intersection(ray, hit));
             }
         }
+    }
+
+    /// [`Scene::closest_intersections`] as the structure answers, a [`Hit`] per ray (`t`, `u`,
+    /// `v` and the triangle): what the lab's wave sorts straight into its lanes, making each
+    /// [`Intersection`] only where it is used ([`intersection`]). The copy into an array of
+    /// `Intersection`s was 28 of the 386 instructions a pixel of the Cornell box's lab pass
+    /// (PERFORMANCE.md, "What the slow state is").
+    #[inline]
+    pub fn closest_hits(&self, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
+        debug_assert_eq!(rays.len(), out.len());
+        if !self.accel.built_for(self.triangles.len()) {
+            for (ray, hit) in rays.iter().zip(out) {
+                *hit = intersect::closest_intersection_brute_force(ray, &self.triangles, t_max)
+                    .map(|i| Hit {
+                        index: i.triangle_index as u32,
+                        t: i.distance,
+                        u: i.u,
+                        v: i.v,
+                    });
+            }
+            return;
+        }
+        self.accel.closest_batch(&self.triangles, rays, t_max, out);
     }
 
     /// [`Scene::occluded_many`] for shadow rays given as lanes, sixteen a group (as the lab's
@@ -240,9 +257,10 @@ impl Scene {
     }
 }
 
-/// The intersection an acceleration structure's hit stands for along `ray`.
+/// The intersection an acceleration structure's hit stands for along `ray`: its point
+/// `ray.at(t)`, the rest as the structure found it.
 #[inline(always)]
-fn intersection(ray: &Ray, hit: Hit) -> Intersection {
+pub fn intersection(ray: &Ray, hit: Hit) -> Intersection {
     Intersection {
         position: ray.at(hit.t),
         distance: hit.t,
@@ -428,6 +446,40 @@ pub enum SceneError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The lab's wave takes the structure's hits and makes each `Intersection` itself: the
+    /// same intersections, bit for bit, as `closest_intersection` one ray at a time, through
+    /// the structure and through the brute-force loop a scene falls back on when triangles were
+    /// added after it was built.
+    #[test]
+    fn closest_hits_make_the_intersections_closest_intersection_finds() {
+        let scene = cornell::cornell_box();
+        let settings = crate::bench::lab_settings(64, 64);
+        let rays = crate::bench::primary_rays(&settings.camera);
+        let mut grown = scene.clone();
+        grown.triangles.push(Triangle::new(
+            Vec3::new(-0.2, -0.2, 0.0),
+            Vec3::new(0.2, -0.2, 0.0),
+            Vec3::new(0.0, 0.2, 0.0),
+            0,
+        ));
+        assert!(!grown.accel.built_for(grown.triangles.len()));
+        for scene in [&scene, &grown] {
+            let mut hits = vec![None; rays.len()];
+            scene.closest_hits(&rays, f32::INFINITY, &mut hits);
+            let mut found = 0;
+            for (ray, hit) in rays.iter().zip(&hits) {
+                let one = scene.closest_intersection(ray, f32::INFINITY);
+                assert_eq!(hit.map(|hit| intersection(ray, hit)), one);
+                found += usize::from(one.is_some());
+            }
+            assert_eq!(
+                found,
+                rays.len(),
+                "every ray of the default view hits the box"
+            );
+        }
+    }
 
     #[test]
     fn scene_choices_parse_name_and_round_trip_through_json() {
