@@ -96,13 +96,19 @@ fn image_point(
     } else {
         pixel_offset(settings.seed, x, y, sample)
     };
-    let point = (x as f32 + dx, y as f32 + dy);
+    let point = image_plane_point(x, y, (dx, dy));
     if settings.camera.aperture > 0.0 {
         // Depth of field: a point of the lens, from the sample's own stream.
         (point, Some(concentric_disk(rng.next_f32(), rng.next_f32())))
     } else {
         (point, None)
     }
+}
+
+/// Pixel `(x, y)`'s point at `offset` (in [0, 1)² from its top-left corner), in pixels.
+#[inline(always)]
+fn image_plane_point(x: u32, y: u32, (dx, dy): (f32, f32)) -> (f32, f32) {
+    (x as f32 + dx, y as f32 + dy)
 }
 
 /// The depth (distance along the view direction, [`crate::Camera::depth_of`]) of what the
@@ -208,23 +214,46 @@ impl<'a> Rows<'a> {
         let (mut lens_x, mut lens_y) = ([0.0; BATCH], [0.0; BATCH]);
         let mut rngs = [Rng::UNUSED; BATCH];
         let mut values = [Vec3::ZERO; BATCH];
+        // Nothing random and a pinhole (the lab's stages as the lab sets them): each image
+        // point is its pixel's offset alone, with no generator and no lens point, in a loop
+        // the compiler can keep simple (the loop below, asking both per pixel, took 8 % of the
+        // lab pass's instructions: PERFORMANCE.md).
+        let points_only =
+            !self.tracer.uses_random_numbers() && self.settings.camera.aperture <= 0.0;
+        let seed = self.settings.seed;
         for (c, chunk) in row.chunks_mut(BATCH).enumerate() {
             let n = chunk.len();
-            for (i, rng) in rngs[..n].iter_mut().enumerate() {
-                let x = (c * BATCH + i) as u32;
-                let ((x, y), lens) =
-                    image_point(self.tracer, self.settings, x, y, self.sample, rng);
-                (px[i], py[i]) = (x, y);
-                let lens = lens.unwrap_or_default();
-                (lens_x[i], lens_y[i]) = (lens.x, lens.y);
+            let first = (c * BATCH) as u32;
+            if points_only && self.sample == 0 {
+                // Sample 0 is every pixel's centre: one offset for the whole row.
+                let centre = pixel_offset(seed, first, y, 0);
+                for (i, (px, py)) in px[..n].iter_mut().zip(&mut py[..n]).enumerate() {
+                    (*px, *py) = image_plane_point(first + i as u32, y, centre);
+                }
+            } else if points_only {
+                for (i, (px, py)) in px[..n].iter_mut().zip(&mut py[..n]).enumerate() {
+                    let x = first + i as u32;
+                    (*px, *py) = image_plane_point(x, y, pixel_offset(seed, x, y, self.sample));
+                }
+            } else {
+                for (i, rng) in rngs[..n].iter_mut().enumerate() {
+                    let x = first + i as u32;
+                    let ((x, y), lens) =
+                        image_point(self.tracer, self.settings, x, y, self.sample, rng);
+                    (px[i], py[i]) = (x, y);
+                    let lens = lens.unwrap_or_default();
+                    (lens_x[i], lens_y[i]) = (lens.x, lens.y);
+                }
             }
+            // A pinhole ignores the lens points (and they may be empty).
+            let lens = if points_only { 0 } else { n };
             let points = ImagePoints {
                 camera: &self.settings.camera,
                 rotation: &self.rotation,
                 px: &px[..n],
                 py: &py[..n],
-                lens_x: &lens_x[..n],
-                lens_y: &lens_y[..n],
+                lens_x: &lens_x[..lens],
+                lens_y: &lens_y[..lens],
             };
             self.tracer
                 .trace_camera(&points, &mut rngs[..n], &mut values[..n]);

@@ -38,7 +38,6 @@ use std::borrow::Cow;
 use std::fmt;
 use std::str::FromStr;
 
-use arrayvec::ArrayVec;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -684,13 +683,15 @@ impl DiffuseHits {
     /// of group `g`'s mask.
     #[inline(always)]
     pub fn blocked(&self, scene: &Scene, lit: &[Lighting<Vec3x16>; GROUPS]) -> [u16; GROUPS] {
-        let shadows: ArrayVec<SegmentLanes, GROUPS> = self
-            .groups()
-            .zip(lit)
-            .map(|((len, _), lit)| lit.shadow.segment_lanes(len))
-            .collect();
+        // Every group's lanes, those past the hits casting nothing (a fixed array: collecting
+        // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass).
+        let groups = self.len.div_ceil(LANES);
+        let shadows: [SegmentLanes; GROUPS] = std::array::from_fn(|g| {
+            let len = self.len.saturating_sub(g * LANES).min(LANES);
+            lit[g].shadow.segment_lanes(len)
+        });
         let mut blocked = [0u16; GROUPS];
-        scene.occluded_lanes(&shadows, &mut blocked[..shadows.len()]);
+        scene.occluded_lanes(&shadows[..groups], &mut blocked[..groups]);
         blocked
     }
 
