@@ -215,69 +215,46 @@ mod x86 {
         start.elapsed().as_nanos() as f64
     }
 
-    /// Ten independent 512-bit FMAs an iteration: the vector units' throughput.
-    #[target_feature(enable = "avx512f")]
-    fn fma512_ns() -> f64 {
-        let start = Instant::now();
-        // SAFETY: register arithmetic only; the caller checked AVX-512F.
-        unsafe {
-            std::arch::asm!(
-                "vxorps zmm0, zmm0, zmm0", "vxorps zmm1, zmm1, zmm1",
-                "vxorps zmm2, zmm2, zmm2", "vxorps zmm3, zmm3, zmm3",
-                "vxorps zmm4, zmm4, zmm4", "vxorps zmm5, zmm5, zmm5",
-                "vxorps zmm6, zmm6, zmm6", "vxorps zmm7, zmm7, zmm7",
-                "vxorps zmm8, zmm8, zmm8", "vxorps zmm9, zmm9, zmm9",
-                "vxorps zmm10, zmm10, zmm10", "vxorps zmm11, zmm11, zmm11",
-                "2:",
-                "vfmadd231ps zmm0, zmm10, zmm11", "vfmadd231ps zmm1, zmm10, zmm11",
-                "vfmadd231ps zmm2, zmm10, zmm11", "vfmadd231ps zmm3, zmm10, zmm11",
-                "vfmadd231ps zmm4, zmm10, zmm11", "vfmadd231ps zmm5, zmm10, zmm11",
-                "vfmadd231ps zmm6, zmm10, zmm11", "vfmadd231ps zmm7, zmm10, zmm11",
-                "vfmadd231ps zmm8, zmm10, zmm11", "vfmadd231ps zmm9, zmm10, zmm11",
-                "sub {n}, 1",
-                "jnz 2b",
-                "vzeroupper",
-                n = inout(reg) ITERATIONS => _,
-                out("zmm0") _, out("zmm1") _, out("zmm2") _, out("zmm3") _,
-                out("zmm4") _, out("zmm5") _, out("zmm6") _, out("zmm7") _,
-                out("zmm8") _, out("zmm9") _, out("zmm10") _, out("zmm11") _,
-                options(nostack, nomem),
-            );
-        }
-        start.elapsed().as_nanos() as f64
+    /// `$name`: ten independent FMAs an iteration on registers `$r`0–11 (`zmm`: 512 bits,
+    /// `ymm`: 256), the vector units' throughput; compiled with `$features`.
+    macro_rules! fma_kernel {
+        ($name:ident, $features:literal, $r:literal) => {
+            #[target_feature(enable = $features)]
+            fn $name() -> f64 {
+                let start = Instant::now();
+                // SAFETY: register arithmetic only; the caller checked the features.
+                unsafe {
+                    std::arch::asm!(
+                        concat!("vxorps ", $r, "10, ", $r, "10, ", $r, "10"),
+                        concat!("vxorps ", $r, "11, ", $r, "11, ", $r, "11"),
+                        "2:",
+                        concat!("vfmadd231ps ", $r, "0, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "1, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "2, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "3, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "4, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "5, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "6, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "7, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "8, ", $r, "10, ", $r, "11"),
+                        concat!("vfmadd231ps ", $r, "9, ", $r, "10, ", $r, "11"),
+                        "sub {n}, 1",
+                        "jnz 2b",
+                        "vzeroupper",
+                        n = inout(reg) ITERATIONS => _,
+                        out("xmm0") _, out("xmm1") _, out("xmm2") _, out("xmm3") _,
+                        out("xmm4") _, out("xmm5") _, out("xmm6") _, out("xmm7") _,
+                        out("xmm8") _, out("xmm9") _, out("xmm10") _, out("xmm11") _,
+                        options(nostack, nomem),
+                    );
+                }
+                start.elapsed().as_nanos() as f64
+            }
+        };
     }
 
-    /// The same with 256-bit FMAs.
-    #[target_feature(enable = "avx2,fma")]
-    fn fma256_ns() -> f64 {
-        let start = Instant::now();
-        // SAFETY: register arithmetic only; the caller checked AVX2 and FMA.
-        unsafe {
-            std::arch::asm!(
-                "vxorps ymm0, ymm0, ymm0", "vxorps ymm1, ymm1, ymm1",
-                "vxorps ymm2, ymm2, ymm2", "vxorps ymm3, ymm3, ymm3",
-                "vxorps ymm4, ymm4, ymm4", "vxorps ymm5, ymm5, ymm5",
-                "vxorps ymm6, ymm6, ymm6", "vxorps ymm7, ymm7, ymm7",
-                "vxorps ymm8, ymm8, ymm8", "vxorps ymm9, ymm9, ymm9",
-                "vxorps ymm10, ymm10, ymm10", "vxorps ymm11, ymm11, ymm11",
-                "2:",
-                "vfmadd231ps ymm0, ymm10, ymm11", "vfmadd231ps ymm1, ymm10, ymm11",
-                "vfmadd231ps ymm2, ymm10, ymm11", "vfmadd231ps ymm3, ymm10, ymm11",
-                "vfmadd231ps ymm4, ymm10, ymm11", "vfmadd231ps ymm5, ymm10, ymm11",
-                "vfmadd231ps ymm6, ymm10, ymm11", "vfmadd231ps ymm7, ymm10, ymm11",
-                "vfmadd231ps ymm8, ymm10, ymm11", "vfmadd231ps ymm9, ymm10, ymm11",
-                "sub {n}, 1",
-                "jnz 2b",
-                "vzeroupper",
-                n = inout(reg) ITERATIONS => _,
-                out("ymm0") _, out("ymm1") _, out("ymm2") _, out("ymm3") _,
-                out("ymm4") _, out("ymm5") _, out("ymm6") _, out("ymm7") _,
-                out("ymm8") _, out("ymm9") _, out("ymm10") _, out("ymm11") _,
-                options(nostack, nomem),
-            );
-        }
-        start.elapsed().as_nanos() as f64
-    }
+    fma_kernel!(fma512_ns, "avx512f", "zmm");
+    fma_kernel!(fma256_ns, "avx2,fma", "ymm");
 
     /// 1000 independent 512-bit FMAs in one loop body (6 KB of code, about the size of a
     /// traversal kernel with its shading): the front end's throughput from the op cache.

@@ -626,12 +626,17 @@ impl DiffuseHits {
     /// The lane groups holding hits, with how many each holds.
     #[inline(always)]
     pub fn groups(&self) -> impl Iterator<Item = (usize, &Surfaces<Vec3x16>)> {
-        let len = self.len;
         self.surfaces
             .iter()
             .enumerate()
-            .take(len.div_ceil(LANES))
-            .map(move |(g, s)| ((len - g * LANES).min(LANES), s))
+            .take(self.len.div_ceil(LANES))
+            .map(|(g, s)| (self.hits_in(g), s))
+    }
+
+    /// How many hits group `g` holds (0 past the last).
+    #[inline(always)]
+    fn hits_in(&self, g: usize) -> usize {
+        self.len.saturating_sub(g * LANES).min(LANES)
     }
 
     /// The owners of group `g`'s hits.
@@ -686,10 +691,8 @@ impl DiffuseHits {
         // Every group's lanes, those past the hits casting nothing (a fixed array: collecting
         // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass).
         let groups = self.len.div_ceil(LANES);
-        let shadows: [SegmentLanes; GROUPS] = std::array::from_fn(|g| {
-            let len = self.len.saturating_sub(g * LANES).min(LANES);
-            lit[g].shadow.segment_lanes(len)
-        });
+        let shadows: [SegmentLanes; GROUPS] =
+            std::array::from_fn(|g| lit[g].shadow.segment_lanes(self.hits_in(g)));
         let mut blocked = [0u16; GROUPS];
         scene.occluded_lanes(&shadows[..groups], &mut blocked[..groups]);
         blocked
