@@ -6,11 +6,11 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use raylab::render::render;
-use raylab::scene::obj::{Placement, model_in_box, parse_obj};
-use raylab::scene::{Scene, cornell_box};
-use raylab::view::render_view;
-use raylab::{RenderSettings, Shading, Stage};
+use raylab_core::render::render;
+use raylab_core::scene::obj::{Placement, model_in_box, parse_obj};
+use raylab_core::scene::{Scene, cornell_box};
+use raylab_core::view::render_view;
+use raylab_core::{RenderSettings, Shading, Stage};
 
 /// The largest image side and sample count `settings_json` renders: each run stays quick.
 pub const MAX_SIDE: u32 = 16;
@@ -67,14 +67,14 @@ pub fn settings_json(data: &[u8]) {
     let scene = SCENE.get_or_init(cornell_box);
     let image = render(scene, &settings);
     assert_eq!(image.pixels.len(), (camera.width * camera.height) as usize);
-    let rgba = settings.display.to_rgba8(&image);
+    let rgba = settings.display.to_rgba8(&image.pixels);
     assert_eq!(rgba.len(), 4 * image.pixels.len());
     if settings.view.is_traced() {
         let _ = render_view(scene, &settings, settings.view, &|| false);
     }
 }
 
-/// Bytes → `raylab::scene_file::parse` (what `--scene-file FILE` and the workbench's Open read)
+/// Bytes → `raylab_core::scene_file::parse` (what `--scene-file FILE` and the workbench's Open read)
 /// → settings that are valid, since the parser validates them. They must save and read back to
 /// the same settings (a scene file round-trips exactly), and when small, render on the Cornell
 /// box as [`settings_json`] does. Model paths resolve against a folder that does not exist, so
@@ -84,14 +84,14 @@ pub fn scene_file(data: &[u8]) {
         return;
     };
     let folder = Path::new("/nonexistent-fuzz-folder");
-    let Ok(settings) = raylab::scene_file::parse(text, folder) else {
+    let Ok(settings) = raylab_core::scene_file::parse(text, folder) else {
         return;
     };
     settings
         .validate()
         .expect("the parser validates what it returns");
-    if let Ok(saved) = raylab::scene_file::to_text(&settings, folder) {
-        let again = raylab::scene_file::parse(&saved, folder)
+    if let Ok(saved) = raylab_core::scene_file::to_text(&settings, folder) {
+        let again = raylab_core::scene_file::parse(&saved, folder)
             .unwrap_or_else(|e| panic!("a saved scene file reads back: {e}\n{saved}"));
         assert_eq!(again, settings, "{saved}");
     }

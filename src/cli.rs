@@ -13,17 +13,17 @@ use std::time::Instant;
 use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
-use raylab::accel::{AccelKind, Isa};
-use raylab::bench::{BenchConfig, bench_scene};
-use raylab::display::{Display, DisplayTransform};
-use raylab::film::OutputFormat;
-use raylab::inspect::{InspectError, inspect_pixel};
-use raylab::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
-use raylab::material::TexturePreset;
-use raylab::render::try_render;
-use raylab::scene::SceneChoice;
-use raylab::settings::{MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_SAMPLES};
-use raylab::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
+use raylab_core::accel::{AccelKind, Isa};
+use raylab_core::bench::{BenchConfig, bench_scene};
+use raylab_core::display::{Display, DisplayTransform};
+use raylab_core::film::OutputFormat;
+use raylab_core::inspect::{InspectError, inspect_pixel};
+use raylab_core::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
+use raylab_core::material::TexturePreset;
+use raylab_core::render::try_render;
+use raylab_core::scene::SceneChoice;
+use raylab_core::settings::{MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_SAMPLES};
+use raylab_core::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -94,7 +94,7 @@ pub struct RenderArgs {
     /// legend is printed after the summary. Views are saved with the lab's display whatever
     /// --display says, so their colours are the legend's. Combines with --settings.
     #[arg(long, default_value = "shaded", value_name = "VIEW")]
-    pub view: raylab::view::View,
+    pub view: raylab_core::view::View,
     /// Also write the render's settings as a scene file (.toml), to open in the workbench or
     /// render again with --scene-file.
     #[arg(long, value_name = "FILE.toml")]
@@ -267,7 +267,7 @@ impl RenderOptions {
     /// warning.
     pub fn resolve_settings(&self) -> anyhow::Result<RenderSettings> {
         if let Some(path) = &self.scene_file {
-            return Ok(raylab::scene_file::load(path)?);
+            return Ok(raylab_core::scene_file::load(path)?);
         }
         match &self.settings {
             Some(path) => read_settings_file(path),
@@ -333,11 +333,11 @@ impl RenderOptions {
     }
 }
 
-/// Reads render settings from a file ([`raylab::settings::files::read_file`]): a scene file,
+/// Reads render settings from a file ([`raylab_core::settings_file::read_file`]): a scene file,
 /// a screenshot PNG or its JSON, or a bare settings object. Unknown fields are warned of on
 /// stderr.
 pub fn read_settings_file(path: &std::path::Path) -> anyhow::Result<RenderSettings> {
-    let loaded = raylab::settings::files::read_file(path)?;
+    let loaded = raylab_core::settings_file::read_file(path)?;
     for warning in &loaded.warnings {
         let _ = writeln!(std::io::stderr(), "warning: {}: {warning}", path.display());
     }
@@ -416,7 +416,7 @@ fn one_line(text: &str) -> String {
 /// keeps its old content, if it had one).
 fn remove_temporary_files_on_interrupt() {
     let installed = ctrlc::set_handler(|| {
-        raylab::temp_files::remove_all();
+        raylab_core::temp_files::remove_all();
         let _ = writeln!(
             std::io::stderr(),
             "raylab: interrupted; its temporary files are removed"
@@ -444,16 +444,16 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    raylab::film::check_writable(&args.out)?;
+    raylab_core::film::check_writable(&args.out)?;
     let settings = args.options.resolve_settings()?;
     settings.validate()?;
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;
-    raylab::memory::check(
+    raylab_core::memory::check(
         format!("a {}×{} render", c.width, c.height),
         settings.memory_estimate(args.view),
     )?;
-    if args.view == raylab::view::View::Variance && settings.samples_per_pixel < 2 {
+    if args.view == raylab_core::view::View::Variance && settings.samples_per_pixel < 2 {
         anyhow::bail!(
             "the variance view needs 2 or more samples per pixel (--samples 2 or more): it \
              measures the spread between a pixel's samples"
@@ -472,14 +472,14 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let start = Instant::now();
     let (image, display, legend) = match args.view {
-        raylab::view::View::Shaded => (
+        raylab_core::view::View::Shaded => (
             pool.install(|| try_render(&scene, &settings))?,
             settings.display,
             None,
         ),
         view => {
-            let v =
-                pool.install(|| raylab::view::render_view(&scene, &settings, view, &|| false))?;
+            let v = pool
+                .install(|| raylab_core::view::render_view(&scene, &settings, view, &|| false))?;
             (v.image, Display::default(), Some(v.legend))
         }
     };
@@ -487,13 +487,13 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     // A PNG carries its settings, so the image alone reopens to the same render.
     let mut carried = settings.clone();
     carried.view = args.view;
-    let text = raylab::settings::files::settings_text(&carried);
-    let keyword = raylab::settings::files::PNG_KEYWORD;
+    let text = raylab_core::settings_file::settings_text(&carried);
+    let keyword = raylab_core::settings_file::PNG_KEYWORD;
     image.save_with_text(&args.out, &display, Some((keyword, &text)))?;
     if let Some(path) = &args.save_scene {
-        raylab::scene_file::save(&settings, path)?;
+        raylab_core::scene_file::save(&settings, path)?;
     }
-    if let Some(note) = raylab::render::camera_sees_nothing(&scene, &settings) {
+    if let Some(note) = raylab_core::render::camera_sees_nothing(&scene, &settings) {
         // A black image the camera is to blame for: say so (the image is written all the same).
         let _ = writeln!(std::io::stderr(), "note: {note}");
     }
@@ -540,7 +540,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
 fn check_scene_destination(path: &std::path::Path) -> anyhow::Result<()> {
     let toml = path
         .extension()
-        .is_some_and(|e| e == raylab::scene_file::EXTENSION);
+        .is_some_and(|e| e == raylab_core::scene_file::EXTENSION);
     if !toml {
         anyhow::bail!(
             "--save-scene '{}': a scene file's name ends in .toml",
@@ -613,7 +613,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             .filter(|c| *c != SceneChoice::TexturedTeapot)
             .collect(),
     };
-    let isa = Isa::best();
+    let isa = raylab_core::scene::best_isa();
     let config = BenchConfig {
         width: args.width,
         height: args.height,
@@ -622,9 +622,9 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
     };
     // Refused before any work if it cannot fit: the scenes are measured one after the other.
     let largest_scene = scenes.iter().map(SceneChoice::memory_estimate).max();
-    raylab::memory::check(
+    raylab_core::memory::check(
         format!("a {}×{} bench", args.width, args.height),
-        raylab::bench::memory_estimate(&config) + largest_scene.unwrap_or(0),
+        raylab_core::bench::memory_estimate(&config) + largest_scene.unwrap_or(0),
     )?;
     // Written with `writeln!` so that a closed pipe (`raylab bench | head`) is an error, not a
     // panic.
@@ -685,7 +685,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             args.height,
             pool.current_num_threads(),
             args.passes,
-            Isa::calibration().map_or_else(
+            raylab_core::scene::calibration().map_or_else(
                 || format!("{} (forced)", isa.name()),
                 |c| format!("{}, the fastest measured here", c.summary())
             )

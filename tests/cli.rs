@@ -4,7 +4,9 @@ mod common;
 
 use std::path::Path;
 
-use common::{files_in, raylab, stderr};
+use common::{files_in, raylab, settings, stderr};
+use raylab_core::Stage;
+use raylab_core::scene::cornell_box;
 
 #[test]
 fn renders_a_png_and_an_exr_of_the_requested_size() {
@@ -474,7 +476,7 @@ fn every_kernel_set_forced_with_isa_gives_the_same_image() {
     // structure traces packets with AVX-512 and single rays otherwise, the same hits either
     // way, so the same pixels. A set this CPU lacks is refused with one line.
     let dir = tempfile::tempdir().unwrap();
-    let available = raylab::accel::Isa::available();
+    let available = raylab_core::accel::Isa::available();
     let mut images = Vec::new();
     for isa in ["best", "scalar", "avx2", "avx512"] {
         let path = dir.path().join(format!("{isa}.png"));
@@ -514,4 +516,147 @@ fn every_kernel_set_forced_with_isa_gives_the_same_image() {
     let out = raylab(&["render", "--isa", "sse9", "--out", "x.png"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("kernels 'sse9'"), "{}", stderr(&out));
+}
+
+// ---- The debug views from the command line. ----
+
+#[test]
+fn render_view_writes_the_view_and_prints_its_legend() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("depth.png");
+    let run = raylab(&[
+        "render",
+        "--view",
+        "depth",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(lines[0].starts_with("rendered cornell"), "{stdout}");
+    assert!(
+        stdout.contains("Depth") && stdout.contains("(white)"),
+        "{stdout}"
+    );
+    // The file is the view: grey levels, white somewhere, not the lab's colours.
+    let image = image::open(&out).unwrap().to_rgb8();
+    assert!(image.pixels().all(|p| p[0] == p[1] && p[1] == p[2]));
+    assert!(image.pixels().any(|p| p[0] == 255));
+
+    let noisy = dir.path().join("variance.png");
+    let once = raylab(&[
+        "render",
+        "--view",
+        "variance",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        noisy.to_str().unwrap(),
+    ]);
+    assert!(!once.status.success());
+    assert!(
+        stderr(&once).contains("2 or more samples"),
+        "{}",
+        stderr(&once)
+    );
+    assert!(!noisy.exists());
+    let twice = raylab(&[
+        "render",
+        "--view",
+        "variance",
+        "--samples",
+        "2",
+        "--stage",
+        "path",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        noisy.to_str().unwrap(),
+    ]);
+    assert!(twice.status.success(), "{}", stderr(&twice));
+    assert!(String::from_utf8_lossy(&twice.stdout).contains("n = 2 samples"));
+
+    let bad = raylab(&["render", "--view", "bvh", "--out", out.to_str().unwrap()]);
+    assert!(!bad.status.success());
+    assert!(stderr(&bad).contains("bvh-cost"), "{}", stderr(&bad));
+}
+
+// ---- The pixel inspector from the command line. ----
+
+/// `raylab inspect --pixel X,Y --json` prints one JSON object whose `t` is the closest hit of
+/// the pixel's centre ray; the text names the lab's equations; bad pixels are one-line errors.
+#[test]
+fn the_inspect_command() {
+    let size = ["--width", "40", "--height", "30"];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["inspect"];
+        args.extend_from_slice(&size);
+        args.extend_from_slice(extra);
+        raylab(&args)
+    };
+    let out = run(&["--pixel", "12,25", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(stdout.trim_end().lines().count(), 1, "one JSON object");
+    let json: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let s = settings(Stage::Lab, 40).camera.with_resolution(40, 30);
+    let hit = cornell_box()
+        .closest_intersection(&s.pixel_ray(12, 25), f32::INFINITY)
+        .unwrap();
+    assert_eq!(json["t"].as_f64().unwrap() as f32, hit.distance);
+    assert_eq!(json["triangle"].as_u64(), Some(hit.triangle_index as u64));
+    assert_eq!(json["pixel"], serde_json::json!([12, 25]));
+    assert_eq!(json["position"].as_array().unwrap().len(), 3);
+
+    let text = run(&["--pixel", "12,25", "--stage", "direct"]);
+    assert!(text.status.success(), "{}", stderr(&text));
+    let text = String::from_utf8(text.stdout).unwrap();
+    assert!(text.contains("eq. 27") && text.contains("eq. 28"), "{text}");
+
+    // The same options as render: a settings file, a preset.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("s.json");
+    std::fs::write(
+        &file,
+        r#"{"camera": {"width": 40, "height": 30, "focal_length": 40},
+            "shading": {"stage": "incoming", "shadows": false, "indirect": false}}"#,
+    )
+    .unwrap();
+    let from_file = raylab(&[
+        "inspect",
+        "--settings",
+        file.to_str().unwrap(),
+        "--pixel",
+        "12,25",
+        "--json",
+    ]);
+    assert!(from_file.status.success(), "{}", stderr(&from_file));
+    let from_file: serde_json::Value = serde_json::from_slice(&from_file.stdout).unwrap();
+    assert_eq!(from_file["stage"], "incoming");
+    assert_eq!(from_file["R"], from_file["D"]);
+
+    for (bad, names) in [
+        (&["--pixel", "40,0"][..], "40×30"),
+        (&["--pixel", "0,30"], "--pixel 0,30"),
+        (&["--pixel", "1,2,3"], "1,2,3"),
+        (&["--pixel", "-1,2"], "-1,2"),
+        (&["--pixel", "3,4", "--stage", "phong"], "phong"),
+        (&[], "--pixel"),
+    ] {
+        let out = run(bad);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}: {}", stderr(&out));
+        let err = stderr(&out);
+        assert_eq!(err.trim_end().lines().count(), 1, "{bad:?}: {err}");
+        assert!(err.contains(names), "{bad:?}: {err}");
+        assert!(out.stdout.is_empty());
+    }
 }

@@ -15,11 +15,11 @@ mod common;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use raylab::accel::{AccelKind, Isa};
-use raylab::geometry::{Ray, Triangle};
-use raylab::intersect::{closest_intersection_brute_force, occluded_brute_force};
-use raylab::sampling::Rng;
-use raylab::scene::{Material, Scene};
+use raylab_core::accel::AccelKind;
+use raylab_core::geometry::{Ray, Triangle};
+use raylab_core::intersect::{closest_intersection_brute_force, occluded_brute_force};
+use raylab_core::sampling::Rng;
+use raylab_core::scene::{Material, Scene};
 
 use common::rays::random_dir;
 use common::{raylab, stderr};
@@ -90,7 +90,12 @@ fn build_and_compare(triangles: &[Triangle], rays: &[Ray]) -> (Duration, usize) 
     let mut slowest = Duration::ZERO;
     for kind in [AccelKind::Bvh2, AccelKind::Bvh8] {
         let start = Instant::now();
-        let scene = Scene::with_accel(triangles.to_vec(), materials.clone(), kind, Isa::best());
+        let scene = Scene::with_accel(
+            triangles.to_vec(),
+            materials.clone(),
+            kind,
+            raylab_core::scene::best_isa(),
+        );
         slowest = slowest.max(start.elapsed());
         for (ray, (closest, occluded)) in rays.iter().zip(&expected) {
             assert_eq!(
@@ -116,7 +121,7 @@ fn a_million_copies_of_one_triangle_build_quickly_and_answer_as_brute_force() {
     // Linear: well under a second in debug and release builds alike (the fault: 83 s for
     // 300,000 copies, in the OBJ loader; the tree's build itself was never quadratic).
     assert!(build < Duration::from_secs(3), "built in {build:?}");
-    let bvh = raylab::accel::bvh::Bvh::build(&triangles);
+    let bvh = raylab_core::accel::bvh::Bvh::build(&triangles);
     assert_eq!(bvh.nodes.len(), 1, "one leaf");
     assert_eq!(bvh.indices, [0], "the first copy is the one kept");
     let hit = Scene::new(triangles, vec![Material::diffuse("m", Vec3::ONE)])
@@ -145,10 +150,10 @@ fn triangles_with_one_centroid_build_a_shallow_tree_and_answer_as_brute_force() 
         })
         .collect();
     for t in &triangles {
-        let b = raylab::accel::bvh::Aabb::of_triangle(t).unwrap();
+        let b = raylab_core::accel::bvh::Aabb::of_triangle(t).unwrap();
         assert_eq!(b.centre(), Vec3::ZERO);
     }
-    let bvh = raylab::accel::bvh::Bvh::build(&triangles);
+    let bvh = raylab_core::accel::bvh::Bvh::build(&triangles);
     let log2 = (n as f64).log2().ceil() as usize;
     assert!(bvh.depth() <= log2 + 42, "depth {} for {n}", bvh.depth());
     let rays = rays_at(&triangles, 200, 33);
@@ -163,7 +168,7 @@ fn triangles_with_one_centroid_build_a_shallow_tree_and_answer_as_brute_force() 
 fn a_million_triangles_in_one_point_build_an_empty_tree() {
     let p = Vec3::new(0.25, 0.5, 2.0);
     let triangles = vec![Triangle::new(p, p, p, 0); COPIES];
-    let bvh = raylab::accel::bvh::Bvh::build(&triangles);
+    let bvh = raylab_core::accel::bvh::Bvh::build(&triangles);
     assert!(bvh.nodes.is_empty() && bvh.indices.is_empty());
     let mut rays = rays_at(&triangles, 20, 34);
     rays.push(Ray::new(Vec3::ZERO, p));
@@ -185,11 +190,14 @@ fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     std::fs::write(&obj, &text).unwrap();
 
     let start = Instant::now();
-    let (scene, warnings) = raylab::scene::obj::obj_scene_with_warnings(&obj).unwrap();
+    let (scene, warnings) = raylab_core::scene::obj::obj_scene_with_warnings(&obj).unwrap();
     let took = start.elapsed();
     assert!(took < Duration::from_secs(5), "loaded in {took:?}");
     // The box's 30 triangles and the one face.
-    assert_eq!(scene.triangles.len(), raylab::scene::CORNELL_TRIANGLES + 1);
+    assert_eq!(
+        scene.triangles.len(),
+        raylab_core::scene::CORNELL_TRIANGLES + 1
+    );
     let want = format!(
         "{}: left out {} faces that can never be seen: 1 degenerate (zero area), {} exact \
          duplicates of earlier faces",
@@ -293,10 +301,10 @@ fn the_largest_allowed_light_writes_a_finite_exr() {
 
 /// The `shadows` stage (figure 6: ρ·D with shadows, no indirect term) of the box from the
 /// default camera, with the light at `light`.
-fn shadows_stage(light: Vec3, side: u32) -> raylab::Image {
-    let mut s = common::settings(raylab::Stage::Shadows, side);
+fn shadows_stage(light: Vec3, side: u32) -> raylab_core::Image {
+    let mut s = common::settings(raylab_core::Stage::Shadows, side);
     s.light.position = light;
-    raylab::render::render(&raylab::scene::cornell_box(), &s)
+    raylab_core::render::render(&raylab_core::scene::cornell_box(), &s)
 }
 
 /// A light outside the box (which spans −1..1) lights nothing inside it: the walls stand in the
@@ -350,7 +358,7 @@ fn a_light_outside_the_box_lights_nothing_inside() {
 /// which lie in the short block's shadow; from outside all are dark.
 #[test]
 fn the_floor_edge_is_lit_from_inside_and_dark_from_outside() {
-    let inside = shadows_stage(raylab::PointLight::default().position, 128);
+    let inside = shadows_stage(raylab_core::PointLight::default().position, 128);
     let outside = shadows_stage(Vec3::new(1.5, 0.0, 0.0), 128);
     for i in 96..128 {
         let in_blocks_shadow = (104..=112).contains(&i);
@@ -369,9 +377,9 @@ fn the_floor_edge_is_lit_from_inside_and_dark_from_outside() {
 /// leave through the walls the camera stands on and see nothing: black.
 #[test]
 fn a_camera_in_a_corner_sees_the_room_in_front_of_it() {
-    let mut s = common::settings(raylab::Stage::Flat, 16);
+    let mut s = common::settings(raylab_core::Stage::Flat, 16);
     s.camera.position = Vec3::new(-1.0, -1.0, -1.0);
-    let image = raylab::render::render(&raylab::scene::cornell_box(), &s);
+    let image = raylab_core::render::render(&raylab_core::scene::cornell_box(), &s);
     for y in 0..16 {
         for x in 0..16 {
             let want = if x >= 8 && y >= 8 {
@@ -389,16 +397,16 @@ fn a_camera_in_a_corner_sees_the_room_in_front_of_it() {
 /// the stage.
 #[test]
 fn a_camera_on_a_wall_sees_what_is_in_front_of_it() {
-    let scene = raylab::scene::cornell_box();
-    for stage in [raylab::Stage::Flat, raylab::Stage::Lab] {
+    let scene = raylab_core::scene::cornell_box();
+    for stage in [raylab_core::Stage::Flat, raylab_core::Stage::Lab] {
         let mut on = common::settings(stage, 48);
         on.camera.position = Vec3::new(0.0, 0.0, 1.0);
         on.camera.yaw = std::f32::consts::PI;
         let mut before = on.clone();
         before.camera.position.z = 1.0 - 1e-3;
         let (a, b) = (
-            raylab::render::render(&scene, &on),
-            raylab::render::render(&scene, &before),
+            raylab_core::render::render(&scene, &on),
+            raylab_core::render::render(&scene, &before),
         );
         // The blue and red blocks and the open front (black) at least, not one colour.
         let colours: std::collections::HashSet<[u32; 3]> = common::bits(&a).into_iter().collect();

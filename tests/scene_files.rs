@@ -7,8 +7,8 @@ mod common;
 use std::path::Path;
 
 use common::{files_in, raylab, stderr};
-use raylab::RenderSettings;
-use raylab::scene::SceneChoice;
+use raylab_core::RenderSettings;
+use raylab_core::scene::SceneChoice;
 
 fn render(args: &[&str]) -> std::process::Output {
     let out = raylab(&[&["render"], args].concat());
@@ -78,9 +78,9 @@ fn a_screenshot_png_reopens_to_its_render() {
         "--light",
         "-0.3,-0.5,-0.6",
     ]);
-    let loaded = raylab::settings::files::read_file(&a).unwrap();
+    let loaded = raylab_core::settings_file::read_file(&a).unwrap();
     assert_eq!(loaded.settings.camera.width, 40);
-    assert_eq!(loaded.settings.shading.stage, raylab::Stage::Shadows);
+    assert_eq!(loaded.settings.shading.stage, raylab_core::Stage::Shadows);
     assert!(loaded.warnings.is_empty());
     render(&[
         "--settings",
@@ -134,22 +134,22 @@ fn every_shipped_scene_file_loads_and_is_valid() {
         ]
     );
     for name in &names {
-        let settings =
-            raylab::scene_file::load(&folder.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let settings = raylab_core::scene_file::load(&folder.join(name))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         settings.validate().unwrap();
     }
     // Figure 7 is exactly the lab's defaults; the presets are the built-ins.
-    let load = |n: &str| raylab::scene_file::load(&folder.join(n)).unwrap();
+    let load = |n: &str| raylab_core::scene_file::load(&folder.join(n)).unwrap();
     assert_eq!(load("figure7.toml"), RenderSettings::default());
     assert_eq!(load("bunny.toml").scene, SceneChoice::Bunny);
     assert_eq!(load("terrain.toml").scene, SceneChoice::Terrain);
     assert_eq!(
         load("mirror.toml").material_preset,
-        raylab::MaterialPreset::Mirror
+        raylab_core::MaterialPreset::Mirror
     );
     assert_eq!(
         load("glass.toml").material_preset,
-        raylab::MaterialPreset::Glass
+        raylab_core::MaterialPreset::Glass
     );
     let gallery = load("gallery.toml").scene.spec();
     assert_eq!(gallery.models.len(), 3);

@@ -51,7 +51,7 @@ fuzz_target!(|data: &[u8]| {
         Some(Command::Render(args)) => resolve(&args.options),
         Some(Command::Inspect(args)) => resolve(&args.options),
         Some(Command::Bench(args)) => {
-            let _ = raylab::accel::Isa::by_name(&args.isa);
+            let _ = raylab_core::accel::Isa::by_name(&args.isa);
         }
         None => {}
     }

@@ -22,9 +22,9 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use eframe::egui;
-use raylab::progressive::{Controller, ControllerError, Frame, WorkerError, catch_panic};
-use raylab::scene::Scene;
-use raylab::{Camera, Image, RenderSettings, Shading};
+use raylab_core::progressive::{Controller, ControllerError, Frame, WorkerError, catch_panic};
+use raylab_core::scene::Scene;
+use raylab_core::{Camera, Image, RenderSettings, Shading};
 
 use super::stats::Stats;
 use super::viewport::filter_for;
@@ -842,7 +842,7 @@ mod tests {
         let mut b = a.clone();
         b.shading.shadows = false;
         b.samples_per_pixel = 16;
-        b.display.transform = raylab::display::DisplayTransform::Srgb;
+        b.display.transform = raylab_core::display::DisplayTransform::Srgb;
         assert_eq!(differences(&a, &b), ["shadows", "samples", "display"]);
         // The same view at another size is only a resolution change.
         let mut c = a.clone();

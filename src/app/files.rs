@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 
 use eframe::egui;
-use raylab::RenderSettings;
-use raylab::settings::files::{self, Loaded};
+use raylab_core::RenderSettings;
+use raylab_core::settings_file::{self, Loaded};
 
 /// What a file holds, once read.
 #[derive(Debug)]
@@ -34,7 +34,7 @@ pub fn open(path: &Path) -> Result<Opened, String> {
         }
         return Ok(Opened::Model(path.to_path_buf()));
     }
-    let loaded = files::read_file(path).map_err(|e| e.to_string())?;
+    let loaded = settings_file::read_file(path).map_err(|e| e.to_string())?;
     loaded
         .settings
         .validate()
@@ -46,8 +46,8 @@ pub fn open(path: &Path) -> Result<Opened, String> {
 /// Returns the path written.
 pub fn save_scene(settings: &RenderSettings, path: &Path) -> Result<PathBuf, String> {
     let path = match path.extension() {
-        None => path.with_extension(raylab::scene_file::EXTENSION),
-        Some(e) if e == raylab::scene_file::EXTENSION => path.to_path_buf(),
+        None => path.with_extension(raylab_core::scene_file::EXTENSION),
+        Some(e) if e == raylab_core::scene_file::EXTENSION => path.to_path_buf(),
         Some(_) => {
             return Err(format!(
                 "not saved: a scene file's name ends in .toml ('{}')",
@@ -55,7 +55,7 @@ pub fn save_scene(settings: &RenderSettings, path: &Path) -> Result<PathBuf, Str
             ));
         }
     };
-    raylab::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
+    raylab_core::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
     Ok(path)
 }
 

@@ -14,7 +14,7 @@
 
 use eframe::egui::{self, Key, KeyboardShortcut, Modifiers};
 use glam::{Mat3, Vec3};
-use raylab::{Camera, RenderSettings};
+use raylab_core::{Camera, RenderSettings};
 
 use super::Command;
 use super::viewport::ViewportInput;

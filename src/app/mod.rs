@@ -23,9 +23,9 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Instant;
 
 use eframe::egui;
-use raylab::progressive::{Controller, Frame, WorkerError, catch_panic};
-use raylab::scene::{Scene, SceneChoice, cornell_box};
-use raylab::{Camera, Image, RenderSettings, Shading, Stage};
+use raylab_core::progressive::{Controller, Frame, WorkerError, catch_panic};
+use raylab_core::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::{Camera, Image, RenderSettings, Shading, Stage};
 
 use persistence::WorkbenchState;
 use stats::Stats;
@@ -184,7 +184,7 @@ struct SceneLoad {
 
 /// An inspection as the inspector panel shows it: its lines, and the same as text to copy.
 struct Inspected {
-    lines: Vec<raylab::inspect::InspectLine>,
+    lines: Vec<raylab_core::inspect::InspectLine>,
     text: String,
 }
 
@@ -666,7 +666,7 @@ impl WorkbenchApp {
             .as_ref()
             .is_some_and(|(s, p, _)| *p == pixel && *s == self.state.settings);
         if !fresh {
-            let result = raylab::inspect::inspect_pixel(
+            let result = raylab_core::inspect::inspect_pixel(
                 &self.scene,
                 &self.state.settings,
                 pixel[0],
@@ -733,7 +733,7 @@ impl WorkbenchApp {
         let settings = &mut self.state.settings;
         let camera = &settings.camera;
         let (px, py) = (at.x * camera.width as f32, at.y * camera.height as f32);
-        match raylab::render::focus_depth(&self.scene, settings, px, py) {
+        match raylab_core::render::focus_depth(&self.scene, settings, px, py) {
             Some(depth) => {
                 settings.camera.focus_distance = depth;
                 let hint = if settings.camera.aperture > 0.0 {
@@ -900,10 +900,10 @@ impl WorkbenchApp {
                 }
             }
             Command::WalkTo(step) => {
-                let step = step.filter(|&n| n < raylab::walkthrough::STEPS.len());
+                let step = step.filter(|&n| n < raylab_core::walkthrough::STEPS.len());
                 self.state.walk_step = step;
                 if let Some(n) = step {
-                    raylab::walkthrough::STEPS[n].apply(&mut self.state.settings);
+                    raylab_core::walkthrough::STEPS[n].apply(&mut self.state.settings);
                 }
             }
             Command::FreezeA => self.freeze_a(ctx),

@@ -5,12 +5,12 @@
 //! find them by.
 
 use eframe::egui;
-use raylab::display::{Display, DisplayTransform};
-use raylab::integrator::MAX_SPECULAR_DEPTH;
-use raylab::material::TexturePreset;
-use raylab::scene::SceneChoice;
-use raylab::view::{Legend, View};
-use raylab::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
+use raylab_core::display::{Display, DisplayTransform};
+use raylab_core::integrator::MAX_SPECULAR_DEPTH;
+use raylab_core::material::TexturePreset;
+use raylab_core::scene::SceneChoice;
+use raylab_core::view::{Legend, View};
+use raylab_core::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
 
 use super::Command;
 use super::persistence::WorkbenchState;
@@ -444,7 +444,7 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
 
 /// The lab walk-through: the current step's explanation and equation, Previous / Next.
 pub fn walkthrough_ui(ui: &mut egui::Ui, step: Option<usize>, commands: &mut Vec<Command>) {
-    use raylab::walkthrough::STEPS;
+    use raylab_core::walkthrough::STEPS;
     let Some(n) = step.filter(|&n| n < STEPS.len()) else {
         ui.label(
             "Step through the lab's figures 2, 3, 5, 6 and 7, then the extensions, each with \

@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use raylab::RenderSettings;
+use raylab_core::RenderSettings;
 use serde::{Deserialize, Serialize};
 
 /// The key in eframe's storage.
@@ -54,7 +54,7 @@ impl Default for WorkbenchState {
         Self {
             version: STATE_VERSION,
             settings: lab_defaults(),
-            render_threads: raylab::progressive::default_threads(),
+            render_threads: raylab_core::progressive::default_threads(),
             screenshot_folder: PathBuf::from("."),
             obj_path: String::new(),
             limited_bounces: DEFAULT_LIMITED_BOUNCES,
@@ -82,7 +82,7 @@ impl WorkbenchState {
             let fallback = Self {
                 screenshot_folder: PathBuf::from("."),
                 settings: RenderSettings {
-                    scene: raylab::scene::SceneChoice::Cornell,
+                    scene: raylab_core::scene::SceneChoice::Cornell,
                     ..self.settings.clone()
                 },
                 ..self.clone()
@@ -212,7 +212,7 @@ mod tests {
         )));
         assert_eq!(notice, None);
         assert_eq!(state.settings.light.position.x, 0.5);
-        assert_eq!(state.settings.camera, raylab::Camera::default());
+        assert_eq!(state.settings.camera, raylab_core::Camera::default());
     }
 
     /// A file saved before the path tracer and the materials existed: no `bounces`,
@@ -239,14 +239,17 @@ mod tests {
         let (state, notice) = load(Some(&stored(old)));
         assert_eq!(notice, None);
         let shading = state.settings.shading;
-        assert_eq!(shading.stage, raylab::Stage::Shadows);
+        assert_eq!(shading.stage, raylab_core::Stage::Shadows);
         assert_eq!(shading.indirect_light, glam::Vec3::splat(0.25));
         assert_eq!(shading.bounces, None);
         assert_eq!(
             shading.specular_depth,
-            raylab::integrator::DEFAULT_SPECULAR_DEPTH
+            raylab_core::integrator::DEFAULT_SPECULAR_DEPTH
         );
-        assert_eq!(state.settings.material_preset, raylab::MaterialPreset::None);
+        assert_eq!(
+            state.settings.material_preset,
+            raylab_core::MaterialPreset::None
+        );
         assert_eq!(state.settings.camera.width, 256);
         assert_eq!(state.limited_bounces, DEFAULT_LIMITED_BOUNCES);
         assert_eq!(state.screenshot_folder, PathBuf::from("/tmp/shots"));
@@ -255,10 +258,10 @@ mod tests {
     #[test]
     fn the_path_stage_and_materials_round_trip() {
         let mut state = WorkbenchState::default();
-        state.settings.shading = raylab::Shading::for_stage(raylab::Stage::Path);
+        state.settings.shading = raylab_core::Shading::for_stage(raylab_core::Stage::Path);
         state.settings.shading.bounces = Some(3);
         state.settings.shading.specular_depth = 2;
-        state.settings.material_preset = raylab::MaterialPreset::Both;
+        state.settings.material_preset = raylab_core::MaterialPreset::Both;
         state.settings.samples_per_pixel = 1024;
         state.limited_bounces = 3;
         let mut storage = MemoryStorage::default();

@@ -12,8 +12,8 @@ use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use raylab::film::OutputFormat;
-use raylab::{Image, RenderSettings};
+use raylab_core::film::OutputFormat;
+use raylab_core::{Image, RenderSettings};
 use serde::{Deserialize, Serialize};
 
 /// The paths a screenshot was written to.
@@ -72,8 +72,8 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
             OutputFormat::Png,
             &request.settings.display,
             Some((
-                raylab::settings::files::PNG_KEYWORD,
-                &raylab::settings::files::settings_text(&request.settings),
+                raylab_core::settings_file::PNG_KEYWORD,
+                &raylab_core::settings_file::settings_text(&request.settings),
             )),
         )
         .context("could not encode the screenshot as PNG")?;
@@ -164,7 +164,7 @@ mod tests {
     fn request(folder: &Path) -> Request {
         let mut settings = RenderSettings::default();
         settings.camera = settings.camera.with_resolution(24, 16);
-        let image = raylab::render::render(&raylab::scene::cornell_box(), &settings);
+        let image = raylab_core::render::render(&raylab_core::scene::cornell_box(), &settings);
         Request {
             folder: folder.to_owned(),
             image: Arc::new(image),
@@ -207,7 +207,8 @@ mod tests {
             serde_json::from_str(&fs::read_to_string(&first.json).unwrap()).unwrap();
         assert_eq!(sidecar.image, "raylab-20250304-050607.png");
         assert_eq!(sidecar.sample_target, 16);
-        let again = raylab::render::render(&raylab::scene::cornell_box(), &sidecar.settings);
+        let again =
+            raylab_core::render::render(&raylab_core::scene::cornell_box(), &sidecar.settings);
         assert_eq!(again.to_rgb8(), png.into_raw());
     }
 

@@ -2,7 +2,7 @@
 //! estimated remaining noise and the time from a change to its first image on screen.
 
 use eframe::egui;
-use raylab::film::NoiseEstimate;
+use raylab_core::film::NoiseEstimate;
 
 /// What the noise figures mean, for their hover text.
 const NOISE_HOVER: &str = "The standard error of the accumulated mean, estimated from the spread \
@@ -32,7 +32,7 @@ pub struct Stats {
     /// The estimated remaining noise of the shown image (from 2 samples on).
     pub noise: Option<NoiseEstimate>,
     /// What the shown debug view's colours mean (none for the shaded image).
-    pub legend: Option<raylab::view::Legend>,
+    pub legend: Option<raylab_core::view::Legend>,
 }
 
 /// A fraction as a percentage with about two significant digits: "0.42 %", "12.5 %".

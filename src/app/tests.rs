@@ -12,10 +12,11 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use glam::Vec3;
-use raylab::light::{approach_at_edge, direct_light, in_shadow, shadow_ray};
-use raylab::render::render;
-use raylab::scene::{SceneChoice, cornell_box};
-use raylab::{Image, MaterialPreset, RenderSettings, Shading, Stage};
+use raylab_core::light::{approach_at_edge, direct_light, shadow_ray};
+use raylab_core::render::render;
+use raylab_core::scene::in_shadow;
+use raylab_core::scene::{SceneChoice, cornell_box};
+use raylab_core::{Image, MaterialPreset, RenderSettings, Shading, Stage};
 
 use super::persistence::{WorkbenchState, lab_defaults};
 use super::*;
@@ -150,7 +151,7 @@ fn shadows_switch_changes_only_pixels_a_shadow_can_reach() {
         for x in 0..w {
             let ray = s.camera.pixel_ray(x, y);
             let hit = scene.closest_intersection(&ray, f32::INFINITY);
-            let at_edge = |hit: &raylab::intersect::Intersection| {
+            let at_edge = |hit: &raylab_core::intersect::Intersection| {
                 let t = &scene.triangles[hit.triangle_index];
                 approach_at_edge(t, hit.u, hit.v, ray.direction)
             };
@@ -836,7 +837,7 @@ fn changing_the_display_never_restarts_the_accumulation() {
     assert_eq!(display.exposure, 1.0);
     assert_eq!(
         h.state().viewport.rgba().unwrap(),
-        display.to_rgba8(&frame.image),
+        display.to_rgba8(&frame.image.pixels),
         "the texture is the image through the new exposure"
     );
 }
@@ -859,7 +860,7 @@ fn click_to_focus_sets_the_focus_distance() {
     h.step();
     let s = settings(&h);
     let (px, py) = (at.x * 128.0, at.y * 96.0);
-    let expected = raylab::render::focus_depth(&cornell_box(), &s, px, py).unwrap();
+    let expected = raylab_core::render::focus_depth(&cornell_box(), &s, px, py).unwrap();
     assert!(
         (s.camera.focus_distance - expected).abs() < 0.02,
         "{} vs {expected}",
@@ -1087,11 +1088,11 @@ fn compare_shadows_off_for_b_differs_exactly_where_the_renders_do() {
     // A keeps its own texture, B's is the live one.
     assert_eq!(
         comparing(&h).a_rgba().unwrap(),
-        a_settings.display.to_rgba8(&a_render)
+        a_settings.display.to_rgba8(&a_render.pixels)
     );
     assert_eq!(
         h.state().viewport.rgba().unwrap(),
-        b.settings.display.to_rgba8(&b_render)
+        b.settings.display.to_rgba8(&b_render.pixels)
     );
 
     let diff = comparing(&h).difference_shown().expect("a difference");
@@ -1235,8 +1236,14 @@ fn compare_keeps_as_display_while_bs_changes() {
     let frozen = comparing(&h).settings().display;
     let live = settings(&h).display;
     assert_eq!((frozen.exposure, live.exposure), (0.0, 1.0));
-    assert_eq!(comparing(&h).a_rgba().unwrap(), frozen.to_rgba8(&a.image));
-    assert_eq!(h.state().viewport.rgba().unwrap(), live.to_rgba8(&b.image));
+    assert_eq!(
+        comparing(&h).a_rgba().unwrap(),
+        frozen.to_rgba8(&a.image.pixels)
+    );
+    assert_eq!(
+        h.state().viewport.rgba().unwrap(),
+        live.to_rgba8(&b.image.pixels)
+    );
     assert!(h.query_by_label("A and B differ in: exposure").is_some());
     assert!(h.query_by_label("A and B are identical").is_some());
 }
@@ -1269,7 +1276,7 @@ fn the_inspector_explains_a_clicked_pixel() {
     );
     assert!(h.query_by_label_contains("R = ρ·(D + N)").is_some());
     let s = settings(&h);
-    let inspection = raylab::inspect::inspect_pixel(&cornell_box(), &s, 40, 70).unwrap();
+    let inspection = raylab_core::inspect::inspect_pixel(&cornell_box(), &s, 40, 70).unwrap();
     assert_eq!(inspection.r, shown(&h).image.get(40, 70));
     assert_eq!(
         h.state().viewport.pinned.map(|r| r.min),
@@ -1295,15 +1302,15 @@ fn the_view_selector_shows_a_debug_view_with_its_legend() {
     choose(&mut h, "View", "Depth t");
     settle(&mut h);
     let s = settings(&h);
-    assert_eq!(s.view, raylab::view::View::Depth);
-    let expected = raylab::view::render_view(&cornell_box(), &s, s.view, &|| false).unwrap();
+    assert_eq!(s.view, raylab_core::view::View::Depth);
+    let expected = raylab_core::view::render_view(&cornell_box(), &s, s.view, &|| false).unwrap();
     assert_eq!(*shown(&h).image, expected.image);
     assert_eq!(h.state().stats.legend.as_ref(), Some(&expected.legend));
     assert!(h.query_by_label_contains(&expected.legend.title).is_some());
     // The texture shows the view through the lab's display, whatever the display in force.
     assert_eq!(
         h.state().viewport.rgba().unwrap(),
-        raylab::display::Display::default().to_rgba8(&expected.image)
+        raylab_core::display::Display::default().to_rgba8(&expected.image.pixels)
     );
     choose(&mut h, "View", "Shaded (the stage)");
     settle(&mut h);
@@ -1364,7 +1371,7 @@ fn a_render_that_panics_is_reported_and_the_next_change_renders() {
         text,
         format!(
             "The render panicked: {} (settings: {})",
-            raylab::progressive::INJECTED_PANIC,
+            raylab_core::progressive::INJECTED_PANIC,
             failed.summary()
         )
     );
@@ -1437,7 +1444,7 @@ fn a_panic_rendering_a_is_reported_and_b_goes_on() {
         text,
         format!(
             "A: The render panicked: {} (settings: {})",
-            raylab::progressive::INJECTED_PANIC,
+            raylab_core::progressive::INJECTED_PANIC,
             a.summary()
         )
     );

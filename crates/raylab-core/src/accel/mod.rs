@@ -1,0 +1,1015 @@
+//! Acceleration structures: what answers a [`crate::scene::Scene`]'s closest-hit and shadow
+//! queries without testing every triangle.
+//!
+//! * [`bvh`]: a binary BVH, binned SAH build, and the readable scalar traversal (the reference).
+//! * [`wide`]: the fast path — an 8-wide BVH collapsed from it, triangles in 8-wide packets —
+//!   and the flat packet list (a SIMD loop over every triangle).
+//! * [`simd`]: the box and triangle kernels, AVX2 with a scalar twin.
+//! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) through the wide
+//!   BVH as packets, one SIMD lane a ray: sixteen at a time with AVX-512, eight with AVX2.
+//! * [`cull`]: a batch of camera rays, or of shadow rays to a point light, bounded by a cone:
+//!   the flat list skips the triangles outside it for the whole batch.
+//! * [`calibrate`]: which kernel set is fastest on this CPU, measured at start-up.
+//!
+//! [`Accel::build`] picks per scene ([`AccelKind::Auto`]): the flat list for tiny scenes (the
+//! 30-triangle Cornell box, where it beats any tree: see PERFORMANCE.md), the wide BVH
+//! otherwise, with the few triangles that are large next to the scene (the box's walls) set
+//! apart in one packet tested first; and the kernels measured fastest on this CPU
+//! ([`Isa::best_with`]), or forced with `--isa`.
+//! Every kind returns exactly what [`crate::intersect::closest_intersection_brute_force`]
+//! returns, ties included.
+//!
+//! ```
+//! use glam::Vec3;
+//! use raylab_core::accel::{Accel, AccelKind, Isa};
+//! use raylab_core::geometry::Ray;
+//! use raylab_core::intersect::closest_intersection_brute_force;
+//! use raylab_core::scene::{SceneChoice, cornell_box};
+//!
+//! // The scene builds its structure itself: flat for the Cornell box, a BVH for the bunny.
+//! assert_eq!(cornell_box().accel().kind(), AccelKind::Flat);
+//! let bunny = SceneChoice::Bunny.load().unwrap();
+//! assert_eq!(bunny.accel().kind(), AccelKind::Bvh8);
+//!
+//! // Any structure, any kernels: the brute-force loop's answer, bit for bit.
+//! let ray = Ray::new(Vec3::new(0.0, 0.0, -3.001), Vec3::new(-0.1, 0.3, 1.0));
+//! let want = closest_intersection_brute_force(&ray, &bunny.triangles, f32::INFINITY).unwrap();
+//! for isa in Isa::available() {
+//!     let accel = Accel::build(&bunny.triangles, AccelKind::Bvh8, isa);
+//!     let hit = accel.closest(&bunny.triangles, &ray, f32::INFINITY).unwrap();
+//!     assert_eq!((hit.index as usize, hit.t), (want.triangle_index, want.distance));
+//! }
+//! ```
+
+pub mod bvh;
+pub mod calibrate;
+pub mod cull;
+#[cfg(target_arch = "x86_64")]
+pub mod packet;
+pub mod simd;
+pub mod wide;
+
+use std::fmt;
+use std::str::FromStr;
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use crate::geometry::{Ray, Triangle};
+use crate::intersect;
+
+use self::bvh::Bvh;
+use self::calibrate::Calibration;
+/// Rays per packet with AVX-512 (one lane a ray), and per chunk of a batch elsewhere.
+const PACKET: usize = 16;
+/// Rays per packet with AVX2 (one lane a ray).
+const PACKET_AVX2: usize = 8;
+use self::cull::Cone;
+use self::simd::RayK;
+use self::simd::{Avx2, Avx512, Scalar};
+use self::wide::{Bvh8Big, Flat};
+
+/// Scenes with at most this many triangles use the flat packet list. Measured (PERFORMANCE.md,
+/// 512×512 lab pass, 2 threads): on the 30-triangle Cornell box the flat AVX-512 loop takes
+/// 7.9 ms against 10.8 ms for the 8-wide BVH; on the 1,022-triangle teapot it takes 91 ms
+/// against 10.6 ms. The crossover lies in between; 64 (four 16-wide packets) is on the safe side.
+pub const FLAT_MAX_TRIANGLES: usize = 64;
+
+/// A closest hit: the triangle's index in the scene and `t`, `u`, `v` exactly as
+/// [`intersect::intersect_triangle`] computes them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub index: u32,
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// The work one closest-hit query did ([`Accel::closest_counting`]): what the workbench's
+/// BVH-cost view shows per pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct TraversalCost {
+    /// Interior nodes visited: each tests the boxes of all its children at once (eight for the
+    /// wide BVH, two for the binary one). Leaves are not counted here but by their triangles.
+    pub nodes: u32,
+    /// Triangles tested: the real triangles of every leaf packet tested, not the packets'
+    /// empty lanes (see [`wide::Bvh8::closest_counting`]); every triangle for the flat loop
+    /// and the brute-force loop.
+    pub triangles: u32,
+}
+
+impl TraversalCost {
+    /// Nodes plus triangles, unweighted: the one number the cost view maps to colour. Plain
+    /// counts can be checked by hand on a small tree; weighting them (the build's SAH takes a
+    /// node visit as about four triangle tests, 1 against 0.25) would be a model of the time,
+    /// not a count of the work.
+    pub fn total(self) -> u32 {
+        self.nodes + self.triangles
+    }
+}
+
+/// Which structure to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum AccelKind {
+    /// Flat for tiny scenes, the 8-wide BVH otherwise.
+    #[default]
+    Auto,
+    /// The lab's loop over every triangle, one at a time.
+    BruteForce,
+    /// Every triangle in 8-wide packets, tested in order.
+    Flat,
+    /// The binary BVH with the scalar reference traversal.
+    Bvh2,
+    /// The 8-wide BVH.
+    Bvh8,
+}
+
+impl AccelKind {
+    pub const ALL: [AccelKind; 5] = [
+        AccelKind::Auto,
+        AccelKind::BruteForce,
+        AccelKind::Flat,
+        AccelKind::Bvh2,
+        AccelKind::Bvh8,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            AccelKind::Auto => "auto",
+            AccelKind::BruteForce => "brute",
+            AccelKind::Flat => "flat",
+            AccelKind::Bvh2 => "bvh2",
+            AccelKind::Bvh8 => "bvh8",
+        }
+    }
+}
+
+impl fmt::Display for AccelKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for AccelKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        AccelKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                format!("unknown accelerator '{s}' (expected auto, brute, flat, bvh2 or bvh8)")
+            })
+    }
+}
+
+/// Which kernels run the flat list and the wide BVH.
+#[derive(Clone, Copy, Debug)]
+pub enum Isa {
+    Scalar,
+    /// AVX2 + FMA: 8-wide everything.
+    Avx2(Avx2),
+    /// AVX-512: the flat list 16 wide; the 8-wide BVH keeps its AVX2 kernels for single rays
+    /// and traces coherent batches as packets of 16 rays.
+    Avx512(Avx512),
+}
+
+/// The kernels every structure uses unless told otherwise: forced ([`Isa::force`], the
+/// `RAYLAB_ISA` variable) or measured ([`calibrate`]), once per process.
+static CHOSEN: OnceLock<(Isa, Option<Calibration>)> = OnceLock::new();
+
+impl Isa {
+    /// The kernels to use on this CPU: the one forced by `--isa` ([`Isa::force`]) or the
+    /// `RAYLAB_ISA` environment variable (`avx512`, `avx2` or `scalar`, if this CPU runs it),
+    /// else the fastest on `workloads` ([`calibrate::calibrate`]: not always the widest; the
+    /// renderer's workloads come from `scene::best_isa`). Decided once per process: later calls
+    /// return the same set without calling `workloads`.
+    pub fn best_with(workloads: impl FnOnce() -> Vec<calibrate::Workload>) -> Self {
+        Self::chosen(workloads).0
+    }
+
+    /// What [`Isa::best_with`] measured, if it has measured (not when forced).
+    pub fn calibration() -> Option<&'static Calibration> {
+        CHOSEN.get().and_then(|(_, c)| c.as_ref())
+    }
+
+    fn chosen(
+        workloads: impl FnOnce() -> Vec<calibrate::Workload>,
+    ) -> &'static (Isa, Option<Calibration>) {
+        CHOSEN.get_or_init(|| {
+            let forced = std::env::var("RAYLAB_ISA").ok();
+            match forced.as_deref().and_then(Isa::by_name) {
+                Some(isa) => (isa, None),
+                None => {
+                    let c = calibrate::calibrate(&workloads());
+                    (c.chosen, Some(c))
+                }
+            }
+        })
+    }
+
+    /// Makes `self` the kernels of every structure built from now on (`--isa`). Fails if
+    /// [`Isa::best_with`] has already decided on another set in this process.
+    pub fn force(self) -> Result<(), String> {
+        let (chosen, _) = CHOSEN.get_or_init(|| (self, None));
+        if chosen.name() == self.name() {
+            Ok(())
+        } else {
+            Err(format!(
+                "the kernels were already chosen ({}) before --isa {}",
+                chosen.name(),
+                self.name()
+            ))
+        }
+    }
+
+    /// The widest kernels this CPU runs: AVX-512, else AVX2 + FMA, else scalar.
+    pub fn widest() -> Self {
+        match (Avx512::detect(), Avx2::detect()) {
+            (Some(k), _) => Isa::Avx512(k),
+            (None, Some(k)) => Isa::Avx2(k),
+            (None, None) => Isa::Scalar,
+        }
+    }
+
+    /// Every kernel set this CPU runs, scalar first.
+    pub fn available() -> Vec<Isa> {
+        let mut out = vec![Isa::Scalar];
+        out.extend(Avx2::detect().map(Isa::Avx2));
+        out.extend(Avx512::detect().map(Isa::Avx512));
+        out
+    }
+
+    /// The named kernel set, if this CPU runs it: `scalar`, `avx2` or `avx512`.
+    pub fn by_name(name: &str) -> Option<Isa> {
+        match name {
+            "scalar" => Some(Isa::Scalar),
+            "avx2" => Avx2::detect().map(Isa::Avx2),
+            "avx512" => Avx512::detect().map(Isa::Avx512),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Isa::Scalar => "scalar",
+            Isa::Avx2(_) => "avx2",
+            Isa::Avx512(_) => "avx512",
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+enum Structure {
+    #[default]
+    BruteForce,
+    Flat(Flat),
+    Bvh2(Bvh),
+    Bvh8(Bvh8Big),
+}
+
+/// A built acceleration structure over one triangle list.
+#[derive(Clone, Debug)]
+pub struct Accel {
+    structure: Structure,
+    isa: Isa,
+    /// How many triangles it was built over (a guard against a changed triangle list).
+    triangles: usize,
+    build_time: Duration,
+}
+
+impl Default for Accel {
+    fn default() -> Self {
+        Self {
+            structure: Structure::BruteForce,
+            isa: Isa::Scalar,
+            triangles: 0,
+            build_time: Duration::ZERO,
+        }
+    }
+}
+
+impl Accel {
+    /// Builds `kind` over `triangles` (on the current rayon pool) using `isa`'s kernels.
+    pub fn build(triangles: &[Triangle], kind: AccelKind, isa: Isa) -> Self {
+        let start = Instant::now();
+        let kind = match kind {
+            AccelKind::Auto if triangles.len() <= FLAT_MAX_TRIANGLES => AccelKind::Flat,
+            AccelKind::Auto => AccelKind::Bvh8,
+            k => k,
+        };
+        let structure = match kind {
+            AccelKind::Auto | AccelKind::BruteForce => Structure::BruteForce,
+            AccelKind::Flat => Structure::Flat(Flat::build(triangles)),
+            AccelKind::Bvh2 => Structure::Bvh2(Bvh::build(triangles)),
+            AccelKind::Bvh8 => Structure::Bvh8(Bvh8Big::build(triangles)),
+        };
+        Self {
+            structure,
+            isa,
+            triangles: triangles.len(),
+            build_time: start.elapsed(),
+        }
+    }
+
+    /// The kind actually built (never `Auto`).
+    pub fn kind(&self) -> AccelKind {
+        match self.structure {
+            Structure::BruteForce => AccelKind::BruteForce,
+            Structure::Flat(_) => AccelKind::Flat,
+            Structure::Bvh2(_) => AccelKind::Bvh2,
+            Structure::Bvh8(_) => AccelKind::Bvh8,
+        }
+    }
+
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    /// How long [`Accel::build`] took.
+    pub fn build_time(&self) -> Duration {
+        self.build_time
+    }
+
+    /// Whether this was built over a list of `n` triangles.
+    pub fn built_for(&self, n: usize) -> bool {
+        self.triangles == n
+    }
+
+    /// The closest hit with `0 < t < t_max`: the lowest index among hits at the same
+    /// distance, exactly as the brute-force loop.
+    #[inline(always)]
+    pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
+        match (&self.structure, self.isa) {
+            (Structure::BruteForce, _) => {
+                intersect::closest_intersection_brute_force(ray, triangles, t_max).map(|h| Hit {
+                    index: h.triangle_index as u32,
+                    t: h.distance,
+                    u: h.u,
+                    v: h.v,
+                })
+            }
+            (Structure::Bvh2(b), _) => b.closest(triangles, ray, t_max),
+            (Structure::Flat(f), Isa::Scalar) => {
+                f.closest(Scalar, &RayK::for_triangles(ray), t_max)
+            }
+            (Structure::Bvh8(b), Isa::Scalar) => {
+                let r = RayK::new(ray);
+                let best = b.big.closest(Scalar, &r, t_max);
+                b.tree.closest(Scalar, &r, t_max, best)
+            }
+            (s, Isa::Avx512(k)) => closest_avx512(k, s, ray, t_max),
+            (s, Isa::Avx2(k)) => closest_avx2(k, s, ray, t_max),
+        }
+    }
+
+    /// [`Accel::closest`] and what it cost ([`TraversalCost`]), counted by the traversal this
+    /// structure really runs, not estimated:
+    ///
+    /// * the brute-force and flat loops test every triangle for every ray (the Cornell box:
+    ///   30 whatever the ray), no nodes; the hit is [`Accel::closest`]'s own;
+    /// * the binary BVH counts in its one (reference) traversal;
+    /// * the 8-wide BVH tests its few large triangles first, exactly as the fast path does
+    ///   (with the same kernels), then walks the tree with [`wide::Bvh8::closest_counting`]: the
+    ///   fast traversal's loop with counters, in the same order and with the same kernels, so the
+    ///   same culling. It is slower than [`Accel::closest`] (not compiled for the instruction
+    ///   set, a heap stack): for views and teaching, not for rendering.
+    ///
+    /// The hit equals [`Accel::closest`]'s bit for bit (tests/views.rs checks it on 100,000
+    /// rays per scene and kernel set), which is what makes the counts those of the real
+    /// traversal.
+    pub fn closest_counting(
+        &self,
+        triangles: &[Triangle],
+        ray: &Ray,
+        t_max: f32,
+    ) -> (Option<Hit>, TraversalCost) {
+        let every = |n: u32| TraversalCost {
+            nodes: 0,
+            triangles: n,
+        };
+        match (&self.structure, self.isa) {
+            (Structure::BruteForce, _) => (
+                self.closest(triangles, ray, t_max),
+                every(triangles.len() as u32),
+            ),
+            (Structure::Flat(f), _) => (
+                self.closest(triangles, ray, t_max),
+                every(f.triangle_count()),
+            ),
+            (Structure::Bvh2(b), _) => b.closest_counting(triangles, ray, t_max),
+            (Structure::Bvh8(b), isa) => {
+                let r = RayK::new(ray);
+                let mut cost = every(b.big.triangle_count());
+                let hit = match isa {
+                    Isa::Scalar => {
+                        let best = b.big.closest(Scalar, &r, t_max);
+                        b.tree.closest_counting(Scalar, &r, t_max, best, &mut cost)
+                    }
+                    Isa::Avx2(k) => {
+                        let best = b.big.closest(k, &r, t_max);
+                        b.tree.closest_counting(k, &r, t_max, best, &mut cost)
+                    }
+                    Isa::Avx512(k) => {
+                        // As the fast path: the large triangles 16 wide, the tree with AVX2.
+                        let best = b.big.closest16(k, &r, t_max);
+                        b.tree
+                            .closest_counting(k.avx2(), &r, t_max, best, &mut cost)
+                    }
+                };
+                (hit, cost)
+            }
+        }
+    }
+
+    /// Whether anything is hit with `0 < t < t_max` (a shadow ray's any-hit query).
+    #[inline(always)]
+    pub fn occluded(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> bool {
+        match (&self.structure, self.isa) {
+            (Structure::BruteForce, _) => intersect::occluded_brute_force(ray, triangles, t_max),
+            (Structure::Bvh2(b), _) => b.occluded(triangles, ray, t_max),
+            (Structure::Flat(f), Isa::Scalar) => {
+                f.occluded(Scalar, &RayK::for_triangles(ray), t_max)
+            }
+            (Structure::Bvh8(b), Isa::Scalar) => {
+                let r = RayK::new(ray);
+                b.tree.occluded(Scalar, &r, t_max) || b.big.occluded(Scalar, &r, t_max)
+            }
+            (s, Isa::Avx512(k)) => occluded_avx512(k, s, ray, t_max),
+            (s, Isa::Avx2(k)) => occluded_avx2(k, s, ray, t_max),
+        }
+    }
+}
+
+impl Accel {
+    /// [`Accel::closest`] for many rays, `out[i]` for `rays[i]`: the same answers, with the
+    /// choice of structure and kernels made once for the batch instead of once per ray, and the
+    /// loop over the rays compiled with the kernels' instruction set.
+    pub fn closest_batch(
+        &self,
+        triangles: &[Triangle],
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [Option<Hit>],
+    ) {
+        debug_assert_eq!(rays.len(), out.len());
+        match (&self.structure, self.isa) {
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx512(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
+                unsafe {
+                    closest_batch_avx512(k, s, rays, t_max, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                closest_batch_avx512(k, s, rays, t_max, out)
+            }
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx2(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `k` proves the CPU has AVX2 and FMA.
+                unsafe {
+                    closest_batch_avx2(k, s, rays, t_max, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                closest_batch_avx2(k, s, rays, t_max, out)
+            }
+            _ => {
+                for (ray, hit) in rays.iter().zip(out) {
+                    *hit = self.closest(triangles, ray, t_max);
+                }
+            }
+        }
+    }
+
+    /// [`Accel::occluded`] for many rays, each with its own `t_max`: `out[i]` for `rays[i]`,
+    /// the same answers, the choice of structure and kernels made once for the batch.
+    pub fn occluded_batch(&self, triangles: &[Triangle], rays: &[(Ray, f32)], out: &mut [bool]) {
+        debug_assert_eq!(rays.len(), out.len());
+        match (&self.structure, self.isa) {
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx512(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `closest_batch`.
+                unsafe {
+                    occluded_batch_avx512(k, s, rays, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                occluded_batch_avx512(k, s, rays, out)
+            }
+            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx2(k)) => {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `closest_batch`.
+                unsafe {
+                    occluded_batch_avx2(k, s, rays, out)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                occluded_batch_avx2(k, s, rays, out)
+            }
+            _ => {
+                for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                    *blocked = self.occluded(triangles, ray, *t_max);
+                }
+            }
+        }
+    }
+}
+
+/// Up to sixteen shadow rays as lanes (structure of arrays), as the lab's shading makes them:
+/// origins, directions and lengths per lane, and `cast`, bit `i` set where lane `i` holds a ray.
+/// [`Accel::occluded_lanes`] traces them without copying them into an array of rays first.
+#[derive(Clone, Copy, Debug)]
+pub struct SegmentLanes<'a> {
+    pub origin: [&'a [f32; 16]; 3],
+    pub direction: [&'a [f32; 16]; 3],
+    pub t_max: &'a [f32; 16],
+    pub cast: u16,
+}
+
+impl SegmentLanes<'_> {
+    /// Lane `i`'s ray and length.
+    pub fn ray(&self, i: usize) -> (Ray, f32) {
+        let v = |a: [&[f32; 16]; 3]| glam::Vec3::new(a[0][i], a[1][i], a[2][i]);
+        (
+            Ray {
+                origin: v(self.origin),
+                direction: v(self.direction),
+            },
+            self.t_max[i],
+        )
+    }
+}
+
+/// How many groups of [`SegmentLanes`] [`Accel::occluded_lanes`] copies into one batch of rays
+/// where it cannot take lanes: four, 64 rays, the integrators' batch.
+pub const BATCH_OF_LANES: usize = 4;
+
+impl Accel {
+    /// [`Accel::occluded_batch`] for shadow rays given as lanes: bit `i` of `blocked[g]` set
+    /// when lane `i` of `groups[g]` is cast and blocked. The same answers: a short flat list
+    /// tests each group's lanes straight from the lanes, against the triangles the whole set's
+    /// cone may reach ([`cull`]) or, without a cone, against all of them; anything else copies
+    /// the rays into arrays of up to [`BATCH_OF_LANES`] groups and asks
+    /// [`Accel::occluded_batch`].
+    pub fn occluded_lanes(
+        &self,
+        triangles: &[Triangle],
+        groups: &[SegmentLanes],
+        blocked: &mut [u16],
+    ) {
+        debug_assert_eq!(groups.len(), blocked.len());
+        #[cfg(target_arch = "x86_64")]
+        if let Structure::Flat(f) = &self.structure {
+            let done = match self.isa {
+                // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
+                Isa::Avx512(k) => unsafe { occluded_lanes_avx512(k, f, groups, blocked) },
+                // SAFETY: `k` proves the CPU has AVX2 and FMA.
+                Isa::Avx2(k) => unsafe { occluded_lanes_avx2(k, f, groups, blocked) },
+                _ => false,
+            };
+            if done {
+                return;
+            }
+        }
+        // Elsewhere, the rays copied out, up to BATCH_OF_LANES groups' in one batch.
+        const RAYS: usize = BATCH_OF_LANES * 16;
+        let chunks = groups.chunks(BATCH_OF_LANES);
+        for (groups, blocked) in chunks.zip(blocked.chunks_mut(BATCH_OF_LANES)) {
+            let mut rays = [(Ray::new(glam::Vec3::ZERO, glam::Vec3::Z), 0.0); RAYS];
+            let mut whose = [(0u8, 0u8); RAYS];
+            let mut n = 0;
+            for (g, group) in groups.iter().enumerate() {
+                for i in (0..16).filter(|&i| group.cast & (1 << i) != 0) {
+                    rays[n] = group.ray(i);
+                    whose[n] = (g as u8, i as u8);
+                    n += 1;
+                }
+            }
+            let mut answers = [false; RAYS];
+            self.occluded_batch(triangles, &rays[..n], &mut answers[..n]);
+            blocked.fill(0);
+            for (&(g, i), &b) in whose[..n].iter().zip(&answers[..n]) {
+                blocked[g as usize] |= u16::from(b) << i;
+            }
+        }
+    }
+}
+
+// The traversals compiled with the kernels' instruction set, so the kernels inline into them.
+// Each takes a batch: the structure is matched once, and a single query is a batch of one
+// (`closest_avx2` and friends), so each traversal is written once.
+
+#[cfg_attr(
+    target_arch = "x86_64",
+    target_feature(enable = "avx512f,avx512dq,avx2,fma")
+)]
+fn closest_batch_avx512(
+    k: Avx512,
+    s: &Structure,
+    rays: &[Ray],
+    t_max: f32,
+    out: &mut [Option<Hit>],
+) {
+    match s {
+        // The flat loop 16 wide; the tree with the AVX2 kernels, its large triangles 16 wide.
+        Structure::Flat(f) => {
+            // A batch in a narrow cone (a stretch of camera rays) skips what it cannot see, and
+            // goes through the few triangles left as packets of rays.
+            #[cfg(target_arch = "x86_64")]
+            if flat_closest_culled(k, f, rays, t_max, out) {
+                return;
+            }
+            for (ray, hit) in rays.iter().zip(out) {
+                *hit = f.closest16(k, &RayK::for_triangles(ray), t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent(rays) {
+                    b.closest_packet(k, rays, t_max, out);
+                    continue;
+                }
+                for (ray, hit) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    let best = b.big.closest16(k, &r, t_max);
+                    *hit = b.tree.closest(k.avx2(), &r, t_max, best);
+                }
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+#[cfg_attr(
+    target_arch = "x86_64",
+    target_feature(enable = "avx512f,avx512dq,avx2,fma")
+)]
+fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
+    match s {
+        Structure::Flat(f) => {
+            // Shadow rays to a point light skip what lies outside their cone.
+            #[cfg(target_arch = "x86_64")]
+            if flat_occluded_culled(k, f, rays, out) {
+                return;
+            }
+            for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                // No boxes: the ray needs no reciprocal direction.
+                *blocked = f.occluded16(k, &RayK::for_triangles(ray), *t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent_shadows(rays) {
+                    b.occluded_packet(k, rays, out);
+                    continue;
+                }
+                for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    *blocked =
+                        b.tree.occluded(k.avx2(), &r, *t_max) || b.big.occluded16(k, &r, *t_max);
+                }
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
+fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
+    match s {
+        Structure::Flat(f) => {
+            #[cfg(target_arch = "x86_64")]
+            if flat_closest_culled(k, f, rays, t_max, out) {
+                return;
+            }
+            for (ray, hit) in rays.iter().zip(out) {
+                *hit = f.closest(k, &RayK::for_triangles(ray), t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent(rays) {
+                    b.closest_packet(k, rays, t_max, out);
+                    continue;
+                }
+                for (ray, hit) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    let best = b.big.closest(k, &r, t_max);
+                    *hit = b.tree.closest(k, &r, t_max, best);
+                }
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
+fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
+    match s {
+        Structure::Flat(f) => {
+            #[cfg(target_arch = "x86_64")]
+            if flat_occluded_culled(k, f, rays, out) {
+                return;
+            }
+            for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                *blocked = f.occluded(k, &RayK::for_triangles(ray), *t_max);
+            }
+        }
+        Structure::Bvh8(b) => {
+            for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
+                #[cfg(target_arch = "x86_64")]
+                if packet::coherent_shadows(rays) {
+                    b.occluded_packet(k, rays, out);
+                    continue;
+                }
+                for ((ray, t_max), blocked) in rays.iter().zip(out) {
+                    let r = RayK::new(ray);
+                    *blocked = b.tree.occluded(k, &r, *t_max) || b.big.occluded(k, &r, *t_max);
+                }
+            }
+        }
+        Structure::BruteForce | Structure::Bvh2(_) => {}
+    }
+}
+
+/// [`Accel::occluded_lanes`] on the flat list, AVX-512; false (nothing done) when the list is
+/// too long to cull.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
+fn occluded_lanes_avx512(
+    k: Avx512,
+    f: &Flat,
+    groups: &[SegmentLanes],
+    blocked: &mut [u16],
+) -> bool {
+    occluded_lanes_in(k, f, groups, blocked)
+}
+
+/// [`occluded_lanes_avx512`] with AVX2, eight lanes at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn occluded_lanes_avx2(k: Avx2, f: &Flat, groups: &[SegmentLanes], blocked: &mut [u16]) -> bool {
+    occluded_lanes_in(k, f, groups, blocked)
+}
+
+/// The flat list's culled closest hits for a batch of rays from one point ([`cull`]): the
+/// triangles the batch's cone may reach, a triangle at a time against a packet of rays. False
+/// (nothing done) when the list is too long to cull or the rays have no cone.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn flat_closest_culled<P: packet::PacketIsa>(
+    k: P,
+    f: &Flat,
+    rays: &[Ray],
+    t_max: f32,
+    out: &mut [Option<Hit>],
+) -> bool {
+    if !f.cullable() {
+        return false;
+    }
+    let Some(cone) = Cone::around_rays_simd(k, rays) else {
+        return false;
+    };
+    let kept = cull::kept(&cone, k, &f.corners, f.count);
+    for (rays, out) in rays.chunks(P::WIDTH).zip(out.chunks_mut(P::WIDTH)) {
+        packet::closest_in_list(k, &f.packets16, kept, rays, t_max, out);
+    }
+    true
+}
+
+/// [`flat_closest_culled`] for shadow rays ending near one point.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn flat_occluded_culled<P: packet::PacketIsa>(
+    k: P,
+    f: &Flat,
+    rays: &[(Ray, f32)],
+    out: &mut [bool],
+) -> bool {
+    if !f.cullable() {
+        return false;
+    }
+    let Some(cone) = Cone::around_segments_simd(k, rays) else {
+        return false;
+    };
+    let kept = cull::kept(&cone, k, &f.corners, f.count);
+    for (rays, out) in rays.chunks(P::WIDTH).zip(out.chunks_mut(P::WIDTH)) {
+        packet::occluded_in_list(k, &f.packets16, kept, rays, out);
+    }
+    true
+}
+
+/// [`flat_closest_culled`] for shadow rays given as lanes; unlike the batches of rays, lanes
+/// without a cone are tested from the lanes too, against every triangle (the path tracer's
+/// shadow rays: 2 ms of its 49 ms pass, against copying them out).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn occluded_lanes_in<P: packet::PacketIsa>(
+    k: P,
+    f: &Flat,
+    groups: &[SegmentLanes],
+    blocked: &mut [u16],
+) -> bool {
+    if !f.cullable() {
+        return false;
+    }
+    // Without a cone (rays from all over the scene, as the path tracer's), every triangle,
+    // still tested straight from the lanes.
+    let kept = match Cone::around_segment_lanes(k, groups) {
+        Some(cone) => cull::kept(&cone, k, &f.corners, f.count),
+        None => u64::MAX.checked_shr(64 - f.count as u32).unwrap_or(0),
+    };
+    for (g, blocked) in groups.iter().zip(blocked) {
+        *blocked = packet::occluded_lanes_in_list(k, &f.packets16, kept, g);
+    }
+    true
+}
+
+fn closest_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
+    let mut hit = [None];
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `k` proves the CPU has AVX2 and FMA.
+    unsafe {
+        closest_batch_avx2(k, s, std::slice::from_ref(ray), t_max, &mut hit)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    closest_batch_avx2(k, s, std::slice::from_ref(ray), t_max, &mut hit);
+    hit[0]
+}
+
+fn occluded_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
+    let mut blocked = [false];
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `k` proves the CPU has AVX2 and FMA.
+    unsafe {
+        occluded_batch_avx2(k, s, &[(*ray, t_max)], &mut blocked)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    occluded_batch_avx2(k, s, &[(*ray, t_max)], &mut blocked);
+    blocked[0]
+}
+
+fn closest_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
+    let mut hit = [None];
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
+    unsafe {
+        closest_batch_avx512(k, s, std::slice::from_ref(ray), t_max, &mut hit)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    closest_batch_avx512(k, s, std::slice::from_ref(ray), t_max, &mut hit);
+    hit[0]
+}
+
+fn occluded_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> bool {
+    let mut blocked = [false];
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: as above.
+    unsafe {
+        occluded_batch_avx512(k, s, &[(*ray, t_max)], &mut blocked)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    occluded_batch_avx512(k, s, &[(*ray, t_max)], &mut blocked);
+    blocked[0]
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    #[test]
+    fn kernel_sets_are_named_only_where_the_cpu_runs_them() {
+        // A set the CPU lacks is not offered (so `--isa` refuses it) and never chosen: the
+        // choice falls back to what the CPU has.
+        assert_eq!(Isa::by_name("avx512").is_some(), Avx512::detect().is_some());
+        assert_eq!(Isa::by_name("avx2").is_some(), Avx2::detect().is_some());
+        assert!(Isa::by_name("scalar").is_some() && Isa::by_name("sse9").is_none());
+        let available: Vec<&str> = Isa::available().into_iter().map(Isa::name).collect();
+        assert!(
+            available.contains(&crate::scene::best_isa().name()),
+            "{available:?}"
+        );
+        assert!(available.contains(&Isa::widest().name()));
+        // AVX-512 implies AVX2 (its kernels use both).
+        if Avx512::detect().is_some() {
+            assert!(available.contains(&"avx2"));
+        }
+        // Forcing the set already chosen is accepted; another one is refused.
+        assert!(crate::scene::best_isa().force().is_ok());
+        if let Some(other) = Isa::available()
+            .into_iter()
+            .find(|i| i.name() != crate::scene::best_isa().name())
+        {
+            assert!(other.force().is_err());
+        }
+    }
+
+    /// Two layers of eight small triangles, one behind the other: triangle `i` of layer `z` has
+    /// corners (i, 0, z), (i + ½, 0, z), (i, ½, z); indices 0–7 at z = 0, 8–15 at z = 1.
+    ///
+    /// The tree, by hand. Root (16): splitting the layers apart costs 2 · 8 · 3.75 = 60 (each
+    /// layer's box is 7.5 × 0.5, flat), splitting in x at best 2 · 8 · 5.75 = 92 (four columns
+    /// each side, 1 deep): the layers. A layer (8): two leaves of four cost 1 + 0.25 · (2 · 4 ·
+    /// 1.75)/3.75 = 1.93 against a leaf's 0.25 · 8 = 2.0: split. Four: 1 + 0.25 · (2 · 2 ·
+    /// 0.75)/1.75 = 1.43 against 1.0: a leaf. So the binary tree is root → two layers → two
+    /// leaves each, and the 8-wide one a single node whose four children are the leaves
+    /// {0–3}, {4–7}, {8–11}, {12–15}. No triangle is large (each 0.25 of the scene's 11.75).
+    fn layers() -> Vec<Triangle> {
+        let mut out = Vec::new();
+        for z in [0.0, 1.0] {
+            for i in 0..8 {
+                let x = i as f32;
+                out.push(Triangle::new(
+                    Vec3::new(x, 0.0, z),
+                    Vec3::new(x + 0.5, 0.0, z),
+                    Vec3::new(x, 0.5, z),
+                    0,
+                ));
+            }
+        }
+        out
+    }
+
+    fn cost(nodes: u32, triangles: u32) -> TraversalCost {
+        TraversalCost { nodes, triangles }
+    }
+
+    #[test]
+    fn the_layers_tree_is_as_worked_out_by_hand() {
+        let triangles = layers();
+        let accel = Accel::build(&triangles, AccelKind::Bvh8, Isa::Scalar);
+        let Structure::Bvh8(b) = &accel.structure else {
+            panic!("not a wide BVH");
+        };
+        assert_eq!(b.big.triangle_count(), 0);
+        assert_eq!(b.tree.nodes.len(), 1);
+        let mut leaves: Vec<Vec<u32>> = b
+            .tree
+            .packets
+            .iter()
+            .map(|p| p.index.iter().copied().filter(|&i| i != u32::MAX).collect())
+            .collect();
+        leaves.sort();
+        let want: Vec<Vec<u32>> = (0..4).map(|l| (4 * l..4 * l + 4).collect()).collect();
+        assert_eq!(leaves, want);
+    }
+
+    /// Rays along z through the layers, counted by hand on the tree above (every kernel set):
+    ///
+    /// * through triangle 5 at (5.1, 0.1): the root node (1) enters the leaves {4–7} (t ≈ 1)
+    ///   and {12–15} (t ≈ 2); the nearer is tested (4 triangles), hits 5 at t = 1, and the
+    ///   farther is then skipped (it starts beyond the hit): 1 node, 4 triangles;
+    /// * the same from behind: hits 13, skips {4–7}: 1 + 4;
+    /// * at (5.4, 0.4), inside both leaves' boxes but between the triangles (triangle i covers
+    ///   x ∈ [i, i + 0.1] at y = 0.4): both leaves tested, nothing hit: 1 + 8;
+    /// * at (5.1, 2), beside everything: the root's boxes only: 1 + 0;
+    /// * along x in the plane z = 0: enters the two front leaves, parallel to every triangle
+    ///   (no hit): 1 + 8.
+    #[test]
+    fn counts_equal_the_hand_count() {
+        let triangles = layers();
+        let along_z =
+            |x: f32, y: f32, z: f32, dz: f32| Ray::new(Vec3::new(x, y, z), Vec3::new(0.0, 0.0, dz));
+        let cases = [
+            (along_z(5.1, 0.1, -1.0, 1.0), Some(5), cost(1, 4)),
+            (along_z(5.1, 0.1, 2.0, -1.0), Some(13), cost(1, 4)),
+            (along_z(5.4, 0.4, -1.0, 1.0), None, cost(1, 8)),
+            (along_z(5.1, 2.0, -1.0, 1.0), None, cost(1, 0)),
+            (
+                Ray::new(Vec3::new(-1.0, 0.1, 0.0), Vec3::X),
+                None,
+                cost(1, 8),
+            ),
+        ];
+        for isa in Isa::available() {
+            let accel = Accel::build(&triangles, AccelKind::Bvh8, isa);
+            for (ray, index, want) in &cases {
+                let (hit, got) = accel.closest_counting(&triangles, ray, f32::INFINITY);
+                assert_eq!(hit.map(|h| h.index), *index, "{} {ray:?}", isa.name());
+                assert_eq!(hit, accel.closest(&triangles, ray, f32::INFINITY));
+                assert_eq!(got, *want, "{} {ray:?}", isa.name());
+                if let Some(h) = hit {
+                    assert_eq!(h.t, 1.0);
+                }
+            }
+        }
+        // The binary tree for the first ray: the root (1), the front layer (2: the back layer
+        // is pushed, then skipped), its leaf {4–7}.
+        let bvh2 = Accel::build(&triangles, AccelKind::Bvh2, Isa::Scalar);
+        assert_eq!(
+            bvh2.closest_counting(&triangles, &cases[0].0, f32::INFINITY)
+                .1,
+            cost(2, 4)
+        );
+        // The flat and brute-force loops test all sixteen, whatever the ray.
+        for kind in [AccelKind::Flat, AccelKind::BruteForce] {
+            let accel = Accel::build(&triangles, kind, crate::scene::best_isa());
+            for (ray, _, _) in &cases {
+                assert_eq!(
+                    accel.closest_counting(&triangles, ray, f32::INFINITY).1,
+                    cost(0, 16)
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,1235 @@
+//! The render controller: progressive rendering on a worker thread, for the workbench window.
+//!
+//! A [`Controller`] owns a named worker thread (`raylab-progressive`) and its own rayon pool
+//! (`raylab-render-N`). [`Controller::submit`] hands it a [`RenderSettings`] and a scene; each
+//! submission gets a new *generation*. The worker renders, for the newest generation only:
+//!
+//! 1. a coarse preview at about 1/8 of the resolution (on screen a frame or two after a change),
+//! 2. the full resolution at sample 0 (the pixel centres: the lab's image),
+//! 3. further jittered passes, averaged in a [`Film`], up to `samples_per_pixel` (the target),
+//!
+//! and publishes a [`Frame`] after each pass, at most one every [`MIN_FRAME_INTERVAL`] after the
+//! first full-resolution one (the last always). Then it sleeps on its channel (no CPU) until the
+//! next submission.
+//!
+//! A submission makes the running pass stale: the pass's `cancelled` closure compares its
+//! generation with the current one, so it stops within one row. Publishing checks the generation
+//! under the same lock that `submit` bumps it under, so a stale frame is never published after a
+//! newer submission, and frames come out in increasing generation order. The UI polls
+//! [`Controller::take_frame`], which never waits; a notify callback (the app's
+//! `request_repaint`) tells it when there is something to take.
+//!
+//! The [`Display`] (exposure and curve) is not part of a job: the film stays linear, and each
+//! frame is converted to 8 bits with the display in force when it is published
+//! ([`Controller::set_display`]). A change never restarts accumulation or re-traces: a running
+//! job notices it at its next pass boundary and publishes then, whatever the frame interval; an
+//! idle worker is woken and publishes its last frame again (same generation, samples and linear
+//! image), converted anew.
+//!
+//! A job that panics (a bug in the tracer) does not take the worker down: rayon re-raises a
+//! panic from its pool on the thread that installed the work, the worker catches it there, reports
+//! it through [`Controller::take_error`] with the message and the job's settings, publishes
+//! nothing more of that job, and waits for the next one.
+//!
+//! Nothing here knows about egui. The same settings always give the same image.
+
+use std::any::Any;
+use std::panic::AssertUnwindSafe;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
+use std::sync::{Arc, Condvar, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use crate::display::Display;
+use crate::film::{Film, Image, NoiseEstimate};
+use crate::render::{Cancelled, camera_sees_nothing, render_pass};
+use crate::scene::Scene;
+use crate::settings::{RenderSettings, SettingsError};
+use crate::view::{Legend, View, render_view, variance_view};
+
+/// The display a frame's pixels are made with: the one in force, but the lab's for a debug
+/// view (one with a legend), whose colours must be its legend's.
+fn shown_with(display: Display, legend: Option<&Legend>) -> Display {
+    if legend.is_some() {
+        Display::default()
+    } else {
+        display
+    }
+}
+
+/// The preview's size divisor: a 1024² image previews at 128².
+pub const PREVIEW_DIVISOR: u32 = 8;
+
+/// The shortest time between two accumulated frames shown (after the first): 25 a second, as
+/// smooth as the eye needs, while passes of a few milliseconds keep accumulating in between.
+pub const MIN_FRAME_INTERVAL: std::time::Duration = std::time::Duration::from_millis(40);
+
+/// Images narrower and shorter than this skip the preview: their first full pass is as quick.
+pub const PREVIEW_MIN_SIDE: u32 = 64;
+
+/// A finished pass of the newest job.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// The submission this frame belongs to (increases with every submission).
+    pub generation: u64,
+    /// The settings that made it (for a preview, still the full-resolution settings).
+    pub settings: RenderSettings,
+    /// The image in linear floats: the preview, or the mean of `samples` full passes.
+    pub image: Arc<Image>,
+    /// The same image through `display`, as 8-bit RGBA.
+    pub rgba: Vec<u8>,
+    /// The display `rgba` was converted with (the one in force when the frame was published).
+    pub display: Display,
+    /// Full-resolution passes averaged so far (0 for a preview).
+    pub samples: u32,
+    /// The sample target, `settings.samples_per_pixel`.
+    pub target: u32,
+    /// Whether this is the coarse preview.
+    pub is_preview: bool,
+    /// Time spent tracing this pass, in milliseconds (a frame published again for a new display
+    /// keeps its pass's figures: nothing was traced).
+    pub pass_ms: f64,
+    /// Primary rays per second of this pass, in millions.
+    pub mrays_per_s: f64,
+    /// Time from the submission to the end of this pass, in milliseconds.
+    pub since_submit_ms: f64,
+    /// The estimated remaining noise of the accumulated image (from 2 samples on).
+    pub noise: Option<NoiseEstimate>,
+    /// For a debug view (`settings.view`), what its colours mean; its pixels are shown with the
+    /// lab's display whatever the display in force, so they match the legend.
+    pub legend: Option<Legend>,
+    /// Why the image is black, when the camera sees nothing at all
+    /// ([`crate::render::camera_sees_nothing`], asked here, off the UI thread, once a job).
+    pub camera_note: Option<String>,
+}
+
+impl Frame {
+    /// Whether the sample target is reached: no more passes will come for this generation (a
+    /// display change may still publish the frame again, converted anew).
+    pub fn is_final(&self) -> bool {
+        !self.is_preview && self.samples >= self.target
+    }
+}
+
+/// Why a submission was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum ControllerError {
+    #[error(transparent)]
+    Invalid(#[from] SettingsError),
+    #[error("the render thread has stopped")]
+    Stopped,
+    #[error("could not start the render threads: {0}")]
+    Spawn(String),
+}
+
+/// Called by the worker after it publishes a frame or meets a problem (the app passes
+/// `ctx.request_repaint`).
+pub type Notify = Box<dyn Fn() + Send + Sync>;
+
+/// A problem the worker met, for the status line ([`Controller::take_error`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorkerError {
+    /// What happened, in one line: for a job that panicked, the panic's message and the job's
+    /// settings in brief ([`RenderSettings::summary`]).
+    pub message: String,
+    /// The settings of the job that panicked, in full, so the failure can be reproduced
+    /// (`raylab render --settings` reads them back as JSON).
+    pub settings: Option<RenderSettings>,
+}
+
+impl std::fmt::Display for WorkerError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl WorkerError {
+    /// The failed job's settings as pretty JSON (a settings file), if there was a job.
+    pub fn settings_json(&self) -> Option<String> {
+        let settings = self.settings.as_ref()?;
+        serde_json::to_string_pretty(settings).ok()
+    }
+}
+
+/// The message of a panic caught by [`std::panic::catch_unwind`]: `panic!`'s formatted text
+/// (a `String` or a `&str`); any other payload is named as such.
+pub fn panic_message(payload: &(dyn Any + Send)) -> String {
+    if let Some(text) = payload.downcast_ref::<&str>() {
+        (*text).to_owned()
+    } else if let Some(text) = payload.downcast_ref::<String>() {
+        text.clone()
+    } else {
+        "a panic with no message".to_owned()
+    }
+}
+
+/// Runs `f`, returning the message of a panic inside it instead of unwinding further.
+///
+/// For the threads of the workbench (the render worker, the scene loader, the A/B difference):
+/// each runs one piece of work whose panic must become a message on the status line, not a
+/// thread gone silent. `AssertUnwindSafe` is sound there because nothing `f` may leave half
+/// updated is used after a panic: the callers drop the work's results and state, and every
+/// lock they share is taken with `unwrap_or_else(PoisonError::into_inner)` on data that stays
+/// whole (a frame slot, a number). The default panic hook still prints the message and
+/// location on stderr.
+pub fn catch_panic<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    std::panic::catch_unwind(AssertUnwindSafe(f)).map_err(|payload| panic_message(&*payload))
+}
+
+/// The message of the panic [`Controller::inject_panic_on_next_pass`] causes.
+#[doc(hidden)]
+pub const INJECTED_PANIC: &str = "injected panic (Controller::inject_panic_on_next_pass)";
+
+enum Message {
+    Job {
+        generation: u64,
+        settings: RenderSettings,
+        scene: Arc<Scene>,
+        submitted: Instant,
+    },
+    Threads {
+        generation: u64,
+        threads: usize,
+    },
+    /// The display changed: if idle, publish the last frame again with it.
+    Display,
+    Quit,
+}
+
+/// State shared by the controller and its worker.
+struct Shared {
+    /// Bumped by every submission and thread change, under `slot`'s lock.
+    generation: AtomicU64,
+    /// The newest published frame, until the UI takes it.
+    slot: Mutex<Option<Frame>>,
+    /// The newest generation the worker has finished (target reached), for [`Controller::wait_idle`].
+    done: Mutex<u64>,
+    done_changed: Condvar,
+    /// Jobs abandoned before their target because a newer submission arrived.
+    abandoned_jobs: AtomicU64,
+    /// A problem the worker met (the thread pool could not be rebuilt, a job panicked), until
+    /// the UI takes it.
+    error: Mutex<Option<WorkerError>>,
+    /// The display frames are converted with; read by the worker at every pass boundary.
+    display: Mutex<Display>,
+    /// Passes traced so far (previews included), for [`Controller::passes_traced`].
+    passes: AtomicU64,
+    /// Test hook: the next pass panics inside the pool ([`Controller::inject_panic_on_next_pass`]).
+    panic_next_pass: AtomicBool,
+    notify: Notify,
+}
+
+impl Shared {
+    fn current(&self) -> u64 {
+        self.generation.load(Ordering::SeqCst)
+    }
+
+    fn display(&self) -> Display {
+        *self.display.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    fn report(&self, error: WorkerError) {
+        *self.error.lock().unwrap_or_else(PoisonError::into_inner) = Some(error);
+        (self.notify)();
+    }
+
+    /// Panics if [`Controller::inject_panic_on_next_pass`] asked for it: called by every row of
+    /// a pass, on the render pool's threads, so the panic takes the path a tracer bug would.
+    /// A plain load first: the swap's write would bounce the flag between cores every row.
+    fn injected_panic(&self) {
+        if self.panic_next_pass.load(Ordering::Relaxed)
+            && self.panic_next_pass.swap(false, Ordering::SeqCst)
+        {
+            panic!("{INJECTED_PANIC}");
+        }
+    }
+}
+
+/// Whether a frame converted with `a` looks like one converted with `b`: compared by bits, so
+/// a NaN exposure equals itself and cannot make the worker publish at every pass.
+fn same_display(a: &Display, b: &Display) -> bool {
+    a.transform == b.transform && a.exposure.to_bits() == b.exposure.to_bits()
+}
+
+/// The progressive renderer: see the module docs.
+pub struct Controller {
+    shared: Arc<Shared>,
+    sender: Sender<Message>,
+    worker: Option<JoinHandle<()>>,
+    threads: usize,
+}
+
+impl Controller {
+    /// Starts the worker with a pool of `threads` render threads (0: one per core).
+    pub fn new(threads: usize, notify: Notify) -> Result<Self, ControllerError> {
+        let threads = resolve_threads(threads);
+        let pool = build_pool(threads).map_err(ControllerError::Spawn)?;
+        let shared = Arc::new(Shared {
+            generation: AtomicU64::new(0),
+            slot: Mutex::new(None),
+            done: Mutex::new(0),
+            done_changed: Condvar::new(),
+            abandoned_jobs: AtomicU64::new(0),
+            error: Mutex::new(None),
+            display: Mutex::new(Display::default()),
+            passes: AtomicU64::new(0),
+            panic_next_pass: AtomicBool::new(false),
+            notify,
+        });
+        let (sender, receiver) = mpsc::channel();
+        let worker_shared = Arc::clone(&shared);
+        let worker = std::thread::Builder::new()
+            .name("raylab-progressive".to_owned())
+            .spawn(move || Worker::new(worker_shared, receiver, pool).run())
+            .map_err(|e| ControllerError::Spawn(e.to_string()))?;
+        Ok(Self {
+            shared,
+            sender,
+            worker: Some(worker),
+            threads,
+        })
+    }
+
+    /// Starts a new job, making any running one stale. Returns its generation.
+    ///
+    /// Never blocks on the renderer: it takes only the frame slot's lock, which the worker holds
+    /// just long enough to move a frame in.
+    pub fn submit(
+        &self,
+        scene: &Arc<Scene>,
+        settings: &RenderSettings,
+    ) -> Result<u64, ControllerError> {
+        settings.validate()?;
+        let submitted = Instant::now();
+        self.bump_and_send(|generation| Message::Job {
+            generation,
+            settings: settings.clone(),
+            scene: Arc::clone(scene),
+            submitted,
+        })
+    }
+
+    /// Rebuilds the render pool with `threads` threads (0: one per core) and restarts the
+    /// current job on it.
+    pub fn set_threads(&mut self, threads: usize) -> Result<u64, ControllerError> {
+        let threads = resolve_threads(threads);
+        self.threads = threads;
+        self.bump_and_send(|generation| Message::Threads {
+            generation,
+            threads,
+        })
+    }
+
+    /// Sets the display frames are converted with, from the next frame on: a running job shows
+    /// it after its current pass, an idle one publishes its last frame again with it. Nothing is
+    /// re-traced and the generation stays; setting the display in force does nothing.
+    ///
+    /// Never blocks on the renderer: the display's lock is only ever held to copy it.
+    pub fn set_display(&self, display: Display) {
+        {
+            let mut current = self
+                .shared
+                .display
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner);
+            if same_display(&current, &display) {
+                return;
+            }
+            *current = display;
+        }
+        // Stored before the message is sent, so the worker sees it when it wakes. A stopped
+        // worker shows nothing anyway.
+        let _ = self.sender.send(Message::Display);
+    }
+
+    /// The display in force.
+    pub fn display(&self) -> Display {
+        self.shared.display()
+    }
+
+    /// Passes traced since the controller started, previews included: a display change adds
+    /// none.
+    pub fn passes_traced(&self) -> u64 {
+        self.shared.passes.load(Ordering::SeqCst)
+    }
+
+    /// The number of render threads asked for.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The newest generation handed out.
+    pub fn generation(&self) -> u64 {
+        self.shared.current()
+    }
+
+    /// The newest frame published since the last call, if any. Never waits: if the worker
+    /// happens to hold the lock this instant, returns `None` (the worker's notify follows).
+    pub fn take_frame(&self) -> Option<Frame> {
+        match self.shared.slot.try_lock() {
+            Ok(mut slot) => slot.take(),
+            Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner().take(),
+            Err(std::sync::TryLockError::WouldBlock) => None,
+        }
+    }
+
+    /// A problem the worker met since the last call. Never waits (a held lock is tried again
+    /// at the next call).
+    pub fn take_error(&self) -> Option<WorkerError> {
+        match self.shared.error.try_lock() {
+            Ok(mut error) => error.take(),
+            Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner().take(),
+            Err(std::sync::TryLockError::WouldBlock) => None,
+        }
+    }
+
+    /// Test hook: the next pass traced (of the running job, or of the next one submitted)
+    /// panics inside the render pool with [`INJECTED_PANIC`], as a bug in the tracer would, so
+    /// tests exercise the real path: rayon re-raising it on the worker, which reports it.
+    #[doc(hidden)]
+    pub fn inject_panic_on_next_pass(&self) {
+        self.shared.panic_next_pass.store(true, Ordering::SeqCst);
+    }
+
+    /// Jobs abandoned so far, before their target, because a newer one arrived.
+    pub fn abandoned_jobs(&self) -> u64 {
+        self.shared.abandoned_jobs.load(Ordering::SeqCst)
+    }
+
+    /// Blocks until the newest job has reached its sample target (or panicked: see
+    /// [`Controller::take_error`]), or `timeout` passes. Returns whether it finished. For tests
+    /// and scripts: **never call this on the UI thread**.
+    pub fn wait_idle(&self, timeout: std::time::Duration) -> bool {
+        let deadline = Instant::now() + timeout;
+        let mut done = self
+            .shared
+            .done
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        loop {
+            if *done >= self.shared.current() {
+                return true;
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return false;
+            }
+            done = match self.shared.done_changed.wait_timeout(done, deadline - now) {
+                Ok((guard, _)) => guard,
+                Err(p) => p.into_inner().0,
+            };
+        }
+    }
+
+    fn bump_and_send(&self, message: impl FnOnce(u64) -> Message) -> Result<u64, ControllerError> {
+        // Bump under the slot's lock, and drop any frame the UI has not taken yet: it is stale.
+        let mut slot = self
+            .shared
+            .slot
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let generation = self.shared.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        *slot = None;
+        self.sender
+            .send(message(generation))
+            .map_err(|_| ControllerError::Stopped)?;
+        Ok(generation)
+    }
+}
+
+impl Drop for Controller {
+    fn drop(&mut self) {
+        // Cancel the running pass, then let the worker leave its loop.
+        self.shared.generation.fetch_add(1, Ordering::SeqCst);
+        let _ = self.sender.send(Message::Quit);
+        if let Some(worker) = self.worker.take() {
+            let _ = worker.join();
+        }
+    }
+}
+
+fn resolve_threads(threads: usize) -> usize {
+    if threads == 0 {
+        default_threads()
+    } else {
+        threads
+    }
+}
+
+/// One render thread per core.
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+fn build_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("raylab-render-{i}"))
+        .build()
+        .map_err(|e| e.to_string())
+}
+
+/// The size of the coarse preview for a `width × height` image, or `None` to skip it.
+pub fn preview_size(width: u32, height: u32) -> Option<(u32, u32)> {
+    if width.max(height) < PREVIEW_MIN_SIDE {
+        return None;
+    }
+    Some((
+        (width / PREVIEW_DIVISOR).max(1),
+        (height / PREVIEW_DIVISOR).max(1),
+    ))
+}
+
+struct Job {
+    generation: u64,
+    settings: RenderSettings,
+    scene: Arc<Scene>,
+    submitted: Instant,
+}
+
+struct Worker {
+    shared: Arc<Shared>,
+    receiver: Receiver<Message>,
+    pool: rayon::ThreadPool,
+    /// The newest job, kept so a thread change can restart it.
+    job: Option<Job>,
+    /// The last frame published, without its `rgba` (the linear image is shared with the UI's
+    /// copy through the `Arc`), so a display change can publish it again without tracing.
+    last: Option<Frame>,
+    /// The running job's [`Frame::camera_note`].
+    camera_note: Option<String>,
+}
+
+impl Worker {
+    fn new(shared: Arc<Shared>, receiver: Receiver<Message>, pool: rayon::ThreadPool) -> Self {
+        Self {
+            shared,
+            receiver,
+            pool,
+            job: None,
+            last: None,
+            camera_note: None,
+        }
+    }
+
+    fn run(mut self) {
+        // Wait (asleep) for a message, then take every message already queued: only the newest
+        // job matters.
+        while let Ok(first) = self.receiver.recv() {
+            let mut pending = Some(first);
+            let mut run = false;
+            let mut redisplay = false;
+            while let Some(message) = pending.take() {
+                match message {
+                    Message::Quit => return,
+                    Message::Job {
+                        generation,
+                        settings,
+                        scene,
+                        submitted,
+                    } => {
+                        self.job = Some(Job {
+                            generation,
+                            settings,
+                            scene,
+                            submitted,
+                        });
+                        run = true;
+                    }
+                    Message::Threads {
+                        generation,
+                        threads,
+                    } => {
+                        self.rebuild_pool(threads);
+                        if let Some(job) = &mut self.job {
+                            job.generation = generation;
+                            job.submitted = Instant::now();
+                            run = true;
+                        } else {
+                            self.mark_done(generation);
+                        }
+                    }
+                    Message::Display => redisplay = true,
+                }
+                pending = match self.receiver.try_recv() {
+                    Ok(m) => Some(m),
+                    Err(TryRecvError::Empty) => None,
+                    Err(TryRecvError::Disconnected) => return,
+                };
+            }
+            // A job to render shows the display in force anyway.
+            if run && let Some(job) = self.job.take() {
+                match catch_panic(|| self.render_job(&job)) {
+                    Ok(true) => self.mark_done(job.generation),
+                    Ok(false) => {
+                        self.shared.abandoned_jobs.fetch_add(1, Ordering::SeqCst);
+                    }
+                    Err(panic) => {
+                        self.drop_frames_of(job.generation);
+                        self.shared.report(WorkerError {
+                            message: format!(
+                                "The render panicked: {panic} (settings: {})",
+                                job.settings.summary()
+                            ),
+                            settings: Some(job.settings.clone()),
+                        });
+                        // Nothing more will come of it: `wait_idle` need not wait.
+                        self.mark_done(job.generation);
+                    }
+                }
+                // Kept even after a panic: a thread change renders it again, as asked.
+                self.job = Some(job);
+            } else if redisplay && let Err(panic) = catch_panic(|| self.redisplay()) {
+                self.shared.report(WorkerError {
+                    message: format!("Showing the image with the new display panicked: {panic}"),
+                    settings: None,
+                });
+            }
+        }
+    }
+
+    /// Publishes the last frame again with the display in force, if it was shown with another.
+    /// Its generation, samples, linear image and timings stay: nothing is traced. If a newer
+    /// submission has come since, `publish` refuses it (that job will show the new display).
+    fn redisplay(&mut self) {
+        let display = self.shared.display();
+        let Some(last) = &self.last else {
+            return;
+        };
+        if same_display(&last.display, &display) {
+            return;
+        }
+        let shown = shown_with(display, last.legend.as_ref());
+        let frame = Frame {
+            rgba: self.pool.install(|| shown.to_rgba8(&last.image.pixels)),
+            display,
+            ..last.clone()
+        };
+        self.publish(frame);
+    }
+
+    fn rebuild_pool(&mut self, threads: usize) {
+        match build_pool(threads) {
+            Ok(pool) => self.pool = pool,
+            Err(e) => self.shared.report(WorkerError {
+                message: format!("could not start {threads} render threads: {e}"),
+                settings: None,
+            }),
+        }
+    }
+
+    /// After a panic: nothing of generation `generation` is shown any more, neither a frame it
+    /// published that the UI has not taken yet, nor (for a display change) its last frame.
+    fn drop_frames_of(&mut self, generation: u64) {
+        let mut slot = self
+            .shared
+            .slot
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        if slot.as_ref().is_some_and(|f| f.generation == generation) {
+            *slot = None;
+        }
+        if self
+            .last
+            .as_ref()
+            .is_some_and(|f| f.generation == generation)
+        {
+            self.last = None;
+        }
+    }
+
+    fn mark_done(&self, generation: u64) {
+        let mut done = self
+            .shared
+            .done
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        *done = (*done).max(generation);
+        self.shared.done_changed.notify_all();
+    }
+
+    /// Renders the job's preview and passes up to its target. Returns `false` if a newer job
+    /// made it stale on the way.
+    fn render_job(&mut self, job: &Job) -> bool {
+        let shared = Arc::clone(&self.shared);
+        let stale = || shared.current() != job.generation;
+        let settings = &job.settings;
+        let target = settings.samples_per_pixel.max(1);
+        let (width, height) = (settings.camera.width, settings.camera.height);
+        self.camera_note = camera_sees_nothing(&job.scene, settings);
+
+        if settings.view.is_traced() {
+            // A debug view: one ray per pixel centre, once.
+            let start = Instant::now();
+            let cancelled = || {
+                shared.injected_panic();
+                shared.current() != job.generation
+            };
+            let result = self
+                .pool
+                .install(|| render_view(&job.scene, settings, settings.view, &cancelled));
+            let Ok(view) = result else {
+                return false;
+            };
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            let rays = u64::from(width) * u64::from(height);
+            let legend = Some(view.legend);
+            let frame = self.frame(job, view.image, target, false, ms, rays, None, legend);
+            return self.publish_and_keep(frame);
+        }
+
+        if let Some((w, h)) = preview_size(width, height) {
+            let mut preview = settings.clone();
+            preview.camera = settings.camera.with_resolution(w, h);
+            let Some((image, pass_ms)) = self.pass(job, &preview, 0) else {
+                return false;
+            };
+            let rays = u64::from(w) * u64::from(h);
+            let frame = self.frame(job, image, 0, true, pass_ms, rays, None, None);
+            if !self.publish_and_keep(frame) {
+                return false;
+            }
+        }
+
+        let mut film = Film::with_noise(width, height);
+        let mut published = Instant::now();
+        for sample in 0..target {
+            let Some((pass, pass_ms)) = self.pass(job, settings, sample) else {
+                return false;
+            };
+            film.add_pass(&pass);
+            // Short passes are not all shown: each frame shown costs the UI a repaint (and the
+            // mean, its display pixels and the noise estimate cost the worker), which takes
+            // from the render on a small machine. The first and the last always are, and the
+            // first after a display change, so the change shows within one pass.
+            let last = sample + 1 == target;
+            if sample > 0
+                && !last
+                && published.elapsed() < MIN_FRAME_INTERVAL
+                && !self.display_changed()
+            {
+                continue;
+            }
+            published = Instant::now();
+            // The variance view: each pixel's variance of the mean, once there are two samples.
+            let variance = if settings.view == View::Variance {
+                variance_view(&film).map(|v| (v.image, v.legend))
+            } else {
+                None
+            };
+            // The mean of one pass is the pass itself: skip the copy.
+            let (image, legend) = match variance {
+                Some((image, legend)) => (image, Some(legend)),
+                None if sample == 0 => (pass, None),
+                None => (film.resolve(), None),
+            };
+            if stale() {
+                return false;
+            }
+            let rays = u64::from(width) * u64::from(height);
+            let noise = film.noise();
+            let frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise, legend);
+            if !self.publish_and_keep(frame) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Whether the display in force differs from the last frame's.
+    fn display_changed(&self) -> bool {
+        self.last
+            .as_ref()
+            .is_some_and(|last| !same_display(&last.display, &self.shared.display()))
+    }
+
+    /// One pass, or `None` if the job went stale.
+    fn pass(&self, job: &Job, settings: &RenderSettings, sample: u32) -> Option<(Image, f64)> {
+        let shared = &self.shared;
+        if shared.current() != job.generation {
+            return None;
+        }
+        // Asked by every row, on the pool's threads.
+        let cancelled = || {
+            shared.injected_panic();
+            shared.current() != job.generation
+        };
+        let start = Instant::now();
+        let result = self
+            .pool
+            .install(|| render_pass(&job.scene, settings, sample, &cancelled));
+        match result {
+            Ok(image) => {
+                self.shared.passes.fetch_add(1, Ordering::SeqCst);
+                Some((image, start.elapsed().as_secs_f64() * 1e3))
+            }
+            Err(Cancelled) => None,
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn frame(
+        &self,
+        job: &Job,
+        image: Image,
+        samples: u32,
+        is_preview: bool,
+        pass_ms: f64,
+        rays: u64,
+        noise: Option<NoiseEstimate>,
+        legend: Option<Legend>,
+    ) -> Frame {
+        let display = self.shared.display();
+        let shown = shown_with(display, legend.as_ref());
+        let rgba = self.pool.install(|| shown.to_rgba8(&image.pixels));
+        Frame {
+            generation: job.generation,
+            settings: job.settings.clone(),
+            image: Arc::new(image),
+            rgba,
+            display,
+            samples,
+            target: job.settings.samples_per_pixel.max(1),
+            is_preview,
+            pass_ms,
+            mrays_per_s: if pass_ms > 0.0 {
+                rays as f64 / (pass_ms * 1e3)
+            } else {
+                0.0
+            },
+            since_submit_ms: job.submitted.elapsed().as_secs_f64() * 1e3,
+            noise,
+            legend,
+            camera_note: self.camera_note.clone(),
+        }
+    }
+
+    /// [`Worker::publish`], remembering the frame (without its pixels) for a display change.
+    fn publish_and_keep(&mut self, mut kept: Frame) -> bool {
+        // Cloned without its pixels: they may be tens of megabytes.
+        let rgba = std::mem::take(&mut kept.rgba);
+        let published = self.publish(Frame {
+            rgba,
+            ..kept.clone()
+        });
+        if published {
+            self.last = Some(kept);
+        }
+        published
+    }
+
+    /// Puts the frame in the slot unless its generation is stale; returns whether it did.
+    fn publish(&self, frame: Frame) -> bool {
+        {
+            let mut slot = self
+                .shared
+                .slot
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner);
+            // `submit` bumps the generation under this lock: checked here, no newer submission
+            // can slip in before the frame is in place.
+            if self.shared.current() != frame.generation {
+                return false;
+            }
+            *slot = Some(frame);
+        }
+        (self.shared.notify)();
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicUsize;
+    use std::time::Duration;
+
+    use super::*;
+    use crate::display::DisplayTransform;
+    use crate::render::render;
+    use crate::scene::cornell_box;
+
+    const TIMEOUT: Duration = Duration::from_secs(60);
+
+    fn small(width: u32, height: u32, samples: u32) -> RenderSettings {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(width, height);
+        s.samples_per_pixel = samples;
+        s
+    }
+
+    fn quiet() -> Notify {
+        Box::new(|| {})
+    }
+
+    /// Takes frames until one is final for `generation`, checking the order on the way.
+    fn last_frame(controller: &Controller, generation: u64) -> Frame {
+        let deadline = Instant::now() + TIMEOUT;
+        let mut newest_seen = 0;
+        loop {
+            if let Some(frame) = controller.take_frame() {
+                assert!(frame.generation >= newest_seen, "an older frame came later");
+                newest_seen = frame.generation;
+                if frame.generation == generation && frame.is_final() {
+                    return frame;
+                }
+            }
+            assert!(
+                Instant::now() < deadline,
+                "no final frame within {TIMEOUT:?}"
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    #[test]
+    fn previews_then_accumulates_to_the_target() {
+        let scene = Arc::new(cornell_box());
+        let frames = Arc::new(Mutex::new(Vec::new()));
+        let notified = Arc::new(AtomicUsize::new(0));
+        let n = Arc::clone(&notified);
+        let controller =
+            Controller::new(2, Box::new(move || _ = n.fetch_add(1, Ordering::SeqCst))).unwrap();
+        let settings = small(96, 64, 4);
+        let generation = controller.submit(&scene, &settings).unwrap();
+        // Collect every frame as it comes (the UI would see only the newest of a burst).
+        let deadline = Instant::now() + TIMEOUT;
+        while frames
+            .lock()
+            .unwrap()
+            .last()
+            .is_none_or(|f: &Frame| !f.is_final())
+        {
+            if let Some(f) = controller.take_frame() {
+                frames.lock().unwrap().push(f);
+            }
+            assert!(Instant::now() < deadline);
+            std::thread::yield_now();
+        }
+        assert!(controller.wait_idle(TIMEOUT));
+        let frames = frames.lock().unwrap();
+        let last = frames.last().unwrap();
+        assert_eq!(last.generation, generation);
+        assert_eq!((last.samples, last.target), (4, 4));
+        assert_eq!((last.image.width, last.image.height), (96, 64));
+        assert_eq!(last.rgba.len(), 96 * 64 * 4);
+        assert_eq!(*last.image, render(&scene, &settings));
+        if let Some(first) = frames.first().filter(|f| f.is_preview) {
+            assert_eq!((first.image.width, first.image.height), (12, 8));
+        }
+        // Sample counts only grow.
+        assert!(frames.windows(2).all(|w| w[0].samples <= w[1].samples));
+        assert!(notified.load(Ordering::SeqCst) >= 1);
+    }
+
+    #[test]
+    fn a_newer_job_cancels_an_older_one() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(1, quiet()).unwrap();
+        // A job far too long to finish within the test: 512², 4096 samples.
+        let old = controller.submit(&scene, &small(512, 512, 4096)).unwrap();
+        // Wait until it is into its full-resolution passes.
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            if controller.take_frame().is_some_and(|f| !f.is_preview) {
+                break;
+            }
+            assert!(Instant::now() < deadline, "the old job never got going");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let newer = small(32, 32, 2);
+        let generation = controller.submit(&scene, &newer).unwrap();
+        assert!(generation > old);
+        let start = Instant::now();
+        let frame = last_frame(&controller, generation);
+        assert_eq!(frame.settings, newer);
+        assert!(controller.wait_idle(TIMEOUT));
+        // The old job was abandoned, not run to its end (4096 passes of 512²).
+        assert_eq!(controller.abandoned_jobs(), 1);
+        assert!(start.elapsed() < Duration::from_secs(20));
+        // And it publishes nothing more: the worker is idle on the newest job.
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+    }
+
+    #[test]
+    fn after_1000_rapid_changes_the_last_settings_win() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let mut settings = small(48, 32, 2);
+        let mut newest_seen = 0;
+        let mut generation = 0;
+        for i in 0..1000 {
+            settings.light.position.x = -0.8 + 1.6 * i as f32 / 999.0;
+            generation = controller.submit(&scene, &settings).unwrap();
+            // The UI polls between changes: whatever it sees is never older than before.
+            if let Some(frame) = controller.take_frame() {
+                assert!(frame.generation >= newest_seen);
+                newest_seen = frame.generation;
+            }
+        }
+        let frame = last_frame(&controller, generation);
+        assert_eq!(frame.settings, settings);
+        assert_eq!(*frame.image, render(&scene, &settings));
+        assert!(controller.wait_idle(TIMEOUT));
+        assert!(controller.take_frame().is_none());
+    }
+
+    #[test]
+    fn the_same_settings_give_the_same_image() {
+        let scene = Arc::new(cornell_box());
+        let settings = small(40, 40, 3);
+        let images: Vec<Arc<Image>> = [1, 2]
+            .into_iter()
+            .map(|threads| {
+                let controller = Controller::new(threads, quiet()).unwrap();
+                let generation = controller.submit(&scene, &settings).unwrap();
+                last_frame(&controller, generation).image
+            })
+            .collect();
+        assert_eq!(images[0], images[1]);
+        // A third run on a controller that rendered something else first.
+        let controller = Controller::new(2, quiet()).unwrap();
+        let other = small(40, 40, 1);
+        let g = controller.submit(&scene, &other).unwrap();
+        last_frame(&controller, g);
+        let g = controller.submit(&scene, &settings).unwrap();
+        assert_eq!(last_frame(&controller, g).image, images[0]);
+    }
+
+    #[test]
+    fn changing_threads_restarts_the_job() {
+        let scene = Arc::new(cornell_box());
+        let mut controller = Controller::new(1, quiet()).unwrap();
+        let settings = small(32, 32, 2);
+        let g = controller.submit(&scene, &settings).unwrap();
+        last_frame(&controller, g);
+        let g = controller.set_threads(2).unwrap();
+        assert_eq!(controller.threads(), 2);
+        let frame = last_frame(&controller, g);
+        assert_eq!(*frame.image, render(&scene, &settings));
+    }
+
+    #[test]
+    fn invalid_settings_are_refused_before_any_work() {
+        let controller = Controller::new(1, quiet()).unwrap();
+        let mut s = small(16, 16, 1);
+        s.camera.focal_length = 0.0;
+        let scene = Arc::new(cornell_box());
+        assert!(matches!(
+            controller.submit(&scene, &s),
+            Err(ControllerError::Invalid(_))
+        ));
+        assert_eq!(controller.generation(), 0);
+    }
+
+    /// The next frame published, waiting for it.
+    fn next_frame(controller: &Controller) -> Frame {
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            if let Some(frame) = controller.take_frame() {
+                return frame;
+            }
+            assert!(Instant::now() < deadline, "no frame within {TIMEOUT:?}");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    const BRIGHTER: Display = Display {
+        transform: DisplayTransform::Lab,
+        exposure: 1.0,
+    };
+
+    #[test]
+    fn a_display_change_when_idle_publishes_the_last_frame_again() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let g = controller.submit(&scene, &small(32, 32, 3)).unwrap();
+        let before = last_frame(&controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        assert_eq!(before.display, Display::default());
+        assert_eq!(before.rgba, before.image.to_rgba8());
+        // Three passes, no preview (32 < 64).
+        assert_eq!(controller.passes_traced(), 3);
+
+        controller.set_display(BRIGHTER);
+        assert_eq!(controller.display(), BRIGHTER);
+        let after = next_frame(&controller);
+        assert_eq!((after.generation, after.samples, after.target), (g, 3, 3));
+        assert!(after.is_final());
+        assert_eq!(after.display, BRIGHTER);
+        assert_eq!(after.rgba, BRIGHTER.to_rgba8(&after.image.pixels));
+        assert_ne!(after.rgba, before.rgba);
+        // Nothing traced: the same linear image, the same pass, no pass added.
+        assert!(Arc::ptr_eq(&after.image, &before.image));
+        assert_eq!(after.pass_ms, before.pass_ms);
+        assert_eq!(controller.passes_traced(), 3);
+        assert_eq!(controller.generation(), g);
+
+        // The display in force again: nothing to show.
+        controller.set_display(BRIGHTER);
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.passes_traced(), 3);
+    }
+
+    #[test]
+    fn a_display_change_while_accumulating_does_not_restart() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let settings = small(128, 128, 200);
+        let g = controller.submit(&scene, &settings).unwrap();
+        // Into its accumulation, a few samples in.
+        let at_change = loop {
+            let frame = next_frame(&controller);
+            if frame.samples >= 3 {
+                break frame;
+            }
+        };
+        assert!(!at_change.is_final(), "the job finished before the change");
+        let passes = controller.passes_traced();
+        let srgb = Display {
+            transform: DisplayTransform::Srgb,
+            exposure: 0.5,
+        };
+        controller.set_display(srgb);
+
+        let mut frames = vec![at_change];
+        while !frames.last().unwrap().is_final() {
+            frames.push(next_frame(&controller));
+        }
+        // One job throughout, its samples only growing: never back to a preview or to 1.
+        assert!(frames.iter().all(|f| f.generation == g && !f.is_preview));
+        assert!(frames.windows(2).all(|w| w[0].samples <= w[1].samples));
+        assert_eq!(controller.abandoned_jobs(), 0);
+        assert_eq!(controller.passes_traced(), 201, "a preview and 200 passes");
+        // The change showed after the pass under way then (the preview counts as a pass, so
+        // `passes` passes make `passes − 1` samples), not up to 40 ms of passes later.
+        let first = frames.iter().find(|f| f.display == srgb).unwrap();
+        assert!(
+            first.samples <= passes as u32 + 1,
+            "{} {passes}",
+            first.samples
+        );
+        let last = frames.last().unwrap();
+        assert_eq!((last.samples, last.display), (200, srgb));
+        assert_eq!(last.rgba, srgb.to_rgba8(&last.image.pixels));
+    }
+
+    #[test]
+    fn a_submission_after_a_display_change_renders_with_it() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        // Nothing rendered yet: nothing to publish again, but the display is kept.
+        let filmic = Display {
+            transform: DisplayTransform::Filmic,
+            exposure: -0.5,
+        };
+        controller.set_display(filmic);
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.passes_traced(), 0);
+
+        let settings = small(40, 30, 2);
+        let g = controller.submit(&scene, &settings).unwrap();
+        let frame = last_frame(&controller, g);
+        assert_eq!(frame.display, filmic);
+        assert_eq!(frame.rgba, filmic.to_rgba8(&frame.image.pixels));
+        // The linear image is the same as with any display.
+        assert_eq!(*frame.image, render(&scene, &settings));
+
+        // A change, then at once a new job: the job shows the new display.
+        controller.set_display(BRIGHTER);
+        let other = small(40, 30, 1);
+        let g = controller.submit(&scene, &other).unwrap();
+        let frame = last_frame(&controller, g);
+        assert_eq!((frame.generation, frame.display), (g, BRIGHTER));
+        assert_eq!(frame.rgba, BRIGHTER.to_rgba8(&frame.image.pixels));
+        assert!(controller.wait_idle(TIMEOUT));
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none(), "no stale frame after it");
+    }
+
+    #[test]
+    fn a_job_that_panics_is_reported_and_the_next_one_renders() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let failing = small(40, 30, 3);
+        controller.inject_panic_on_next_pass();
+        let g = controller.submit(&scene, &failing).unwrap();
+        // A job that panicked counts as finished: nothing more will come of it.
+        assert!(controller.wait_idle(TIMEOUT));
+        let error = controller.take_error().expect("the panic is reported");
+        assert_eq!(
+            error.message,
+            format!(
+                "The render panicked: {INJECTED_PANIC} (settings: scene cornell, stage lab \
+                 (shadows on, indirect on), 40×30, camera (0, 0, -3.001) yaw 0° pitch 0° f 40 \
+                 px, light (0, -0.5, -0.7) 14 W, 3 spp, seed 0)"
+            )
+        );
+        assert_eq!(error.settings.as_ref(), Some(&failing));
+        let json = error.settings_json().unwrap();
+        assert_eq!(
+            serde_json::from_str::<RenderSettings>(&json).unwrap(),
+            failing
+        );
+        assert!(controller.take_error().is_none(), "reported once");
+        // Its first pass panicked (40 < 64: no preview): nothing traced, nothing published.
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.passes_traced(), 0);
+        assert_eq!(controller.generation(), g);
+
+        // The worker goes on: the next job renders as if nothing had happened.
+        let next = small(48, 32, 4);
+        let g = controller.submit(&scene, &next).unwrap();
+        let frame = last_frame(&controller, g);
+        assert_eq!(frame.settings, next);
+        assert_eq!(*frame.image, render(&scene, &next));
+        assert!(controller.take_error().is_none());
+    }
+
+    #[test]
+    fn after_a_panic_mid_job_nothing_more_of_it_is_shown() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        // Long enough to be mid-accumulation when the panic comes.
+        let settings = small(128, 128, 4096);
+        let g = controller.submit(&scene, &settings).unwrap();
+        while next_frame(&controller).samples < 2 {}
+        controller.inject_panic_on_next_pass();
+        assert!(controller.wait_idle(TIMEOUT));
+        let error = controller.take_error().expect("the panic is reported");
+        assert!(error.message.contains(INJECTED_PANIC), "{}", error.message);
+        // The frame the worker may have published before the panic is gone from the slot, and a
+        // display change does not show the failed job's last frame again.
+        assert!(controller.take_frame().is_none());
+        controller.set_display(BRIGHTER);
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(controller.take_frame().is_none());
+        assert_eq!(controller.abandoned_jobs(), 0);
+        assert_eq!(controller.generation(), g);
+    }
+
+    #[test]
+    fn a_panic_message_is_read_from_its_payload() {
+        assert_eq!(catch_panic(|| 7), Ok(7));
+        assert_eq!(
+            catch_panic(|| panic!("at {}", 3)),
+            Err::<(), _>("at 3".to_owned())
+        );
+        assert_eq!(
+            catch_panic(|| panic!("static")),
+            Err::<(), _>("static".to_owned())
+        );
+        let other = catch_panic(|| std::panic::panic_any(42));
+        assert_eq!(other, Err::<(), _>("a panic with no message".to_owned()));
+    }
+
+    #[test]
+    fn preview_sizes() {
+        assert_eq!(preview_size(1024, 768), Some((128, 96)));
+        assert_eq!(preview_size(512, 4), Some((64, 1)));
+        assert_eq!(preview_size(32, 32), None);
+    }
+}

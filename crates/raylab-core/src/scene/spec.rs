@@ -1,0 +1,374 @@
+//! A scene described by its parts: the lab's room and blocks, models standing in the box, a
+//! terrain on its floor. Every scene raylab traces is assembled here ([`assemble`]), the
+//! built-in ones included ([`super::SceneChoice::spec`]), so a scene file that names the same
+//! parts gives the same triangles, bit for bit.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+use super::obj::{self, Mesh, Placement};
+use super::terrain::{self, TerrainSpec};
+use super::{Material, MaterialKind, Scene, SceneError, cornell_box};
+use crate::invalid::SettingsError;
+use crate::texture::Texture;
+
+/// The lab's room: the first ten triangles of [`cornell_box`] (floor, walls, ceiling).
+pub const ROOM_TRIANGLES: usize = 10;
+
+/// The parts of a scene. `PartialEq` compares every field, so two specs that are equal build
+/// the same scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneSpec {
+    /// What the scene is called in the workbench and in messages.
+    pub name: String,
+    /// The lab's room: floor, left, right and back walls, ceiling (its open side faces the
+    /// camera).
+    pub room: bool,
+    /// The lab's two blocks, the short red one and the tall blue one.
+    pub blocks: bool,
+    /// Models standing on the box's floor, in order.
+    pub models: Vec<ModelSpec>,
+    /// A fractal terrain covering the floor.
+    pub terrain: Option<TerrainSpec>,
+}
+
+/// A model standing in the box.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelSpec {
+    /// A model built into raylab (`bunny`, `teapot`, `textured-teapot`) or the path of an OBJ
+    /// file. A scene file's relative paths are resolved against its own folder when it is read.
+    pub file: PathBuf,
+    /// Where and how it stands; its `reflectance` is the model's ρ.
+    pub height: f32,
+    /// The centre of its footprint on the floor, (x, z).
+    pub floor_position: [f32; 2],
+    /// Turn about the vertical axis, in radians.
+    pub yaw: f32,
+    /// Its diffuse reflectance ρ (kept for mirror and glass too, as the blocks' is).
+    pub reflectance: Vec3,
+    /// Diffuse (the default, textured if its material library names a texture), mirror or
+    /// glass.
+    pub kind: MaterialKind,
+}
+
+/// The models compiled into raylab, by the name a [`ModelSpec::file`] gives them.
+pub const BUILT_IN_MODELS: [&str; 3] = ["bunny", "teapot", "textured-teapot"];
+
+impl ModelSpec {
+    /// A diffuse model at `placement`.
+    pub fn new(file: impl Into<PathBuf>, placement: &Placement) -> Self {
+        Self {
+            file: file.into(),
+            height: placement.height,
+            floor_position: placement.floor_position,
+            yaw: placement.yaw,
+            reflectance: placement.reflectance,
+            kind: MaterialKind::Diffuse,
+        }
+    }
+
+    pub fn placement(&self) -> Placement {
+        Placement {
+            height: self.height,
+            floor_position: self.floor_position,
+            yaw: self.yaw,
+            reflectance: self.reflectance,
+        }
+    }
+
+    /// The built-in model this names, if any.
+    pub fn built_in(&self) -> Option<&'static str> {
+        let name = self.file.to_str()?;
+        BUILT_IN_MODELS.into_iter().find(|b| *b == name)
+    }
+
+    /// The model's name: the built-in's, or the file's stem.
+    pub fn name(&self) -> String {
+        match self.built_in() {
+            Some(name) => name.to_owned(),
+            None => self
+                .file
+                .file_stem()
+                .map_or_else(|| "model".to_owned(), |s| s.to_string_lossy().into_owned()),
+        }
+    }
+
+    /// Reads the mesh and its texture: a warning for each part that could not be used.
+    fn load(&self) -> Result<(Mesh, Option<Texture>, Vec<String>), SceneError> {
+        match self.built_in() {
+            Some("bunny") => Ok((obj::builtin(obj::BUNNY_OBJ, "bunny")?, None, Vec::new())),
+            Some("teapot") => Ok((obj::builtin(obj::TEAPOT_OBJ, "teapot")?, None, Vec::new())),
+            Some(_) => obj::builtin_textured_mesh(
+                obj::TEXTURED_TEAPOT_OBJ,
+                obj::TEXTURED_TEAPOT_MTL,
+                obj::TEXTURED_TEAPOT_PNG,
+                "textured-teapot",
+            ),
+            None => obj::load_textured(&self.file),
+        }
+    }
+}
+
+/// What a scene load is doing, for a progress line.
+pub type Progress<'a> = &'a (dyn Fn(&str) + Sync);
+
+impl SceneSpec {
+    /// The lab's Cornell box: room and blocks.
+    pub fn cornell(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            room: true,
+            blocks: true,
+            models: Vec::new(),
+            terrain: None,
+        }
+    }
+
+    /// Checks the values a scene file may hold; errors name the field (`scene.models[0].height`).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let bad = |name: String, value: String, reason: &'static str| SettingsError {
+            name: name.into(),
+            value,
+            reason,
+        };
+        for (i, m) in self.models.iter().enumerate() {
+            let field = |f: &str| format!("scene.models[{i}].{f}");
+            if !(m.height.is_finite() && m.height > 0.0 && m.height <= 2.0) {
+                return Err(bad(
+                    field("height"),
+                    m.height.to_string(),
+                    "must be in (0, 2]",
+                ));
+            }
+            let [x, z] = m.floor_position;
+            if !(x.abs() <= 1.0 && z.abs() <= 1.0) {
+                let v = format!("[{x}, {z}]");
+                return Err(bad(
+                    field("floor_position"),
+                    v,
+                    "must be inside the box, in [−1, 1]",
+                ));
+            }
+            if !m.yaw.is_finite() {
+                return Err(bad(
+                    field("yaw"),
+                    m.yaw.to_string(),
+                    "must be a finite number",
+                ));
+            }
+            if !(m.reflectance.is_finite()
+                && m.reflectance.min_element() >= 0.0
+                && m.reflectance.max_element() <= 1.0)
+            {
+                let v = m.reflectance.to_string();
+                return Err(bad(
+                    field("reflectance"),
+                    v,
+                    "must be in [0, 1] in each channel",
+                ));
+            }
+            match m.kind {
+                MaterialKind::Diffuse => {}
+                MaterialKind::Mirror { tint } | MaterialKind::Glass { tint, .. }
+                    if !(tint.is_finite()
+                        && tint.min_element() >= 0.0
+                        && tint.max_element() <= 1.0) =>
+                {
+                    return Err(bad(
+                        field("material"),
+                        tint.to_string(),
+                        "a tint must be in [0, 1]",
+                    ));
+                }
+                MaterialKind::Glass { ior, .. }
+                    if !(ior.is_finite() && (1.0..=4.0).contains(&ior)) =>
+                {
+                    return Err(bad(
+                        field("material"),
+                        ior.to_string(),
+                        "an index of refraction must be in [1, 4]",
+                    ));
+                }
+                _ => {}
+            }
+        }
+        if let Some(t) = &self.terrain {
+            if !(1..=MAX_TERRAIN_GRID).contains(&t.grid) {
+                return Err(bad(
+                    "scene.terrain.grid".into(),
+                    t.grid.to_string(),
+                    "must be between 1 and 2048",
+                ));
+            }
+            if !(t.height.is_finite() && t.height > 0.0 && t.height <= 2.0) {
+                return Err(bad(
+                    "scene.terrain.height".into(),
+                    t.height.to_string(),
+                    "must be in (0, 2]",
+                ));
+            }
+            if !(1..=MAX_TERRAIN_OCTAVES).contains(&t.octaves) {
+                return Err(bad(
+                    "scene.terrain.octaves".into(),
+                    t.octaves.to_string(),
+                    "must be between 1 and 16",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Roughly the most memory loading and building the scene takes, in bytes: nothing to
+    /// speak of for the lab's box; 16 MiB a built-in model; for an OBJ file, 8 times its size
+    /// (a face of some 40 bytes of text becomes a triangle, its corners' normals and texture
+    /// coordinates and its share of the structure, some 300 bytes), or 0 if it cannot be read
+    /// (loading it fails anyway); 320 MiB for the default terrain's million triangles (it runs
+    /// in about 350 MiB of address space in all), in proportion to its triangle count for
+    /// another grid.
+    pub fn memory_estimate(&self) -> u64 {
+        let models: u64 = self
+            .models
+            .iter()
+            .map(|m| match m.built_in() {
+                Some(_) => 16 << 20,
+                None => std::fs::metadata(&m.file).map_or(0, |f| 8 * f.len()),
+            })
+            .sum();
+        let terrain = self.terrain.as_ref().map_or(0, |t| {
+            let default = u64::from(TerrainSpec::default().grid).pow(2);
+            (320u64 << 20) * u64::from(t.grid).pow(2) / default
+        });
+        models + terrain
+    }
+
+    /// Builds the scene and its acceleration structure (on the current rayon pool), with a
+    /// warning for each model part that could not be used (a missing material library or
+    /// texture). `cancelled` is asked between parts: a load given up returns
+    /// [`SceneError::Cancelled`]. `progress` hears what is being done.
+    pub fn build(
+        &self,
+        cancelled: &(dyn Fn() -> bool + Sync),
+        progress: Progress<'_>,
+    ) -> Result<(Scene, Vec<String>), SceneError> {
+        let mut warnings = Vec::new();
+        let mut models = Vec::with_capacity(self.models.len());
+        for model in &self.models {
+            if cancelled() {
+                return Err(SceneError::Cancelled);
+            }
+            progress(&format!("reading {}", model.name()));
+            let (mesh, texture, mut w) = model.load()?;
+            warnings.append(&mut w);
+            let mut material = Material::diffuse(model.name(), model.reflectance);
+            material.kind = model.kind;
+            if model.kind == MaterialKind::Diffuse {
+                material.texture = texture;
+            }
+            models.push((mesh, model.placement(), material));
+        }
+        if cancelled() {
+            return Err(SceneError::Cancelled);
+        }
+        if self.terrain.is_some() {
+            progress("making the terrain");
+        }
+        let scene = assemble(
+            self.room,
+            self.blocks,
+            &models,
+            self.terrain.as_ref(),
+            cancelled,
+            progress,
+        )?;
+        Ok((scene, warnings))
+    }
+}
+
+/// The largest terrain grid a scene may ask for: 2 · 2048² ≈ 8.4 million triangles.
+pub const MAX_TERRAIN_GRID: u32 = 2048;
+/// The most octaves of terrain noise (finer ones are below a pixel at any allowed grid).
+pub const MAX_TERRAIN_OCTAVES: u32 = 16;
+
+/// The one place a scene's triangles are put together: the room (triangles 0–9 of
+/// [`cornell_box`]), then the blocks (10–29), each model, and the terrain, with every material
+/// of the box kept (so the room's material indices never change). Models and terrain carry
+/// their corners' normals and texture coordinates; the room and blocks stay flat.
+pub fn assemble(
+    room: bool,
+    blocks: bool,
+    models: &[(Mesh, Placement, Material)],
+    terrain: Option<&TerrainSpec>,
+    cancelled: &(dyn Fn() -> bool + Sync),
+    progress: Progress<'_>,
+) -> Result<Scene, SceneError> {
+    let lab = cornell_box();
+    let mut materials = lab.materials;
+    let mut triangles = Vec::new();
+    if room {
+        triangles.extend_from_slice(&lab.triangles[..ROOM_TRIANGLES]);
+    }
+    if blocks {
+        triangles.extend_from_slice(&lab.triangles[ROOM_TRIANGLES..]);
+    }
+    let mut normals: Vec<Option<[Vec3; 3]>> = vec![None; triangles.len()];
+    let mut uvs: Vec<Option<[Vec2; 3]>> = vec![None; triangles.len()];
+    let mut any_uvs = false;
+    for (mesh, placement, material) in models {
+        materials.push(material.clone());
+        let placed = obj::place_model(mesh, placement, (materials.len() - 1) as u32);
+        let n = placed.triangles.len();
+        triangles.extend(placed.triangles);
+        normals.extend(placed.normals.into_iter().map(Some));
+        match placed.uvs {
+            Some(model_uvs) => {
+                any_uvs = true;
+                uvs.extend(model_uvs.into_iter().map(Some));
+            }
+            None => uvs.extend(std::iter::repeat_n(None, n)),
+        }
+    }
+    if let Some(spec) = terrain {
+        materials.push(Material::diffuse("terrain", terrain::TERRAIN_REFLECTANCE));
+        let material = (materials.len() - 1) as u32;
+        terrain::extend_with_terrain(spec, material, &mut triangles, &mut normals);
+        uvs.resize(triangles.len(), None);
+    }
+    if triangles.is_empty() {
+        return Err(SceneError::Empty);
+    }
+    if cancelled() {
+        return Err(SceneError::Cancelled);
+    }
+    progress(&format!(
+        "building the BVH of {} triangles",
+        triangles.len()
+    ));
+    let any_normals = normals.iter().any(Option::is_some);
+    let normals = if any_normals { normals } else { Vec::new() };
+    let uvs = if any_uvs { uvs } else { Vec::new() };
+    Ok(Scene::new(triangles, materials).with_surface(normals, uvs))
+}
+
+/// Turns a relative model path into one relative to `folder` (a scene file's), leaving built-in
+/// names and absolute paths alone.
+pub fn resolve_models(spec: &mut SceneSpec, folder: &Path) {
+    for m in &mut spec.models {
+        if m.built_in().is_none() && m.file.is_relative() {
+            m.file = folder.join(&m.file);
+        }
+    }
+}
+
+/// The inverse of [`resolve_models`] for writing a scene file into `folder`: paths inside it
+/// become relative, so the file and its models can be sent together.
+pub fn relative_models(spec: &mut SceneSpec, folder: &Path) {
+    for m in &mut spec.models {
+        if let Ok(rest) = m.file.strip_prefix(folder)
+            && m.built_in().is_none()
+        {
+            m.file = rest.to_path_buf();
+        }
+    }
+}

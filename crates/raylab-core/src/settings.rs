@@ -1,0 +1,558 @@
+//! Everything that determines an image, in one serialisable value.
+//!
+//! The command line, the workbench's panels and saved screenshots all describe a render with a
+//! [`RenderSettings`]; the renderer takes nothing else. `#[serde(default)]` everywhere means an
+//! older or partial settings file still loads, with the lab's values for what it lacks.
+
+mod stage;
+mod view_choice;
+
+pub use stage::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
+pub use view_choice::View;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+pub use crate::invalid::SettingsError;
+
+use crate::camera::Camera;
+use crate::display::Display;
+use crate::light::PointLight;
+use crate::material::{MaterialPreset, TexturePreset};
+use crate::scene::SceneChoice;
+
+/// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+/// The longest focal length, in pixels: a field of view of a 10,000th of a degree on a
+/// 16384-pixel image. Far beyond it, the squared length of a primary ray's direction
+/// overflows `f32` and every ray is lost (a black image).
+pub const MAX_FOCAL_LENGTH: f32 = 1e7;
+
+/// The largest exposure, either way, in stops.
+pub const MAX_EXPOSURE: f32 = 20.0;
+
+/// The most samples per pixel a render may ask for.
+pub const MAX_SAMPLES: u32 = 1 << 16;
+
+/// The most light power, in watts: 71,000 times the lab's 14 W. With [`MAX_LIGHT_COLOUR`] and
+/// [`MAX_INDIRECT_LIGHT`] it keeps every value a render makes finite (the derivation is in
+/// [`RenderSettings::validate`]); brighter images are what the exposure is for.
+pub const MAX_LIGHT_POWER: f32 = 1e6;
+
+/// The largest channel of the light's colour (the lab's white is 1, 1, 1): each channel's
+/// power is the power times it.
+pub const MAX_LIGHT_COLOUR: f32 = 1e3;
+
+/// The largest constant indirect light N, per channel (the lab's is 0.5).
+pub const MAX_INDIRECT_LIGHT: f32 = 1e6;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RenderSettings {
+    /// The scene to trace: the lab's Cornell box by default.
+    pub scene: SceneChoice,
+    /// The camera, including the image size.
+    pub camera: Camera,
+    pub light: PointLight,
+    pub shading: Shading,
+    /// Mirror and glass for the Cornell box's blocks (none: the lab's diffuse box).
+    pub material_preset: MaterialPreset,
+    /// Textures for the Cornell box's floor and walls (none: the lab's plain colours).
+    pub texture_preset: TexturePreset,
+    /// How linear values are shown and written to PNG (the lab's clamp by default). Changing
+    /// it never re-traces: the renderer ignores it.
+    pub display: Display,
+    /// What the workbench shows: the shaded image (the default) or a debug view of the same
+    /// scene and camera ([`crate::view`]). `render` ignores it; the command line's `--view`
+    /// chooses.
+    pub view: View,
+    /// Samples per pixel to accumulate; 1 traces each pixel's centre (the lab's image), more
+    /// jitter inside the pixel and average (anti-aliasing).
+    pub samples_per_pixel: u32,
+    /// Seed of every random choice; the same seed gives the same image.
+    pub seed: u64,
+}
+
+impl Default for RenderSettings {
+    /// Figure 7 of the lab at 512 × 512.
+    fn default() -> Self {
+        Self {
+            scene: SceneChoice::Cornell,
+            camera: Camera::default(),
+            light: PointLight::default(),
+            shading: Shading::default(),
+            material_preset: MaterialPreset::None,
+            texture_preset: TexturePreset::None,
+            display: Display::default(),
+            view: View::Shaded,
+            samples_per_pixel: 1,
+            seed: 0,
+        }
+    }
+}
+
+/// What [`RenderSettings::memory_estimate`] allows for the program itself: its code, its
+/// threads' stacks and its allocator's first reserves (a small render runs in 50 MiB of
+/// address space).
+pub const BASE_MEMORY: u64 = 64 << 20;
+
+impl RenderSettings {
+    /// The memory a render of these settings needs at its peak, in bytes, as the command line
+    /// makes it: the shaded image (`view` [`View::Shaded`], whatever the sample count) or a
+    /// debug view. A rough upper bound, for refusing early what cannot fit
+    /// ([`crate::memory::check`]), counted as:
+    ///
+    /// * per pixel, what lives together at the peak: the shaded image is one linear float
+    ///   image, 12 bytes a pixel, which the passes are summed into row by row
+    ///   ([`crate::render::try_render`]) and which PNG and EXR files are encoded from a band
+    ///   of rows at a time ([`crate::film::Image::save_with`]); a debug view holds its raw
+    ///   values beside its image ([`View::bytes_per_pixel`]);
+    /// * the scene ([`SceneChoice::memory_estimate`]);
+    /// * [`BASE_MEMORY`] for the program.
+    ///
+    /// A 16384 × 16384 render: 268,435,456 pixels × 12 bytes = 3.0 GiB, plus 64 MiB: 3.1 GiB.
+    pub fn memory_estimate(&self, view: View) -> u64 {
+        let pixels = u64::from(self.camera.width) * u64::from(self.camera.height);
+        pixels * view.bytes_per_pixel() + self.scene.memory_estimate() + BASE_MEMORY
+    }
+
+    /// Whether `other` renders the same linear image: equal but perhaps for the display
+    /// transform and exposure, which change only how the image is shown.
+    pub fn renders_like(&self, other: &RenderSettings) -> bool {
+        let mut same_display = self.clone();
+        same_display.display = other.display;
+        same_display == *other
+    }
+
+    /// Reads settings from JSON text: a workbench screenshot's sidecar (whose `settings` field
+    /// holds them) or a bare settings object. Missing fields take the lab's defaults. The values
+    /// are not checked: call [`RenderSettings::validate`] before rendering.
+    ///
+    /// Here rather than in the command line so the settings-file fuzz target
+    /// (`fuzz/fuzz_targets/settings_json.rs`) runs exactly what `--settings FILE` runs.
+    pub fn from_json(text: &str) -> Result<Self, String> {
+        from_json(text).map(|loaded| loaded.settings)
+    }
+
+    /// One line naming what most often explains a render: the scene, stage and switches,
+    /// resolution, camera, light, samples and seed. For error reports (a render that panicked
+    /// says which settings did it); the JSON (`serde_json::to_string`) has everything.
+    pub fn summary(&self) -> String {
+        let (c, l, s) = (&self.camera, &self.light, &self.shading);
+        let on = |b: bool| if b { "on" } else { "off" };
+        let v = |v: Vec3| format!("({}, {}, {})", v.x, v.y, v.z);
+        format!(
+            "scene {}, stage {} (shadows {}, indirect {}), {}×{}, camera {} yaw {}° pitch {}° \
+             f {} px, light {} {} W, {} spp, seed {}",
+            self.scene,
+            s.stage,
+            on(s.shadows),
+            on(s.indirect),
+            c.width,
+            c.height,
+            v(c.position),
+            c.yaw.to_degrees(),
+            c.pitch.to_degrees(),
+            c.focal_length,
+            v(l.position),
+            l.power,
+            self.samples_per_pixel,
+            self.seed,
+        )
+    }
+
+    /// Checks every value before a render: sizes in 1..=16384, finite numbers, a positive focal
+    /// length, light power, colour and indirect light from 0 to their maxima, 1..=65536
+    /// samples.
+    ///
+    /// **Why the light has a maximum.** Finite is not enough: a light of 1e38 W, or N = 1e38,
+    /// made infinite pixels (written to EXR files as ∞). The bounds keep every value a render
+    /// makes below `f32::MAX` (3.4e38), with room to spare:
+    ///
+    /// * D (equation 27) is at most P · c / (4π r²) with r never below
+    ///   [`MIN_LIGHT_DISTANCE`](crate::light::MIN_LIGHT_DISTANCE) (1e−3): at most
+    ///   1e6 W · 1000 / (4π · 1e−6) = 8.0e13 with the largest power and colour.
+    /// * Every reflectance ρ is at most 1, so a lab stage's value, ρ·(D + N) or D + N, is at
+    ///   most 8.0e13 + 1e6; mirror and glass branches split a weight of at most 1.
+    /// * The path tracer adds ρ·D at each of at most
+    ///   [`MAX_DEPTH`](crate::integrator::path::MAX_DEPTH) = 256 vertices, weighted by a
+    ///   throughput that Russian roulette raises by at most 1/0.95 a vertex: at most
+    ///   256 · 0.95^−253 · 8.0e13 ≈ 9e21.
+    /// * A pixel sums up to 65,536 samples before dividing: at most 6e26. The display
+    ///   multiplies by at most 2^20 (+20 EV) and its curves take any finite value.
+    ///
+    /// So the image, its sums and the EXR file are always finite; outputs are not clamped.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        if let SceneChoice::Custom(spec) = &self.scene {
+            spec.validate()?;
+        }
+        let c = &self.camera;
+        check_side("width", c.width)?;
+        check_side("height", c.height)?;
+        check_vec("camera position", c.position)?;
+        check_finite("yaw", c.yaw)?;
+        check_finite("pitch", c.pitch)?;
+        check_finite("focal length", c.focal_length)?;
+        if c.focal_length <= 0.0 {
+            return Err(err("focal length", c.focal_length, "must be > 0"));
+        }
+        if c.focal_length > MAX_FOCAL_LENGTH {
+            let f = c.focal_length;
+            return Err(err("focal length", f, "must be at most 1e7 px"));
+        }
+        check_vec("light position", self.light.position)?;
+        check_finite("aperture", c.aperture)?;
+        if c.aperture < 0.0 {
+            return Err(err("aperture", c.aperture, "must be ≥ 0"));
+        }
+        check_finite("focus distance", c.focus_distance)?;
+        if c.focus_distance <= 0.0 {
+            return Err(err("focus distance", c.focus_distance, "must be > 0"));
+        }
+        let light = &self.light;
+        check_finite("light power", light.power)?;
+        if light.power < 0.0 {
+            return Err(err("light power", light.power, "must be ≥ 0"));
+        }
+        if light.power > MAX_LIGHT_POWER {
+            let p = number(light.power);
+            return Err(err(
+                "light power",
+                p,
+                "must be at most 1e6 W (--light-power ≤ 1e6)",
+            ));
+        }
+        check_vec("light colour", light.colour)?;
+        if light.colour.min_element() < 0.0 {
+            return Err(err("light colour", light.colour, "must be ≥ 0"));
+        }
+        if light.colour.max_element() > MAX_LIGHT_COLOUR {
+            let c = vector(light.colour);
+            return Err(err("light colour", c, "each channel must be at most 1000"));
+        }
+        check_finite("light radius", light.radius)?;
+        if light.radius < 0.0 {
+            return Err(err("light radius", light.radius, "must be ≥ 0"));
+        }
+        check_finite("exposure", self.display.exposure)?;
+        if self.display.exposure.abs() > MAX_EXPOSURE {
+            return Err(err(
+                "exposure",
+                self.display.exposure,
+                "must be between −20 and 20 stops",
+            ));
+        }
+        check_vec("indirect light", self.shading.indirect_light)?;
+        if self.shading.indirect_light.min_element() < 0.0 {
+            let n = self.shading.indirect_light;
+            return Err(err("indirect light", n, "must be ≥ 0"));
+        }
+        if self.shading.indirect_light.max_element() > MAX_INDIRECT_LIGHT {
+            let n = vector(self.shading.indirect_light);
+            return Err(err(
+                "indirect light",
+                n,
+                "must be at most 1e6 (--indirect ≤ 1e6)",
+            ));
+        }
+        if self.shading.specular_depth > MAX_SPECULAR_DEPTH {
+            let d = self.shading.specular_depth;
+            return Err(err("specular depth", d, "must be at most 12"));
+        }
+        if !(1..=MAX_SAMPLES).contains(&self.samples_per_pixel) {
+            let s = self.samples_per_pixel;
+            return Err(err("samples per pixel", s, "must be between 1 and 65536"));
+        }
+        Ok(())
+    }
+}
+
+fn err(name: &'static str, value: impl std::fmt::Display, reason: &'static str) -> SettingsError {
+    SettingsError {
+        name: name.into(),
+        value: value.to_string(),
+        reason,
+    }
+}
+
+/// A number as a person would write it: 1e38, not 100000000000000000000000000000000000000.
+fn number(x: f32) -> String {
+    if x.abs() >= 1e7 {
+        format!("{x:e}")
+    } else {
+        x.to_string()
+    }
+}
+
+/// A vector as [`number`] writes its components.
+fn vector(v: Vec3) -> String {
+    format!("({}, {}, {})", number(v.x), number(v.y), number(v.z))
+}
+
+fn check_side(name: &'static str, side: u32) -> Result<(), SettingsError> {
+    if (1..=MAX_IMAGE_SIDE).contains(&side) {
+        Ok(())
+    } else {
+        Err(err(name, side, "must be between 1 and 16384"))
+    }
+}
+
+fn check_finite(name: &'static str, x: f32) -> Result<(), SettingsError> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(err(name, x, "must be a finite number"))
+    }
+}
+
+fn check_vec(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(err(name, v, "must be finite"))
+    }
+}
+
+/// Settings read from a file, and what in it was not understood.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Loaded {
+    pub settings: RenderSettings,
+    /// One line per thing ignored (an unknown field).
+    pub warnings: Vec<String>,
+}
+
+/// Parses settings JSON: a screenshot sidecar (whose `settings` field holds them) or a bare
+/// settings object. Lenient where a scene file is strict
+/// ([`crate::settings_file`]'s module docs say how).
+pub fn from_json(text: &str) -> Result<Loaded, String> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut value: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    if let Some(inner) = value.get_mut("settings") {
+        value = inner.take();
+    }
+    if let Some(camera) = value.get_mut("camera").and_then(|c| c.as_object_mut())
+        && !camera.contains_key("focal_length")
+        && let Some(width) = camera.get("width").and_then(serde_json::Value::as_u64)
+    {
+        // `Camera::default_for(width, …)`: f = W, the lab's 53.13° across.
+        camera.insert("focal_length".to_owned(), serde_json::json!(width as f32));
+    }
+    let mut warnings = Vec::new();
+    let settings = serde_ignored::deserialize(value, |path| {
+        warnings.push(format!("unknown field `{path}` ignored"));
+    })
+    .map_err(|e: serde_json::Error| e.to_string())?;
+    Ok(Loaded { settings, warnings })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_round_trip_through_json() {
+        let s = RenderSettings::default();
+        s.validate().unwrap();
+        let json = serde_json::to_string(&s).unwrap();
+        assert_eq!(serde_json::from_str::<RenderSettings>(&json).unwrap(), s);
+        // A partial file keeps the defaults for what it lacks.
+        let partial: RenderSettings =
+            serde_json::from_str(r#"{"light": {"position": [0.5, 0.0, 0.0]}}"#).unwrap();
+        assert_eq!(partial.light.position, Vec3::new(0.5, 0.0, 0.0));
+        assert_eq!(partial.light.channel_power(), Vec3::splat(14.0));
+        assert_eq!(partial.camera, Camera::default());
+    }
+
+    #[test]
+    fn json_text_is_a_sidecar_or_bare_settings() {
+        let mut s = RenderSettings::default();
+        s.seed = 7;
+        s.camera = s.camera.with_resolution(64, 32);
+        let bare = serde_json::to_string(&s).unwrap();
+        assert_eq!(RenderSettings::from_json(&bare).unwrap(), s);
+        let sidecar = format!(r#"{{"png": "x.png", "settings": {bare}}}"#);
+        assert_eq!(RenderSettings::from_json(&sidecar).unwrap(), s);
+        assert_eq!(
+            RenderSettings::from_json("{}").unwrap(),
+            RenderSettings::default()
+        );
+        assert!(RenderSettings::from_json("{").is_err());
+        assert!(RenderSettings::from_json(r#"{"samples_per_pixel": -1}"#).is_err());
+        assert!(RenderSettings::from_json("[1, 2]").is_err());
+    }
+
+    #[test]
+    fn the_summary_names_what_explains_a_render() {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(128, 96);
+        s.seed = 3;
+        assert_eq!(
+            s.summary(),
+            "scene cornell, stage lab (shadows on, indirect on), 128×96, camera (0, 0, -3.001) \
+             yaw 0° pitch 0° f 128 px, light (0, -0.5, -0.7) 14 W, 1 spp, seed 3"
+        );
+    }
+
+    #[test]
+    fn the_display_does_not_change_the_render() {
+        let a = RenderSettings::default();
+        let mut b = a.clone();
+        b.display.exposure = 2.0;
+        b.display.transform = crate::display::DisplayTransform::Filmic;
+        assert!(a.renders_like(&b) && b.renders_like(&a));
+        b.light.radius = 0.1;
+        assert!(!a.renders_like(&b));
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let mut s = RenderSettings::default();
+        s.camera.width = 0;
+        assert_eq!(s.validate().unwrap_err().name, "width");
+        let mut s = RenderSettings::default();
+        s.camera.height = 16_385;
+        assert_eq!(s.validate().unwrap_err().name, "height");
+        let mut s = RenderSettings::default();
+        s.camera.focal_length = -1.0;
+        assert_eq!(s.validate().unwrap_err().name, "focal length");
+        // 2e19 px would overflow the rays' squared length: refused, not a black image.
+        s.camera.focal_length = 2e19;
+        assert_eq!(s.validate().unwrap_err().name, "focal length");
+        let mut s = RenderSettings::default();
+        s.light.position.y = f32::NAN;
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.name, "light position");
+        assert!(e.to_string().contains("NaN"), "{e}");
+        let mut s = RenderSettings::default();
+        s.camera.yaw = f32::INFINITY;
+        assert_eq!(s.validate().unwrap_err().name, "yaw");
+    }
+
+    /// Huge but finite light is refused above its bound, naming the field and the bound
+    /// (issue 10, fault 5: 1e38 W and N = 1e38 wrote ∞ to EXR files); the bounds themselves
+    /// are allowed.
+    #[test]
+    fn light_beyond_its_bounds_is_refused_naming_the_bound() {
+        let mut s = RenderSettings::default();
+        s.light.power = 1e38;
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid light power 1e38: must be at most 1e6 W (--light-power ≤ 1e6)"
+        );
+        s.light.power = MAX_LIGHT_POWER;
+        s.light.colour = Vec3::new(1.0, 2e3, 0.0);
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid light colour (1, 2000, 0): each channel must be at most 1000"
+        );
+        s.light.colour = Vec3::splat(MAX_LIGHT_COLOUR);
+        s.shading.indirect_light = Vec3::splat(1e38);
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid indirect light (1e38, 1e38, 1e38): must be at most 1e6 (--indirect ≤ 1e6)"
+        );
+        s.shading.indirect_light = Vec3::splat(MAX_INDIRECT_LIGHT);
+        s.validate().unwrap();
+    }
+
+    /// The estimate by hand: 16384² pixels × 12 bytes + 64 MiB = 3,288,334,336 bytes for the
+    /// Cornell box's shaded image; the normals view adds 16 bytes a pixel (an optional vector);
+    /// the terrain adds its 320 MiB.
+    #[test]
+    fn memory_estimates_by_hand() {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(MAX_IMAGE_SIDE, MAX_IMAGE_SIDE);
+        let pixels = 16_384u64 * 16_384;
+        assert_eq!(s.memory_estimate(View::Shaded), 3_288_334_336);
+        s.samples_per_pixel = 1000;
+        assert_eq!(
+            s.memory_estimate(View::Shaded),
+            3_288_334_336,
+            "summed in place"
+        );
+        assert_eq!(s.memory_estimate(View::Normals), pixels * 28 + BASE_MEMORY);
+        s.scene = SceneChoice::Terrain;
+        s.camera = s.camera.with_resolution(512, 512);
+        assert_eq!(
+            s.memory_estimate(View::Shaded),
+            512 * 512 * 12 + (320 << 20) + BASE_MEMORY
+        );
+    }
+
+    /// The largest light and N the bounds allow, the light on a surface (where D is largest:
+    /// r counts as 1 mm), the most samples: every pixel and every sum finite, in every stage.
+    /// The brightest pixel is the one below the light: D = 1e9 / (4π · 1e−6) = 7.96e13.
+    #[test]
+    fn the_largest_allowed_light_gives_a_finite_image() {
+        let scene = crate::scene::cornell_box();
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(9, 9);
+        // On the floor, clear of both blocks.
+        s.light.position = Vec3::new(0.5, 1.0, 0.3);
+        s.light.power = MAX_LIGHT_POWER;
+        s.light.colour = Vec3::splat(MAX_LIGHT_COLOUR);
+        for stage in crate::Stage::ALL {
+            // Indirect light on: N in the lab stages, bounces in the path stage.
+            s.shading = crate::Shading::for_stage(stage);
+            s.shading.indirect = true;
+            s.shading.indirect_light = Vec3::splat(MAX_INDIRECT_LIGHT);
+            s.samples_per_pixel = if stage == crate::Stage::Path { 64 } else { 1 };
+            s.validate().unwrap();
+            let image = crate::render::render(&scene, &s);
+            assert!(
+                image.pixels.iter().all(|p| p.is_finite()),
+                "{stage}: {:?}",
+                image.pixels
+            );
+            let brightest = image
+                .pixels
+                .iter()
+                .map(|p| p.max_element())
+                .fold(0.0, f32::max);
+            if stage != crate::Stage::Flat {
+                assert!(brightest > 1e6, "{stage}: {brightest}");
+            }
+        }
+        // The incoming stage (D, no ρ) summed over the most samples, on a 1 × 1 image whose
+        // rays meet the back wall near (0, 0, 1): r = (0.5, 1, −0.7), r² = 1.74, r̂·n̂ = 0.7/1.319,
+        // D ≈ 1e9 · 0.5307 / (4π · 1.74) = 2.4e7 there.
+        s.shading = crate::Shading::for_stage(crate::Stage::Incoming);
+        s.camera = s.camera.with_resolution(1, 1);
+        s.samples_per_pixel = MAX_SAMPLES;
+        let many = crate::render::render(&scene, &s);
+        assert!(many.pixels[0].is_finite(), "{}", many.pixels[0]);
+        assert!(many.pixels[0].x > 1e7, "{}", many.pixels[0]);
+    }
+
+    #[test]
+    fn a_camera_with_only_a_width_keeps_the_labs_field_of_view() {
+        let loaded = from_json(r#"{"camera": {"width": 256, "height": 128}}"#).unwrap();
+        let c = loaded.settings.camera;
+        assert_eq!((c.width, c.height, c.focal_length), (256, 128, 256.0));
+        // 2·atan(W / 2f) = 2·atan(1/2) = 53.13°, as `--width 256 --height 128` gives.
+        assert!((c.horizontal_fov_degrees() - 53.130_1).abs() < 1e-3);
+        assert!(loaded.warnings.is_empty());
+        // A focal length that is given stays.
+        let c = from_json(r#"{"camera": {"width": 256, "focal_length": 100}}"#).unwrap();
+        assert_eq!(c.settings.camera.focal_length, 100.0);
+    }
+
+    #[test]
+    fn unknown_fields_are_warned_of_and_a_byte_order_mark_is_ignored() {
+        let loaded =
+            from_json("\u{feff}{\"seed\": 3, \"colour\": 1, \"light\": {\"watts\": 2}}").unwrap();
+        assert_eq!(loaded.settings.seed, 3);
+        assert_eq!(
+            loaded.warnings,
+            [
+                "unknown field `colour` ignored",
+                "unknown field `light.watts` ignored"
+            ]
+        );
+        let sidecar = from_json(r#"{"settings": {"seed": 4}, "saved_at": "x"}"#).unwrap();
+        assert_eq!(sidecar.settings.seed, 4);
+        assert!(sidecar.warnings.is_empty());
+        assert!(from_json("{\"seed\": -1}").is_err());
+    }
+}

@@ -1,0 +1,252 @@
+//! What a pass computes: the lab's stages (figures 2 to 7) or the path tracer, and the switches
+//! that change what a stage adds (shadows, the constant indirect term, bounces, smooth normals).
+//! Plain choices, read by the integrators ([`crate::integrator`]).
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::material::MaterialPreset;
+
+/// A step of the lab, named after what it shows, or the path tracer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stage {
+    /// Figure 2: the colour ρ of the first surface hit.
+    Flat,
+    /// Figure 3: the incoming light D (equation 27), or T = D + N (equation 29) with indirect.
+    Incoming,
+    /// Figure 5: reflected direct light ρ ∗ D (equation 28), no shadows.
+    Direct,
+    /// Figure 6: ρ ∗ D with shadows (section 5.1).
+    Shadows,
+    /// Figure 7: ρ ∗ (D + N) with shadows (equation 30). The default.
+    #[default]
+    Lab,
+    /// Beyond the lab: path tracing, ρ ∗ D at every bounce plus real indirect light in place of
+    /// N (π × radiance, converging as samples accumulate).
+    Path,
+}
+
+impl Stage {
+    /// Every stage, the lab's five then `path`.
+    pub const ALL: [Stage; 6] = [
+        Stage::Flat,
+        Stage::Incoming,
+        Stage::Direct,
+        Stage::Shadows,
+        Stage::Lab,
+        Stage::Path,
+    ];
+
+    /// The lab's stages, in the order of its figures.
+    pub const LAB: [Stage; 5] = [
+        Stage::Flat,
+        Stage::Incoming,
+        Stage::Direct,
+        Stage::Shadows,
+        Stage::Lab,
+    ];
+
+    /// The name used on the command line and in settings files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Flat => "flat",
+            Stage::Incoming => "incoming",
+            Stage::Direct => "direct",
+            Stage::Shadows => "shadows",
+            Stage::Lab => "lab",
+            Stage::Path => "path",
+        }
+    }
+
+    /// The lab figure this stage reproduces with its preset switches (`None` for `path`, which
+    /// goes beyond the lab).
+    pub fn figure(self) -> Option<u32> {
+        match self {
+            Stage::Flat => Some(2),
+            Stage::Incoming => Some(3),
+            Stage::Direct => Some(5),
+            Stage::Shadows => Some(6),
+            Stage::Lab => Some(7),
+            Stage::Path => None,
+        }
+    }
+
+    /// What this stage computes with its preset switches, in the lab's terms and equation
+    /// numbers. `·` stands for the lab's element-wise product `∗` (a glyph the workbench's font
+    /// lacks). [`Shading::description`] says what is computed with the switches as they are.
+    pub fn equation(self) -> &'static str {
+        match self {
+            Stage::Flat => "ρ, the reflectance",
+            Stage::Incoming => "D, the incoming light (eq. 27)",
+            Stage::Direct => "ρ·D (eq. 28)",
+            Stage::Shadows => "ρ·D with shadows (eq. 28, §5.1)",
+            Stage::Lab => "ρ·(D + N) with shadows (eq. 30)",
+            Stage::Path => "ρ·D with shadows at every bounce, real indirect light for N",
+        }
+    }
+
+    /// The shadows and indirect switches as the lab's figure has them (`path`: both on).
+    pub fn preset_switches(self) -> (bool, bool) {
+        match self {
+            Stage::Flat | Stage::Incoming | Stage::Direct => (false, false),
+            Stage::Shadows => (true, false),
+            Stage::Lab | Stage::Path => (true, true),
+        }
+    }
+
+    /// Which integrator computes this stage.
+    pub fn integrator(self) -> Integrator {
+        match self {
+            Stage::Path => Integrator::Path,
+            _ => Integrator::Lab,
+        }
+    }
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Stage {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Stage::ALL
+            .into_iter()
+            .find(|stage| stage.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown stage '{s}' (expected flat, incoming, direct, shadows, lab or path)"
+                )
+            })
+    }
+}
+
+/// The two integrators (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Integrator {
+    /// The lab's stages, mirror and glass traced Whitted-style.
+    Lab,
+    /// Monte Carlo path tracing.
+    Path,
+}
+
+/// How deep the lab stages follow mirror and glass by default: enough to see through the glass
+/// block (in, out, and a few internal reflections).
+pub const DEFAULT_SPECULAR_DEPTH: u32 = 6;
+
+/// The deepest [`Shading::specular_depth`] allowed: a glass branch doubles the rays at every
+/// level, so 2¹² rays per pixel at the very most.
+pub const MAX_SPECULAR_DEPTH: u32 = 12;
+
+/// What to compute at a hit: the stage and its switches.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Shading {
+    pub stage: Stage,
+    /// Cast shadow rays (section 5.1).
+    pub shadows: bool,
+    /// Lab stages: add the constant indirect term N (section 5.2). `path`: follow bounces of
+    /// real indirect light (off: direct light only).
+    pub indirect: bool,
+    /// N, the constant indirect illumination, per colour channel (the lab's `indirectLight`).
+    pub indirect_light: Vec3,
+    /// `path`: the most diffuse bounces a path makes; `None` is unlimited, paths ending by
+    /// Russian roulette. 0 is direct light only.
+    pub bounces: Option<u32>,
+    /// Lab stages: how many mirror and glass hits in a row are followed before a branch is
+    /// given up (black).
+    pub specular_depth: u32,
+    /// Smooth shading: light models with their vertex normals interpolated across each
+    /// triangle (the box has none and stays flat, the lab's look). Off: every triangle flat.
+    pub smooth: bool,
+}
+
+impl Default for Shading {
+    fn default() -> Self {
+        Self::for_stage(Stage::Lab)
+    }
+}
+
+impl Shading {
+    /// The lab's constant indirect light, N = 0.5·(1, 1, 1).
+    pub const LAB_INDIRECT_LIGHT: Vec3 = Vec3::splat(0.5);
+
+    /// The stage with the switches its figure uses.
+    pub fn for_stage(stage: Stage) -> Self {
+        let (shadows, indirect) = stage.preset_switches();
+        Self {
+            stage,
+            shadows,
+            indirect,
+            indirect_light: Self::LAB_INDIRECT_LIGHT,
+            bounces: None,
+            specular_depth: DEFAULT_SPECULAR_DEPTH,
+            smooth: true,
+        }
+    }
+
+    /// N if the indirect switch is on (and the stage is one of the lab's), else 0.
+    pub fn indirect_term(&self) -> Vec3 {
+        if self.indirect && self.stage != Stage::Path {
+            self.indirect_light
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// The most diffuse bounces a path makes (`path` stage): 0 with indirect off.
+    pub fn max_bounces(&self) -> u32 {
+        if self.indirect {
+            self.bounces.unwrap_or(u32::MAX)
+        } else {
+            0
+        }
+    }
+
+    /// What is computed with the switches as they are, in the lab's terms (`·` is its `∗`).
+    pub fn description(&self, materials: MaterialPreset) -> String {
+        let shadows = if self.shadows {
+            " with shadows (§5.1)"
+        } else {
+            ""
+        };
+        let mut text = match self.stage {
+            Stage::Flat => "ρ, the reflectance".to_owned(),
+            Stage::Incoming if self.indirect => format!("D + N (eq. 29){shadows}"),
+            Stage::Incoming => format!("D, the incoming light (eq. 27){shadows}"),
+            Stage::Direct | Stage::Shadows | Stage::Lab if self.indirect => {
+                format!("ρ·(D + N) (eq. 30){shadows}")
+            }
+            Stage::Direct | Stage::Shadows | Stage::Lab => format!("ρ·D (eq. 28){shadows}"),
+            Stage::Path => {
+                let bounces = match self.max_bounces() {
+                    0 => "no bounces: direct light only".to_owned(),
+                    u32::MAX => "real indirect light, bounces until Russian roulette ends the \
+                                 path"
+                        .to_owned(),
+                    1 => "real indirect light, 1 bounce".to_owned(),
+                    n => format!("real indirect light, up to {n} bounces"),
+                };
+                format!("π × radiance: ρ·D{shadows} at every diffuse hit; {bounces}")
+            }
+        };
+        if materials != MaterialPreset::None {
+            if self.stage == Stage::Path {
+                text.push_str("; mirror and glass sampled");
+            } else {
+                text.push_str(&format!(
+                    "; mirror and glass followed up to {} deep (Whitted)",
+                    self.specular_depth
+                ));
+            }
+        }
+        text
+    }
+}

@@ -1,0 +1,117 @@
+//! The debug views by name: what the viewport shows instead of the shaded image. Rendered by
+//! [`crate::view`].
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+/// What the stage shows: the shaded image or one of the debug views.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum View {
+    /// The rendered image (the chosen stage).
+    #[default]
+    Shaded,
+    /// The shading normal at the first hit, as colour.
+    Normals,
+    /// The distance `t` to the first hit, white (near) to black (far).
+    Depth,
+    /// The barycentric coordinates `(1 − u − v, u, v)` of the first hit, as colour.
+    Barycentric,
+    /// A colour per triangle.
+    Triangle,
+    /// The work of each primary ray's closest-hit query, as a heat map.
+    BvhCost,
+    /// Whether the first hit sees the light: lit, blocked, or facing away.
+    Shadow,
+    /// How noisy each pixel's mean still is, from the spread of its samples.
+    Variance,
+}
+
+impl View {
+    pub const ALL: [View; 8] = [
+        View::Shaded,
+        View::Normals,
+        View::Depth,
+        View::Barycentric,
+        View::Triangle,
+        View::BvhCost,
+        View::Shadow,
+        View::Variance,
+    ];
+
+    /// The name on the command line and in settings files (kebab-case).
+    pub fn name(self) -> &'static str {
+        match self {
+            View::Shaded => "shaded",
+            View::Normals => "normals",
+            View::Depth => "depth",
+            View::Barycentric => "barycentric",
+            View::Triangle => "triangle",
+            View::BvhCost => "bvh-cost",
+            View::Shadow => "shadow",
+            View::Variance => "variance",
+        }
+    }
+
+    /// One line on what the view shows, for a selector's tooltip.
+    pub fn description(self) -> &'static str {
+        match self {
+            View::Shaded => "the rendered image of the chosen stage",
+            View::Normals => "the shading normal n at each pixel's first hit, as (n + 1)/2",
+            View::Depth => "the distance t to each pixel's first hit: near white, far black",
+            View::Barycentric => "the hit's barycentric coordinates (1 − u − v, u, v) as RGB",
+            View::Triangle => "a colour per triangle, to see the mesh",
+            View::BvhCost => "nodes visited + triangles tested per primary ray, as a heat map",
+            View::Shadow => "whether the first hit sees the light's centre, or faces away",
+            View::Variance => "the variance of each pixel's mean over its samples, as a heat map",
+        }
+    }
+
+    /// Whether [`render_view`] traces this view from primary rays (all but the shaded image
+    /// and the variance map, which come from the renderer's film).
+    pub fn is_traced(self) -> bool {
+        !matches!(self, View::Shaded | View::Variance)
+    }
+
+    /// The bytes a pixel of this view takes while it is made ([`render_view`]; the shaded
+    /// image as [`crate::render::try_render`] makes it): its linear image (12 bytes), and the
+    /// raw values of a traced view beside it (an optional vector: 16; an optional distance,
+    /// triangle index or a traversal cost: 8; a shadow state: 1). The variance view renders
+    /// into a film that tracks the noise (the sum, 12, and the squares, 4) beside one pass
+    /// (12), then makes its variances (4) and image (12) while the film is still there.
+    pub fn bytes_per_pixel(self) -> u64 {
+        let image = 12;
+        image
+            + match self {
+                View::Shaded => 0,
+                View::Normals | View::Barycentric => 16,
+                View::Depth | View::Triangle | View::BvhCost => 8,
+                View::Shadow => 1,
+                View::Variance => 20,
+            }
+    }
+}
+
+impl fmt::Display for View {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for View {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        View::ALL
+            .into_iter()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown view '{s}' (expected shaded, normals, depth, barycentric, triangle, \
+                 bvh-cost, shadow or variance)"
+                )
+            })
+    }
+}

@@ -1,0 +1,611 @@
+//! Textures: a reflectance ρ that varies over a surface (one of the lab's extensions).
+//!
+//! A diffuse [`crate::Material`] may carry a [`Texture`]; where it does, ρ at a hit is the
+//! texture's value at the hit's texture coordinates instead of the material's constant
+//! reflectance. Coordinates come from the mesh (an OBJ's `vt`, interpolated by the hit's
+//! barycentric u, v) or, for surfaces without them such as the Cornell box's walls, from a
+//! planar projection of the hit position ([`planar_uv`]).
+//!
+//! Texture coordinates follow OBJ files: u goes right across an image and v goes **up**, so
+//! v = 0 is the image's bottom row and v = 1 its top. Every texture repeats with period 1 in
+//! both directions, so any finite (u, v) has a value; a non-finite one gets a fixed value
+//! rather than a panic, since one bad hit must not stop a render.
+
+use std::io::Cursor;
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+
+/// A reflectance that varies with the texture coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texture {
+    /// Squares of side `1/scale` in texture space, alternating between two colours: the
+    /// square holding (u, v) is (⌊u·scale⌋, ⌊v·scale⌋), `colours[0]` where the sum of those
+    /// two integers is even and `colours[1]` where it is odd.
+    Checker { scale: f32, colours: [Vec3; 2] },
+    /// Lines every `1/scale` in u and in v, each centred on a multiple of `1/scale` and
+    /// `line_width` wide (as a fraction of a cell), on a background.
+    Grid {
+        scale: f32,
+        line_width: f32,
+        background: Vec3,
+        line: Vec3,
+    },
+    /// An image, looked up with bilinear filtering and wrapping ([`TextureImage::bilinear`]).
+    Image(Arc<TextureImage>),
+}
+
+impl Texture {
+    /// ρ at texture coordinates `uv`.
+    ///
+    /// A non-finite `uv` gives `colours[1]` for a checker (the parity test fails on NaN), the
+    /// background for a grid and black for an image: a fixed value, never a panic.
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        match self {
+            Texture::Checker { scale, colours } => {
+                let p = (uv * *scale).floor();
+                // rem_euclid, not %: the cell left of u = 0 is −1, which is odd.
+                let parity = (p.x + p.y).rem_euclid(2.0);
+                if parity < 1.0 { colours[0] } else { colours[1] }
+            }
+            Texture::Grid {
+                scale,
+                line_width,
+                background,
+                line,
+            } => {
+                // Where in its cell (u, v) lies, in [0, 1] also for negative coordinates.
+                let f = (uv * *scale).fract_gl();
+                let half = 0.5 * line_width;
+                let on_line = f.x < half || f.x > 1.0 - half || f.y < half || f.y > 1.0 - half;
+                if on_line { *line } else { *background }
+            }
+            Texture::Image(image) => image.bilinear(uv),
+        }
+    }
+}
+
+/// A texture image in linear RGB (decoded from sRGB when loaded from a PNG or JPEG).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureImage {
+    /// The file it came from, for messages.
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGB, rows top to bottom (as stored in image files), `width × height` of them.
+    pub texels: Vec<Vec3>,
+}
+
+/// Why a texture image could not be loaded; the message names the file.
+#[derive(Debug, thiserror::Error)]
+#[error("could not load texture '{name}': {reason}")]
+pub struct TextureError {
+    pub name: String,
+    pub reason: String,
+}
+
+impl TextureImage {
+    /// The largest width or height accepted. A texture is held as 12-byte linear texels, so
+    /// even this is 3 GiB at full size; the limit stops a corrupt or hostile header from
+    /// asking for far more before anything is decoded.
+    pub const MAX_SIDE: u32 = 16384;
+
+    /// Loads a PNG or JPEG file.
+    pub fn load(path: &Path) -> Result<Self, TextureError> {
+        let bytes = std::fs::read(path).map_err(|e| TextureError {
+            name: path.display().to_string(),
+            reason: e.to_string(),
+        })?;
+        Self::from_encoded(&bytes, &path.display().to_string())
+    }
+
+    /// Decodes a PNG or JPEG held in memory; `name` names it in errors.
+    ///
+    /// The file's values are taken as 8-bit sRGB (16-bit PNGs are first reduced to 8 bits)
+    /// and turned into linear RGB with the exact sRGB decoding curve, since ρ multiplies light
+    /// and light adds linearly. Alpha is ignored: a texture here is a reflectance, not a cut-out.
+    /// The size is read from the header and checked (1 to [`Self::MAX_SIDE`] a side) before
+    /// the pixels are decoded.
+    pub fn from_encoded(bytes: &[u8], name: &str) -> Result<Self, TextureError> {
+        let error = |reason: String| TextureError {
+            name: name.to_owned(),
+            reason,
+        };
+        let reader = || {
+            let reader = image::ImageReader::new(Cursor::new(bytes))
+                .with_guessed_format()
+                .map_err(|e| error(e.to_string()))?;
+            match reader.format() {
+                Some(image::ImageFormat::Png | image::ImageFormat::Jpeg) => Ok(reader),
+                Some(other) => Err(error(format!(
+                    "{other:?} images are not supported (PNG or JPEG only)"
+                ))),
+                None => Err(error("not a PNG or JPEG image".into())),
+            }
+        };
+        let (width, height) = reader()?
+            .into_dimensions()
+            .map_err(|e| error(e.to_string()))?;
+        check_size(width, height).map_err(error)?;
+
+        let mut decoder = reader()?;
+        // The size was checked above; the decoder's default 512 MiB cap would otherwise
+        // refuse large textures within it.
+        decoder.no_limits();
+        let rgb = decoder
+            .decode()
+            .map_err(|e| error(e.to_string()))?
+            .into_rgb8();
+        let table = srgb8_to_linear_table();
+        let texels = rgb
+            .pixels()
+            .map(|p| {
+                Vec3::new(
+                    table[p[0] as usize],
+                    table[p[1] as usize],
+                    table[p[2] as usize],
+                )
+            })
+            .collect();
+        Self::from_linear(name, rgb.width(), rgb.height(), texels)
+    }
+
+    /// An image from linear RGB texels, rows top to bottom; refused unless there are exactly
+    /// `width × height` of them and each side is 1 to [`Self::MAX_SIDE`].
+    pub fn from_linear(
+        name: &str,
+        width: u32,
+        height: u32,
+        texels: Vec<Vec3>,
+    ) -> Result<Self, TextureError> {
+        let error = |reason: String| TextureError {
+            name: name.to_owned(),
+            reason,
+        };
+        check_size(width, height).map_err(error)?;
+        let expected = width as usize * height as usize;
+        if texels.len() != expected {
+            return Err(error(format!(
+                "{} texels for a {width}×{height} image (expected {expected})",
+                texels.len()
+            )));
+        }
+        Ok(Self {
+            name: name.to_owned(),
+            width,
+            height,
+            texels,
+        })
+    }
+
+    /// The value at texture coordinates `uv`, filtered bilinearly and repeating in both
+    /// directions.
+    ///
+    /// u goes right and v goes **up**, as in OBJ files: v = 0 is the bottom row of the image
+    /// and v = 1 the top. Texel (i, j), counting columns from the left and rows from the
+    /// bottom, has its centre at ((i + 0.5)/width, (j + 0.5)/height); between centres the four
+    /// nearest texels are mixed by distance, and past the edges the lookup wraps, so the
+    /// left edge u = 0 is half the first column and half the last. Any finite `uv` works
+    /// (negative, or many periods away); a non-finite one, or an image whose texels do not
+    /// match its size (the fields are public), gives black.
+    pub fn bilinear(&self, uv: Vec2) -> Vec3 {
+        let (w, h) = (self.width as usize, self.height as usize);
+        if !uv.is_finite() || w == 0 || h == 0 || w.checked_mul(h) != Some(self.texels.len()) {
+            return Vec3::ZERO;
+        }
+        let (i0, i1, fx) = wrap(uv.x, w);
+        let (j0, j1, fy) = wrap(uv.y, h);
+        // Row j counted from the bottom is row h − 1 − j of the stored, top-first rows.
+        let at = |i: usize, j: usize| self.texels[(h - 1 - j) * w + i];
+        let bottom = at(i0, j0).lerp(at(i1, j0), fx);
+        let top = at(i0, j1).lerp(at(i1, j1), fx);
+        bottom.lerp(top, fy)
+    }
+}
+
+/// For coordinate `t` on an axis of `n` texels: the texel at or before `t`, the one after it
+/// (wrapping), and how far `t` is from the first towards the second, in [0, 1).
+fn wrap(t: f32, n: usize) -> (usize, usize, f32) {
+    // The fraction in f64: exact for any f32, so t and t + k (k whole) wrap alike when the
+    // f32 sum itself is exact.
+    let t = f64::from(t);
+    let x = (t - t.floor()) * n as f64 - 0.5; // texel centres at whole numbers; in [−0.5, n − 0.5]
+    let x0 = x.floor();
+    let i0 = (x0 as i64).rem_euclid(n as i64) as usize;
+    (i0, (i0 + 1) % n, (x - x0) as f32)
+}
+
+/// Refuses an empty image or one over [`TextureImage::MAX_SIDE`] a side.
+fn check_size(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 {
+        Err(format!("the image is empty ({width}×{height})"))
+    } else if width > TextureImage::MAX_SIDE || height > TextureImage::MAX_SIDE {
+        Err(format!(
+            "{width}×{height} is too large (at most {} pixels a side)",
+            TextureImage::MAX_SIDE
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// The sRGB decoding curve for each 8-bit value: c = value/255, then c/12.92 for
+/// c ≤ 0.04045 and ((c + 0.055)/1.055)^2.4 above (computed in f64, rounded once to f32).
+fn srgb8_to_linear_table() -> [f32; 256] {
+    std::array::from_fn(|i| {
+        let c = i as f64 / 255.0;
+        let linear = if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        };
+        linear as f32
+    })
+}
+
+/// Texture coordinates for a surface without its own: the hit position projected on the plane
+/// the normal is most nearly perpendicular to, one scene unit to one unit of texture space.
+///
+/// | largest normal component | u | v |
+/// |---|---|---|
+/// | x (ties go to x) | z | y |
+/// | y (ties with z go to y) | x | z |
+/// | z | x | y |
+///
+/// The sign of the normal does not matter, so the two sides of a wall match. raylab's y points
+/// down, so on the walls v grows downwards: an image texture there appears upside down, which
+/// a repeating pattern such as [`Texture::Checker`] does not show.
+pub fn planar_uv(position: Vec3, normal: Vec3) -> Vec2 {
+    let a = normal.abs();
+    if a.x >= a.y && a.x >= a.z {
+        Vec2::new(position.z, position.y)
+    } else if a.y >= a.z {
+        Vec2::new(position.x, position.z)
+    } else {
+        Vec2::new(position.x, position.y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BLACK: Vec3 = Vec3::ZERO;
+    const WHITE: Vec3 = Vec3::ONE;
+
+    fn grey(v: f32) -> Vec3 {
+        Vec3::splat(v)
+    }
+
+    fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
+        (a - b).abs().max_element() <= tol
+    }
+
+    /// A 2×2 image of greys, rows top to bottom:
+    ///
+    /// ```text
+    ///   top    (j = 1):  2  4     centres at v = 0.75
+    ///   bottom (j = 0):  0  1     centres at v = 0.25
+    ///                    ^  ^ centres at u = 0.25, 0.75
+    /// ```
+    fn two_by_two() -> TextureImage {
+        let texels = [2.0, 4.0, 0.0, 1.0].map(grey).to_vec();
+        TextureImage::from_linear("2x2", 2, 2, texels).unwrap()
+    }
+
+    fn encode(image: image::DynamicImage, format: image::ImageFormat) -> Vec<u8> {
+        let mut bytes = Cursor::new(Vec::new());
+        image.write_to(&mut bytes, format).unwrap();
+        bytes.into_inner()
+    }
+
+    #[test]
+    fn checker_squares_are_where_the_floor_puts_them() {
+        let checker = Texture::Checker {
+            scale: 4.0,
+            colours: [BLACK, WHITE],
+        };
+        // Scale 4: squares 0.25 wide. (u, v) → (⌊4u⌋, ⌊4v⌋) → sum → colour.
+        let cases = [
+            ((0.1, 0.1), BLACK),   // (0, 0): 0, even
+            ((0.3, 0.1), WHITE),   // (1, 0): 1, odd
+            ((0.1, 0.3), WHITE),   // (0, 1): 1, odd
+            ((0.3, 0.3), BLACK),   // (1, 1): 2, even
+            ((0.6, 0.1), BLACK),   // (2, 0): 2, even
+            ((-0.1, 0.1), WHITE),  // (−1, 0): −1, odd
+            ((-0.1, -0.1), BLACK), // (−1, −1): −2, even
+            ((-0.3, 0.1), BLACK),  // (−2, 0): −2, even
+            ((0.25, 0.0), WHITE),  // on a corner: (1, 0), the square up and to the right
+            ((10.1, 0.1), BLACK),  // 4 · 10.1 = 40.4: (40, 0), even
+            ((10.3, 0.1), WHITE),  // 4 · 10.3 = 41.2: (41, 0), odd
+        ];
+        for ((u, v), want) in cases {
+            assert_eq!(checker.eval(Vec2::new(u, v)), want, "uv ({u}, {v})");
+        }
+    }
+
+    #[test]
+    fn grid_lines_sit_on_the_cell_borders() {
+        let grid = Texture::Grid {
+            scale: 4.0,
+            line_width: 0.1,
+            background: BLACK,
+            line: WHITE,
+        };
+        // Cells 0.25 wide; a line covers 0.05 of a cell either side of each border.
+        // (0.01, 0.125): within the cell (0.04, 0.5): 0.04 < 0.05, on the line at u = 0.
+        assert_eq!(grid.eval(Vec2::new(0.01, 0.125)), WHITE);
+        // (0.125, 0.125): (0.5, 0.5), the middle of a cell.
+        assert_eq!(grid.eval(Vec2::new(0.125, 0.125)), BLACK);
+        // (−0.01, 0.125): 4 · −0.01 = −0.04 → 0.96 > 0.95, the same line from the other side.
+        assert_eq!(grid.eval(Vec2::new(-0.01, 0.125)), WHITE);
+        // (0.125, 0.74): (0.5, 0.96), the line at v = 0.75.
+        assert_eq!(grid.eval(Vec2::new(0.125, 0.74)), WHITE);
+    }
+
+    #[test]
+    fn bilinear_mixes_the_four_nearest_texels() {
+        let image = two_by_two();
+        // On a centre, that texel alone; v = 0.25 is the bottom row.
+        assert_eq!(image.bilinear(Vec2::new(0.25, 0.25)), grey(0.0));
+        assert_eq!(image.bilinear(Vec2::new(0.75, 0.25)), grey(1.0));
+        assert_eq!(image.bilinear(Vec2::new(0.25, 0.75)), grey(2.0));
+        assert_eq!(image.bilinear(Vec2::new(0.75, 0.75)), grey(4.0));
+        // Midway between the four centres: (0 + 1 + 2 + 4)/4 = 1.75.
+        assert_eq!(image.bilinear(Vec2::new(0.5, 0.5)), grey(1.75));
+        // (0.375, 0.625): x = 0.375·2 − 0.5 = 0.25 of the way right, y = 0.625·2 − 0.5 = 0.75
+        // of the way up. Weights 0.75·0.25 (bottom left, 0), 0.25·0.25 (bottom right, 1),
+        // 0.75·0.75 (top left, 2), 0.25·0.75 (top right, 4):
+        // 0 + 0.0625 + 1.125 + 0.75 = 1.9375.
+        assert_eq!(image.bilinear(Vec2::new(0.375, 0.625)), grey(1.9375));
+        // Through Texture::eval too.
+        let texture = Texture::Image(Arc::new(image));
+        assert_eq!(texture.eval(Vec2::new(0.375, 0.625)), grey(1.9375));
+    }
+
+    #[test]
+    fn lookups_wrap_in_both_directions() {
+        let image = two_by_two();
+        // Dyadic coordinates: uv + (1, −2) is exact in f32, so the value is too.
+        let uv = Vec2::new(0.375, 0.625);
+        assert_eq!(
+            image.bilinear(uv),
+            image.bilinear(uv + Vec2::new(1.0, -2.0))
+        );
+        assert_eq!(
+            image.bilinear(uv),
+            image.bilinear(uv + Vec2::new(-7.0, 12.0))
+        );
+        // Others only as closely as f32 holds 1.3 and −1.3.
+        let uv = Vec2::new(0.3, 0.7);
+        let shifted = image.bilinear(uv + Vec2::new(1.0, -2.0));
+        assert!(close(image.bilinear(uv), shifted, 1e-5));
+
+        // One row of four: 0 1 2 3, centres at u = 0.125, 0.375, 0.625, 0.875.
+        let row = TextureImage::from_linear("row", 4, 1, [0.0, 1.0, 2.0, 3.0].map(grey).to_vec())
+            .unwrap();
+        // u = 0 lies halfway between the last centre (0.875 − 1) and the first: (3 + 0)/2.
+        assert_eq!(row.bilinear(Vec2::new(0.0, 0.5)), grey(1.5));
+        assert_eq!(row.bilinear(Vec2::new(1.0, 0.5)), grey(1.5));
+        assert_eq!(row.bilinear(Vec2::new(-3.0, 0.5)), grey(1.5));
+        // u = 1/16: x = 0.25 − 0.5 = −0.25, 0.75 of the way from the last column to the first:
+        // 3 + 0.75·(0 − 3) = 0.75.
+        assert_eq!(row.bilinear(Vec2::new(0.0625, 0.5)), grey(0.75));
+        // u = 15/16, from the other side: x = 3.25, 0.25 of the way from 3 to 0: 2.25.
+        assert_eq!(row.bilinear(Vec2::new(0.9375, 0.5)), grey(2.25));
+        // One row: every v reads it.
+        assert_eq!(row.bilinear(Vec2::new(0.375, -5.3)), grey(1.0));
+    }
+
+    #[test]
+    fn bad_coordinates_and_inconsistent_images_give_black() {
+        let image = two_by_two();
+        for uv in [
+            Vec2::new(f32::NAN, 0.5),
+            Vec2::new(0.5, f32::INFINITY),
+            Vec2::splat(f32::NEG_INFINITY),
+        ] {
+            assert_eq!(image.bilinear(uv), BLACK);
+        }
+        // Huge but finite: wraps to the fraction 0, the blend of the corners, 1.75.
+        assert_eq!(image.bilinear(Vec2::splat(1e30)), grey(1.75));
+        // Fields edited past from_linear's checks.
+        let mut broken = image.clone();
+        broken.texels.pop();
+        assert_eq!(broken.bilinear(Vec2::splat(0.5)), BLACK);
+        broken.width = 0;
+        assert_eq!(broken.bilinear(Vec2::splat(0.5)), BLACK);
+        // Checker and grid do not panic either.
+        let nan = Vec2::splat(f32::NAN);
+        let checker = Texture::Checker {
+            scale: 4.0,
+            colours: [BLACK, WHITE],
+        };
+        assert_eq!(checker.eval(nan), WHITE);
+        let grid = Texture::Grid {
+            scale: 4.0,
+            line_width: 0.1,
+            background: BLACK,
+            line: WHITE,
+        };
+        assert_eq!(grid.eval(nan), BLACK);
+    }
+
+    #[test]
+    fn srgb_decoding_is_the_exact_curve() {
+        let table = srgb8_to_linear_table();
+        assert_eq!(table[0], 0.0);
+        assert_eq!(table[255], 1.0);
+        // 128/255 = 0.5019608; ((0.5019608 + 0.055)/1.055)^2.4 = 0.5279248^2.4 = 0.2158605.
+        assert!((table[128] - 0.215_860_5).abs() < 1e-7);
+        // 10/255 = 0.0392157 ≤ 0.04045, the straight segment: 0.0392157/12.92 = 0.0030353.
+        assert!((table[10] - 0.003_035_27).abs() < 1e-8);
+        // 11/255 = 0.0431373 > 0.04045, the curve: (0.0981373/1.055)^2.4 = 0.0033465.
+        assert!((table[11] - 0.003_346_54).abs() < 1e-8);
+        // Increasing throughout.
+        assert!(table.windows(2).all(|w| w[0] < w[1]));
+    }
+
+    #[test]
+    fn a_png_decodes_to_linear_texels_in_file_order() {
+        // 2×2, top row red and sRGB grey 128, bottom row black and white; alpha varies.
+        let mut rgba = image::RgbaImage::new(2, 2);
+        rgba.put_pixel(0, 0, image::Rgba([255, 0, 0, 255]));
+        rgba.put_pixel(1, 0, image::Rgba([128, 128, 128, 0]));
+        rgba.put_pixel(0, 1, image::Rgba([0, 0, 0, 10]));
+        rgba.put_pixel(1, 1, image::Rgba([255, 255, 255, 128]));
+        let png = encode(rgba.into(), image::ImageFormat::Png);
+        let image = TextureImage::from_encoded(&png, "memory.png").unwrap();
+        assert_eq!((image.width, image.height), (2, 2));
+        assert_eq!(image.name, "memory.png");
+        let mid = table_value(128);
+        // Alpha ignored: the transparent grey keeps its colour.
+        assert_eq!(image.texels, vec![Vec3::X, Vec3::splat(mid), BLACK, WHITE]);
+        // The top row of the file is v = 0.75, the bottom v = 0.25.
+        assert_eq!(image.bilinear(Vec2::new(0.25, 0.75)), Vec3::X);
+        assert_eq!(image.bilinear(Vec2::new(0.25, 0.25)), BLACK);
+
+        // A grey 16-bit PNG: reduced to 8 bits, then decoded (65535 → 255 → 1).
+        let grey16 =
+            image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(3, 1, image::Luma([65535]));
+        let png = encode(grey16.into(), image::ImageFormat::Png);
+        let image = TextureImage::from_encoded(&png, "grey16.png").unwrap();
+        assert_eq!(image.texels, vec![WHITE; 3]);
+    }
+
+    fn table_value(v: u8) -> f32 {
+        srgb8_to_linear_table()[v as usize]
+    }
+
+    #[test]
+    fn a_jpeg_round_trip_stays_within_its_loss() {
+        // 16×8: the left half sRGB (200, 100, 50), the right half (50, 100, 200); two blocks
+        // of 8×8, so each half is one flat block and the colours survive up to rounding and
+        // chroma subsampling.
+        let rgb = image::RgbImage::from_fn(16, 8, |x, _| {
+            if x < 8 {
+                image::Rgb([200, 100, 50])
+            } else {
+                image::Rgb([50, 100, 200])
+            }
+        });
+        let jpeg = encode(rgb.into(), image::ImageFormat::Jpeg);
+        let image = TextureImage::from_encoded(&jpeg, "memory.jpg").unwrap();
+        assert_eq!((image.width, image.height), (16, 8));
+        // Linear values: 200 → 0.5775804, 100 → 0.1274377, 50 → 0.0318960. Four 8-bit steps
+        // near 200 are about 0.018 in linear terms, so allow 0.03.
+        let orange = Vec3::new(0.577_580_4, 0.127_437_7, 0.031_896_0);
+        let blue = Vec3::new(0.031_896_0, 0.127_437_7, 0.577_580_4);
+        let row = 4 * 16;
+        assert!(
+            close(image.texels[row + 2], orange, 0.03),
+            "{}",
+            image.texels[row + 2]
+        );
+        assert!(
+            close(image.texels[row + 13], blue, 0.03),
+            "{}",
+            image.texels[row + 13]
+        );
+    }
+
+    #[test]
+    fn bad_input_is_an_error_naming_the_file() {
+        let message = |r: Result<TextureImage, TextureError>| r.unwrap_err().to_string();
+
+        let m = message(TextureImage::from_encoded(
+            b"not an image at all",
+            "wall.png",
+        ));
+        assert!(
+            m.contains("wall.png") && m.contains("not a PNG or JPEG"),
+            "{m}"
+        );
+        let m = message(TextureImage::from_encoded(&[], "empty.png"));
+        assert!(m.contains("empty.png"), "{m}");
+
+        // A real PNG cut short: the header reads, the pixels do not.
+        let rgb = image::RgbImage::from_fn(64, 64, |x, y| image::Rgb([x as u8, y as u8, 7]));
+        let png = encode(rgb.into(), image::ImageFormat::Png);
+        let m = message(TextureImage::from_encoded(&png[..png.len() / 2], "cut.png"));
+        assert!(m.contains("cut.png"), "{m}");
+
+        // A format the image crate knows but textures do not take.
+        let bmp = [b"BM".as_slice(), &[0; 60]].concat();
+        let m = message(TextureImage::from_encoded(&bmp, "old.bmp"));
+        assert!(m.contains("old.bmp") && m.contains("not supported"), "{m}");
+
+        // One pixel too wide: refused from the header.
+        let wide = image::GrayImage::new(TextureImage::MAX_SIDE + 1, 1);
+        let png = encode(wide.into(), image::ImageFormat::Png);
+        let m = message(TextureImage::from_encoded(&png, "wide.png"));
+        assert!(m.contains("wide.png") && m.contains("too large"), "{m}");
+
+        let missing = Path::new("/nonexistent/raylab/brick.png");
+        let m = message(TextureImage::load(missing));
+        assert!(m.contains("/nonexistent/raylab/brick.png"), "{m}");
+
+        // from_linear checks sizes and counts.
+        let m = message(TextureImage::from_linear("zero", 0, 4, Vec::new()));
+        assert!(m.contains("zero") && m.contains("empty"), "{m}");
+        let m = message(TextureImage::from_linear("short", 2, 2, vec![BLACK; 3]));
+        assert!(m.contains("short") && m.contains("expected 4"), "{m}");
+        let m = message(TextureImage::from_linear(
+            "huge",
+            1,
+            20000,
+            vec![BLACK; 20000],
+        ));
+        assert!(m.contains("too large"), "{m}");
+    }
+
+    #[test]
+    fn loading_a_file_names_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("tile.png");
+        let rgb = image::RgbImage::from_pixel(3, 2, image::Rgb([128, 0, 255]));
+        std::fs::write(&path, encode(rgb.into(), image::ImageFormat::Png)).unwrap();
+        let image = TextureImage::load(&path).unwrap();
+        assert_eq!(image.name, path.display().to_string());
+        assert_eq!(image.texels, vec![Vec3::new(table_value(128), 0.0, 1.0); 6]);
+    }
+
+    #[test]
+    fn the_teapot_texture_decodes() {
+        let png = include_bytes!("../../../assets/models/teapot-porcelain.png");
+        let image = TextureImage::from_encoded(png, "teapot-porcelain.png").unwrap();
+        assert_eq!((image.width, image.height), (512, 256));
+        let luminance = |c: &Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        let (lo, hi) = image
+            .texels
+            .iter()
+            .map(luminance)
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), l| {
+                (lo.min(l), hi.max(l))
+            });
+        // Blue on white: a real pattern, not one colour.
+        assert!(hi - lo > 0.5, "luminance from {lo} to {hi}");
+        // Mostly white ground: bright even shown without a gamma curve.
+        let mean = image.texels.iter().map(luminance).sum::<f32>() / image.texels.len() as f32;
+        assert!(mean > 0.5, "mean luminance {mean}");
+    }
+
+    #[test]
+    fn planar_uv_projects_along_the_largest_normal_component() {
+        let p = Vec3::new(1.0, 2.0, 3.0);
+        // Walls facing ±x: (z, y).
+        assert_eq!(planar_uv(p, Vec3::X), Vec2::new(3.0, 2.0));
+        assert_eq!(planar_uv(p, Vec3::new(-0.9, 0.3, 0.3)), Vec2::new(3.0, 2.0));
+        // Floor and ceiling, ±y: (x, z).
+        assert_eq!(planar_uv(p, -Vec3::Y), Vec2::new(1.0, 3.0));
+        // The back wall, ±z: (x, y).
+        assert_eq!(
+            planar_uv(p, Vec3::new(0.1, -0.2, -0.97)),
+            Vec2::new(1.0, 2.0)
+        );
+        // Ties: x before y before z.
+        assert_eq!(planar_uv(p, Vec3::new(1.0, 1.0, 1.0)), Vec2::new(3.0, 2.0));
+        assert_eq!(planar_uv(p, Vec3::new(0.0, 1.0, 1.0)), Vec2::new(1.0, 3.0));
+    }
+}
