@@ -19,7 +19,7 @@ shift $(( $# < 4 ? $# : 4 ))
 OUT=target/stepcount
 mkdir -p "$OUT"
 cc -O2 -o "$OUT/stepcount" scripts/stepcount.c
-cargo build --release --quiet --example marked_pass
+cargo build --release --quiet -p raylab-core --example marked_pass
 EXE=target/release/examples/marked_pass
 "$OUT/stepcount" "$OUT/histogram.txt" "$EXE" "$STAGE" "$WIDTH" "$HEIGHT" "$SAMPLE"
 python3 scripts/stepcount-report.py "$OUT/histogram.txt" "$EXE" $((WIDTH * HEIGHT)) "$@"

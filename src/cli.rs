@@ -19,7 +19,7 @@ use raylab_core::display::{Display, DisplayTransform};
 use raylab_core::film::OutputFormat;
 use raylab_core::inspect::{InspectError, inspect_pixel};
 use raylab_core::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
-use raylab_core::material::TexturePreset;
+use raylab_core::material::{DEFAULT_ROUGHNESS, TexturePreset};
 use raylab_core::render::try_render;
 use raylab_core::scene::SceneChoice;
 use raylab_core::settings::{MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_SAMPLES};
@@ -133,7 +133,7 @@ pub struct RenderOptions {
         conflicts_with_all = [
             "scene_file", "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
             "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
-            "material_preset", "specular_depth", "texture_preset", "smooth", "light_radius",
+            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius",
             "light_colour", "aperture", "focus_distance", "display", "exposure",
         ]
     )]
@@ -146,7 +146,7 @@ pub struct RenderOptions {
         conflicts_with_all = [
             "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
             "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
-            "material_preset", "specular_depth", "texture_preset", "smooth", "light_radius",
+            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius",
             "light_colour", "aperture", "focus_distance", "display", "exposure",
         ]
     )]
@@ -170,10 +170,14 @@ pub struct RenderOptions {
     /// paths); 0 is direct light only.
     #[arg(long, default_value = "unlimited", value_parser = parse_bounces, value_name = "B|unlimited")]
     pub bounces: Bounces,
-    /// Mirror and glass: none (the lab's diffuse box), mirror (the tall block is a mirror of
-    /// reflectance 0.9), glass (the short block is clear glass, index 1.5) or both.
+    /// Mirror, glass and rough metal: none (the lab's diffuse box), mirror (the tall block is a
+    /// mirror of reflectance 0.9), glass (the short block is clear glass, index 1.5), both, or
+    /// rough (the tall block is a rough metal of reflectance 0.9, roughness --roughness).
     #[arg(long, default_value = "none", value_name = "PRESET")]
     pub material_preset: MaterialPreset,
+    /// The rough metal's GGX roughness α, from 0.01 (nearly a mirror) to 1 [default: 0.2].
+    #[arg(long, value_parser = parse_finite, value_name = "A", allow_hyphen_values = true)]
+    pub roughness: Option<f32>,
     /// Textures: none (the lab's plain colours), checker-floor (a checkerboard floor),
     /// grid-walls (grid lines on the walls and ceiling) or both.
     #[arg(long, default_value = "none", value_name = "PRESET")]
@@ -299,6 +303,7 @@ impl RenderOptions {
                 ..Shading::for_stage(self.stage)
             },
             material_preset: self.material_preset,
+            roughness: self.roughness.unwrap_or(DEFAULT_ROUGHNESS),
             texture_preset: self.texture_preset,
             display: Display {
                 transform: self.display,

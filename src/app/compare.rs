@@ -607,6 +607,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
         light,
         shading,
         material_preset,
+        roughness,
         texture_preset,
         display,
         view,
@@ -643,6 +644,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     differ("specular depth", *specular_depth != s.specular_depth);
     differ("smooth shading", *smooth != s.smooth);
     differ("materials", *material_preset != b.material_preset);
+    differ("roughness", *roughness != b.roughness);
     differ("textures", *texture_preset != b.texture_preset);
     differ("samples", *samples_per_pixel != b.samples_per_pixel);
     differ("seed", *seed != b.seed);

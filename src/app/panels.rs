@@ -7,7 +7,7 @@
 use eframe::egui;
 use raylab_core::display::{Display, DisplayTransform};
 use raylab_core::integrator::MAX_SPECULAR_DEPTH;
-use raylab_core::material::TexturePreset;
+use raylab_core::material::{MIN_ROUGHNESS, TexturePreset};
 use raylab_core::scene::SceneChoice;
 use raylab_core::view::{Legend, View};
 use raylab_core::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
@@ -590,6 +590,7 @@ pub fn material_label(preset: MaterialPreset) -> &'static str {
         MaterialPreset::Mirror => "Mirror tall block",
         MaterialPreset::Glass => "Glass short block",
         MaterialPreset::Both => "Mirror and glass",
+        MaterialPreset::Rough => "Rough metal tall block",
     }
 }
 
@@ -654,6 +655,10 @@ fn material_hover(preset: MaterialPreset) -> &'static str {
             "The short red block becomes clear glass (index of refraction 1.5)"
         }
         MaterialPreset::Both => "The tall block a mirror, the short block glass",
+        MaterialPreset::Rough => {
+            "The tall blue block becomes a rough metal reflecting 90 % (GGX microfacets of \
+             roughness α): a highlight under the light, blurred reflections in the path stage"
+        }
     }
 }
 
@@ -667,6 +672,7 @@ pub fn shading_ui(
     commands: &mut Vec<Command>,
 ) {
     let view = &mut settings.view;
+    let roughness = &mut settings.roughness;
     let materials = &mut settings.material_preset;
     let textures = &mut settings.texture_preset;
     let shading = &mut settings.shading;
@@ -694,6 +700,17 @@ pub fn shading_ui(
                     .on_hover_text(material_hover(preset));
             }
         });
+    if *materials == MaterialPreset::Rough {
+        ui.add(
+            egui::Slider::new(roughness, MIN_ROUGHNESS..=1.0)
+                .logarithmic(true)
+                .text("Roughness α"),
+        )
+        .on_hover_text(
+            "The rough metal's GGX roughness α: small is nearly a mirror, 1 spreads the \
+             reflection over the whole hemisphere",
+        );
+    }
     egui::ComboBox::new("textures", "Textures")
         .selected_text(texture_label(*textures))
         .show_ui(ui, |ui| {

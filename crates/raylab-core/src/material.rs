@@ -38,6 +38,9 @@ pub enum MaterialKind {
     /// Clear glass: exact Fresnel reflection and refraction at index of refraction `ior`
     /// (outside is 1.0); refracted light is multiplied by `tint`.
     Glass { ior: f32, tint: Vec3 },
+    /// A rough metal: microfacets of GGX roughness `alpha` (0 is a mirror, 1 very rough) that
+    /// reflect `tint` of the light, with no Fresnel falloff ([`crate::bsdf::Bsdf::RoughConductor`]).
+    Rough { alpha: f32, tint: Vec3 },
 }
 
 impl MaterialKind {
@@ -47,6 +50,7 @@ impl MaterialKind {
             MaterialKind::Diffuse => "diffuse",
             MaterialKind::Mirror { .. } => "mirror",
             MaterialKind::Glass { .. } => "glass",
+            MaterialKind::Rough { .. } => "rough",
         }
     }
 }
@@ -97,6 +101,12 @@ impl Material {
         matches!(self.kind, MaterialKind::Diffuse)
     }
 
+    /// Whether the material scatters only into single directions (mirror, glass): such
+    /// surfaces are followed, never lit directly by a point light.
+    pub fn is_specular(&self) -> bool {
+        matches!(self.kind, MaterialKind::Mirror { .. } | MaterialKind::Glass { .. })
+    }
+
     /// The specular branches at a hit, for Whitted-style tracing: up to two directions, each
     /// with its weight (a mirror: the reflection with its tint; glass: the reflection with
     /// Fresnel's F and the refraction with (1 − F)·tint, or only the reflection past the
@@ -108,7 +118,7 @@ impl Material {
     pub fn specular_branches(&self, direction: Vec3, normal: Vec3) -> Branches {
         let mut out = Branches::default();
         match self.kind {
-            MaterialKind::Diffuse => {}
+            MaterialKind::Diffuse | MaterialKind::Rough { .. } => {}
             MaterialKind::Mirror { tint } => out.push(reflect(direction, normal), tint),
             MaterialKind::Glass { ior, tint } => {
                 let g = GlassHit::new(direction, normal, ior);
@@ -143,7 +153,7 @@ impl Material {
                     weight: self.reflectance,
                 }
             }
-            MaterialKind::Mirror { tint } => Scatter {
+            MaterialKind::Mirror { tint } | MaterialKind::Rough { tint, .. } => Scatter {
                 direction: reflect(direction, normal),
                 weight: tint,
             },
@@ -265,6 +275,9 @@ pub enum MaterialPreset {
     Glass,
     /// Both.
     Both,
+    /// The tall blue block becomes a rough metal reflecting 0.9 in every channel, of roughness
+    /// [`crate::RenderSettings::roughness`] (0.2 by default).
+    Rough,
 }
 
 /// The material name of the Cornell box's tall block, which the mirror presets change.
@@ -276,6 +289,13 @@ pub const SHORT_BLOCK: &str = "red";
 pub const PRESET_MIRROR: MaterialKind = MaterialKind::Mirror {
     tint: Vec3::splat(0.9),
 };
+/// The tint of the rough preset's metal.
+pub const PRESET_ROUGH_TINT: Vec3 = Vec3::splat(0.9);
+/// The rough preset's roughness unless the settings say otherwise.
+pub const DEFAULT_ROUGHNESS: f32 = 0.2;
+/// The smallest roughness α a rough metal may have (below it the microfacet distribution's
+/// peak exceeds what `f32` evaluates well; a mirror is its own material).
+pub const MIN_ROUGHNESS: f32 = 0.01;
 /// The glass of the presets.
 pub const PRESET_GLASS: MaterialKind = MaterialKind::Glass {
     ior: 1.5,
@@ -283,11 +303,12 @@ pub const PRESET_GLASS: MaterialKind = MaterialKind::Glass {
 };
 
 impl MaterialPreset {
-    pub const ALL: [MaterialPreset; 4] = [
+    pub const ALL: [MaterialPreset; 5] = [
         MaterialPreset::None,
         MaterialPreset::Mirror,
         MaterialPreset::Glass,
         MaterialPreset::Both,
+        MaterialPreset::Rough,
     ];
 
     pub fn name(self) -> &'static str {
@@ -296,20 +317,28 @@ impl MaterialPreset {
             MaterialPreset::Mirror => "mirror",
             MaterialPreset::Glass => "glass",
             MaterialPreset::Both => "both",
+            MaterialPreset::Rough => "rough",
         }
     }
 
     /// The materials with the preset applied: by name, the tall block's (`blue`) becomes the
-    /// mirror, the short block's (`red`) the glass. Scenes without those names are unchanged.
-    pub fn apply(self, materials: &[Material]) -> Vec<Material> {
+    /// mirror (or the rough metal of roughness `roughness`), the short block's (`red`) the
+    /// glass. Scenes without those names are unchanged.
+    pub fn apply(self, materials: &[Material], roughness: f32) -> Vec<Material> {
         let mirror = matches!(self, MaterialPreset::Mirror | MaterialPreset::Both);
         let glass = matches!(self, MaterialPreset::Glass | MaterialPreset::Both);
+        let rough = self == MaterialPreset::Rough;
         materials
             .iter()
             .map(|m| {
                 let mut m = m.clone();
                 if mirror && m.name == TALL_BLOCK {
                     m.kind = PRESET_MIRROR;
+                } else if rough && m.name == TALL_BLOCK {
+                    m.kind = MaterialKind::Rough {
+                        alpha: roughness,
+                        tint: PRESET_ROUGH_TINT,
+                    };
                 } else if glass && m.name == SHORT_BLOCK {
                     m.kind = PRESET_GLASS;
                 }
@@ -333,7 +362,7 @@ impl FromStr for MaterialPreset {
             .into_iter()
             .find(|p| p.name() == s)
             .ok_or_else(|| {
-                format!("unknown material preset '{s}' (expected none, mirror, glass or both)")
+                format!("unknown material preset '{s}' (expected none, mirror, glass, both or rough)")
             })
     }
 }
@@ -592,13 +621,13 @@ mod tests {
     #[test]
     fn presets_change_the_blocks_by_name() {
         let box_materials = crate::scene::cornell_box().materials;
-        assert_eq!(MaterialPreset::None.apply(&box_materials), box_materials);
-        let both = MaterialPreset::Both.apply(&box_materials);
+        assert_eq!(MaterialPreset::None.apply(&box_materials, DEFAULT_ROUGHNESS), box_materials);
+        let both = MaterialPreset::Both.apply(&box_materials, DEFAULT_ROUGHNESS);
         let kind = |name: &str| both.iter().find(|m| m.name == name).unwrap().kind;
         assert_eq!(kind("blue"), PRESET_MIRROR);
         assert_eq!(kind("red"), PRESET_GLASS);
         assert_eq!(kind("white"), MaterialKind::Diffuse);
-        let mirror = MaterialPreset::Mirror.apply(&box_materials);
+        let mirror = MaterialPreset::Mirror.apply(&box_materials, DEFAULT_ROUGHNESS);
         assert_eq!(mirror.iter().filter(|m| !m.is_diffuse()).count(), 1);
         for p in MaterialPreset::ALL {
             assert_eq!(p.name().parse::<MaterialPreset>(), Ok(p));

@@ -217,6 +217,7 @@ fn key_path(name: &str) -> Vec<String> {
         "light power" => &["light", "power"],
         "light colour" => &["light", "colour"],
         "light radius" => &["light", "radius"],
+        "roughness" => &["scene", "roughness"],
         "exposure" => &["display", "exposure"],
         "indirect light" => &["shading", "indirect_light"],
         "specular depth" => &["shading", "specular_depth"],
@@ -293,14 +294,21 @@ struct SceneV1 {
     room: bool,
     /// The lab's two blocks.
     blocks: bool,
-    /// Mirror and glass for the blocks: none, mirror, glass, both.
+    /// Mirror, glass or rough metal for the blocks: none, mirror, glass, both, rough.
     material_preset: MaterialPreset,
+    /// The rough preset's GGX roughness α (0.2 if the file does not say).
+    #[serde(default = "default_roughness")]
+    roughness: f32,
     /// Textures for the floor and walls: none, checker-floor, grid-walls, both.
     texture_preset: TexturePreset,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     models: Vec<ModelV1>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     terrain: Option<TerrainV1>,
+}
+
+fn default_roughness() -> f32 {
+    crate::material::DEFAULT_ROUGHNESS
 }
 
 #[derive(Serialize, Deserialize)]
@@ -312,8 +320,9 @@ struct ModelV1 {
     floor_position: [f32; 2],
     yaw: f32,
     reflectance: Vec3,
-    /// `{ kind = "diffuse" }`, `{ kind = "mirror", tint = [r, g, b] }` or
-    /// `{ kind = "glass", ior = 1.5, tint = [r, g, b] }`.
+    /// `{ kind = "diffuse" }`, `{ kind = "mirror", tint = [r, g, b] }`,
+    /// `{ kind = "glass", ior = 1.5, tint = [r, g, b] }` or
+    /// `{ kind = "rough", alpha = 0.2, tint = [r, g, b] }`.
     material: MaterialKind,
 }
 
@@ -437,6 +446,7 @@ impl FileV1 {
                 room: spec.room,
                 blocks: spec.blocks,
                 material_preset: s.material_preset,
+                roughness: s.roughness,
                 texture_preset: s.texture_preset,
                 models: spec
                     .models
@@ -551,6 +561,7 @@ impl FileV1 {
                 smooth: sh.smooth,
             },
             material_preset: scene.material_preset,
+            roughness: scene.roughness,
             texture_preset: scene.texture_preset,
             display: Display {
                 transform: self.display.transform,

@@ -18,7 +18,7 @@ pub use crate::invalid::SettingsError;
 use crate::camera::Camera;
 use crate::display::Display;
 use crate::light::PointLight;
-use crate::material::{MaterialPreset, TexturePreset};
+use crate::material::{DEFAULT_ROUGHNESS, MIN_ROUGHNESS, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
 
 /// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
@@ -56,8 +56,10 @@ pub struct RenderSettings {
     pub camera: Camera,
     pub light: PointLight,
     pub shading: Shading,
-    /// Mirror and glass for the Cornell box's blocks (none: the lab's diffuse box).
+    /// Mirror, glass or rough metal for the Cornell box's blocks (none: the lab's diffuse box).
     pub material_preset: MaterialPreset,
+    /// The GGX roughness α of the rough preset's metal (0.2 by default; in (0, 1]).
+    pub roughness: f32,
     /// Textures for the Cornell box's floor and walls (none: the lab's plain colours).
     pub texture_preset: TexturePreset,
     /// How linear values are shown and written to PNG (the lab's clamp by default). Changing
@@ -83,6 +85,7 @@ impl Default for RenderSettings {
             light: PointLight::default(),
             shading: Shading::default(),
             material_preset: MaterialPreset::None,
+            roughness: DEFAULT_ROUGHNESS,
             texture_preset: TexturePreset::None,
             display: Display::default(),
             view: View::Shaded,
@@ -235,6 +238,7 @@ impl RenderSettings {
         if light.radius < 0.0 {
             return Err(err("light radius", light.radius, "must be ≥ 0"));
         }
+        check_roughness("roughness", self.roughness)?;
         check_finite("exposure", self.display.exposure)?;
         if self.display.exposure.abs() > MAX_EXPOSURE {
             return Err(err(
@@ -266,6 +270,15 @@ impl RenderSettings {
         }
         Ok(())
     }
+}
+
+/// The GGX roughness α a rough metal may have: from [`MIN_ROUGHNESS`] (nearly a mirror; below
+/// it the microfacet distribution's peak exceeds what `f32` evaluates well) to 1.
+pub fn check_roughness(name: &'static str, alpha: f32) -> Result<(), SettingsError> {
+    if !(MIN_ROUGHNESS..=1.0).contains(&alpha) {
+        return Err(err(name, alpha, "must be between 0.01 and 1"));
+    }
+    Ok(())
 }
 
 fn err(name: &'static str, value: impl std::fmt::Display, reason: &'static str) -> SettingsError {

@@ -616,7 +616,7 @@ impl<'a> Tracer<'a> {
     pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Self {
         let mut materials = match settings.material_preset {
             MaterialPreset::None => Cow::Borrowed(scene.materials.as_slice()),
-            preset => Cow::Owned(preset.apply(&scene.materials)),
+            preset => Cow::Owned(preset.apply(&scene.materials, settings.roughness)),
         };
         if settings.texture_preset != TexturePreset::None {
             materials = Cow::Owned(settings.texture_preset.apply(&materials));

@@ -171,7 +171,9 @@ impl SceneSpec {
             }
             match m.kind {
                 MaterialKind::Diffuse => {}
-                MaterialKind::Mirror { tint } | MaterialKind::Glass { tint, .. }
+                MaterialKind::Mirror { tint }
+                | MaterialKind::Glass { tint, .. }
+                | MaterialKind::Rough { tint, .. }
                     if !(tint.is_finite()
                         && tint.min_element() >= 0.0
                         && tint.max_element() <= 1.0) =>
@@ -180,6 +182,15 @@ impl SceneSpec {
                         field("material"),
                         tint.to_string(),
                         "a tint must be in [0, 1]",
+                    ));
+                }
+                MaterialKind::Rough { alpha, .. }
+                    if !(crate::material::MIN_ROUGHNESS..=1.0).contains(&alpha) =>
+                {
+                    return Err(bad(
+                        field("material"),
+                        alpha.to_string(),
+                        "a roughness must be in [0.01, 1]",
                     ));
                 }
                 MaterialKind::Glass { ior, .. }
