@@ -20,6 +20,7 @@
 
 pub mod accel;
 pub mod bench;
+pub mod bsdf;
 pub mod camera;
 pub mod display;
 pub mod film;

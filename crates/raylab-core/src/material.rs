@@ -23,6 +23,7 @@ use std::str::FromStr;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+pub use crate::bsdf::{fresnel_dielectric, reflect};
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
 use crate::texture::Texture;
 
@@ -202,32 +203,6 @@ pub fn facing(normal: Vec3, direction: Vec3) -> Vec3 {
     } else {
         normal
     }
-}
-
-/// The mirror direction of `direction` about the plane with normal `normal` (either side):
-/// `d − 2 (d·n) n`. The angle to the normal is kept exactly up to rounding.
-#[inline(always)]
-pub fn reflect(direction: Vec3, normal: Vec3) -> Vec3 {
-    direction - 2.0 * direction.dot(normal) * normal
-}
-
-/// The fraction of unpolarised light a smooth dielectric interface reflects: the exact Fresnel
-/// equations (as pbrt's `FrDielectric`), the mean of the s- and p-polarised reflectances.
-///
-/// `cos_i` is the cosine of the angle of incidence (≥ 0), `eta` the ratio of the index on the
-/// far side to the index on the near side. Returns 1 past the critical angle (total internal
-/// reflection).
-#[inline(always)]
-pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let cos_i = cos_i.clamp(0.0, 1.0);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular)
 }
 
 /// What happens where a ray meets glass.

@@ -9,6 +9,19 @@ use crate::geometry::{Ray, Triangle};
 use crate::lanes::{Mask, MaskOf, Real, Vector, select_lazy};
 use crate::sampling::{orthonormal_basis, uniform_cone};
 
+#[cfg(test)]
+mod checks;
+mod interface;
+mod point;
+mod quad;
+mod shape;
+mod sphere;
+
+pub use interface::{Light, LightSample};
+pub use quad::QuadLight;
+pub use shape::{AnyLight, LightShape, emitter};
+pub use sphere::SphereLight;
+
 /// Distances below this (in scene units) count as this far when dividing by `4πr²`: a light
 /// exactly on a surface then gives a large but finite value, never ∞ or NaN.
 pub const MIN_LIGHT_DISTANCE: f32 = 1e-3;

@@ -1,0 +1,175 @@
+//! Checks every area light's tests run: Monte Carlo estimates of what a light delivers through
+//! [`Light`]'s methods, to compare with closed forms, and the agreement of its methods with one
+//! another.
+
+use std::f64::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+use super::Light;
+use crate::geometry::Ray;
+use crate::sampling::{Rng, orthonormal_basis, uniform_cone};
+
+/// A Monte Carlo estimate: the mean and its standard error.
+#[derive(Clone, Copy, Debug)]
+pub struct Estimate {
+    pub mean: f64,
+    pub standard_error: f64,
+}
+
+impl Estimate {
+    /// The mean and standard error of `samples` values.
+    fn of(values: impl Iterator<Item = f64>) -> Self {
+        let (mut n, mut sum, mut sum2) = (0u64, 0.0, 0.0);
+        for v in values {
+            n += 1;
+            sum += v;
+            sum2 += v * v;
+        }
+        let n = n as f64;
+        let mean = sum / n;
+        let variance = (sum2 / n - mean * mean).max(0.0) * n / (n - 1.0);
+        Self {
+            mean,
+            standard_error: (variance / n).sqrt(),
+        }
+    }
+
+    /// Whether `expected` lies within `k` standard errors of the mean.
+    pub fn agrees_with(&self, expected: f64, k: f64) -> bool {
+        (self.mean - expected).abs() <= k * self.standard_error
+    }
+}
+
+/// The irradiance the light's first channel gives the point `p` with unit normal `n`, in the
+/// lab's D terms (physical irradiance; the lab's ρ·D is ρ times it), estimated from `samples`
+/// of [`Light::sample_li`]: the mean of `(1/π) · Li · max(cos θ, 0) / pdf`, Li being π ×
+/// radiance. A sample of `None` counts as 0.
+pub fn irradiance(light: &dyn Light, p: Vec3, n: Vec3, samples: usize, seed: u64) -> Estimate {
+    let mut rng = Rng::new(seed);
+    Estimate::of((0..samples).map(|_| {
+        let u = Vec2::new(rng.next_f32(), rng.next_f32());
+        match light.sample_li(p, u) {
+            Some(s) => {
+                let cos = f64::from(s.wi.dot(n).max(0.0));
+                f64::from(s.li.x) * cos / f64::from(s.pdf) / PI
+            }
+            None => 0.0,
+        }
+    }))
+}
+
+/// `∫ pdf_li(p, ω) dω` over the sphere of directions at `p`, by stratified sampling
+/// (`strata × strata` cells, one jittered direction each) of the cap of directions toward a
+/// sphere `(bound_centre, bound_radius)` that encloses the light (all of the sphere of
+/// directions if `p` is inside it); `pdf_li` is also checked to be 0 at `checks` random
+/// directions outside that cap.
+pub fn pdf_integral(
+    light: &dyn Light,
+    p: Vec3,
+    bound_centre: Vec3,
+    bound_radius: f32,
+    strata: usize,
+    seed: u64,
+) -> f64 {
+    let mut rng = Rng::new(seed);
+    let to_bound = bound_centre - p;
+    let d = to_bound.length();
+    let axis = to_bound / d;
+    let cos_cap = if d > bound_radius {
+        let sin = bound_radius / d;
+        (1.0 - sin * sin).sqrt()
+    } else {
+        -1.0
+    };
+    let (t1, t2) = orthonormal_basis(axis);
+    let world = |local: Vec3| (local.x * t1 + local.y * t2 + local.z * axis).normalize();
+    let cells = (strata * strata) as f64;
+    let mut sum = 0.0f64;
+    for i in 0..strata {
+        for j in 0..strata {
+            let u1 = (i as f32 + rng.next_f32()) / strata as f32;
+            let u2 = (j as f32 + rng.next_f32()) / strata as f32;
+            let wi = world(uniform_cone(u1, u2, cos_cap));
+            sum += f64::from(light.pdf_li(p, wi));
+        }
+    }
+    // Outside the cap: cos θ uniform in [−1, cos_cap), so the directions are uniform there.
+    for _ in 0..10_000 {
+        if cos_cap <= -1.0 {
+            break;
+        }
+        let z = -1.0 + rng.next_f32() * (cos_cap + 1.0);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * rng.next_f32();
+        let wi = world(Vec3::new(r * phi.cos(), r * phi.sin(), z));
+        if wi.dot(axis) < cos_cap {
+            assert_eq!(light.pdf_li(p, wi), 0.0, "{wi} outside the light's cap");
+        }
+    }
+    sum / cells * 2.0 * PI * (1.0 - f64::from(cos_cap))
+}
+
+/// What [`Light::sample_li`] returns at `p` agrees with the light's other methods, for
+/// `samples` samples: `wi` is a unit vector toward `point`, `distance` away; its `pdf` is
+/// [`Light::pdf_li`]'s for `wi`; the ray from `p` along `wi` meets the light
+/// ([`Light::intersect`]) at `distance`, where [`Light::le`] is the sample's `li`. Returns the
+/// largest relative differences of pdf and distance seen.
+pub fn samples_agree(light: &dyn Light, p: Vec3, samples: usize, seed: u64) -> (f32, f32) {
+    let mut rng = Rng::new(seed);
+    let (mut worst_pdf, mut worst_distance) = (0.0f32, 0.0f32);
+    for _ in 0..samples {
+        let u = Vec2::new(rng.next_f32(), rng.next_f32());
+        let s = light.sample_li(p, u).expect("a sample");
+        assert!(!s.is_delta && !light.is_delta());
+        assert!((s.wi.length() - 1.0).abs() < 1e-5, "{}", s.wi);
+        assert!(s.pdf > 0.0 && s.pdf.is_finite(), "{}", s.pdf);
+        let along = p + s.distance * s.wi;
+        assert!(
+            (along - s.point).length() <= 1e-5 * (1.0 + s.distance),
+            "{along} {}",
+            s.point
+        );
+        let pdf = light.pdf_li(p, s.wi);
+        worst_pdf = worst_pdf.max((pdf - s.pdf).abs() / s.pdf);
+        let ray = Ray {
+            origin: p,
+            direction: s.wi,
+        };
+        let t = light
+            .intersect(&ray, f32::INFINITY)
+            .unwrap_or_else(|| panic!("the ray toward {} misses the light", s.point));
+        worst_distance = worst_distance.max((t - s.distance).abs() / s.distance);
+        assert_eq!(light.le(s.wi), s.li);
+        // A ray stopping short of the light does not reach it.
+        assert_eq!(light.intersect(&ray, 0.99 * s.distance), None);
+    }
+    (worst_pdf, worst_distance)
+}
+
+/// The total power the light's first channel emits, estimated from [`Light::intersect`] and
+/// [`Light::le`] alone as the power leaving a sphere `(centre, radius)` around it: points
+/// uniform on that sphere, directions cosine-distributed about its inward normal, each adding
+/// `(le/π) · cos θ / pdf` where the ray meets the light, that is `le · 4π radius²`. Every bit
+/// of light crosses the enclosing sphere once, so this is `P`.
+pub fn power_through_sphere(
+    light: &dyn Light,
+    centre: Vec3,
+    radius: f32,
+    samples: usize,
+    seed: u64,
+) -> Estimate {
+    let mut rng = Rng::new(seed);
+    let area = 4.0 * PI * f64::from(radius) * f64::from(radius);
+    Estimate::of((0..samples).map(|_| {
+        let outward = uniform_cone(rng.next_f32(), rng.next_f32(), -1.0);
+        let origin = centre + radius * outward;
+        let local = crate::sampling::cosine_hemisphere(rng.next_f32(), rng.next_f32());
+        let direction = crate::sampling::hemisphere_around(-outward, local);
+        let ray = Ray { origin, direction };
+        match light.intersect(&ray, f32::INFINITY) {
+            Some(_) => f64::from(light.le(direction).x) * area,
+            None => 0.0,
+        }
+    }))
+}

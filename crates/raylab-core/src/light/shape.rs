@@ -1,0 +1,262 @@
+//! Which emitter the lab's light is: a point, a sphere or a square, and the light that makes.
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+use super::{Light, LightSample, PointLight, QuadLight, SphereLight};
+use crate::geometry::Ray;
+
+/// The shape of the emitter the lab's light is turned into by [`emitter`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LightShape {
+    /// The lab's point light (hard shadows). The default.
+    #[default]
+    Point,
+    /// A sphere emitting from its surface ([`SphereLight`]): soft shadows from every side.
+    Sphere,
+    /// A square panel facing the floor ([`QuadLight`]): a Cornell box's ceiling light.
+    Quad,
+}
+
+impl LightShape {
+    /// Every shape, the lab's point first.
+    pub const ALL: [LightShape; 3] = [LightShape::Point, LightShape::Sphere, LightShape::Quad];
+
+    /// The name used on the command line and in settings files.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightShape::Point => "point",
+            LightShape::Sphere => "sphere",
+            LightShape::Quad => "quad",
+        }
+    }
+}
+
+impl fmt::Display for LightShape {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for LightShape {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        LightShape::ALL
+            .into_iter()
+            .find(|shape| shape.name() == s)
+            .ok_or_else(|| format!("unknown light shape '{s}' (expected point, sphere or quad)"))
+    }
+}
+
+/// One of the lab's lights, whichever its shape: enum dispatch, so a light is a plain `Copy`
+/// value (no allocation, no virtual call, `Send + Sync` for the render threads) and each call
+/// is a `match` the compiler can inline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AnyLight {
+    Point(PointLight),
+    Sphere(SphereLight),
+    Quad(QuadLight),
+}
+
+impl From<PointLight> for AnyLight {
+    fn from(light: PointLight) -> Self {
+        AnyLight::Point(light)
+    }
+}
+
+impl From<SphereLight> for AnyLight {
+    fn from(light: SphereLight) -> Self {
+        AnyLight::Sphere(light)
+    }
+}
+
+impl From<QuadLight> for AnyLight {
+    fn from(light: QuadLight) -> Self {
+        AnyLight::Quad(light)
+    }
+}
+
+/// Each call goes to the light inside.
+impl Light for AnyLight {
+    #[inline]
+    fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        match self {
+            AnyLight::Point(light) => light.sample_li(p, u),
+            AnyLight::Sphere(light) => light.sample_li(p, u),
+            AnyLight::Quad(light) => light.sample_li(p, u),
+        }
+    }
+
+    #[inline]
+    fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        match self {
+            AnyLight::Point(light) => light.pdf_li(p, wi),
+            AnyLight::Sphere(light) => light.pdf_li(p, wi),
+            AnyLight::Quad(light) => light.pdf_li(p, wi),
+        }
+    }
+
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
+        match self {
+            AnyLight::Point(light) => light.intersect(ray, t_max),
+            AnyLight::Sphere(light) => light.intersect(ray, t_max),
+            AnyLight::Quad(light) => light.intersect(ray, t_max),
+        }
+    }
+
+    #[inline]
+    fn le(&self, ray_direction: Vec3) -> Vec3 {
+        match self {
+            AnyLight::Point(light) => light.le(ray_direction),
+            AnyLight::Sphere(light) => light.le(ray_direction),
+            AnyLight::Quad(light) => light.le(ray_direction),
+        }
+    }
+
+    #[inline]
+    fn is_delta(&self) -> bool {
+        match self {
+            AnyLight::Point(light) => light.is_delta(),
+            AnyLight::Sphere(light) => light.is_delta(),
+            AnyLight::Quad(light) => light.is_delta(),
+        }
+    }
+
+    #[inline]
+    fn power(&self) -> Vec3 {
+        match self {
+            AnyLight::Point(light) => light.power(),
+            AnyLight::Sphere(light) => light.power(),
+            AnyLight::Quad(light) => light.power(),
+        }
+    }
+}
+
+/// The lab's light as an emitter of the given shape and size, with its position as the centre
+/// and its total power per channel (`P · colour`):
+///
+/// * [`LightShape::Point`]: the point light itself (its `radius` is ignored, `size` too);
+/// * [`LightShape::Sphere`]: a [`SphereLight`] of radius `size`;
+/// * [`LightShape::Quad`]: a [`QuadLight`] of side `size`, facing the floor (+y).
+///
+/// A `size` that is not above 0 (or not finite) gives the point light for every shape: a
+/// sphere or square of no size is a point, and its radiance would be infinite.
+pub fn emitter(light: &PointLight, shape: LightShape, size: f32) -> AnyLight {
+    if !(size > 0.0 && size < f32::INFINITY) {
+        return AnyLight::Point(*light);
+    }
+    let (centre, power) = (light.position, light.channel_power());
+    match shape {
+        LightShape::Point => AnyLight::Point(*light),
+        LightShape::Sphere => AnyLight::Sphere(SphereLight {
+            centre,
+            radius: size,
+            power,
+        }),
+        LightShape::Quad => AnyLight::Quad(QuadLight {
+            centre,
+            side: size,
+            power,
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    #[test]
+    fn light_shapes_by_name() {
+        assert_eq!(LightShape::default(), LightShape::Point);
+        for shape in LightShape::ALL {
+            assert_eq!(shape.name().parse::<LightShape>(), Ok(shape));
+            assert_eq!(shape.to_string(), shape.name());
+            let json = serde_json::to_string(&shape).unwrap();
+            assert_eq!(json, format!("\"{}\"", shape.name()));
+            assert_eq!(serde_json::from_str::<LightShape>(&json).unwrap(), shape);
+        }
+        assert!("disk".parse::<LightShape>().unwrap_err().contains("disk"));
+        assert!(serde_json::from_str::<LightShape>("\"Sphere\"").is_err());
+    }
+
+    /// `emitter` centres each shape on the lab's light with its power per channel; no size
+    /// gives the point light.
+    #[test]
+    fn emitter_makes_each_shape_from_the_labs_light() {
+        let lab = PointLight {
+            colour: Vec3::new(1.0, 0.5, 0.25),
+            radius: 0.3,
+            ..PointLight::default()
+        };
+        let power = Vec3::new(14.0, 7.0, 3.5);
+        assert_eq!(emitter(&lab, LightShape::Point, 0.2), AnyLight::Point(lab));
+        assert_eq!(
+            emitter(&lab, LightShape::Sphere, 0.2),
+            AnyLight::Sphere(SphereLight {
+                centre: lab.position,
+                radius: 0.2,
+                power
+            })
+        );
+        assert_eq!(
+            emitter(&lab, LightShape::Quad, 0.5),
+            AnyLight::Quad(QuadLight {
+                centre: lab.position,
+                side: 0.5,
+                power
+            })
+        );
+        for shape in LightShape::ALL {
+            assert_eq!(emitter(&lab, shape, 0.2).power(), power);
+            for size in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+                assert_eq!(emitter(&lab, shape, size), AnyLight::Point(lab));
+            }
+        }
+        assert!(emitter(&lab, LightShape::Point, 0.2).is_delta());
+        assert!(!emitter(&lab, LightShape::Sphere, 0.2).is_delta());
+        assert!(!emitter(&lab, LightShape::Quad, 0.2).is_delta());
+    }
+
+    /// `AnyLight` answers exactly as the light inside it, and the interface is object safe
+    /// (the lights can be held as `Box<dyn Light + Send + Sync>` too).
+    #[test]
+    fn any_light_answers_as_the_light_inside() {
+        let lab = PointLight::default();
+        let mut rng = Rng::new(17);
+        for shape in LightShape::ALL {
+            let any = emitter(&lab, shape, 0.3);
+            let inner: Box<dyn Light + Send + Sync> = match any {
+                AnyLight::Point(l) => Box::new(l),
+                AnyLight::Sphere(l) => Box::new(l),
+                AnyLight::Quad(l) => Box::new(l),
+            };
+            for _ in 0..200 {
+                let p = Vec3::new(
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                );
+                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                let s = any.sample_li(p, u);
+                assert_eq!(s, inner.sample_li(p, u));
+                let wi = s.map_or(Vec3::X, |s| s.wi);
+                assert_eq!(any.pdf_li(p, wi), inner.pdf_li(p, wi));
+                let ray = Ray {
+                    origin: p,
+                    direction: wi,
+                };
+                assert_eq!(any.intersect(&ray, 5.0), inner.intersect(&ray, 5.0));
+                assert_eq!(any.le(wi), inner.le(wi));
+            }
+            assert_eq!(any.is_delta(), inner.is_delta());
+            assert_eq!(any.power(), inner.power());
+        }
+    }
+}
