@@ -19,6 +19,7 @@ use raylab_core::display::{Display, DisplayTransform};
 use raylab_core::film::OutputFormat;
 use raylab_core::inspect::{InspectError, inspect_pixel};
 use raylab_core::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
+use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
 use raylab_core::material::{DEFAULT_ROUGHNESS, TexturePreset};
 use raylab_core::render::try_render;
 use raylab_core::scene::SceneChoice;
@@ -133,7 +134,7 @@ pub struct RenderOptions {
         conflicts_with_all = [
             "scene_file", "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
             "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
-            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius",
+            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius", "light_shape", "light_size",
             "light_colour", "aperture", "focus_distance", "display", "exposure",
         ]
     )]
@@ -146,7 +147,7 @@ pub struct RenderOptions {
         conflicts_with_all = [
             "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
             "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
-            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius",
+            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius", "light_shape", "light_size",
             "light_colour", "aperture", "focus_distance", "display", "exposure",
         ]
     )]
@@ -212,9 +213,18 @@ pub struct RenderOptions {
     /// Light colour, each channel ≥ 0 [default: 1,1,1, white].
     #[arg(long, value_parser = parse_colour, value_name = "R,G,B", allow_hyphen_values = true)]
     pub light_colour: Option<Vec3>,
-    /// Light radius: a sphere of the same power, for soft shadows; 0 is the lab's point light.
-    #[arg(long, default_value_t = 0.0, value_parser = parse_non_negative, value_name = "R", allow_hyphen_values = true)]
-    pub light_radius: f32,
+    /// Light shape: point (the lab's), sphere (radius --light-size) or quad (a square of side
+    /// --light-size under the light's position, facing the floor); each of the same power.
+    #[arg(long, value_name = "point|sphere|quad")]
+    pub light_shape: Option<LightShape>,
+    /// The area light's size: the sphere's radius or the quad's side [default: 0.1 for a
+    /// sphere, 0.5 for a quad].
+    #[arg(long, value_parser = parse_non_negative, value_name = "S", allow_hyphen_values = true, conflicts_with = "light_radius")]
+    pub light_size: Option<f32>,
+    /// A sphere light of radius R (--light-shape sphere --light-size R), for soft shadows; 0 is
+    /// the lab's point light.
+    #[arg(long, value_parser = parse_non_negative, value_name = "R", allow_hyphen_values = true, conflicts_with = "light_shape")]
+    pub light_radius: Option<f32>,
     /// Lens aperture radius, for depth of field; 0 is the lab's pinhole (all sharp).
     #[arg(long, default_value_t = 0.0, value_parser = parse_non_negative, value_name = "A", allow_hyphen_values = true)]
     pub aperture: f32,
@@ -322,7 +332,26 @@ impl RenderOptions {
         if let Some(c) = self.light_colour {
             settings.light.colour = c;
         }
-        settings.light.radius = self.light_radius;
+        match (self.light_radius, self.light_shape) {
+            (Some(r), _) => {
+                settings.light.shape = LightShape::Sphere;
+                settings.light.radius = r;
+            }
+            (None, Some(shape)) => {
+                settings.light.shape = shape;
+                settings.light.radius = self.light_size.unwrap_or(match shape {
+                    LightShape::Point => 0.0,
+                    LightShape::Sphere => DEFAULT_SPHERE_RADIUS,
+                    LightShape::Quad => DEFAULT_QUAD_SIDE,
+                });
+            }
+            (None, None) => {
+                if let Some(size) = self.light_size {
+                    settings.light.shape = LightShape::Sphere;
+                    settings.light.radius = size;
+                }
+            }
+        }
         if let Some(shadows) = self.shadows {
             settings.shading.shadows = shadows;
         }

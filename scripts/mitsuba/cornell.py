@@ -66,7 +66,7 @@ def to_scene(p):
     return q * np.array([-1, -1, 1], np.float32)
 
 
-def bsdf(name, preset):
+def bsdf(name, preset, roughness=0.2):
     diffuse = {"type": "twosided",
                "bsdf": {"type": "diffuse",
                         "reflectance": {"type": "rgb", "value": REFLECTANCE[name]}}}
@@ -74,20 +74,27 @@ def bsdf(name, preset):
         return {"type": "twosided",
                 "bsdf": {"type": "conductor", "material": "none",
                          "specular_reflectance": {"type": "rgb", "value": [0.9] * 3}}}
+    if name == "blue" and preset == "rough":
+        # raylab's rough metal: GGX of alpha `roughness`, no Fresnel falloff (material none),
+        # visible-normal sampling, Smith's separable shadowing (Mitsuba's defaults).
+        return {"type": "twosided",
+                "bsdf": {"type": "roughconductor", "material": "none", "distribution": "ggx",
+                         "alpha": roughness,
+                         "specular_reflectance": {"type": "rgb", "value": [0.9] * 3}}}
     if name == "red" and preset in ("glass", "both"):
         # ext_ior 1.0 exactly: Mitsuba's default "air" is 1.000277.
         return {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}
     return diffuse
 
 
-def mesh(name, tris, preset):
+def mesh(name, tris, preset, roughness=0.2):
     """One Mitsuba mesh of the given triangles, with face normals equal to raylab's."""
     # raylab's normal is cross(v2 - v0, v1 - v0); Mitsuba's is cross(v1 - v0, v2 - v0), so each
     # triangle goes in as (v0, v2, v1). This matters for the glass (ior inside = behind normal).
     verts = np.array([to_scene(p) for t in tris for p in (t[0], t[2], t[1])], np.float32)
     faces = np.arange(len(verts), dtype=np.uint32)
     props = mi.Properties()
-    props["bsdf"] = mi.load_dict(bsdf(name, preset))
+    props["bsdf"] = mi.load_dict(bsdf(name, preset, roughness))
     m = mi.Mesh(name, len(verts), len(tris), props=props)
     params = mi.traverse(m)
     params["vertex_positions"] = mi.Float(verts.ravel())
@@ -98,16 +105,34 @@ def mesh(name, tris, preset):
 
 def scene_dict(width=512, height=512, spp=64, integrator="path", max_depth=-1, rr_depth=5,
                light=(0.0, -0.5, -0.7), light_power=14.0, camera=(0.0, 0.0, -3.001),
-               focal=None, preset="none"):
+               focal=None, preset="none", roughness=0.2, light_shape="point", light_size=0.0):
     focal = width if focal is None else focal
     groups = {}
     for t in triangles():
         groups.setdefault(t[3], []).append(t)
     d = {"type": "scene"}
     for name, tris in groups.items():
-        d[name] = mesh(name, tris, preset)
-    d["light"] = {"type": "point", "position": list(light),
-                  "intensity": {"type": "rgb", "value": [light_power / (4 * math.pi)] * 3}}
+        d[name] = mesh(name, tris, preset, roughness)
+    if light_shape == "quad":
+        # A square of side S in the plane y = light.y, emitting toward +y (the floor), of
+        # radiance P/(pi S^2): the rectangle [-1, 1]^2 (normal +z) scaled by S/2, turned so its
+        # normal is +y, moved to the light.
+        s = light_size
+        d["light"] = {"type": "rectangle",
+                      "to_world": mi.ScalarTransform4f().translate(list(light))
+                      @ mi.ScalarTransform4f().rotate([1, 0, 0], -90)
+                      @ mi.ScalarTransform4f().scale([s / 2, s / 2, 1]),
+                      "emitter": {"type": "area", "radiance": {
+                          "type": "rgb", "value": [light_power / (math.pi * s * s)] * 3}}}
+    elif light_shape == "sphere":
+        r = light_size
+        d["light"] = {"type": "sphere", "center": list(light), "radius": r,
+                      "emitter": {"type": "area", "radiance": {
+                          "type": "rgb",
+                          "value": [light_power / (4 * math.pi ** 2 * r * r)] * 3}}}
+    else:
+        d["light"] = {"type": "point", "position": list(light),
+                      "intensity": {"type": "rgb", "value": [light_power / (4 * math.pi)] * 3}}
     if integrator == "path":
         d["integrator"] = {"type": "path", "max_depth": max_depth, "rr_depth": rr_depth}
     else:
@@ -150,7 +175,11 @@ def parse_args(argv=None):
     p.add_argument("--light", type=vec3, default=(0.0, -0.5, -0.7))
     p.add_argument("--light-power", type=float, default=14.0, help="P in W per channel")
     p.add_argument("--camera", type=vec3, default=(0.0, 0.0, -3.001))
-    p.add_argument("--preset", choices=["none", "mirror", "glass", "both"], default="none")
+    p.add_argument("--preset", choices=["none", "mirror", "glass", "both", "rough"], default="none")
+    p.add_argument("--roughness", type=float, default=0.2, help="the rough preset's GGX alpha")
+    p.add_argument("--light-shape", choices=["point", "sphere", "quad"], default="point")
+    p.add_argument("--light-size", type=float, default=0.5,
+                   help="the sphere's radius or the quad's side")
     p.add_argument("--threads", type=int, default=None, help="drjit threads (default: all)")
     p.add_argument("--out", default="mitsuba.exr", help="EXR of pi x radiance")
     return p.parse_args(argv)
@@ -163,12 +192,12 @@ def main():
         dr.set_thread_count(a.threads)
     scene = mi.load_dict(scene_dict(a.width, a.height, a.spp, a.integrator, a.max_depth,
                                     a.rr_depth, a.light, a.light_power, a.camera, a.focal,
-                                    a.preset))
+                                    a.preset, a.roughness, a.light_shape, a.light_size))
     img = mi.render(scene, spp=a.spp, seed=a.seed) * math.pi  # raylab's units
     mi.Bitmap(img).write(a.out)
     means = np.array(img, np.float64).reshape(-1, 3).mean(axis=0)
     print(f"mitsuba {mi.__version__} {a.integrator} {a.width}x{a.height} {a.spp} spp "
-          f"preset={a.preset}: mean (pi x radiance) R {means[0]:.6f} G {means[1]:.6f} "
+          f"preset={a.preset} light={a.light_shape}: mean (pi x radiance) R {means[0]:.6f} G {means[1]:.6f} "
           f"B {means[2]:.6f} -> {a.out}")
 
 

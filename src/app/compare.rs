@@ -626,6 +626,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     differ("light power", light.power != b.light.power);
     differ("light colour", light.colour != b.light.colour);
     differ("light radius", light.radius != b.light.radius);
+    differ("light shape", light.shape != b.light.shape);
     let Shading {
         stage,
         shadows,

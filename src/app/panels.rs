@@ -7,6 +7,7 @@
 use eframe::egui;
 use raylab_core::display::{Display, DisplayTransform};
 use raylab_core::integrator::MAX_SPECULAR_DEPTH;
+use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
 use raylab_core::material::{MIN_ROUGHNESS, TexturePreset};
 use raylab_core::scene::SceneChoice;
 use raylab_core::view::{Legend, View};
@@ -428,18 +429,58 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
             light.colour = glam::Vec3::ONE;
         }
     });
+    let shape_before = light.shape;
+    egui::ComboBox::new("light_shape", "Light shape")
+        .selected_text(light_shape_label(light.shape))
+        .show_ui(ui, |ui| {
+            for shape in LightShape::ALL {
+                ui.selectable_value(&mut light.shape, shape, light_shape_label(shape));
+            }
+        })
+        .response
+        .on_hover_text(
+            "The lab's point light, or an area light of the same power: a sphere, or a square \
+             facing the floor. The lab's stages keep equation 27 from its centre and soften the \
+             shadows; the path stage sees the real light, with multiple importance sampling",
+        );
+    if light.shape != shape_before && light.radius == 0.0 {
+        light.radius = match light.shape {
+            LightShape::Point => 0.0,
+            LightShape::Sphere => DEFAULT_SPHERE_RADIUS,
+            LightShape::Quad => DEFAULT_QUAD_SIDE,
+        };
+    }
+    let size_label = if light.shape == LightShape::Quad {
+        "Light side"
+    } else {
+        "Light radius"
+    };
+    let radius_before = light.radius;
     ui.add(
         egui::Slider::new(&mut light.radius, 0.0..=MAX_LIGHT_RADIUS_UI)
-            .custom_parser(typed_number("Light radius", 0.0, MAX_LIGHT_RADIUS_UI))
+            .custom_parser(typed_number(size_label, 0.0, MAX_LIGHT_RADIUS_UI))
             .clamping(egui::SliderClamping::Edits)
             .max_decimals(3)
-            .text("Light radius"),
+            .text(size_label),
     )
     .on_hover_text(
-        "0 is the lab's point light (hard shadows); above 0 a sphere of the same power, whose \
-         shadows are soft: each sample sees a point of it, and the samples average to the \
-         fraction of the light a point sees",
+        "0 is the lab's point light (hard shadows); above 0 an area light of the same power (a \
+         sphere of this radius, or a square of this side), whose shadows are soft: each sample \
+         sees a point of it, and the samples average to the fraction of the light a point sees",
     );
+    // A radius given to the point light makes it the sphere it always meant.
+    if light.shape == LightShape::Point && radius_before == 0.0 && light.radius > 0.0 {
+        light.shape = LightShape::Sphere;
+    }
+}
+
+/// The light shape's name in the selector.
+pub fn light_shape_label(shape: LightShape) -> &'static str {
+    match shape {
+        LightShape::Point => "Point (the lab)",
+        LightShape::Sphere => "Sphere",
+        LightShape::Quad => "Square (quad)",
+    }
 }
 
 /// The lab walk-through: the current step's explanation and equation, Previous / Next.

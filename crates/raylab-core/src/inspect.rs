@@ -1056,7 +1056,7 @@ impl Inspection {
                 format!("{indent}no shadow ray: no light arrives to be blocked"),
             ),
             Some(ray) => {
-                let toward = if self.light.radius > 0.0 {
+                let toward = if self.light.is_area() {
                     format!(
                         "a random point of the light's sphere (radius {}), along {}",
                         num(self.light.radius),

@@ -20,9 +20,10 @@
 use std::fmt;
 use std::str::FromStr;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::bsdf::{Bsdf, ShadingFrame};
 pub use crate::bsdf::{fresnel_dielectric, reflect};
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
 use crate::texture::Texture;
@@ -105,7 +106,10 @@ impl Material {
     /// Whether the material scatters only into single directions (mirror, glass): such
     /// surfaces are followed, never lit directly by a point light.
     pub fn is_specular(&self) -> bool {
-        matches!(self.kind, MaterialKind::Mirror { .. } | MaterialKind::Glass { .. })
+        matches!(
+            self.kind,
+            MaterialKind::Mirror { .. } | MaterialKind::Glass { .. }
+        )
     }
 
     /// The specular branches at a hit, for Whitted-style tracing: up to two directions, each
@@ -132,47 +136,53 @@ impl Material {
         out
     }
 
+    /// The BSDF of this material at a hit whose diffuse reflectance is `rho` (the texture's
+    /// value there, or [`Material::reflectance`]): the one place a material says how it
+    /// scatters ([`crate::bsdf`]).
+    #[inline(always)]
+    pub fn bsdf(&self, rho: Vec3) -> Bsdf {
+        match self.kind {
+            MaterialKind::Diffuse => Bsdf::Lambertian { rho },
+            MaterialKind::Mirror { tint } => Bsdf::Mirror { tint },
+            MaterialKind::Glass { ior, tint } => Bsdf::Glass { ior, tint },
+            MaterialKind::Rough { alpha, tint } => Bsdf::RoughConductor { alpha, tint },
+        }
+    }
+
     /// Samples the direction a path continues along after hitting this material, with the
-    /// weight of that sample (the BSDF times cos θ over the pdf, in π × radiance units):
+    /// weight of that sample (the BSDF times cos θ over the pdf, in π × radiance units), or
+    /// `None` where the BSDF sends nothing on (a rough reflection below the surface).
     ///
     /// * diffuse: a cosine-weighted direction on the side the ray came from, weight ρ (drawn
-    ///   by rejection: 2.5 numbers on average); the path tracer draws its diffuse bounces
-    ///   sixteen at a time with the same functions, weighted by ρ at the hit (a texture's);
-    /// * mirror: the reflection, weight `tint`;
-    /// * glass: the reflection with probability F (Fresnel), else the refraction; weight 1 for
-    ///   the reflection and `tint` for the refraction, so the expected weight equals the
-    ///   Whitted branches' sum.
-    ///
-    /// Draws one number from `rng` for glass, none for a mirror.
+    ///   by rejection: 2.5 numbers on average). The path tracer draws its diffuse bounces
+    ///   sixteen at a time with the same functions, weighted by ρ at the hit (a texture's):
+    ///   [`Bsdf::Lambertian`]'s sampling, specialised to lanes;
+    /// * every other material: [`Bsdf::sample`] in the shading frame of the surface's
+    ///   geometric `normal` ([`ShadingFrame`]), with one number for the choice of lobe and,
+    ///   where the BSDF is not a delta (the rough metal), two for the direction.
     #[inline(always)]
-    pub fn sample(&self, direction: Vec3, normal: Vec3, rng: &mut Rng) -> Scatter {
-        match self.kind {
-            MaterialKind::Diffuse => {
-                let local = cosine_hemisphere_by_rejection(rng, true);
-                Scatter {
-                    direction: hemisphere_around(facing(normal, direction), local),
-                    weight: self.reflectance,
-                }
-            }
-            MaterialKind::Mirror { tint } | MaterialKind::Rough { tint, .. } => Scatter {
-                direction: reflect(direction, normal),
-                weight: tint,
-            },
-            MaterialKind::Glass { ior, tint } => {
-                let g = GlassHit::new(direction, normal, ior);
-                let u = rng.next_f32();
-                match g.refracted {
-                    Some(refracted) if u >= g.fresnel => Scatter {
-                        direction: refracted,
-                        weight: tint,
-                    },
-                    _ => Scatter {
-                        direction: reflect(direction, normal),
-                        weight: Vec3::ONE,
-                    },
-                }
-            }
+    pub fn sample(&self, direction: Vec3, normal: Vec3, rng: &mut Rng) -> Option<Scatter> {
+        let bsdf = self.bsdf(self.reflectance);
+        if let Bsdf::Lambertian { rho } = bsdf {
+            let local = cosine_hemisphere_by_rejection(rng, true);
+            return Some(Scatter {
+                direction: hemisphere_around(facing(normal, direction), local),
+                weight: rho,
+            });
         }
+        let uc = rng.next_f32();
+        let u = if bsdf.is_delta() {
+            Vec2::ZERO
+        } else {
+            Vec2::new(rng.next_f32(), rng.next_f32())
+        };
+        let frame = ShadingFrame::new(normal, normal, -direction);
+        frame
+            .sample_world(&bsdf, -direction, uc, u)
+            .map(|s| Scatter {
+                direction: s.wi,
+                weight: s.weight,
+            })
     }
 }
 
@@ -337,7 +347,9 @@ impl FromStr for MaterialPreset {
             .into_iter()
             .find(|p| p.name() == s)
             .ok_or_else(|| {
-                format!("unknown material preset '{s}' (expected none, mirror, glass, both or rough)")
+                format!(
+                    "unknown material preset '{s}' (expected none, mirror, glass, both or rough)"
+                )
             })
     }
 }
@@ -467,7 +479,7 @@ mod tests {
             kind: PRESET_MIRROR,
             texture: None,
         };
-        let s = mirror.sample(d, n, &mut Rng::new(1));
+        let s = mirror.sample(d, n, &mut Rng::new(1)).unwrap();
         assert_eq!((s.direction, s.weight), (r, Vec3::splat(0.9)));
     }
 
@@ -548,7 +560,7 @@ mod tests {
             let samples = 20_000;
             let mut reflected = 0;
             for _ in 0..samples {
-                let s = glass().sample(d, n, &mut rng);
+                let s = glass().sample(d, n, &mut rng).unwrap();
                 assert_eq!(s.weight, Vec3::ONE);
                 if s.direction.y < 0.0 {
                     reflected += 1;
@@ -585,7 +597,7 @@ mod tests {
         let n = Vec3::new(0.0, 0.0, -1.0);
         for d in [Vec3::Z, -Vec3::Z] {
             for _ in 0..1000 {
-                let s = m.sample(d, n, &mut rng);
+                let s = m.sample(d, n, &mut rng).unwrap();
                 assert!(s.direction.dot(d) < 0.0, "back towards the ray's side");
                 assert!((s.direction.length() - 1.0).abs() < 1e-5);
                 assert_eq!(s.weight, Vec3::splat(0.75));
@@ -596,7 +608,10 @@ mod tests {
     #[test]
     fn presets_change_the_blocks_by_name() {
         let box_materials = crate::scene::cornell_box().materials;
-        assert_eq!(MaterialPreset::None.apply(&box_materials, DEFAULT_ROUGHNESS), box_materials);
+        assert_eq!(
+            MaterialPreset::None.apply(&box_materials, DEFAULT_ROUGHNESS),
+            box_materials
+        );
         let both = MaterialPreset::Both.apply(&box_materials, DEFAULT_ROUGHNESS);
         let kind = |name: &str| both.iter().find(|m| m.name == name).unwrap().kind;
         assert_eq!(kind("blue"), PRESET_MIRROR);

@@ -69,7 +69,7 @@ use serde::{Deserialize, Serialize};
 use crate::camera::Camera;
 use crate::display::{Display, DisplayTransform};
 use crate::integrator::{Shading, Stage};
-use crate::light::PointLight;
+use crate::light::{LightShape, PointLight};
 use crate::material::{MaterialKind, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
 use crate::scene::spec::{self, ModelSpec, SceneSpec};
@@ -354,7 +354,11 @@ struct LightV1 {
     position: Vec3,
     power: f32,
     colour: Vec3,
+    /// The area light's size: the sphere's radius or the square's side.
     radius: f32,
+    /// `point`, `sphere` or `quad`; a file without it means a sphere by any radius above 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    shape: Option<LightShape>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -482,6 +486,7 @@ impl FileV1 {
                 power: l.power,
                 colour: l.colour,
                 radius: l.radius,
+                shape: Some(l.shape),
             },
             shading: ShadingV1 {
                 stage: sh.stage,
@@ -550,6 +555,11 @@ impl FileV1 {
                 power: l.power,
                 colour: l.colour,
                 radius: l.radius,
+                shape: l.shape.unwrap_or(if l.radius > 0.0 {
+                    LightShape::Sphere
+                } else {
+                    LightShape::Point
+                }),
             },
             shading: Shading {
                 stage: sh.stage,

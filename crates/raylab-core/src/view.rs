@@ -452,7 +452,7 @@ fn shadow_view(settings: &RenderSettings, states: Vec<ShadowState>) -> ViewImage
         ),
         format!("black: nothing hit ({:.1}%)", share(ShadowState::NoHit)),
     ];
-    if settings.light.radius > 0.0 {
+    if settings.light.is_area() {
         lines.push(
             "the light's centre only: a sphere light's soft shadow shows as its centre's hard one"
                 .into(),

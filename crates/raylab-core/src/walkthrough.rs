@@ -49,6 +49,9 @@ impl Step {
         settings.texture_preset = TexturePreset::None;
         settings.samples_per_pixel = s.samples;
         settings.light.radius = s.light_radius;
+        if s.light_radius > 0.0 {
+            settings.light.shape = crate::light::LightShape::Sphere;
+        }
     }
 }
 

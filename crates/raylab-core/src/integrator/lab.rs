@@ -7,6 +7,9 @@
 //! 1 − F), which are traced the same way, up to [`Shading::specular_depth`] specular hits in a
 //! row. A branch that goes deeper, or leaves the scene, adds nothing (black).
 //!
+//! A rough metal is shaded as a diffuse surface whose ρ is π·f(wo, wi) toward the light's
+//! centre ([`super::Tracer::glossy_reflectance`]): its highlight under the lab's light.
+//!
 //! In the lab's all-diffuse box every camera ray ends at its first hit with weight 1, and the
 //! value is exactly the lab's (1 · x = x, 0 + x = x): sample 0 is the lab's image bit for bit.
 //!
@@ -84,7 +87,7 @@ fn wave_for_light<R: Recorder>(
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
     rec: &mut R,
 ) {
-    if tracer.light.radius > 0.0 {
+    if tracer.light.is_area() {
         wave::<true, R>(tracer, rays, wave_kind, rngs, out, next, rec);
     } else {
         wave::<false, R>(tracer, rays, wave_kind, rngs, out, next, rec);
@@ -125,6 +128,15 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         let normal = scene.triangles[hit.triangle_index].normal;
         if material.is_diffuse() {
             diffuse.push(tracer.surface(hit, material, ray.direction), i);
+            continue;
+        }
+        if !material.is_specular() {
+            // A glossy surface (the rough metal): shaded as the lab shades a diffuse one,
+            // with π·f toward the light's centre in place of ρ (ρ = π·f for a diffuse
+            // surface), so equation 28 gives its highlight: π·f·D.
+            let mut surface = tracer.surface(hit, material, ray.direction);
+            surface.rho = tracer.glossy_reflectance(material, &surface, ray.direction);
+            diffuse.push(surface, i);
             continue;
         }
         let branch = match wave {

@@ -33,6 +33,7 @@
 
 pub mod lab;
 pub mod path;
+pub mod path_mis;
 
 use std::borrow::Cow;
 
@@ -40,11 +41,12 @@ use glam::Vec3;
 
 use crate::accel::simd::{Avx2, Avx512};
 use crate::accel::{Isa, SegmentLanes};
+use crate::bsdf::ShadingFrame;
 use crate::camera::ImagePoints;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{LANES, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
-use crate::light::{DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
+use crate::light::{AnyLight, DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -516,6 +518,10 @@ pub trait Recorder {
     /// roulette's survival probability (1 before [`path::ROULETTE_DEPTH`]), β after both, and
     /// whether the path goes on. Not called when the bounce cap ends the path at that hit.
     fn scattered(&mut self, scatter: &Scatter, survival: f32, beta: Vec3, survives: bool);
+
+    /// General path tracer ([`path_mis`]): what a vertex computed, its BSDF and its
+    /// next-event estimation with both densities and the MIS weight.
+    fn path_vertex(&mut self, _vertex: &path_mis::PathVertex) {}
 }
 
 /// Normal rendering: records nothing, costs nothing.
@@ -536,11 +542,11 @@ impl Recorder for () {
 }
 
 /// The point of the light a shadow ray from `position` goes to: the centre of the lab's point
-/// light, or a point of a spherical light drawn from `rng` ([`PointLight::sample_point`]).
+/// light, or a point of an area light drawn from `rng` ([`PointLight::shadow_target`]).
 #[inline(always)]
 pub fn light_point(light: &PointLight, position: Vec3, rng: &mut Rng) -> Vec3 {
-    if light.radius > 0.0 {
-        light.sample_point(position, rng.next_f32(), rng.next_f32())
+    if light.is_area() {
+        light.shadow_target(position, rng.next_f32(), rng.next_f32())
     } else {
         light.position
     }
@@ -604,6 +610,11 @@ pub struct Tracer<'a> {
     pub scene: &'a Scene,
     pub materials: Cow<'a, [Material]>,
     pub light: PointLight,
+    /// The light as an emitter ([`Light`]): what the general path tracer samples and sees.
+    emitter: AnyLight,
+    /// Whether the path stage needs the general path tracer ([`path_mis`]): an area light, or
+    /// a material the sixteen-lane one does not have (the rough metal).
+    general: bool,
     pub shading: Shading,
     /// Whether anything draws random numbers: the path tracer, a spherical light's soft
     /// shadows, a thin lens's aperture.
@@ -622,14 +633,20 @@ impl<'a> Tracer<'a> {
             materials = Cow::Owned(settings.texture_preset.apply(&materials));
         }
         let random = settings.shading.stage.integrator() == Integrator::Path
-            || settings.light.radius > 0.0
+            || settings.light.is_area()
             || settings.camera.aperture > 0.0;
+        let general = settings.light.is_area()
+            || materials
+                .iter()
+                .any(|m| !m.is_diffuse() && !m.is_specular());
         let plain = materials.iter().all(|m| m.texture.is_none())
             && (scene.vertex_normals.is_empty() || !settings.shading.smooth);
         Self {
             scene,
             materials,
             light: settings.light,
+            emitter: settings.light.emitter(),
+            general,
             shading: settings.shading,
             random,
             plain,
@@ -686,6 +703,29 @@ impl<'a> Tracer<'a> {
             }),
             at_edge,
         }
+    }
+
+    /// What the lab's stages use as ρ at a glossy hit (the rough metal): π·f(wo, wi), with wo
+    /// toward the viewer and wi toward the light's centre, evaluated in the hit's shading
+    /// frame ([`ShadingFrame::eval_world`]); for a diffuse surface this would be ρ itself.
+    /// Multiplied by D (equation 27) it is the light the surface reflects toward the viewer.
+    pub fn glossy_reflectance(
+        &self,
+        material: &Material,
+        surface: &Surface,
+        incoming: Vec3,
+    ) -> Vec3 {
+        let wo = -incoming;
+        let wi = (self.light.position - surface.position).normalize_or_zero();
+        let frame = ShadingFrame::new(surface.normal, surface.geometric, wo);
+        let (f, _) = frame.eval_world(&material.bsdf(surface.rho), wo, wi);
+        std::f32::consts::PI * f
+    }
+
+    /// The scene's light as an emitter.
+    #[inline]
+    pub fn emitter(&self) -> &AnyLight {
+        &self.emitter
     }
 
     /// The material of triangle `index`.
@@ -809,7 +849,11 @@ impl<'a> Tracer<'a> {
                     rays.len(),
                     "the path tracer needs a generator per ray"
                 );
-                path::trace(self, rays, rngs, out, recorder);
+                if self.general {
+                    path_mis::trace(self, rays, rngs, out, recorder);
+                } else {
+                    path::trace(self, rays, rngs, out, recorder);
+                }
             }
         }
     }
@@ -1015,6 +1059,7 @@ mod tests {
             power: 3.5,
             colour: Vec3::new(1.0, 0.25, 0.0),
             radius: 0.0,
+            shape: crate::light::LightShape::Point,
         };
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         let mut builds: Vec<(&str, LanesFn)> = vec![("portable", lit_lanes)];

@@ -215,7 +215,7 @@ fn batch<R: Recorder>(
 ) {
     let scene = tracer.scene;
     let max_bounces = tracer.shading.max_bounces();
-    let sphere_light = tracer.light.radius > 0.0;
+    let sphere_light = tracer.light.is_area();
     let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
     out.fill(Vec3::ZERO);
     let mut paths = [PathState {
@@ -267,11 +267,15 @@ fn batch<R: Recorder>(
                 arriving[diffuse.len / LANES].set_lane(diffuse.len % LANES, path.beta);
                 diffuse.push(surface, i);
             } else {
+                // A direction the BSDF refuses (none for mirror and glass, whose shading
+                // frame is the geometric one) ends the path.
+                let Some(scatter) = material.sample(incoming, geometric, &mut rngs[i]) else {
+                    continue;
+                };
                 let (g, lane) = (n_specular / LANES, n_specular % LANES);
                 if lane == 0 {
                     specular[g].active = M16::NONE;
                 }
-                let scatter = material.sample(incoming, geometric, &mut rngs[i]);
                 specular[g].set(lane, i, &hit, geometric, path.beta);
                 specular[g].set_scatter(lane, at_edge, scatter);
                 n_specular += 1;

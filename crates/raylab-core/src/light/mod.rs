@@ -22,6 +22,11 @@ pub use quad::QuadLight;
 pub use shape::{AnyLight, LightShape, emitter};
 pub use sphere::SphereLight;
 
+/// The sphere light's radius when only its shape is chosen.
+pub const DEFAULT_SPHERE_RADIUS: f32 = 0.1;
+/// The quad light's side when only its shape is chosen: the lab-sized ceiling light.
+pub const DEFAULT_QUAD_SIDE: f32 = 0.5;
+
 /// Distances below this (in scene units) count as this far when dividing by `4πr²`: a light
 /// exactly on a surface then gives a large but finite value, never ∞ or NaN.
 pub const MIN_LIGHT_DISTANCE: f32 = 1e-3;
@@ -32,6 +37,11 @@ pub const SHADOW_OFFSET: f32 = 1e-4;
 
 /// The lab's light: a point at `position` sending `power` watts equally in all directions, in
 /// the colour `colour` (so `power · colour` per channel, the lab's `lightColor = 14·(1, 1, 1)`).
+///
+/// Its `shape` may make it an area light of the same total power: a sphere of radius `radius`
+/// or a square of side `radius` facing the floor ([`emitter`] makes the [`Light`] each is). The
+/// lab's stages keep equation 27 from the centre for every shape and aim the shadow rays at
+/// points of the shape ([`PointLight::shadow_target`]); the path tracer sees the real emitter.
 ///
 /// With a `radius` above 0 it is a sphere of that radius, emitting the same total power
 /// uniformly from its surface (soft shadows, one of the lab's extensions); the sphere is not
@@ -44,8 +54,11 @@ pub struct PointLight {
     pub power: f32,
     /// The light's colour: the power per channel is `power · colour`.
     pub colour: Vec3,
-    /// Radius of the emitting sphere in scene units; 0 is the lab's point light.
+    /// The size of an area light in scene units: the sphere's radius or the square's side
+    /// (ignored for the point; 0 makes any shape the lab's point light).
     pub radius: f32,
+    /// The light's shape: the lab's point, a sphere or a square.
+    pub shape: LightShape,
 }
 
 impl Default for PointLight {
@@ -56,6 +69,7 @@ impl Default for PointLight {
             power: 14.0,
             colour: Vec3::ONE,
             radius: 0.0,
+            shape: LightShape::Point,
         }
     }
 }
@@ -65,6 +79,38 @@ impl PointLight {
     #[inline(always)]
     pub fn channel_power(&self) -> Vec3 {
         self.colour * self.power
+    }
+
+    /// Whether the light is an area light (a sphere or square of some size), not the lab's
+    /// point: what makes its shadows soft and the path tracer see it.
+    #[inline]
+    pub fn is_area(&self) -> bool {
+        self.shape != LightShape::Point && self.radius > 0.0
+    }
+
+    /// The emitter this light is, behind the [`Light`] interface.
+    pub fn emitter(&self) -> AnyLight {
+        let shape = if self.is_area() {
+            self.shape
+        } else {
+            LightShape::Point
+        };
+        emitter(self, shape, self.radius)
+    }
+
+    /// The point a lab-stage shadow ray from `position` aims at (`u1`, `u2` uniform in
+    /// [0, 1)): the centre of the point light, a point of the sphere's near side
+    /// ([`PointLight::sample_point`]) or a point drawn uniformly on the square. The share of
+    /// such points a surface sees unblocked estimates how much of the light it sees.
+    #[inline]
+    pub fn shadow_target(&self, position: Vec3, u1: f32, u2: f32) -> Vec3 {
+        match (self.is_area(), self.shape) {
+            (true, LightShape::Sphere) => self.sample_point(position, u1, u2),
+            (true, LightShape::Quad) => {
+                self.position + self.radius * Vec3::new(u1 - 0.5, 0.0, u2 - 0.5)
+            }
+            _ => self.position,
+        }
     }
 
     /// A point of the light for a shadow ray from `position`: the centre for the point light,
@@ -104,6 +150,8 @@ struct LightFields {
     power: PowerField,
     colour: Option<Vec3>,
     radius: f32,
+    /// Files written before lights had shapes meant a sphere by any radius above 0.
+    shape: Option<LightShape>,
 }
 
 #[derive(Deserialize)]
@@ -121,6 +169,7 @@ impl Default for LightFields {
             power: PowerField::Watts(light.power),
             colour: None,
             radius: light.radius,
+            shape: None,
         }
     }
 }
@@ -140,6 +189,11 @@ impl From<LightFields> for PointLight {
             power,
             colour,
             radius: f.radius,
+            shape: f.shape.unwrap_or(if f.radius > 0.0 {
+                LightShape::Sphere
+            } else {
+                LightShape::Point
+            }),
         }
     }
 }
@@ -605,6 +659,7 @@ mod tests {
         let light = PointLight {
             position: Vec3::new(0.0, 0.0, 2.0),
             radius: 0.5,
+            shape: LightShape::Point,
             ..PointLight::default()
         };
         let alpha = (0.5f64 / 2.0).asin();

@@ -193,6 +193,7 @@ mod tests {
         let lab = PointLight {
             colour: Vec3::new(1.0, 0.5, 0.25),
             radius: 0.3,
+            shape: LightShape::Point,
             ..PointLight::default()
         };
         let power = Vec3::new(14.0, 7.0, 3.5);

@@ -57,6 +57,7 @@ impl SphereLight {
             power: 0.0,
             colour: Vec3::ONE,
             radius: self.radius,
+            shape: crate::light::LightShape::Sphere,
         }
     }
 
@@ -200,6 +201,7 @@ mod tests {
             power: 14.0,
             colour: Vec3::ONE,
             radius: 0.0,
+            shape: crate::light::LightShape::Point,
         };
         let axis = Vec3::new(0.0, 0.6, 0.8);
         let p = light.centre + axis;
