@@ -31,7 +31,7 @@ use glam::{Vec2, Vec3};
 use serde::Serialize;
 
 use crate::geometry::Ray;
-use crate::integrator::{HitTerms, Recorder, Stage, Tracer, path};
+use crate::integrator::{HitTerms, Recorder, Stage, Tracer, path, path_mis};
 use crate::intersect::Intersection;
 use crate::light::{DirectLight, PointLight};
 use crate::material::{Material, MaterialKind, Scatter};
@@ -256,6 +256,29 @@ pub struct PathVertex {
     pub beta_after: Option<Vec3>,
     /// Why the path ends here, if it does.
     pub ends: Option<String>,
+    /// The general path tracer (area lights, the rough metal): its light sample here, with the
+    /// BSDF's value, both densities and the MIS weight.
+    pub light_sample: Option<NextEvent>,
+}
+
+/// Next-event estimation at a vertex of the general path tracer
+/// ([`crate::integrator::path_mis`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct NextEvent {
+    /// The direction toward the light's sampled point.
+    pub wi: Vec3,
+    /// f(wo, wi), the BSDF's value toward it.
+    pub f: Vec3,
+    /// The light's density of `wi` (solid angle; 1 for the point light).
+    pub pdf_light: f32,
+    /// The BSDF's density of `wi` (0 for the point light, which BSDF sampling never finds).
+    pub pdf_bsdf: f32,
+    /// The power heuristic's weight p_light²/(p_light² + p_bsdf²) (1 for the point light, or
+    /// where the path ends here).
+    pub mis_weight: f32,
+    pub blocked: bool,
+    /// β·f·Li·|cos θ|/p_light·weight, added to R.
+    pub added: Vec3,
 }
 
 /// One line of the explanation: the equation it evaluates and the text.
@@ -350,6 +373,7 @@ enum Event {
         beta: Vec3,
         survives: bool,
     },
+    Vertex(path_mis::PathVertex),
 }
 
 /// The inspector's [`Recorder`]: every step, in order.
@@ -401,6 +425,10 @@ impl Recorder for Recording {
             beta,
             survives,
         });
+    }
+
+    fn path_vertex(&mut self, vertex: &path_mis::PathVertex) {
+        self.events.push(Event::Vertex(*vertex));
     }
 }
 
@@ -559,6 +587,7 @@ impl Inspection {
                             survival: None,
                             beta_after: None,
                             ends: None,
+                            light_sample: None,
                         });
                     }
                     if material.is_diffuse() {
@@ -651,6 +680,20 @@ impl Inspection {
                         }
                     }
                     inspection.shaded.push(shaded);
+                }
+                Event::Vertex(v) => {
+                    if let (Some(vertex), Some(l)) = (inspection.bounces.last_mut(), v.light) {
+                        vertex.light_added = l.added;
+                        vertex.light_sample = Some(NextEvent {
+                            wi: l.wi,
+                            f: l.f,
+                            pdf_light: l.pdf_light,
+                            pdf_bsdf: l.pdf_bsdf,
+                            mis_weight: l.mis_weight,
+                            blocked: l.blocked,
+                            added: l.added,
+                        });
+                    }
                 }
                 Event::Scattered {
                     scatter,
@@ -919,7 +962,22 @@ impl Inspection {
                     colour(vertex.beta)
                 ),
             );
-            if vertex.kind == "diffuse"
+            if let Some(l) = &vertex.light_sample {
+                lines.push(
+                    "MIS",
+                    format!(
+                        "  light sample along {}: f = {}, p_light = {}, p_bsdf = {}, MIS weight \
+                         p_light²/(p_light² + p_bsdf²) = {}; shadow ray {}; adds β·f·Li·cos θ/p_light·w = {}",
+                        vector(l.wi),
+                        colour(l.f),
+                        num(l.pdf_light),
+                        num(l.pdf_bsdf),
+                        num(l.mis_weight),
+                        if l.blocked { "blocked" } else { "unblocked" },
+                        colour(l.added)
+                    ),
+                );
+            } else if vertex.kind == "diffuse"
                 && let Some(hit) = shaded.next()
             {
                 self.terms_lines(lines, hit, "  ");
@@ -949,6 +1007,7 @@ impl Inspection {
             ) {
                 let how = match (vertex.kind, vertex.scatter.unwrap_or("")) {
                     ("diffuse", _) => "a cosine-weighted bounce, weight ρ",
+                    ("rough", _) => "a GGX visible-normal sample, weight tint·G1(wi)",
                     ("mirror", _) => "the mirror's reflection, weight the tint",
                     ("glass", "reflection") => "reflection off the glass (probability F), weight",
                     _ => "refraction through the glass (probability 1 − F), weight the tint",
@@ -1251,6 +1310,7 @@ mod tests {
                 Event::Specular { .. } => "specular",
                 Event::Shaded { .. } => "shaded",
                 Event::Scattered { .. } => "scattered",
+                Event::Vertex(_) => "vertex",
             })
             .collect();
         assert_eq!(kinds, ["hit", "shaded"]);
@@ -1258,5 +1318,42 @@ mod tests {
             unreachable!()
         };
         assert_eq!((*value, *weight), (out[0], Vec3::ONE));
+    }
+
+    /// Under the quad light the general path tracer runs, and the inspector shows each
+    /// vertex's light sample with the BSDF's value, both densities and the MIS weight; R is
+    /// still the rendered pixel bit for bit.
+    #[test]
+    fn a_path_vertex_under_an_area_light_shows_its_mis_weight() {
+        use crate::light::LightShape;
+        let scene = crate::scene::cornell_box();
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(32, 32);
+        s.shading = crate::integrator::Shading::for_stage(Stage::Path);
+        s.light.position = Vec3::new(0.0, -0.98, 0.0);
+        s.light.shape = LightShape::Quad;
+        s.light.radius = 0.5;
+        s.material_preset = crate::material::MaterialPreset::Rough;
+        let mut seen = 0;
+        for (x, y) in [(10, 16), (16, 20), (22, 26), (5, 5)] {
+            let i = inspect_pixel(&scene, &s, x, y).unwrap();
+            let rendered = crate::render::trace_pixel(&scene, &s, x, y, 0);
+            assert_eq!(
+                i.r.to_array().map(f32::to_bits),
+                rendered.to_array().map(f32::to_bits)
+            );
+            // Every vertex below the light samples it (the ceiling, above it, cannot).
+            for v in i.bounces.iter().filter(|v| v.position.y > -0.98) {
+                let l = v.light_sample.expect("a vertex below the light samples it");
+                assert!((0.0..=1.0).contains(&l.mis_weight), "{l:?}");
+                assert!(l.pdf_light > 0.0, "{l:?}");
+                seen += 1;
+            }
+            let text: Vec<String> = i.lines().into_iter().map(|l| l.text).collect();
+            if !i.bounces.is_empty() {
+                assert!(text.iter().any(|l| l.contains("MIS weight")), "{text:?}");
+            }
+        }
+        assert!(seen > 0);
     }
 }
