@@ -1461,3 +1461,25 @@ fn a_panic_rendering_a_is_reported_and_b_goes_on() {
     // B's frames don't take A's error down: A will not render again by itself.
     assert_eq!(status(&h).1, StatusKind::Error);
 }
+
+/// The light's shape and the rough metal from the panels: a square light of the default side,
+/// the rough preset with its roughness slider; the image is the library's for those settings.
+#[test]
+fn the_light_shape_and_the_rough_metal_are_chosen_in_the_panels() {
+    let mut h = harness(tiny_state());
+    choose(&mut h, "Light shape", "Square (quad)");
+    let s = settings(&h);
+    assert_eq!(s.light.shape, raylab_core::light::LightShape::Quad);
+    assert_eq!(s.light.radius, raylab_core::light::DEFAULT_QUAD_SIDE);
+    // The size slider names what it sets.
+    h.get_by_role_and_label(Role::Slider, "Light side");
+    assert!(h.query_by_label("Roughness α").is_none());
+    choose(&mut h, "Materials", "Rough metal tall block");
+    h.get_by_role_and_label(Role::Slider, "Roughness α")
+        .set_value_accesskit(0.5);
+    settle(&mut h);
+    let frame = shown(&h);
+    assert_eq!(frame.settings.material_preset, MaterialPreset::Rough);
+    assert_eq!(frame.settings.roughness, 0.5);
+    assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
+}
