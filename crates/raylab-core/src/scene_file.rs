@@ -96,11 +96,17 @@ pub enum SceneFileError {
 }
 
 /// Reads a scene file: the settings it describes, with model paths resolved against the
-/// file's folder.
+/// file's folder. Only a regular file of at most [`crate::inputs::MAX_SCENE_FILE_BYTES`] is
+/// read.
 pub fn load(path: &Path) -> Result<RenderSettings, SceneFileError> {
-    let bytes = std::fs::read(path).map_err(|e| SceneFileError::Read {
+    let bytes = crate::inputs::read_capped(
+        path,
+        crate::inputs::MAX_SCENE_FILE_BYTES,
+        "a scene file",
+    )
+    .map_err(|reason| SceneFileError::Read {
         path: path.to_path_buf(),
-        reason: e.to_string(),
+        reason,
     })?;
     let text = std::str::from_utf8(&bytes).map_err(|e| SceneFileError::Invalid {
         path: path.to_path_buf(),
