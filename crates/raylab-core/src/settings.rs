@@ -29,6 +29,13 @@ pub const MAX_IMAGE_SIDE: u32 = 16_384;
 /// overflows `f32` and every ray is lost (a black image).
 pub const MAX_FOCAL_LENGTH: f32 = 1e7;
 
+/// The shortest focal length, in pixels: a field of view within a hair of 180°. Every primary
+/// ray's direction is at least (0, 0, f) long, and normalising it divides by its length: far
+/// below this, f² underflows `f32` (at f = 1e−23 it is 0) and the centre ray has no direction
+/// (a black pixel). At 1e−3, f² = 1e−6 is an ordinary `f32` with its full precision, and so is
+/// it for the workbench's preview at an eighth of the width.
+pub const MIN_FOCAL_LENGTH: f32 = 1e-3;
+
 /// The largest exposure, either way, in stops.
 pub const MAX_EXPOSURE: f32 = 20.0;
 
@@ -197,6 +204,10 @@ impl RenderSettings {
         if c.focal_length <= 0.0 {
             return Err(err("focal length", c.focal_length, "must be > 0"));
         }
+        if c.focal_length < MIN_FOCAL_LENGTH {
+            let f = number(c.focal_length);
+            return Err(err("focal length", f, "must be at least 0.001 px"));
+        }
         if c.focal_length > MAX_FOCAL_LENGTH {
             let f = c.focal_length;
             return Err(err("focal length", f, "must be at most 1e7 px"));
@@ -276,9 +287,10 @@ fn err(name: &'static str, value: impl std::fmt::Display, reason: &'static str) 
     }
 }
 
-/// A number as a person would write it: 1e38, not 100000000000000000000000000000000000000.
+/// A number as a person would write it: 1e38, not 100000000000000000000000000000000000000,
+/// and 1e-23, not 0.00000000000000000000001.
 fn number(x: f32) -> String {
-    if x.abs() >= 1e7 {
+    if x.abs() >= 1e7 || (x != 0.0 && x.abs() < 1e-4) {
         format!("{x:e}")
     } else {
         x.to_string()
@@ -419,6 +431,21 @@ mod tests {
         // 2e19 px would overflow the rays' squared length: refused, not a black image.
         s.camera.focal_length = 2e19;
         assert_eq!(s.validate().unwrap_err().name, "focal length");
+        // 1e−23 px would underflow it: the centre ray of an odd-sized image, (0, 0, f), has a
+        // squared length of 0 in f32, so it cannot be normalised (it was a black pixel).
+        s.camera = Camera::default_for(5, 5);
+        s.camera.focal_length = 1e-23;
+        let centre = s.camera.pixel_ray(2, 2);
+        assert!(!centre.direction.is_normalized(), "{centre:?}");
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid focal length 1e-23: must be at least 0.001 px"
+        );
+        s.camera.focal_length = MIN_FOCAL_LENGTH;
+        s.validate().unwrap();
+        let centre = s.camera.pixel_ray(2, 2);
+        assert!(centre.direction.is_normalized(), "{centre:?}");
+        assert_eq!(centre.direction, glam::Vec3::Z);
         let mut s = RenderSettings::default();
         s.light.position.y = f32::NAN;
         let e = s.validate().unwrap_err();
