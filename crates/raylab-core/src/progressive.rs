@@ -453,13 +453,55 @@ fn resolve_threads(threads: usize) -> usize {
     if threads == 0 {
         default_threads()
     } else {
-        threads
+        threads.min(MAX_THREADS)
     }
 }
 
-/// One render thread per core.
+/// The most render threads a pool is built with (`--threads` takes 1 to this): far more than
+/// any machine's cores, and few enough that starting them is quick.
+pub const MAX_THREADS: usize = 1024;
+
+/// The render threads when none are asked for: `RAYON_NUM_THREADS` if it is set to a number
+/// (at most [`MAX_THREADS`]), else one per core. Every pool raylab builds is given its count
+/// explicitly, so rayon's own reading of `RAYON_NUM_THREADS`, which has no cap, never applies.
 pub fn default_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    threads_from(std::env::var("RAYON_NUM_THREADS").ok().as_deref(), cores).0
+}
+
+/// What `RAYON_NUM_THREADS` set to something unusable makes of [`default_threads`], for a
+/// warning: `None` when it is unset or a number from 1 to [`MAX_THREADS`].
+pub fn default_threads_note() -> Option<String> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    threads_from(std::env::var("RAYON_NUM_THREADS").ok().as_deref(), cores).1
+}
+
+/// The thread count for a `RAYON_NUM_THREADS` value on a machine of `cores`, and a note when
+/// the value was not used as it stands.
+fn threads_from(variable: Option<&str>, cores: usize) -> (usize, Option<String>) {
+    let cores = cores.clamp(1, MAX_THREADS);
+    let Some(text) = variable else {
+        return (cores, None);
+    };
+    match text.trim().parse::<u128>() {
+        // rayon's own meaning of 0: one per core.
+        Ok(0) => (cores, None),
+        Ok(n) if n <= MAX_THREADS as u128 => (n as usize, None),
+        Ok(_) => (
+            MAX_THREADS,
+            Some(format!(
+                "RAYON_NUM_THREADS={} is more than {MAX_THREADS} threads: using {MAX_THREADS}",
+                text.trim()
+            )),
+        ),
+        Err(_) => (
+            cores,
+            Some(format!(
+                "RAYON_NUM_THREADS={text:?} is not a number of threads: using one per core \
+                 ({cores})"
+            )),
+        ),
+    }
 }
 
 fn build_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
@@ -1071,6 +1113,28 @@ mod tests {
         std::thread::sleep(Duration::from_millis(50));
         assert!(controller.take_frame().is_none());
         assert_eq!(controller.passes_traced(), 3);
+    }
+
+    /// `RAYON_NUM_THREADS` gives the default thread count up to the cap that `--threads` has;
+    /// beyond it, or unreadable, it is not used as it stands, and a note says so.
+    #[test]
+    fn the_thread_count_from_the_environment_is_capped() {
+        assert_eq!(threads_from(None, 2), (2, None));
+        assert_eq!(threads_from(Some("3"), 2), (3, None));
+        assert_eq!(threads_from(Some("0"), 2), (2, None));
+        assert_eq!(threads_from(Some("1024"), 2), (1024, None));
+        let (n, note) = threads_from(Some("2000"), 2);
+        assert_eq!(n, MAX_THREADS);
+        assert_eq!(
+            note.unwrap(),
+            "RAYON_NUM_THREADS=2000 is more than 1024 threads: using 1024"
+        );
+        let (n, note) = threads_from(Some("lots"), 4);
+        assert_eq!(n, 4);
+        assert!(note.unwrap().contains("\"lots\" is not a number"));
+        assert_eq!(threads_from(Some("99999999999999999999999"), 2).0, MAX_THREADS);
+        assert_eq!(threads_from(None, 5000).0, MAX_THREADS);
+        assert_eq!(resolve_threads(100_000), MAX_THREADS);
     }
 
     #[test]
