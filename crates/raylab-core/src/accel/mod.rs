@@ -239,6 +239,30 @@ impl Isa {
     }
 
     /// The named kernel set, if this CPU runs it: `scalar`, `avx2` or `avx512`.
+    /// What is wrong with the `RAYLAB_ISA` environment variable, when it is set to something
+    /// [`Isa::best_with`] cannot use and so does not (it measures, as if the variable were
+    /// unset): for a warning naming the sets that are accepted. `None` when it is unset, `best`
+    /// or a set this CPU runs.
+    pub fn environment_note() -> Option<String> {
+        let value = std::env::var_os("RAYLAB_ISA")?;
+        let text = value.to_string_lossy();
+        if text == "best" || Isa::by_name(&text).is_some() {
+            return None;
+        }
+        let known = ["avx512", "avx2", "scalar"].contains(&&*text);
+        let runs: Vec<&str> = Isa::available().iter().rev().map(|i| i.name()).collect();
+        Some(format!(
+            "RAYLAB_ISA={text:?} is {}: the kernels are chosen by measuring, as without it \
+             (accepted: best, {})",
+            if known {
+                "a kernel set this CPU does not run"
+            } else {
+                "not a kernel set"
+            },
+            runs.join(", ")
+        ))
+    }
+
     pub fn by_name(name: &str) -> Option<Isa> {
         match name {
             "scalar" => Some(Isa::Scalar),
