@@ -142,6 +142,32 @@ impl RenderSettings {
         from_json(text).map(|loaded| loaded.settings)
     }
 
+    /// The settings as a file written into `folder` holds them (a screenshot's text, its
+    /// `.json`, a scene file): each model's path relative to `folder`
+    /// ([`crate::scene::spec::path_relative_to`]), so the file names the same models wherever
+    /// it is read from ([`RenderSettings::resolve_paths`]).
+    pub fn relative_to(&self, folder: &std::path::Path) -> RenderSettings {
+        let mut settings = self.clone();
+        match &mut settings.scene {
+            SceneChoice::Obj(path) => {
+                *path = crate::scene::spec::path_relative_to(path, folder);
+            }
+            SceneChoice::Custom(spec) => crate::scene::spec::relative_models(spec, folder),
+            _ => {}
+        }
+        settings
+    }
+
+    /// Settings read from a file in `folder`: relative model paths are taken from that folder
+    /// (the inverse of [`RenderSettings::relative_to`]).
+    pub fn resolve_paths(&mut self, folder: &std::path::Path) {
+        match &mut self.scene {
+            SceneChoice::Obj(path) => *path = crate::scene::spec::resolve_path(path, folder),
+            SceneChoice::Custom(spec) => crate::scene::spec::resolve_models(spec, folder),
+            _ => {}
+        }
+    }
+
     /// One line naming what most often explains a render: the scene, stage and switches,
     /// resolution, camera, light, samples and seed. For error reports (a render that panicked
     /// says which settings did it); the JSON (`serde_json::to_string`) has everything.
@@ -191,8 +217,10 @@ impl RenderSettings {
     ///
     /// So the image, its sums and the EXR file are always finite; outputs are not clamped.
     pub fn validate(&self) -> Result<(), SettingsError> {
-        if let SceneChoice::Custom(spec) = &self.scene {
-            spec.validate()?;
+        match &self.scene {
+            SceneChoice::Custom(spec) => spec.validate()?,
+            SceneChoice::Obj(path) => check_path("model path", path)?,
+            _ => {}
         }
         let c = &self.camera;
         check_side("width", c.width)?;
@@ -300,6 +328,24 @@ fn number(x: f32) -> String {
 /// A vector as [`number`] writes its components.
 fn vector(v: Vec3) -> String {
     format!("({}, {}, {})", number(v.x), number(v.y), number(v.z))
+}
+
+/// A path the settings carry must be UTF-8 text: screenshots and scene files hold them as
+/// text (JSON and TOML strings), so another would make a render whose settings cannot be
+/// written. Refused before anything is rendered, naming the path.
+pub(crate) fn check_path(
+    name: impl Into<std::borrow::Cow<'static, str>>,
+    path: &std::path::Path,
+) -> Result<(), SettingsError> {
+    if path.to_str().is_some() {
+        return Ok(());
+    }
+    Err(SettingsError {
+        name: name.into(),
+        value: format!("'{}'", path.display()),
+        reason: "is not UTF-8 text, and raylab writes the paths of its settings as text \
+                 (rename the file or its folder)",
+    })
 }
 
 fn check_side(name: &'static str, side: u32) -> Result<(), SettingsError> {
@@ -550,6 +596,91 @@ mod tests {
         let many = crate::render::render(&scene, &s);
         assert!(many.pixels[0].is_finite(), "{}", many.pixels[0]);
         assert!(many.pixels[0].x > 1e7, "{}", many.pixels[0]);
+    }
+
+    /// A model path written into a file in another folder is written relative to that folder
+    /// (`../m.obj`, not the working folder's `m.obj`), and read back relative to it: the same
+    /// file, whichever folder reads it. Paths with nothing but the root in common stay
+    /// absolute; built-in models stay names.
+    #[test]
+    fn model_paths_are_relative_to_the_file_that_names_them() {
+        use std::path::{Path, PathBuf};
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().canonicalize().unwrap();
+        std::fs::create_dir_all(root.join("sub")).unwrap();
+        std::fs::create_dir_all(root.join("models")).unwrap();
+        std::fs::write(root.join("models/m.obj"), "").unwrap();
+        let model = root.join("models/m.obj");
+        let s = RenderSettings {
+            scene: SceneChoice::Obj(model.clone()),
+            ..RenderSettings::default()
+        };
+        let written = s.relative_to(&root.join("sub"));
+        assert_eq!(
+            written.scene,
+            SceneChoice::Obj(PathBuf::from("../models/m.obj"))
+        );
+        let mut read = written.clone();
+        read.resolve_paths(&root.join("sub"));
+        let SceneChoice::Obj(path) = &read.scene else {
+            panic!("{:?}", read.scene)
+        };
+        assert_eq!(path.canonicalize().unwrap(), model);
+        // Inside the folder: plain; a missing model is compared as written.
+        assert_eq!(
+            crate::scene::spec::path_relative_to(&model, &root),
+            Path::new("models/m.obj")
+        );
+        assert_eq!(
+            crate::scene::spec::path_relative_to(&root.join("gone/x.obj"), &root.join("sub")),
+            Path::new("../gone/x.obj")
+        );
+        // Only the root in common: absolute.
+        assert_eq!(
+            crate::scene::spec::path_relative_to(Path::new("/nowhere-a/x.obj"), &root),
+            Path::new("/nowhere-a/x.obj")
+        );
+        let mut custom = SceneChoice::Bunny.spec();
+        custom.models.push(crate::scene::ModelSpec::new(
+            model.clone(),
+            &crate::scene::obj::Placement::TEAPOT,
+        ));
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(custom)),
+            ..RenderSettings::default()
+        };
+        let SceneChoice::Custom(spec) = s.relative_to(&root.join("sub")).scene else {
+            panic!()
+        };
+        assert_eq!(spec.models[0].file, Path::new("bunny"));
+        assert_eq!(spec.models[1].file, Path::new("../models/m.obj"));
+    }
+
+    /// A model path that is not UTF-8 is refused before anything is rendered: the settings
+    /// that carry it could not be written into a screenshot or a scene file (it panicked
+    /// there, after the whole render, writing nothing).
+    #[cfg(unix)]
+    #[test]
+    fn a_model_path_that_is_not_utf8_is_refused() {
+        use std::os::unix::ffi::OsStrExt as _;
+        let path = std::path::PathBuf::from(std::ffi::OsStr::from_bytes(b"models/m\xff.obj"));
+        let s = RenderSettings {
+            scene: SceneChoice::Obj(path.clone()),
+            ..RenderSettings::default()
+        };
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid model path 'models/m\u{fffd}.obj': is not UTF-8 text, and raylab writes \
+             the paths of its settings as text (rename the file or its folder)"
+        );
+        let mut spec = SceneChoice::Bunny.spec();
+        spec.models[0].file = path;
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(spec)),
+            ..RenderSettings::default()
+        };
+        assert_eq!(s.validate().unwrap_err().name, "scene.models[0].file");
+        assert!(crate::settings_file::settings_text(&s).is_err(), "no panic");
     }
 
     #[test]
