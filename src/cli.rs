@@ -371,6 +371,10 @@ pub fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if matches!(cli.command, Some(Command::Render(_))) {
+        // First: the threads started below inherit the signals it blocks.
+        crate::signals::remove_temporary_files_when_stopped();
+    }
     let result = match choose_kernels(&cli.isa) {
         Err(e) => Err(e),
         Ok(()) => match cli.command {
@@ -411,25 +415,7 @@ fn one_line(text: &str) -> String {
     format!("{first} {}", listed.join(", "))
 }
 
-/// Ctrl+C (SIGINT) and `kill` (SIGTERM) end a render with exit code 130, removing any
-/// temporary file it was writing: an interrupted write leaves nothing behind (the destination
-/// keeps its old content, if it had one).
-fn remove_temporary_files_on_interrupt() {
-    let installed = ctrlc::set_handler(|| {
-        raylab_core::temp_files::remove_all();
-        let _ = writeln!(
-            std::io::stderr(),
-            "raylab: interrupted; its temporary files are removed"
-        );
-        std::process::exit(130);
-    });
-    if let Err(e) = installed {
-        let _ = writeln!(std::io::stderr(), "note: Ctrl+C is not handled: {e}");
-    }
-}
-
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
-    remove_temporary_files_on_interrupt();
     // Refuse what can't be written before spending time on the render.
     OutputFormat::from_path(&args.out)?;
     if let Some(path) = &args.save_scene {
