@@ -1461,3 +1461,26 @@ fn a_panic_rendering_a_is_reported_and_b_goes_on() {
     // B's frames don't take A's error down: A will not render again by itself.
     assert_eq!(status(&h).1, StatusKind::Error);
 }
+
+/// A saved state whose scene cannot be loaded (here a FIFO given as the model, which would
+/// keep the loader waiting for ever) never keeps the window from starting: it opens on the
+/// lab's box, and a notice says why.
+#[test]
+fn a_saved_scene_that_cannot_be_loaded_falls_back_to_the_labs_box() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("model.obj");
+    raylab_core::inputs::make_fifo(&fifo);
+    let mut state = small_state();
+    state.settings.scene = SceneChoice::Obj(fifo);
+    let h = harness(state);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Notice);
+    assert!(
+        text.starts_with("The saved scene could not be loaded")
+            && text.contains("not a regular file (a FIFO)")
+            && text.ends_with("showing the cornell scene"),
+        "{text}"
+    );
+    assert_eq!(settings(&h).scene, SceneChoice::Cornell);
+    assert_eq!(*shown(&h).image, render(&cornell_box(), &settings(&h)));
+}
