@@ -654,18 +654,25 @@ mod tests {
         assert_ne!(a.path(), b.path());
         for t in [&a, &b] {
             let name = t.path().file_name().unwrap().to_string_lossy().into_owned();
-            assert!(name.starts_with(".x.png.") && name.ends_with(".tmp"), "{name}");
+            assert!(
+                name.starts_with(".x.png.") && name.ends_with(".tmp"),
+                "{name}"
+            );
             assert!(name.len() > ".x.png..tmp".len() + 5, "{name}");
         }
         drop((a, b));
-        assert!(fs::read_dir(dir.path()).unwrap().next().is_none(), "removed when dropped");
+        assert!(
+            fs::read_dir(dir.path()).unwrap().next().is_none(),
+            "removed when dropped"
+        );
 
         let victim = dir.path().join("victim.txt");
         fs::write(&victim, "keep me").unwrap();
         #[cfg(unix)]
         std::os::unix::fs::symlink(
             &victim,
-            dir.path().join(format!(".x.png.{}.tmp", std::process::id())),
+            dir.path()
+                .join(format!(".x.png.{}.tmp", std::process::id())),
         )
         .unwrap();
         Image::new(4, 2).save(&out).unwrap();
@@ -706,7 +713,10 @@ mod tests {
         if cfg!(unix) {
             assert_eq!(second, dir.path().join("s-2.toml"));
             assert_eq!(third, dir.path().join("s-3.toml"));
-            assert!(!dir.path().join("elsewhere").exists(), "the link was not followed");
+            assert!(
+                !dir.path().join("elsewhere").exists(),
+                "the link was not followed"
+            );
         } else {
             assert_eq!(second, dir.path().join("s-1.toml"));
         }

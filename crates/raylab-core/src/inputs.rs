@@ -106,14 +106,22 @@ pub fn read_open(
     limit: u64,
     what: &str,
 ) -> Result<Vec<u8>, String> {
-    let too_large = |size: &str| format!("it is {size}, more than the {} {what} may be", size_of(limit));
+    let too_large = |size: &str| {
+        format!(
+            "it is {size}, more than the {} {what} may be",
+            size_of(limit)
+        )
+    };
     if len > limit {
         return Err(too_large(&size_of(len)));
     }
     let mut bytes = Vec::new();
-    bytes
-        .try_reserve_exact(len as usize)
-        .map_err(|_| format!("it is {}, more than can be held in memory", format_bytes(len)))?;
+    bytes.try_reserve_exact(len as usize).map_err(|_| {
+        format!(
+            "it is {}, more than can be held in memory",
+            format_bytes(len)
+        )
+    })?;
     // A file that grows while it is read is still read no further than the cap.
     file.take(limit + 1)
         .read_to_end(&mut bytes)

@@ -1132,7 +1132,10 @@ mod tests {
         let (n, note) = threads_from(Some("lots"), 4);
         assert_eq!(n, 4);
         assert!(note.unwrap().contains("\"lots\" is not a number"));
-        assert_eq!(threads_from(Some("99999999999999999999999"), 2).0, MAX_THREADS);
+        assert_eq!(
+            threads_from(Some("99999999999999999999999"), 2).0,
+            MAX_THREADS
+        );
         assert_eq!(threads_from(None, 5000).0, MAX_THREADS);
         assert_eq!(resolve_threads(100_000), MAX_THREADS);
     }

@@ -99,15 +99,12 @@ pub enum SceneFileError {
 /// file's folder. Only a regular file of at most [`crate::inputs::MAX_SCENE_FILE_BYTES`] is
 /// read.
 pub fn load(path: &Path) -> Result<RenderSettings, SceneFileError> {
-    let bytes = crate::inputs::read_capped(
-        path,
-        crate::inputs::MAX_SCENE_FILE_BYTES,
-        "a scene file",
-    )
-    .map_err(|reason| SceneFileError::Read {
-        path: path.to_path_buf(),
-        reason,
-    })?;
+    let bytes =
+        crate::inputs::read_capped(path, crate::inputs::MAX_SCENE_FILE_BYTES, "a scene file")
+            .map_err(|reason| SceneFileError::Read {
+                path: path.to_path_buf(),
+                reason,
+            })?;
     let text = std::str::from_utf8(&bytes).map_err(|e| SceneFileError::Invalid {
         path: path.to_path_buf(),
         message: format!("byte {}: not UTF-8 text", e.valid_up_to()),
@@ -396,7 +393,10 @@ impl<'de, const N: usize> Deserialize<'de> for Floats<N> {
             fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
                 write!(f, "an array of exactly {N} numbers")
             }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Floats<N>, A::Error> {
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Floats<N>, A::Error> {
                 let mut out = [0.0; N];
                 for (i, x) in out.iter_mut().enumerate() {
                     *x = seq
@@ -816,9 +816,16 @@ mod tests {
         );
         let million = format!("position = [{}]", vec!["0"; 1_000_000].join(", "));
         let e = error_of(|t| t.replace(position, &million));
-        assert!(e.contains("more than 3 elements"), "{}", &e[..200.min(e.len())]);
+        assert!(
+            e.contains("more than 3 elements"),
+            "{}",
+            &e[..200.min(e.len())]
+        );
         let e = error_of(|t| t.replace(position, "position = [0, 0]"));
-        assert!(e.contains("invalid length 2") && e.contains("exactly 3"), "{e}");
+        assert!(
+            e.contains("invalid length 2") && e.contains("exactly 3"),
+            "{e}"
+        );
         let e = error_of(|t| t.replace("colour = [1.0, 1.0, 1.0]", "colour = [1, 1, 1, 1]"));
         assert!(e.contains("more than 3 elements"), "{e}");
     }
@@ -847,10 +854,17 @@ mod tests {
             ("kind = \"diffuse\"".to_owned(), "tint"),
         ] {
             let e = parse(&text.replace(kind, &edit), Path::new("/x")).unwrap_err();
-            assert!(e.contains(&format!("unknown field `{field}`")), "{edit}: {e}");
+            assert!(
+                e.contains(&format!("unknown field `{field}`")),
+                "{edit}: {e}"
+            );
             assert!(e.starts_with("line "), "{e}");
         }
-        let e = parse(&text.replace("tint = [0.9, 0.9, 0.9]", "tint = [0.9, 0.9, 0.9, 0.9]"), Path::new("/x")).unwrap_err();
+        let e = parse(
+            &text.replace("tint = [0.9, 0.9, 0.9]", "tint = [0.9, 0.9, 0.9, 0.9]"),
+            Path::new("/x"),
+        )
+        .unwrap_err();
         assert!(e.contains("more than 3 elements"), "{e}");
     }
 

@@ -151,7 +151,8 @@ pub fn png_text(mut png: impl Read + Seek, keyword: &str) -> Result<Option<Strin
         if matches!(&kind, b"iTXt" | b"tEXt" | b"zTXt") {
             // The keyword comes first: 1 to 79 bytes and a NUL.
             let mut head = vec![0u8; length.min(80) as usize];
-            png.read_exact(&mut head).map_err(|e| cut_short(e, offset))?;
+            png.read_exact(&mut head)
+                .map_err(|e| cut_short(e, offset))?;
             read = head.len() as u64;
             let ours = head.split(|&b| b == 0).next() == Some(keyword.as_bytes())
                 && head.len() > keyword.len();
@@ -349,7 +350,10 @@ mod tests {
         assert!(e.contains("is not UTF-8 (at byte 2)"), "{e}");
         // Cut short: no end.
         let e = text_of(&before[..before.len() - 12]).unwrap_err();
-        assert!(e.contains("cut short") && e.contains("no end (IEND)"), "{e}");
+        assert!(
+            e.contains("cut short") && e.contains("no end (IEND)"),
+            "{e}"
+        );
         assert!(text_of(b"GIF89a").unwrap_err().contains("not a PNG"));
     }
 
@@ -369,7 +373,8 @@ mod tests {
             "its raylab-settings text (iTXt) inflates to more than the 1 MiB settings may be"
         );
         let big = png_with(|w| {
-            w.write_text_chunk(&itxt(&" ".repeat(2 << 20), false)).unwrap();
+            w.write_text_chunk(&itxt(&" ".repeat(2 << 20), false))
+                .unwrap();
             w.write_image_data(&DATA).unwrap();
         });
         assert!(text_of(&big).unwrap_err().contains("more than the 1 MiB"));

@@ -105,8 +105,15 @@ mod tests {
             let _guard_b = registry.register(&b);
             assert_eq!(registry.registered(), [a.clone(), b.clone()]);
         }
-        assert_eq!(registry.registered(), [a.clone()], "b forgotten when dropped");
-        assert!(!GLOBAL.registered().contains(&a), "not on the program's list");
+        assert_eq!(
+            registry.registered(),
+            [a.clone()],
+            "b forgotten when dropped"
+        );
+        assert!(
+            !GLOBAL.registered().contains(&a),
+            "not on the program's list"
+        );
         registry.remove_all();
         assert!(!a.exists(), "removed");
         assert!(b.exists(), "no longer listed, so left alone");

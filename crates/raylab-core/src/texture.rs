@@ -105,15 +105,12 @@ impl TextureImage {
     /// [`crate::inputs::MAX_TEXTURE_FILE_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, TextureError> {
         let name = path.display().to_string();
-        let bytes = crate::inputs::read_capped(
-            path,
-            crate::inputs::MAX_TEXTURE_FILE_BYTES,
-            "a texture",
-        )
-        .map_err(|reason| TextureError {
-            name: name.clone(),
-            reason,
-        })?;
+        let bytes =
+            crate::inputs::read_capped(path, crate::inputs::MAX_TEXTURE_FILE_BYTES, "a texture")
+                .map_err(|reason| TextureError {
+                    name: name.clone(),
+                    reason,
+                })?;
         Self::from_encoded(&bytes, &name)
     }
 

@@ -1638,7 +1638,9 @@ mod tests {
     #[test]
     fn a_library_named_many_times_is_read_once() {
         let dir = tempfile::tempdir().unwrap();
-        let mtl: String = (0..2000).map(|i| format!("newmtl m{i}\nKd 1 1 1\n")).collect();
+        let mtl: String = (0..2000)
+            .map(|i| format!("newmtl m{i}\nKd 1 1 1\n"))
+            .collect();
         std::fs::write(dir.path().join("lib.mtl"), &mtl).unwrap();
         let obj = format!("{}usemtl m7\n{TRIANGLE}", "mtllib lib.mtl\n".repeat(8000));
         let path = dir.path().join("model.obj");
@@ -1682,7 +1684,10 @@ mod tests {
             std::fs::write(&path, format!("mtllib fifo.mtl\n{TRIANGLE}")).unwrap();
             let (_, warnings) = obj_scene_with_warnings(&path).unwrap();
             assert_eq!(warnings.len(), 1, "{warnings:?}");
-            assert!(warnings[0].contains("not a regular file (a FIFO)"), "{warnings:?}");
+            assert!(
+                warnings[0].contains("not a regular file (a FIFO)"),
+                "{warnings:?}"
+            );
         }
     }
 
