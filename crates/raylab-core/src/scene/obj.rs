@@ -1352,8 +1352,10 @@ mod tests {
 
     /// Around a position with more than `MAX_FAN` faces: copies of two faces give each corner
     /// the normal the two faces alone give it (equal normals grouped, their angles summed), and
-    /// a fan of many different faces is averaged whole; both in linear time (a million faces
-    /// around one position took minutes).
+    /// a fan of many different faces is averaged whole. Each corner there costs the number of
+    /// distinct normals, not of faces, which keeps the whole linear (a million faces around one
+    /// position took minutes): the copies make two groups, the fan one sum. How fast it runs is
+    /// the `degenerate` benchmark's to measure (benches/trace.rs), not a time limit here.
     #[test]
     fn many_faces_around_one_position_are_smoothed_in_linear_time() {
         // Two faces meeting at 30° along the y axis, as in the test above, then copied.
@@ -1376,9 +1378,12 @@ mod tests {
         let copies = 100_000;
         let many_faces: Vec<[u32; 3]> = (0..copies).map(|i| faces[i % 2]).collect();
         let many_normals: Vec<Vec3> = (0..copies).map(|i| face_normals[i % 2]).collect();
-        let start = std::time::Instant::now();
         let many = smooth_normals(&positions, &many_faces, &many_normals, crease);
-        assert!(start.elapsed().as_secs_f32() < 2.0, "{:?}", start.elapsed());
+        let around: Vec<(u32, f32)> = (0..copies as u32).map(|f| (f, 1.0)).collect();
+        match Fan::of(&around, &many_normals) {
+            Fan::Grouped(groups) => assert_eq!(groups.len(), 2),
+            Fan::Whole(_) => panic!("two distinct normals are grouped"),
+        }
         for (i, corners) in many.iter().enumerate() {
             for (a, b) in corners.iter().zip(&two[i % 2]) {
                 assert!((*a - *b).length() < 1e-5, "face {i}: {a} against {b}");
@@ -1403,9 +1408,9 @@ mod tests {
                 (b - a).cross(c - a).normalize()
             })
             .collect();
-        let start = std::time::Instant::now();
         let fan = smooth_normals(&fan_positions, &fan_faces, &fan_normals, crease);
-        assert!(start.elapsed().as_secs_f32() < 2.0, "{:?}", start.elapsed());
+        let around: Vec<(u32, f32)> = (0..n as u32).map(|f| (f, 1.0)).collect();
+        assert!(matches!(Fan::of(&around, &fan_normals), Fan::Whole(_)));
         assert!((fan[0][0] - Vec3::Z).length() < 1e-3, "{}", fan[0][0]);
     }
 
