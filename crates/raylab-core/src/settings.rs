@@ -587,15 +587,31 @@ mod tests {
                 assert!(brightest > 1e6, "{stage}: {brightest}");
             }
         }
-        // The incoming stage (D, no ρ) summed over the most samples, on a 1 × 1 image whose
-        // rays meet the back wall near (0, 0, 1): r = (0.5, 1, −0.7), r² = 1.74, r̂·n̂ = 0.7/1.319,
-        // D ≈ 1e9 · 0.5307 / (4π · 1.74) = 2.4e7 there.
+        // The incoming stage (D, no ρ) on a 1 × 1 image looking at (0, −0.8, 1) on the back
+        // wall, above both blocks: its one sample's ray (the pixel's centre) meets the wall
+        // there. r = (0.5, 1.8, −0.7), r² = 3.98, r̂·n̂ = 0.7/√3.98 = 0.35088,
+        // D = 1e9 · 0.35088 / (4π · 3.98) = 7.0156e6.
         s.shading = crate::Shading::for_stage(crate::Stage::Incoming);
         s.camera = s.camera.with_resolution(1, 1);
+        s.camera.look_at(Vec3::new(0.0, -0.8, 1.0));
+        s.samples_per_pixel = 1;
+        let one = crate::render::render(&scene, &s).pixels[0];
+        let d = 1e9 * (0.7 / 3.98f64.sqrt()) / (4.0 * std::f64::consts::PI * 3.98);
+        assert!(
+            (f64::from(one.x) / d - 1.0).abs() < 1e-4,
+            "{one} against {d}"
+        );
+        assert_eq!(one, Vec3::splat(one.x), "white light");
+        // Summed over the most samples (jittered across the whole view, each D at most the
+        // 8.0e13 derived in `validate`): finite, and a mean of values within that bound.
         s.samples_per_pixel = MAX_SAMPLES;
         let many = crate::render::render(&scene, &s);
         assert!(many.pixels[0].is_finite(), "{}", many.pixels[0]);
-        assert!(many.pixels[0].x > 1e7, "{}", many.pixels[0]);
+        assert!(
+            many.pixels[0].min_element() > 0.0 && many.pixels[0].max_element() <= 8.0e13,
+            "{}",
+            many.pixels[0]
+        );
     }
 
     /// A model path written into a file in another folder is written relative to that folder
