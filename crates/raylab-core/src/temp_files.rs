@@ -107,7 +107,7 @@ mod tests {
         }
         assert_eq!(
             registry.registered(),
-            [a.clone()],
+            std::slice::from_ref(&a),
             "b forgotten when dropped"
         );
         assert!(
