@@ -94,8 +94,9 @@ pub struct RenderArgs {
     /// bvh-cost, shadow, or variance (of each pixel's mean; needs --samples 2 or more). Its
     /// legend is printed after the summary. Views are saved with the lab's display whatever
     /// --display says, so their colours are the legend's. Combines with --settings.
-    #[arg(long, default_value = "shaded", value_name = "VIEW")]
-    pub view: raylab_core::view::View,
+    /// [default: shaded, or the view a screenshot given to --settings was made with]
+    #[arg(long, value_name = "VIEW")]
+    pub view: Option<raylab_core::view::View>,
     /// Also write the render's settings as a scene file (.toml), to open in the workbench or
     /// render again with --scene-file.
     #[arg(long, value_name = "FILE.toml")]
@@ -373,7 +374,7 @@ impl RenderOptions {
 pub fn read_settings_file(path: &std::path::Path) -> anyhow::Result<RenderSettings> {
     let loaded = raylab_core::settings_file::read_file(path)?;
     for warning in &loaded.warnings {
-        let _ = writeln!(std::io::stderr(), "warning: {}: {warning}", path.display());
+        print_error_line(&format!("warning: {}: {warning}", path.display()));
     }
     Ok(loaded.settings)
 }
@@ -396,15 +397,45 @@ pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {
-            // --help and --version.
-            let _ = e.print();
-            return ExitCode::SUCCESS;
+            // --help and --version: a success only if the text was written (not to a full
+            // disk, `> /dev/full`).
+            let mut out = std::io::stdout();
+            let text = e.render();
+            let printed = if std::io::IsTerminal::is_terminal(&out) {
+                write!(out, "{}", text.ansi())
+            } else {
+                write!(out, "{text}")
+            }
+            .and_then(|()| out.flush());
+            return match printed {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+                Err(_) => ExitCode::FAILURE,
+            };
         }
         Err(e) => {
-            eprintln!("{}", one_line(&e.render().to_string()));
+            // Nothing here may panic on a stderr that cannot be written (`2> /dev/full`):
+            // the exit code says what happened.
+            print_error_line(&one_line(&e.render().to_string()));
             return ExitCode::from(2);
         }
     };
+    if matches!(cli.command, Some(Command::Render(_))) {
+        // First: the threads started below inherit the signals it blocks.
+        crate::signals::remove_temporary_files_when_stopped();
+    }
+    // Whatever runs outside the commands' own pools (the kernels' calibration, for one) runs
+    // on rayon's global pool: its thread count is given too, so `RAYON_NUM_THREADS` cannot
+    // ask for more than the cap.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(raylab_core::progressive::default_threads())
+        .thread_name(|i| format!("raylab-{i}"))
+        .build_global();
+    if cli.isa == "best"
+        && let Some(note) = Isa::environment_note()
+    {
+        print_error_line(&format!("warning: {note}"));
+    }
     let result = match choose_kernels(&cli.isa) {
         Err(e) => Err(e),
         Ok(()) => match cli.command {
@@ -417,7 +448,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            print_error_line(&format!("error: {e:#}"));
             // A pixel outside the image is a bad argument, as clap's refusals are.
             let bad_argument = e
                 .downcast_ref::<InspectError>()
@@ -429,6 +460,26 @@ pub fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// Writes one line to stderr: `text`, with what came from files (a scene's name, a model's
+/// file name, a line of a scene file) made safe for a terminal
+/// ([`raylab_core::inputs::escape_control`]: control characters escaped, a line break
+/// included, so the message stays one line). A stderr that cannot be written (`2> /dev/full`)
+/// is no panic: the exit code still says what happened.
+fn print_error_line(text: &str) {
+    let _ = writeln!(
+        std::io::stderr(),
+        "{}",
+        raylab_core::inputs::escape_control(text)
+    );
+}
+
+/// `text` of several lines made safe for a terminal line by line (see [`print_error_line`]).
+fn printable_lines(text: &str) -> String {
+    text.lines()
+        .map(|line| format!("{}\n", raylab_core::inputs::escape_control(line)))
+        .collect()
 }
 
 /// clap's message as one line: its first, with what it lists after a colon ("the following
@@ -445,25 +496,7 @@ fn one_line(text: &str) -> String {
     format!("{first} {}", listed.join(", "))
 }
 
-/// Ctrl+C (SIGINT) and `kill` (SIGTERM) end a render with exit code 130, removing any
-/// temporary file it was writing: an interrupted write leaves nothing behind (the destination
-/// keeps its old content, if it had one).
-fn remove_temporary_files_on_interrupt() {
-    let installed = ctrlc::set_handler(|| {
-        raylab_core::temp_files::remove_all();
-        let _ = writeln!(
-            std::io::stderr(),
-            "raylab: interrupted; its temporary files are removed"
-        );
-        std::process::exit(130);
-    });
-    if let Err(e) = installed {
-        let _ = writeln!(std::io::stderr(), "note: Ctrl+C is not handled: {e}");
-    }
-}
-
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
-    remove_temporary_files_on_interrupt();
     // Refuse what can't be written before spending time on the render.
     OutputFormat::from_path(&args.out)?;
     if let Some(path) = &args.save_scene {
@@ -481,31 +514,44 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     raylab_core::film::check_writable(&args.out)?;
     let settings = args.options.resolve_settings()?;
     settings.validate()?;
+    // A screenshot made with a debug view is that view again, unless --view says otherwise.
+    let view = args.view.unwrap_or(settings.view);
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;
     raylab_core::memory::check(
         format!("a {}×{} render", c.width, c.height),
-        settings.memory_estimate(args.view),
+        settings.memory_estimate(view),
     )?;
-    if args.view == raylab_core::view::View::Variance && settings.samples_per_pixel < 2 {
+    if view == raylab_core::view::View::Variance && settings.samples_per_pixel < 2 {
         anyhow::bail!(
             "the variance view needs 2 or more samples per pixel (--samples 2 or more): it \
              measures the spread between a pixel's samples"
         );
     }
-    let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-render-{i}"));
-    if let Some(n) = args.options.threads {
-        pool = pool.num_threads(n.into());
-    }
-    let pool = pool.build().context("could not start the render threads")?;
+    // What the PNG carries and the scene file says are made now: what cannot be written
+    // (a seed a scene file cannot hold) is refused before the render, not after it.
+    let out_folder = args.out.parent().unwrap_or(std::path::Path::new(""));
+    let mut carried = settings.relative_to(out_folder);
+    carried.view = view;
+    let text = raylab_core::settings_file::settings_text(&carried).map_err(anyhow::Error::msg)?;
+    let scene_text = match &args.save_scene {
+        Some(path) => {
+            let folder = path.parent().unwrap_or(std::path::Path::new(""));
+            let text = raylab_core::scene_file::to_text(&settings, folder)
+                .map_err(|reason| anyhow::anyhow!("--save-scene '{}': {reason}", path.display()))?;
+            Some((path, text))
+        }
+        None => None,
+    };
+    let pool = thread_pool("render", args.options.threads)?;
 
     let choice = &settings.scene;
     let (scene, warnings) = pool.install(|| choice.load_with_warnings())?;
     for warning in warnings {
-        let _ = writeln!(std::io::stderr(), "warning: {warning}");
+        print_error_line(&format!("warning: {warning}"));
     }
     let start = Instant::now();
-    let (image, display, legend) = match args.view {
+    let (image, display, legend) = match view {
         raylab_core::view::View::Shaded => (
             pool.install(|| try_render(&scene, &settings))?,
             settings.display,
@@ -519,17 +565,15 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let elapsed = start.elapsed();
     // A PNG carries its settings, so the image alone reopens to the same render.
-    let mut carried = settings.clone();
-    carried.view = args.view;
-    let text = raylab_core::settings_file::settings_text(&carried);
     let keyword = raylab_core::settings_file::PNG_KEYWORD;
     image.save_with_text(&args.out, &display, Some((keyword, &text)))?;
-    if let Some(path) = &args.save_scene {
-        raylab_core::scene_file::save(&settings, path)?;
-    }
+    let saved_scene = match scene_text {
+        Some((path, text)) => Some(save_scene_file(path, &text)?),
+        None => None,
+    };
     if let Some(note) = raylab_core::render::camera_sees_nothing(&scene, &settings) {
         // A black image the camera is to blame for: say so (the image is written all the same).
-        let _ = writeln!(std::io::stderr(), "note: {note}");
+        print_error_line(&format!("note: {note}"));
     }
 
     let c = &settings.camera;
@@ -551,6 +595,15 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         args.out.display()
     );
     let mut text = summary + "\n";
+    if let Some((path, asked)) = &saved_scene
+        && path != asked
+    {
+        text += &format!(
+            "scene file → {} ('{}' exists, and is left as it is)\n",
+            path.display(),
+            asked.display()
+        );
+    }
     if let Some(legend) = legend {
         text += &format!("{} view:\n", legend.title);
         for line in &legend.lines {
@@ -559,6 +612,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
     // The image is written: a reader that went away (`| head`, `| true`) is no failure, and
     // nothing may panic on a stdout that cannot be written (`> /dev/full`).
+    let text = printable_lines(&text);
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         Ok(()) => Ok(()),
@@ -570,7 +624,26 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
 }
 
-/// `--save-scene`'s file: a `.toml` in a folder that exists.
+/// Writes `--save-scene`'s text at `path`, or, if a file is there (the scene file the render
+/// was read from, or any other), at the first free name `NAME-1.toml`, `NAME-2.toml`, … as
+/// screenshots are named: an existing file is never replaced. Returns the path written and
+/// the one asked for.
+fn save_scene_file(
+    path: &std::path::Path,
+    text: &str,
+) -> anyhow::Result<(std::path::PathBuf, std::path::PathBuf)> {
+    let written =
+        raylab_core::film::write_to_free_name(path, text.as_bytes()).map_err(|e| match e {
+            raylab_core::film::SaveError::Write { path, reason } => {
+                anyhow::anyhow!("could not write scene file '{}': {reason}", path.display())
+            }
+            other => anyhow::Error::new(other),
+        })?;
+    Ok((written, path.to_path_buf()))
+}
+
+/// `--save-scene`'s file: a `.toml` in a folder that exists and takes new files (checked by
+/// creating one). A file already there is not replaced ([`save_scene_file`] picks a free name).
 fn check_scene_destination(path: &std::path::Path) -> anyhow::Result<()> {
     let toml = path
         .extension()
@@ -590,13 +663,12 @@ fn check_scene_destination(path: &std::path::Path) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    if path.is_dir() {
-        anyhow::bail!(
-            "could not write scene file '{}': it is a folder",
-            path.display()
-        );
-    }
-    Ok(())
+    raylab_core::film::check_file_destination(path).map_err(|e| match e {
+        raylab_core::film::SaveError::Write { reason, .. } => {
+            anyhow::anyhow!("could not write scene file '{}': {reason}", path.display())
+        }
+        other => anyhow::Error::new(other),
+    })
 }
 
 fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
@@ -614,11 +686,7 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
         })
         .context(format!("--pixel {x},{y}")));
     }
-    let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-inspect-{i}"));
-    if let Some(n) = args.options.threads {
-        pool = pool.num_threads(n.into());
-    }
-    let pool = pool.build().context("could not start the threads")?;
+    let pool = thread_pool("inspect", args.options.threads)?;
     let scene = pool.install(|| settings.scene.load())?;
     let inspection =
         inspect_pixel(&scene, &settings, x, y).with_context(|| format!("--pixel {x},{y}"))?;
@@ -627,17 +695,13 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
     if args.json {
         writeln!(out, "{}", serde_json::to_string(&inspection)?)?;
     } else {
-        write!(out, "{}", inspection.to_text())?;
+        write!(out, "{}", printable_lines(&inspection.to_text()))?;
     }
     Ok(())
 }
 
 fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
-    let mut pool = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("raylab-bench-{i}"));
-    if let Some(n) = args.threads {
-        pool = pool.num_threads(n.into());
-    }
-    let pool = pool.build().context("could not start the bench threads")?;
+    let pool = thread_pool("bench", args.threads)?;
     let scenes: Vec<SceneChoice> = match (&args.obj, &args.scene) {
         (Some(path), _) => vec![SceneChoice::Obj(path.clone())],
         (None, Some(choice)) => vec![choice.clone()],
@@ -696,7 +760,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             write!(
                 out,
                 "{:<10} {:>9} {:>6} {:>6} {:>10.2} {:>12.1} {:>12.1} {:>10.2}",
-                r.scene,
+                raylab_core::inputs::escape_control(&r.scene),
                 r.triangles,
                 kind.name(),
                 isa.name(),
@@ -726,6 +790,27 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// A pool of `threads` threads named `raylab-{what}-N`, or by default
+/// [`raylab_core::progressive::default_threads`] (`RAYON_NUM_THREADS` up to the cap `--threads`
+/// has, else one per core; a value beyond it is warned of). The count is always given
+/// explicitly, so rayon never reads `RAYON_NUM_THREADS` itself.
+fn thread_pool(what: &'static str, threads: Option<u16>) -> anyhow::Result<rayon::ThreadPool> {
+    let threads = match threads {
+        Some(n) => usize::from(n),
+        None => {
+            if let Some(note) = raylab_core::progressive::default_threads_note() {
+                print_error_line(&format!("warning: {note}"));
+            }
+            raylab_core::progressive::default_threads()
+        }
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(move |i| format!("raylab-{what}-{i}"))
+        .build()
+        .with_context(|| format!("could not start the {what} threads"))
 }
 
 fn parse_finite(s: &str) -> Result<f32, String> {

@@ -2,6 +2,7 @@
 
 mod app;
 mod cli;
+mod signals;
 
 fn main() -> std::process::ExitCode {
     cli::main()

@@ -1,18 +1,20 @@
-//! Regression tests for the faults of issue 10 fixed here: each checks the message a user
-//! gets, that nothing crashed, and that nothing was written that should not have been.
+//! Inputs that once crashed the program, overwrote or lost a file, or gave a wrong answer
+//! silently, run as a user runs them: each test checks the message a user gets, that nothing
+//! crashed, and that nothing was written that should not have been.
 //!
-//! * Fault 3: coincident and degenerate geometry (a million copies of one triangle) loads and
-//!   builds in linear time, and the structures still answer as the brute-force loop does.
-//! * Fault 4: a render or bench too large for the memory the process may use is refused at
-//!   once, saying how much it needs and how much there is, instead of aborting.
-//! * Fault 5: huge but finite light (1e38 W, N = 1e38) is refused, naming the bound, instead of
-//!   writing infinite pixels.
-//! * Fault 6: a light outside the box no longer leaks in along its edges, and a camera exactly
-//!   on a wall sees the room, not the wall.
+//! * Coincident and degenerate geometry (a million copies of one triangle) loads and builds,
+//!   and the structures still answer as the brute-force loop does.
+//! * A render or bench too large for the memory the process may use, or a texture too large
+//!   to decode, is refused at once, saying how much it needs and how much there is.
+//! * Huge but finite light is refused, naming the bound, instead of writing infinite pixels.
+//! * A light outside the box does not leak in along its edges; a camera on a wall sees the
+//!   room.
+//! * Files: paths that are not UTF-8, FIFOs and devices, oversized or damaged screenshots,
+//!   text with control characters, scene files saved over their input or out of range.
+//! * The process: signals during a write, a full stderr or stdout, thread counts and kernel
+//!   names from the environment.
 
 mod common;
-
-use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use raylab_core::accel::AccelKind;
@@ -25,7 +27,7 @@ use common::rays::random_dir;
 use common::{raylab, stderr};
 
 // ---------------------------------------------------------------------------------------------
-// Fault 3: many copies of one triangle.
+// Many copies of one triangle.
 
 /// How many copies the big-input tests use: a million in release builds, where it takes well
 /// under a second; 200,000 in the tests' debug builds, to stay quick there (the fault took
@@ -73,10 +75,9 @@ fn rays_at(triangles: &[Triangle], count: usize, seed: u64) -> Vec<Ray> {
         .collect()
 }
 
-/// Builds `triangles` into each kind of structure (with the best kernels), timing each build,
-/// and checks every answer on `rays` against the brute-force loop, bit for bit. Returns the
-/// slowest build and how many rays hit.
-fn build_and_compare(triangles: &[Triangle], rays: &[Ray]) -> (Duration, usize) {
+/// Builds `triangles` into each kind of structure (with the best kernels) and checks every
+/// answer on `rays` against the brute-force loop, bit for bit. Returns how many rays hit.
+fn build_and_compare(triangles: &[Triangle], rays: &[Ray]) -> usize {
     let materials = vec![Material::diffuse("m", Vec3::ONE)];
     let expected: Vec<_> = rays
         .iter()
@@ -87,16 +88,13 @@ fn build_and_compare(triangles: &[Triangle], rays: &[Ray]) -> (Duration, usize) 
             )
         })
         .collect();
-    let mut slowest = Duration::ZERO;
     for kind in [AccelKind::Bvh2, AccelKind::Bvh8] {
-        let start = Instant::now();
         let scene = Scene::with_accel(
             triangles.to_vec(),
             materials.clone(),
             kind,
             raylab_core::scene::best_isa(),
         );
-        slowest = slowest.max(start.elapsed());
         for (ray, (closest, occluded)) in rays.iter().zip(&expected) {
             assert_eq!(
                 scene.closest_intersection(ray, f32::INFINITY),
@@ -106,21 +104,19 @@ fn build_and_compare(triangles: &[Triangle], rays: &[Ray]) -> (Duration, usize) 
             assert_eq!(scene.occluded(ray, 5.0), *occluded, "{kind}: {ray:?}");
         }
     }
-    (slowest, expected.iter().filter(|e| e.0.is_some()).count())
+    expected.iter().filter(|e| e.0.is_some()).count()
 }
 
-/// A million copies of one triangle (the fault's OBJ, built directly): the build is linear and
-/// quick, the copies leave the tree (a ray tests one triangle, not a million), and every answer
-/// is the brute-force loop's: the first copy, index 0.
+/// A million copies of one triangle (an OBJ file of them, built directly): the copies leave the
+/// tree (a ray tests one triangle, not a million), and every answer is the brute-force loop's:
+/// the first copy, index 0. How fast it builds is measured by the `degenerate` benchmark
+/// (`benches/trace.rs`), not here: a busy machine would fail a time limit by chance.
 #[test]
 fn a_million_copies_of_one_triangle_build_quickly_and_answer_as_brute_force() {
     let triangles = vec![the_triangle(); COPIES];
     let rays = rays_at(&triangles, 40, 31);
-    let (build, hits) = build_and_compare(&triangles, &rays);
+    let hits = build_and_compare(&triangles, &rays);
     assert!(hits >= 15, "{hits} of 40 rays hit");
-    // Linear: well under a second in debug and release builds alike (the fault: 83 s for
-    // 300,000 copies, in the OBJ loader; the tree's build itself was never quadratic).
-    assert!(build < Duration::from_secs(3), "built in {build:?}");
     let bvh = raylab_core::accel::bvh::Bvh::build(&triangles);
     assert_eq!(bvh.nodes.len(), 1, "one leaf");
     assert_eq!(bvh.indices, [0], "the first copy is the one kept");
@@ -157,9 +153,8 @@ fn triangles_with_one_centroid_build_a_shallow_tree_and_answer_as_brute_force() 
     let log2 = (n as f64).log2().ceil() as usize;
     assert!(bvh.depth() <= log2 + 42, "depth {} for {n}", bvh.depth());
     let rays = rays_at(&triangles, 200, 33);
-    let (build, hits) = build_and_compare(&triangles, &rays);
+    let hits = build_and_compare(&triangles, &rays);
     assert!(hits >= 100, "{hits} of 200 rays hit");
-    assert!(build < Duration::from_secs(5), "built in {build:?}");
 }
 
 /// A million triangles all in one point (zero area): no ray can hit them, so the tree is
@@ -172,13 +167,13 @@ fn a_million_triangles_in_one_point_build_an_empty_tree() {
     assert!(bvh.nodes.is_empty() && bvh.indices.is_empty());
     let mut rays = rays_at(&triangles, 20, 34);
     rays.push(Ray::new(Vec3::ZERO, p));
-    let (_, hits) = build_and_compare(&triangles, &rays);
+    let hits = build_and_compare(&triangles, &rays);
     assert_eq!(hits, 0);
 }
 
-/// The fault's OBJ file: one triangle, then `f 1 2 3` over and over (8 MB for a million). It
-/// loads in linear time, the copies are left out with a warning saying how many, and the
-/// command line renders it, printing that warning.
+/// An OBJ file of one triangle, then `f 1 2 3` over and over (8 MB for a million): the copies
+/// are left out with a warning saying how many, and the command line renders it, printing that
+/// warning. (It took minutes at 300,000 copies; the `degenerate` benchmark times it now.)
 #[test]
 fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     let dir = tempfile::tempdir().unwrap();
@@ -189,10 +184,7 @@ fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     text.push_str("f 1 2 4\nf 3 1 2\n");
     std::fs::write(&obj, &text).unwrap();
 
-    let start = Instant::now();
     let (scene, warnings) = raylab_core::scene::obj::obj_scene_with_warnings(&obj).unwrap();
-    let took = start.elapsed();
-    assert!(took < Duration::from_secs(5), "loaded in {took:?}");
     // The box's 30 triangles and the one face.
     assert_eq!(
         scene.triangles.len(),
@@ -225,7 +217,7 @@ fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fault 5: huge but finite light.
+// Huge but finite light.
 
 /// `raylab render ARGS… --out DIR/x.exr`, which must be refused: exit code 1, one line naming
 /// `names`, and no file (nor a temporary one) left in the folder.
@@ -297,7 +289,7 @@ fn the_largest_allowed_light_writes_a_finite_exr() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fault 6: light through the box's edges; a camera on a wall.
+// Light through the box's edges; a camera on a wall.
 
 /// The `shadows` stage (figure 6: ρ·D with shadows, no indirect term) of the box from the
 /// default camera, with the light at `light`.
@@ -354,18 +346,47 @@ fn a_light_outside_the_box_lights_nothing_inside() {
 
 /// The corner pixels themselves, where the fault lit the floor: the pixel centres on the image's
 /// diagonal from (96, 96) to (127, 127) see the edge where the floor meets the right wall
-/// (x = y = 1). Lit from inside (the lab's light) they are lit as before, but for 104–112,
-/// which lie in the short block's shadow; from outside all are dark.
+/// (x = y = 1: the ray through (i + ½, i + ½) runs along x = y). From outside all are dark.
+/// From inside (the lab's light) each is lit exactly when the segment from its point to the
+/// light crosses neither block: derived here from the geometry, the point found and the
+/// segment tested against the blocks' twenty triangles by the reference intersection
+/// (Cramer's rule, one triangle at a time), not by the renderer's shadow rays.
 #[test]
 fn the_floor_edge_is_lit_from_inside_and_dark_from_outside() {
-    let inside = shadows_stage(raylab_core::PointLight::default().position, 128);
+    use raylab_core::intersect::{closest_intersection_brute_force, intersect_triangle};
+    let light = raylab_core::PointLight::default().position;
+    let inside = shadows_stage(light, 128);
     let outside = shadows_stage(Vec3::new(1.5, 0.0, 0.0), 128);
+    let scene = raylab_core::scene::cornell_box();
+    let camera = common::settings(raylab_core::Stage::Shadows, 128).camera;
+    let mut shadowed = Vec::new();
     for i in 96..128 {
-        let in_blocks_shadow = (104..=112).contains(&i);
+        let ray = camera.pixel_ray(i, i);
+        let hit = closest_intersection_brute_force(&ray, &scene.triangles, f32::INFINITY)
+            .expect("the edge is hit");
+        let p = hit.position;
+        assert!(
+            (p.x - 1.0).abs() < 1e-5 && (p.y - 1.0).abs() < 1e-5,
+            "({i}, {i}) sees {p}, not the edge"
+        );
+        let to_light = light - p;
+        let segment = Ray::new(p, to_light);
+        let blocked = scene.triangles[10..30]
+            .iter()
+            .any(|t| intersect_triangle(&segment, t, to_light.length()).is_some());
         let lit = inside.get(i, i).y > 0.05;
-        assert_eq!(lit, !in_blocks_shadow, "({i}, {i}): {}", inside.get(i, i));
+        assert_eq!(lit, !blocked, "({i}, {i}) at {p}: {}", inside.get(i, i));
+        if blocked {
+            shadowed.push(i);
+        }
         assert_eq!(outside.get(i, i), Vec3::ZERO, "({i}, {i})");
     }
+    // Both cases occur along the edge (the short block's shadow falls across it), so the
+    // comparison above tests something.
+    assert!(
+        !shadowed.is_empty() && shadowed.len() < 32,
+        "shadowed: {shadowed:?}"
+    );
 }
 
 /// A camera exactly in the box's top-left front corner (−1, −1, −1), looking along +z, stands
@@ -423,24 +444,22 @@ fn a_camera_on_a_wall_sees_what_is_in_front_of_it() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fault 4: the largest images under a memory limit.
+// The largest images under a memory limit.
 
-/// Runs `raylab ARGS…` under `ulimit -v KIB` (the address-space limit the fault was seen
-/// with): its output and how long it took.
-fn raylab_limited(kib: u32, args: &[&str]) -> (std::process::Output, Duration) {
-    let start = Instant::now();
-    let out = std::process::Command::new("sh")
+/// Runs `raylab ARGS…` under `ulimit -v KIB` (an address-space limit): its output.
+fn raylab_limited(kib: u32, args: &[&str]) -> std::process::Output {
+    std::process::Command::new("sh")
         .arg("-c")
         .arg(format!("ulimit -v {kib}; exec \"$0\" \"$@\""))
         .arg(env!("CARGO_BIN_EXE_raylab"))
         .args(args)
         .output()
-        .expect("run raylab under sh");
-    (out, start.elapsed())
+        .expect("run raylab under sh")
 }
 
-/// Refused at once (well under the seconds a 16384² render takes): exit code 1, one line saying
-/// what is needed and what the limit leaves, and no image nor temporary file.
+/// Refused before any work: exit code 1, one line saying what is needed and what the limit
+/// leaves, and no image nor temporary file. (Had the render started, the image's allocation
+/// would have failed under the limit with another message, "could not allocate …".)
 fn assert_refused_for_memory(kib: u32, args: &[&str], out: &str, needs: &str) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join(out);
@@ -448,7 +467,7 @@ fn assert_refused_for_memory(kib: u32, args: &[&str], out: &str, needs: &str) {
     if args[0] == "render" {
         argv.extend(["--out", out.to_str().unwrap()]);
     }
-    let (out, took) = raylab_limited(kib, &argv);
+    let out = raylab_limited(kib, &argv);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
     assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
@@ -461,18 +480,17 @@ fn assert_refused_for_memory(kib: u32, args: &[&str], out: &str, needs: &str) {
             .ends_with(" GiB is available (address-space limit: ulimit -v)"),
         "{args:?}: {err}"
     );
-    assert!(took < Duration::from_secs(5), "{args:?} took {took:?}");
     assert!(
         common::files_in(dir.path()).is_empty(),
         "{args:?} wrote a file"
     );
 }
 
-/// The fault: a 16384 × 16384 render under a 4 GB limit aborted ("memory allocation … failed",
-/// exit code 134) after rendering, needing 6.3 GB (PNG) to 9.4 GB (EXR). It now needs one image,
+/// A 16384 × 16384 render under a 4 GB limit aborted ("memory allocation … failed", exit code
+/// 134) after rendering, needing 6.3 GB (PNG) to 9.4 GB (EXR). It now needs one image,
 /// 3 GiB, plus 64 MiB for the program: 3.1 GiB. That fits under `ulimit -v 4000000` (3.8 GiB),
 /// so here the limit is 3,000,000 KiB (2.9 GiB, less what the program already uses): refused.
-/// Under the fault's limit, what still does not fit is refused as well: the variance view
+/// Under the 4 GB limit, what still does not fit is refused as well: the variance view
 /// (32 bytes a pixel: 8.1 GiB), and the bench (its rays, 64 bytes a pixel: 16.4 GiB).
 #[test]
 fn a_render_too_large_for_the_memory_is_refused_at_once() {
@@ -500,5 +518,704 @@ fn a_render_too_large_for_the_memory_is_refused_at_once() {
         &[&["bench", "--scene", "cornell"][..], &side].concat(),
         "",
         "a 16384×16384 bench needs about 16.1 GiB",
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Files: names, kinds, sizes and contents raylab must not trust.
+
+/// `raylab ARGS…` run in `dir`, killed and failed if it has not finished after a minute: for
+/// inputs that used to make it wait for ever (a FIFO). The minute is not a speed limit, only
+/// the line between "finished" and "waiting".
+fn raylab_in(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run raylab");
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("raylab {args:?} was still waiting after a minute");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A one-line error (exit code 1, no panic) containing every one of `says`.
+fn assert_one_line_error(out: &std::process::Output, says: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for s in says {
+        assert!(err.contains(s), "'{err}' should say '{s}'");
+    }
+}
+
+const TETRAHEDRON: &str =
+    "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 0 1 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+/// A different model, to catch a path resolved against the wrong folder.
+const WEDGE: &str = "v 0 0 0\nv 2 0 0\nv 0 0 1\nv 0 3 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+/// A model whose path is not UTF-8 (`--obj $'m\xff.obj'`, or a scene file in such a folder)
+/// is refused before the render, naming it; it used to panic after the whole render, writing
+/// no image.
+#[cfg(unix)]
+#[test]
+fn a_model_path_that_is_not_utf8_is_refused_before_the_render() {
+    use std::os::unix::ffi::OsStrExt as _;
+    let dir = tempfile::tempdir().unwrap();
+    let name = std::ffi::OsStr::from_bytes(b"m\xff.obj");
+    std::fs::write(dir.path().join(name), TETRAHEDRON).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(["render", "--out", "x.png", "--obj"])
+        .arg(name)
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_one_line_error(
+        &out,
+        &["invalid model path 'm\u{fffd}.obj'", "is not UTF-8 text"],
+    );
+    assert!(!dir.path().join("x.png").exists());
+    // A scene file in a folder whose name is not UTF-8, naming a model beside it.
+    let folder = dir.path().join(std::ffi::OsStr::from_bytes(b"scenes-\xfe"));
+    std::fs::create_dir(&folder).unwrap();
+    std::fs::write(folder.join("m.obj"), TETRAHEDRON).unwrap();
+    let mut spec = raylab_core::scene::SceneChoice::Bunny.spec();
+    spec.models[0].file = folder.join("m.obj");
+    let settings = raylab_core::RenderSettings {
+        scene: raylab_core::scene::SceneChoice::Custom(Box::new(spec)),
+        ..common::settings(raylab_core::Stage::Lab, 8)
+    };
+    // The file names the model beside it, `m.obj`, which is UTF-8; the folder is not.
+    let text = raylab_core::scene_file::to_text(&settings, &folder).unwrap();
+    assert!(text.contains("file = \"m.obj\""), "{text}");
+    std::fs::write(folder.join("s.toml"), text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(["render", "--out", "y.png", "--scene-file"])
+        .arg(folder.join("s.toml"))
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_one_line_error(&out, &["scene.models[0].file", "is not UTF-8 text"]);
+    assert!(!dir.path().join("y.png").exists());
+}
+
+/// A FIFO given as the model, the scene file, the settings file or a material library is
+/// refused at once (it kept raylab waiting for ever), and /dev/zero (read until memory ran
+/// out) likewise, each saying what it is.
+#[cfg(unix)]
+#[test]
+fn fifos_and_devices_are_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    raylab_core::inputs::make_fifo(&fifo);
+    let fifo = fifo.to_str().unwrap();
+    for (flag, input) in [
+        ("--obj", fifo),
+        ("--scene-file", fifo),
+        ("--settings", fifo),
+        ("--obj", "/dev/zero"),
+        ("--settings", "/dev/zero"),
+    ] {
+        let out = raylab_in(dir.path(), &["render", "--out", "x.png", flag, input]);
+        let what = if input == fifo {
+            "not a regular file (a FIFO)"
+        } else {
+            "not a regular file (a character device)"
+        };
+        assert_one_line_error(&out, &[what]);
+        assert!(!dir.path().join("x.png").exists());
+    }
+    // A material library that is a FIFO: a warning, and the model renders.
+    raylab_core::inputs::make_fifo(&dir.path().join("lib.mtl"));
+    std::fs::write(
+        dir.path().join("m.obj"),
+        format!("mtllib lib.mtl\n{TETRAHEDRON}"),
+    )
+    .unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &[
+            "render", "--out", "m.png", "--obj", "m.obj", "--width", "16", "--height", "16",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("'lib.mtl': it is not a regular file (a FIFO)"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// A screenshot whose settings text is compressed and inflates far beyond any settings (8 MiB
+/// of spaces in a few kilobytes; the fault's file held 3 GiB in 3 MB and aborted
+/// `render --settings`) is refused at once, saying so.
+#[test]
+fn a_screenshot_whose_settings_inflate_without_end_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("bomb.png");
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, 2, 2);
+        encoder.set_color(png::ColorType::Rgb);
+        let mut writer = encoder.write_header().unwrap();
+        let mut chunk = png::text_metadata::ITXtChunk::new(
+            raylab_core::settings_file::PNG_KEYWORD,
+            " ".repeat(8 << 20),
+        );
+        chunk.compressed = true;
+        writer.write_text_chunk(&chunk).unwrap();
+        writer.write_image_data(&[0; 12]).unwrap();
+        writer.finish().unwrap();
+    }
+    assert!(bytes.len() < 64 << 10, "{}", bytes.len());
+    std::fs::write(&shot, &bytes).unwrap();
+    let out = raylab(&[
+        "render",
+        "--out",
+        dir.path().join("x.png").to_str().unwrap(),
+        "--settings",
+        shot.to_str().unwrap(),
+    ]);
+    assert_one_line_error(
+        &out,
+        &[
+            "bomb.png",
+            "raylab-settings text (iTXt) inflates to more than the 1 MiB settings may be",
+        ],
+    );
+}
+
+/// Text from files reaches the terminal escaped: a scene's name with an ANSI sequence in the
+/// summary line, a material library's name in a warning. No escape byte is printed.
+#[test]
+fn control_characters_from_files_are_escaped_in_what_is_printed() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut settings = common::settings(raylab_core::Stage::Lab, 8);
+    let mut spec = raylab_core::scene::SceneChoice::Cornell.spec();
+    spec.name = "\u{1b}[31mred\u{1b}[0m\ttab".into();
+    spec.blocks = false;
+    settings.scene = raylab_core::scene::SceneChoice::Custom(Box::new(spec));
+    let text = raylab_core::scene_file::to_text(&settings, dir.path()).unwrap();
+    std::fs::write(dir.path().join("s.toml"), text).unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &["render", "--out", "x.png", "--scene-file", "s.toml"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.starts_with("rendered \\u{1b}[31mred\\u{1b}[0m\\u{9}tab 8×8"),
+        "{stdout}"
+    );
+    std::fs::write(
+        dir.path().join("m.obj"),
+        format!("mtllib \u{1b}]0;title\u{7}.mtl\n{TETRAHEDRON}"),
+    )
+    .unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &[
+            "render", "--out", "m.png", "--obj", "m.obj", "--width", "8", "--height", "8",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("\\u{1b}]0;title\\u{7}.mtl"), "{err}");
+    assert!(!out.stdout.contains(&0x1b) && !out.stderr.contains(&0x1b));
+}
+
+/// A texture whose header says 16384² (the fault's 782 KB PNG decodes to 4 GiB) is counted in
+/// the memory estimate from its header: refused before the render under a 3 GB limit, rather
+/// than aborting while it decodes.
+#[test]
+fn a_texture_too_large_for_the_memory_is_refused_before_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut header = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut header, 16384, 16384);
+        encoder.set_color(png::ColorType::Rgb);
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_chunk(png::chunk::IDAT, &[0; 8]).unwrap();
+    }
+    std::fs::write(dir.path().join("huge.png"), &header).unwrap();
+    std::fs::write(dir.path().join("m.mtl"), "newmtl glaze\nmap_Kd huge.png\n").unwrap();
+    std::fs::write(
+        dir.path().join("m.obj"),
+        format!("mtllib m.mtl\nusemtl glaze\n{TETRAHEDRON}"),
+    )
+    .unwrap();
+    let obj = dir.path().join("m.obj");
+    let out = raylab_limited(
+        3_000_000,
+        &[
+            "render",
+            "--obj",
+            obj.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            dir.path().join("x.png").to_str().unwrap(),
+        ],
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with("error: a 8×8 render needs about 4.1 GiB but only "),
+        "{err}"
+    );
+    assert!(!dir.path().join("x.png").exists());
+}
+
+/// An OBJ naming one library of 2,000 materials 8,000 times (it asked for 5.4 GB) renders
+/// under a 2 GB address-space limit: the library is read once.
+#[test]
+fn a_library_named_thousands_of_times_is_read_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let mtl: String = (0..2000)
+        .map(|i| format!("newmtl m{i}\nKd 1 1 1\n"))
+        .collect();
+    std::fs::write(dir.path().join("lib.mtl"), mtl).unwrap();
+    std::fs::write(
+        dir.path().join("m.obj"),
+        format!("{}{TETRAHEDRON}", "mtllib lib.mtl\n".repeat(8000)),
+    )
+    .unwrap();
+    let out = raylab_limited(
+        2_000_000,
+        &[
+            "render",
+            "--obj",
+            dir.path().join("m.obj").to_str().unwrap(),
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--out",
+            dir.path().join("x.png").to_str().unwrap(),
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(stderr(&out), "");
+}
+
+/// 100,000 missing material libraries: three warnings name the first three, one counts the
+/// rest (they printed 12.8 MB of warnings).
+#[test]
+fn many_missing_libraries_make_a_few_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj: String = (0..100_000)
+        .map(|i| format!("mtllib gone-{i}.mtl\n"))
+        .chain([TETRAHEDRON.to_owned()])
+        .collect();
+    std::fs::write(dir.path().join("m.obj"), obj).unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &[
+            "render", "--out", "x.png", "--obj", "m.obj", "--width", "8", "--height", "8",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 4, "{err}");
+    assert!(
+        err.lines().last().unwrap().ends_with(
+            "m.obj: 99997 more material libraries could not be read either; their materials \
+             are not used"
+        ),
+        "{err}"
+    );
+}
+
+/// `--save-scene sub/s.toml` of an `--obj m.obj` render names the model relative to the scene
+/// file (`../m.obj`): read from another folder, the scene file renders the same model, not
+/// `sub/m.obj` (a different model planted there). A screenshot made in folder A and rendered
+/// again with `--settings ../A/shot.png` from folder B loads A's model, not B's.
+#[test]
+fn model_paths_are_relative_to_the_file_that_names_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path();
+    for sub in ["A", "B", "A/sub"] {
+        std::fs::create_dir(root.join(sub)).unwrap();
+    }
+    std::fs::write(root.join("A/m.obj"), TETRAHEDRON).unwrap();
+    std::fs::write(root.join("A/sub/m.obj"), WEDGE).unwrap();
+    std::fs::write(root.join("B/m.obj"), WEDGE).unwrap();
+    let size = ["--width", "48", "--height", "48"];
+    let out = raylab_in(
+        &root.join("A"),
+        &[
+            &["render", "--obj", "m.obj", "--out", "shot.png"][..],
+            &["--save-scene", "sub/s.toml"],
+            &size,
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let scene = std::fs::read_to_string(root.join("A/sub/s.toml")).unwrap();
+    assert!(scene.contains("file = \"../m.obj\""), "{scene}");
+    let shot = image::open(root.join("A/shot.png")).unwrap().to_rgb8();
+    // From B, both files: the same image as the shot (A's tetrahedron).
+    for (flag, file) in [
+        ("--scene-file", "../A/sub/s.toml"),
+        ("--settings", "../A/shot.png"),
+    ] {
+        let out = raylab_in(
+            &root.join("B"),
+            &["render", flag, file, "--out", "again.png"],
+        );
+        assert!(out.status.success(), "{flag}: {}", stderr(&out));
+        let again = image::open(root.join("B/again.png")).unwrap().to_rgb8();
+        assert_eq!(again, shot, "{flag} {file} rendered another model");
+    }
+    // The wedge does look different: the comparison above can fail.
+    let out = raylab_in(
+        &root.join("B"),
+        &[
+            &["render", "--obj", "m.obj", "--out", "wedge.png"][..],
+            &size,
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_ne!(
+        image::open(root.join("B/wedge.png")).unwrap().to_rgb8(),
+        shot
+    );
+}
+
+/// A PNG written with `--view normals` carries that view, and `render --settings` of it draws
+/// the normals again, pixel for pixel (it drew the shaded image); `--view` still overrides.
+#[test]
+fn a_debug_views_screenshot_renders_that_view_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let size = ["--width", "40", "--height", "30"];
+    let run = |args: &[&str]| {
+        let out = raylab_in(dir.path(), args);
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+        image::open(dir.path().join(args[2])).unwrap().to_rgb8()
+    };
+    let normals = run(&[
+        &["render", "--out", "n.png", "--view", "normals"][..],
+        &size,
+    ]
+    .concat());
+    let shaded = run(&[&["render", "--out", "s.png"][..], &size].concat());
+    assert_ne!(normals, shaded);
+    assert_eq!(
+        run(&["render", "--out", "again.png", "--settings", "n.png"]),
+        normals
+    );
+    assert_eq!(
+        run(&[
+            "render",
+            "--out",
+            "over.png",
+            "--settings",
+            "n.png",
+            "--view",
+            "shaded"
+        ]),
+        shaded
+    );
+}
+
+/// `--save-scene` is checked before the render: a folder that refuses new files and a seed a
+/// scene file cannot hold (above 2⁶³ − 1) are refused first (the OBJ named alongside, which
+/// would fail to load, is never reached). Onto an existing file — the scene file being read,
+/// or any other — it writes the first free name, `-1`, `-2`, …, and says so: nothing is
+/// replaced.
+#[test]
+fn save_scene_never_replaces_a_file_and_is_checked_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = ["--obj", "missing.obj"];
+    if std::path::Path::new("/sys").is_dir() {
+        let out = raylab_in(
+            dir.path(),
+            &[
+                &["render", "--out", "x.png", "--save-scene", "/sys/s.toml"][..],
+                &missing,
+            ]
+            .concat(),
+        );
+        assert_one_line_error(&out, &["could not write scene file '/sys/s.toml'"]);
+    }
+    let out = raylab_in(
+        dir.path(),
+        &[
+            &["render", "--out", "x.png", "--save-scene", "s.toml"][..],
+            &["--seed", "9223372036854775808"],
+            &missing,
+        ]
+        .concat(),
+    );
+    assert_one_line_error(&out, &["--save-scene 's.toml'", "seed 9223372036854775808"]);
+    assert!(common::files_in(dir.path()).is_empty());
+
+    // Onto the scene file it reads: a hand-written file, comments and all, stays.
+    let settings = common::settings(raylab_core::Stage::Lab, 8);
+    let hand = format!(
+        "# my notes\n{}",
+        raylab_core::scene_file::to_text(&settings, dir.path()).unwrap()
+    );
+    std::fs::write(dir.path().join("s.toml"), &hand).unwrap();
+    let args = [
+        "render",
+        "--out",
+        "x.png",
+        "--scene-file",
+        "s.toml",
+        "--save-scene",
+        "s.toml",
+    ];
+    for n in 1..=2 {
+        let out = raylab_in(dir.path(), &args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains(&format!(
+                "scene file → s-{n}.toml ('s.toml' exists, and is left as it is)"
+            )),
+            "{stdout}"
+        );
+        let saved = dir.path().join(format!("s-{n}.toml"));
+        let again = raylab_core::scene_file::load(&saved).unwrap();
+        assert_eq!(
+            again,
+            raylab_core::scene_file::load(&dir.path().join("s.toml")).unwrap()
+        );
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("s.toml")).unwrap(),
+        hand
+    );
+}
+
+/// Scene-file arrays take exactly their length on the command line too: a fourth number in the
+/// camera's position is refused, naming the line.
+#[test]
+fn a_scene_file_array_of_four_numbers_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = common::settings(raylab_core::Stage::Lab, 8);
+    let text = raylab_core::scene_file::to_text(&settings, dir.path())
+        .unwrap()
+        .replace(
+            "position = [0.0, 0.0, -3.001]",
+            "position = [0.0, 0.0, -3.001, 99.0]",
+        );
+    std::fs::write(dir.path().join("s.toml"), text).unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &["render", "--out", "x.png", "--scene-file", "s.toml"],
+    );
+    assert_one_line_error(&out, &["s.toml", "line ", "more than 3 elements"]);
+}
+
+/// `--focal 1e-23` underflowed the centre ray's direction to (0, 0, 0), a black pixel
+/// silently: refused, as a focal length above 1e7 is.
+#[test]
+fn a_focal_length_too_short_to_normalise_the_rays_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &[
+            "render", "--out", "x.png", "--focal", "1e-23", "--width", "5",
+        ],
+    );
+    assert_one_line_error(
+        &out,
+        &["invalid focal length 1e-23: must be at least 0.001 px"],
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// The process: signals, full outputs, the environment.
+
+/// Renders a 1200² EXR in `dir` and sends `signal` once the temporary file exists: the
+/// program exits with 128 + the signal's number, saying so, and leaves no temporary file.
+#[cfg(unix)]
+fn stopped_by(signal: &str, number: i32) {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.exr");
+    for _attempt in 0..5 {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(["render", "--width", "1200", "--height", "1200", "--out"])
+            .arg(&out)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        while !has_temporary_file(dir.path()) && child.try_wait().unwrap().is_none() {
+            std::thread::sleep(std::time::Duration::from_micros(200));
+        }
+        let _ = Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status();
+        let output = child.wait_with_output().unwrap();
+        assert!(
+            !has_temporary_file(dir.path()),
+            "SIG{signal}: {:?}",
+            common::files_in(dir.path())
+        );
+        if output.status.code() == Some(0) {
+            // The write finished before the signal came: try again.
+            let _ = std::fs::remove_file(&out);
+            continue;
+        }
+        let err = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(
+            output.status.code(),
+            Some(128 + number),
+            "SIG{signal}: {err}"
+        );
+        assert!(
+            err.contains(&format!(
+                "stopped by SIG{signal}; its temporary files are removed"
+            )),
+            "{err}"
+        );
+        return;
+    }
+    panic!("SIG{signal} never arrived during a write in five tries");
+}
+
+#[cfg(unix)]
+fn has_temporary_file(dir: &std::path::Path) -> bool {
+    common::files_in(dir)
+        .iter()
+        .any(|n| n.to_string_lossy().ends_with(".tmp"))
+}
+
+#[cfg(unix)]
+#[test]
+fn sigquit_sigusr1_and_sigalrm_during_a_write_leave_no_temporary_file() {
+    stopped_by("QUIT", 3);
+    stopped_by("USR1", 10);
+    stopped_by("ALRM", 14);
+}
+
+/// A write past `ulimit -f` (SIGXFSZ) fails with "File too large" and leaves neither the image
+/// nor its temporary file: the signal is ignored, so the write's error is handled.
+#[cfg(unix)]
+#[test]
+fn a_write_past_the_file_size_limit_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("big.exr");
+    // 1,000 blocks of 512 bytes (sh) at most: far less than a 1200² EXR's 17 MB.
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -f 1000; exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_raylab"))
+        .args(["render", "--width", "1200", "--height", "1200", "--out"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("File too large"), "{err}");
+    assert!(
+        common::files_in(dir.path()).is_empty(),
+        "{:?}",
+        common::files_in(dir.path())
+    );
+}
+
+/// Errors and warnings written to a full stderr panicked (exit code 101): now the exit code
+/// says what happened. `--help` into a full stdout fails instead of exiting 0.
+#[cfg(unix)]
+#[test]
+fn a_full_stderr_or_stdout_is_no_panic() {
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    let run = |args: &[&str], stdout: std::fs::File, stderr: std::fs::File| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(args)
+            .stdout(stdout)
+            .stderr(stderr)
+            .status()
+            .unwrap()
+    };
+    let null = || std::fs::File::create("/dev/null").unwrap();
+    assert_eq!(
+        run(&["render", "--width", "0"], null(), full()).code(),
+        Some(2)
+    );
+    assert_eq!(
+        run(&["render", "--out", "x.jpg"], null(), full()).code(),
+        Some(1)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    // A render whose warning cannot be printed still writes its image.
+    let obj = dir.path().join("m.obj");
+    std::fs::write(&obj, format!("mtllib gone.mtl\n{TETRAHEDRON}")).unwrap();
+    let png = dir.path().join("x.png");
+    let status = run(
+        &[
+            "render",
+            "--obj",
+            obj.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            png.to_str().unwrap(),
+        ],
+        null(),
+        full(),
+    );
+    assert_eq!(status.code(), Some(0));
+    assert!(png.exists());
+    assert_eq!(run(&["--help"], full(), null()).code(), Some(1));
+    assert_eq!(run(&["--version"], full(), null()).code(), Some(1));
+    assert_eq!(run(&["--help"], null(), null()).code(), Some(0));
+}
+
+/// `RAYON_NUM_THREADS` above the cap `--threads` has is capped, with a warning; a usable one is
+/// taken as it is. `RAYLAB_ISA` naming no kernel set is warned of once, naming those accepted.
+#[test]
+fn thread_counts_and_kernel_names_from_the_environment() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |var: &str, value: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(["render", "--out", "x.png", "--width", "8", "--height", "8"])
+            .env(var, value)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let out = run("RAYON_NUM_THREADS", "2000");
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out),
+        "warning: RAYON_NUM_THREADS=2000 is more than 1024 threads: using 1024\n"
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains(" on 1024 threads "));
+    let out = run("RAYON_NUM_THREADS", "3");
+    assert_eq!(stderr(&out), "");
+    assert!(String::from_utf8_lossy(&out.stdout).contains(" on 3 threads "));
+    let out = run("RAYLAB_ISA", "garbage");
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("warning: RAYLAB_ISA=\"garbage\" is not a kernel set")
+            && err.contains("(accepted: best, ")
+            && err.contains("scalar)"),
+        "{err}"
     );
 }

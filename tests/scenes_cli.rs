@@ -3,7 +3,11 @@
 mod common;
 
 use common::{raylab, stderr};
+use raylab_core::scene::SceneChoice;
 
+/// Each scene the command line is given is the one rendered: the PNG is the library's render
+/// of that scene (the lab's display of it), byte for byte, and no two scenes give the same
+/// image (so a `--scene` or `--obj` that was ignored would fail).
 #[test]
 fn renders_the_built_in_models_and_an_obj_file() {
     let dir = tempfile::tempdir().unwrap();
@@ -13,10 +17,15 @@ fn renders_the_built_in_models_and_an_obj_file() {
         "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 0 1 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
     )
     .unwrap();
-    for args in [
-        &["--scene", "bunny"][..],
-        &["--scene", "teapot"],
-        &["--obj", obj.to_str().unwrap()],
+    let mut seen: Vec<Vec<u8>> = Vec::new();
+    for (args, choice) in [
+        (&["--scene", "cornell"][..], SceneChoice::Cornell),
+        (&["--scene", "bunny"], SceneChoice::Bunny),
+        (&["--scene", "teapot"], SceneChoice::Teapot),
+        (
+            &["--obj", obj.to_str().unwrap()],
+            SceneChoice::Obj(obj.clone()),
+        ),
     ] {
         let png = dir.path().join("out.png");
         let mut argv = vec![
@@ -31,7 +40,17 @@ fn renders_the_built_in_models_and_an_obj_file() {
         argv.extend_from_slice(args);
         let out = raylab(&argv);
         assert!(out.status.success(), "{args:?}: {}", stderr(&out));
-        assert!(image::open(&png).is_ok());
+        let written = image::open(&png).unwrap().to_rgb8().into_raw();
+        let mut settings = common::settings(raylab_core::Stage::Lab, 48);
+        settings.scene = choice;
+        let scene = settings.scene.load().unwrap();
+        let want = raylab_core::render::render(&scene, &settings).to_rgb8();
+        assert_eq!(written, want, "{args:?}");
+        assert!(
+            !seen.contains(&written),
+            "{args:?} gave another scene's image"
+        );
+        seen.push(written);
     }
 }
 

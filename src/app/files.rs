@@ -29,9 +29,9 @@ pub fn open(path: &Path) -> Result<Opened, String> {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     if extension.as_deref() == Some("obj") {
-        if !path.is_file() {
-            return Err(format!("could not open '{}': no such file", path.display()));
-        }
+        // Only a regular file: a FIFO would keep the scene loader waiting for ever.
+        raylab_core::inputs::open_regular(path)
+            .map_err(|reason| format!("could not open '{}': {reason}", path.display()))?;
         return Ok(Opened::Model(path.to_path_buf()));
     }
     let loaded = settings_file::read_file(path).map_err(|e| e.to_string())?;

@@ -18,6 +18,7 @@ mod stats;
 mod tests;
 mod viewport;
 
+use std::io::Write as _;
 use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Instant;
@@ -163,6 +164,9 @@ pub struct WorkbenchApp {
     /// The settings before a file was opened whose scene is still loading: put back if the
     /// scene cannot be loaded, so nothing is lost.
     restore_on_failure: Option<RenderSettings>,
+    /// The scene of the saved state is the one loading (at start): if it cannot be loaded,
+    /// the lab's box stays, and the notice says so.
+    saved_scene_loading: bool,
     /// Test hook: the next scene load panics on its thread.
     #[cfg(test)]
     inject_loader_panic: bool,
@@ -201,18 +205,29 @@ pub fn light_marker(settings: &RenderSettings) -> Option<egui::Vec2> {
 
 /// Opens the workbench window; returns when it is closed.
 pub fn run() -> anyhow::Result<()> {
+    // eframe reads its state file before the app starts, and would wait for ever on a FIFO:
+    // one that is not a regular file of a sensible size is left alone.
+    let (persistence_path, state_notice) =
+        persistence::state_file(eframe::storage_dir(TITLE).as_deref());
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title(TITLE)
             .with_app_id(TITLE)
             .with_inner_size([1180.0, 760.0])
             .with_min_inner_size([480.0, 320.0]),
+        persistence_path,
         ..Default::default()
     };
     eframe::run_native(
         TITLE,
         options,
-        Box::new(|cc| Ok(Box::new(WorkbenchApp::new(cc)))),
+        Box::new(move |cc| {
+            let mut app = WorkbenchApp::new(cc);
+            if let Some(notice) = state_notice {
+                app.set_status(StatusKind::Notice, notice);
+            }
+            Ok(Box::new(app))
+        }),
     )
     .map_err(|e| {
         anyhow::anyhow!(
@@ -229,6 +244,7 @@ impl WorkbenchApp {
     }
 
     fn with_state(ctx: &egui::Context, state: WorkbenchState, notice: Option<String>) -> Self {
+        let saved_scene = state.settings.scene != SceneChoice::Cornell;
         let repaint = ctx.clone();
         let (controller, error) = match Controller::new(
             state.render_threads,
@@ -277,6 +293,7 @@ impl WorkbenchApp {
             file_dialog: None,
             scene_cache: Vec::new(),
             restore_on_failure: None,
+            saved_scene_loading: saved_scene,
             #[cfg(test)]
             inject_loader_panic: false,
         }
@@ -475,6 +492,7 @@ impl WorkbenchApp {
         let Some(load) = self.scene_loading.take() else {
             return;
         };
+        let saved = std::mem::take(&mut self.saved_scene_loading);
         match result {
             Ok((scene, warnings)) => {
                 let ms = load.started.elapsed().as_secs_f64() * 1e3;
@@ -491,6 +509,18 @@ impl WorkbenchApp {
                 };
                 self.set_status(kind, text);
                 self.swap_in_scene(load.choice, Arc::new(scene));
+            }
+            Err(e) if saved => {
+                // The saved state's scene (a model since moved, or one too large for this
+                // machine): the window starts on the lab's box all the same.
+                self.put_back_settings(&load.choice);
+                self.set_status(
+                    StatusKind::Notice,
+                    format!(
+                        "The saved scene could not be loaded ({e}); showing the {} scene",
+                        self.scene_choice
+                    ),
+                );
             }
             Err(e) => {
                 // Nothing is lost: the scene on screen stays, and so do its settings.
@@ -1204,7 +1234,8 @@ impl eframe::App for WorkbenchApp {
         if self.log_frames {
             // One line a frame, for scripts: fields in a fixed order.
             let (change_ms, change_frames) = self.stats.change_to_image.unwrap_or((f64::NAN, 0));
-            eprintln!(
+            let _ = writeln!(
+                std::io::stderr(),
                 "raylab-frame ui_ms={:.2} frame_cpu_ms={:.2} samples={} target={} preview={} \
                  t_ms={:.1} change_to_image_ms={:.1} change_frames={} full_pass_ms={:.1}",
                 self.stats.ui_frame_ms,

@@ -111,6 +111,13 @@ impl WorkbenchState {
         if state.render_threads == 0 {
             return Err("it asks for 0 render threads".to_owned());
         }
+        if state.render_threads > raylab_core::progressive::MAX_THREADS {
+            return Err(format!(
+                "it asks for {} render threads (at most {})",
+                state.render_threads,
+                raylab_core::progressive::MAX_THREADS
+            ));
+        }
         Ok(state)
     }
 }
@@ -129,6 +136,48 @@ pub fn load(storage: Option<&dyn eframe::Storage>) -> (WorkbenchState, Option<St
             )),
         ),
     }
+}
+
+/// The most of eframe's state file that is read: raylab's state is a few KiB.
+pub const MAX_STATE_BYTES: u64 = 16 << 20;
+
+/// The file eframe should keep the state in, given its folder (`eframe::storage_dir`): `None`
+/// for its own choice, `app.ron` there, when that is a regular file of at most
+/// [`MAX_STATE_BYTES`] (or absent). Otherwise eframe would wait for ever on a FIFO, or read a
+/// device without end: then the state is kept in `app.ron.fallback` beside it (or, if that is
+/// no better, a file of this run's own in the temporary folder), the original is neither read
+/// nor replaced, and the notice says so.
+pub fn state_file(folder: Option<&std::path::Path>) -> (Option<PathBuf>, Option<String>) {
+    let Some(folder) = folder else {
+        return (None, None);
+    };
+    let usable = |path: &std::path::Path| match std::fs::metadata(path) {
+        Err(_) => Ok(()),
+        Ok(m) if !m.is_file() => Err("it is not a regular file".to_owned()),
+        Ok(m) if m.len() > MAX_STATE_BYTES => Err(format!(
+            "it is {}, more than the {} saved settings may be",
+            raylab_core::memory::format_bytes(m.len()),
+            raylab_core::memory::format_bytes(MAX_STATE_BYTES)
+        )),
+        Ok(_) => Ok(()),
+    };
+    let file = folder.join("app.ron");
+    let Err(why) = usable(&file) else {
+        return (None, None);
+    };
+    let fallback = folder.join("app.ron.fallback");
+    let fallback = if usable(&fallback).is_ok() {
+        fallback
+    } else {
+        std::env::temp_dir().join(format!("raylab-state-{}.ron", std::process::id()))
+    };
+    let notice = format!(
+        "Saved settings ignored: '{}' was not read ({why}). Using the lab's defaults; this \
+         session's settings are kept in '{}'.",
+        file.display(),
+        fallback.display()
+    );
+    (Some(fallback), Some(notice))
 }
 
 pub fn save(storage: &mut dyn eframe::Storage, state: &WorkbenchState) {
@@ -203,6 +252,36 @@ mod tests {
             let notice = notice.unwrap_or_default();
             assert!(notice.contains(says), "{json}: {notice}");
         }
+    }
+
+    /// eframe's state file is read only when it is a regular file of a sensible size: a FIFO
+    /// (which would keep the window from ever appearing) or a device is left alone, and the
+    /// state kept beside it, with a notice; an ordinary file, or none, is eframe's to read.
+    #[test]
+    fn a_state_file_that_is_not_a_regular_file_is_not_read() {
+        let dir = tempfile::tempdir().unwrap();
+        assert_eq!(state_file(None), (None, None));
+        assert_eq!(state_file(Some(dir.path())), (None, None), "no file yet");
+        let file = dir.path().join("app.ron");
+        std::fs::write(&file, "()").unwrap();
+        assert_eq!(state_file(Some(dir.path())), (None, None));
+        std::fs::remove_file(&file).unwrap();
+        raylab_core::inputs::make_fifo(&file);
+        let (path, notice) = state_file(Some(dir.path()));
+        assert_eq!(path, Some(dir.path().join("app.ron.fallback")));
+        let notice = notice.unwrap();
+        assert!(
+            notice.contains("not a regular file") && notice.contains("app.ron"),
+            "{notice}"
+        );
+        // A fallback that is no better either: a file of this run's own.
+        raylab_core::inputs::make_fifo(&dir.path().join("app.ron.fallback"));
+        let (path, _) = state_file(Some(dir.path()));
+        assert!(path.unwrap().starts_with(std::env::temp_dir()));
+        assert_eq!(
+            WorkbenchState::from_json(r#"{"version": 1, "render_threads": 2000}"#).unwrap_err(),
+            "it asks for 2000 render threads (at most 1024)"
+        );
     }
 
     #[test]

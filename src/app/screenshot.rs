@@ -66,15 +66,17 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
             folder.display()
         );
     }
+    // Model paths relative to the folder, so the pair names the same models from wherever
+    // it is opened.
+    let settings = request.settings.relative_to(folder);
+    let text = raylab_core::settings_file::settings_text(&settings)
+        .map_err(|e| anyhow::anyhow!("could not save the screenshot: {e}"))?;
     let png_bytes = request
         .image
         .encode_with_text(
             OutputFormat::Png,
             &request.settings.display,
-            Some((
-                raylab_core::settings_file::PNG_KEYWORD,
-                &raylab_core::settings_file::settings_text(&request.settings),
-            )),
+            Some((raylab_core::settings_file::PNG_KEYWORD, &text)),
         )
         .context("could not encode the screenshot as PNG")?;
     let base = base_name(&request.time);
@@ -87,7 +89,7 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
         image: name,
         raylab_version: env!("CARGO_PKG_VERSION").to_owned(),
         saved_at: request.time.to_rfc3339(),
-        settings: request.settings.clone(),
+        settings,
         sample_target: request.sample_target,
     };
     let json = serde_json::to_vec_pretty(&sidecar).context("could not describe the settings")?;

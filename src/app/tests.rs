@@ -747,9 +747,25 @@ fn the_stats_show_the_noise_of_a_path_traced_image() {
     choose(&mut h, "Stage", "Path tracing (real light)");
     set_target(&mut h, 4);
     settle(&mut h);
-    assert!(shown(&h).samples >= 2);
+    let frame = shown(&h);
+    assert!(frame.samples >= 2);
     let noise = h.state().stats.noise.expect("a noise estimate");
-    assert!(noise.relative_error_of_mean > 0.0);
+    // The estimate of the film the library accumulates from the same passes, exactly.
+    let mut film = raylab_core::film::Film::with_noise(
+        frame.settings.camera.width,
+        frame.settings.camera.height,
+    );
+    for sample in 0..frame.samples {
+        let pass =
+            raylab_core::render::render_pass(&cornell_box(), &frame.settings, sample, &|| false)
+                .unwrap();
+        film.add_pass(&pass);
+    }
+    assert_eq!(Some(noise), film.noise());
+    assert!(
+        noise.relative_error_of_mean > 0.0,
+        "a path-traced image is noisy"
+    );
     let node = h
         .query_by_label_contains("Noise: ±")
         .expect("a Noise label in the Stats")
@@ -1482,4 +1498,27 @@ fn the_light_shape_and_the_rough_metal_are_chosen_in_the_panels() {
     assert_eq!(frame.settings.material_preset, MaterialPreset::Rough);
     assert_eq!(frame.settings.roughness, 0.5);
     assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
+}
+
+/// A saved state whose scene cannot be loaded (here a FIFO given as the model, which would
+/// keep the loader waiting for ever) never keeps the window from starting: it opens on the
+/// lab's box, and a notice says why.
+#[test]
+fn a_saved_scene_that_cannot_be_loaded_falls_back_to_the_labs_box() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("model.obj");
+    raylab_core::inputs::make_fifo(&fifo);
+    let mut state = small_state();
+    state.settings.scene = SceneChoice::Obj(fifo);
+    let h = harness(state);
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Notice);
+    assert!(
+        text.starts_with("The saved scene could not be loaded")
+            && text.contains("not a regular file (a FIFO)")
+            && text.ends_with("showing the cornell scene"),
+        "{text}"
+    );
+    assert_eq!(settings(&h).scene, SceneChoice::Cornell);
+    assert_eq!(*shown(&h).image, render(&cornell_box(), &settings(&h)));
 }

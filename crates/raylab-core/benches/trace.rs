@@ -4,7 +4,10 @@
 //! criterion. 512×512 on the default rayon pool
 //! (all cores); set RAYON_NUM_THREADS=2 to match PERFORMANCE.md.
 //!
-//! `cargo bench -- cornell` runs one scene's group.
+//! `cargo bench -- cornell` runs one scene's group. The `degenerate` group times the inputs
+//! that once took minutes (a million copies of one triangle, built and loaded from an OBJ
+//! file; 100,000 faces around one vertex, smoothed): each should take well under a second in
+//! release, linear in its size. The tests check what these inputs give, not how fast.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -72,5 +75,61 @@ fn scenes(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, scenes);
+fn degenerate(c: &mut Criterion) {
+    use glam::Vec3;
+    use raylab_core::geometry::Triangle;
+    use raylab_core::scene::obj;
+    const COPIES: usize = 1_000_000;
+    let mut group = c.benchmark_group("degenerate");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(4));
+    let triangle = Triangle::new(
+        Vec3::new(-1.0, -1.0, 2.0),
+        Vec3::new(1.0, -1.0, 2.0),
+        Vec3::new(0.0, 1.0, 2.0),
+        0,
+    );
+    let copies = vec![triangle; COPIES];
+    group.bench_function("build_a_million_copies", |b| {
+        b.iter(|| {
+            Accel::build(
+                black_box(&copies),
+                AccelKind::Bvh8,
+                raylab_core::scene::best_isa(),
+            )
+        })
+    });
+    let mut text = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    text.push_str(&"f 1 2 3\n".repeat(COPIES));
+    group.bench_function("load_an_obj_of_a_million_copies", |b| {
+        b.iter(|| {
+            let mesh = obj::parse_obj(black_box(text.as_bytes()), std::path::Path::new("c.obj"));
+            obj::model_in_box(&mesh.unwrap(), &obj::Placement::FRONT_LEFT, "copies")
+        })
+    });
+    // A fan of 100,000 faces around the origin, each turned a little further.
+    let n = 100_000;
+    let mut positions = vec![Vec3::ZERO];
+    let mut faces = Vec::new();
+    for k in 0..n {
+        let angle = std::f32::consts::TAU * k as f32 / n as f32;
+        positions.push(Vec3::new(angle.cos(), angle.sin(), -1.0));
+        faces.push([0, 1 + k as u32, 1 + ((k + 1) % n) as u32]);
+    }
+    let normals: Vec<Vec3> = faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|i| positions[i as usize]);
+            (b - a).cross(c - a).normalize()
+        })
+        .collect();
+    group.bench_function("smooth_a_fan_of_100000_faces", |b| {
+        b.iter(|| obj::smooth_normals(black_box(&positions), &faces, &normals, 1.0))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, scenes, degenerate);
 criterion_main!(benches);

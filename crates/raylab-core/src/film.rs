@@ -238,6 +238,12 @@ pub enum SaveError {
 /// again). A render that could not be saved is refused before it starts.
 pub fn check_writable(path: &Path) -> Result<(), SaveError> {
     OutputFormat::from_path(path)?;
+    check_file_destination(path)
+}
+
+/// [`check_writable`] for any file: `path` does not name a folder, and a file can be created
+/// in its folder (a temporary one, created exclusively under a random name and removed again).
+pub fn check_file_destination(path: &Path) -> Result<(), SaveError> {
     let fail = |reason| SaveError::Write {
         path: path.to_owned(),
         reason,
@@ -248,20 +254,34 @@ pub fn check_writable(path: &Path) -> Result<(), SaveError> {
             "it is a folder",
         )));
     }
+    let probe = temporary_beside(path, ".check").map_err(fail)?;
+    drop(probe);
+    Ok(())
+}
+
+/// A new, empty file in `path`'s folder named `.NAME.XXXXXX{suffix}` (`XXXXXX` random),
+/// created exclusively: never through a symbolic link, never an existing file. It is removed
+/// when dropped unless persisted. Its permissions are those `File::create` gives (0666 less
+/// the umask), so the file it becomes is like any other the user writes.
+fn temporary_beside(path: &Path, suffix: &str) -> io::Result<tempfile::NamedTempFile> {
     let name = path
         .file_name()
-        .ok_or_else(|| fail(io::Error::new(io::ErrorKind::InvalidInput, "no file name")))?;
-    let mut probe_name = std::ffi::OsString::from(".");
-    probe_name.push(name);
-    probe_name.push(format!(".{}.check", std::process::id()));
-    let probe = path.with_file_name(probe_name);
-    fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&probe)
-        .map_err(fail)?;
-    let _ = fs::remove_file(&probe);
-    Ok(())
+        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "no file name"))?;
+    let folder = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    prefix.push(".");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(suffix);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        builder.permissions(fs::Permissions::from_mode(0o666));
+    }
+    builder.tempfile_in(folder)
 }
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it to `path`.
@@ -275,35 +295,75 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
 }
 
 /// Has `write` write a temporary file beside `path` (buffered), then renames it to `path`; the
-/// temporary file is removed if anything fails.
+/// temporary file is removed if anything fails. The temporary file is made by
+/// [`temporary_beside`]: a random name, created exclusively, so a file or link planted beside
+/// the destination is never written through. While it exists it is on the program's list of
+/// files to remove if a signal stops the program ([`crate::temp_files`]).
 pub fn write_atomically_with(
     path: &Path,
-    write: impl FnOnce(&mut BufWriter<fs::File>) -> Result<(), SaveError>,
+    write: impl FnOnce(&mut BufWriter<&fs::File>) -> Result<(), SaveError>,
 ) -> Result<(), SaveError> {
     let wrap = |reason| SaveError::Write {
         path: path.to_owned(),
         reason,
     };
-    let name = path
-        .file_name()
-        .ok_or_else(|| wrap(io::Error::new(io::ErrorKind::InvalidInput, "no file name")))?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".{}.tmp", std::process::id()));
-    let tmp = path.with_file_name(tmp_name);
-    // Removed by the command line's Ctrl+C handler if the program is stopped mid-write.
-    let _registered = crate::temp_files::register(&tmp);
-    let result = (|| {
-        let mut file = BufWriter::new(fs::File::create(&tmp).map_err(wrap)?);
+    let tmp = temporary_beside(path, ".tmp").map_err(wrap)?;
+    let _registered = crate::temp_files::register(tmp.path());
+    {
+        let mut file = BufWriter::new(tmp.as_file());
         write(&mut file)?;
-        let file = file.into_inner().map_err(|e| wrap(e.into_error()))?;
-        file.sync_all().map_err(wrap)?;
-        fs::rename(&tmp, path).map_err(wrap)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
+        file.flush().map_err(wrap)?;
     }
-    result
+    tmp.as_file().sync_all().map_err(wrap)?;
+    // On failure the temporary file comes back in the error, and is removed when dropped.
+    tmp.persist(path).map_err(|e| wrap(e.error))?;
+    Ok(())
+}
+
+/// Writes `bytes` to a file that did not exist: at `path`, or, if something is there, at the
+/// first free name `STEM-1.EXT`, `STEM-2.EXT`, … beside it (as screenshots are named); nothing
+/// is ever replaced. The text is written once to a temporary file, then linked to the first
+/// free name atomically (no other program can take the name in between, and a name taken by
+/// a link is never written through). Returns the path written.
+pub fn write_to_free_name(path: &Path, bytes: &[u8]) -> Result<PathBuf, SaveError> {
+    let wrap = |at: &Path, reason| SaveError::Write {
+        path: at.to_owned(),
+        reason,
+    };
+    let mut tmp = temporary_beside(path, ".tmp").map_err(|e| wrap(path, e))?;
+    let registered = crate::temp_files::register(tmp.path());
+    tmp.write_all(bytes).map_err(|e| wrap(path, e))?;
+    tmp.as_file().sync_all().map_err(|e| wrap(path, e))?;
+    let stem = path.file_stem().unwrap_or_default();
+    let extension = path.extension();
+    for n in 0..10_000u32 {
+        let candidate = if n == 0 {
+            path.to_path_buf()
+        } else {
+            let mut name = stem.to_owned();
+            name.push(format!("-{n}"));
+            if let Some(e) = extension {
+                name.push(".");
+                name.push(e);
+            }
+            path.with_file_name(name)
+        };
+        match tmp.persist_noclobber(&candidate) {
+            Ok(_) => {
+                drop(registered);
+                return Ok(candidate);
+            }
+            Err(e) if e.error.kind() == io::ErrorKind::AlreadyExists => tmp = e.file,
+            Err(e) => return Err(wrap(&candidate, e.error)),
+        }
+    }
+    Err(wrap(
+        path,
+        io::Error::new(
+            io::ErrorKind::AlreadyExists,
+            "no free name like it (-1 to -9999) beside it",
+        ),
+    ))
 }
 
 /// Accumulates passes of one view into a running mean (progressive refinement), and, if asked,
@@ -579,6 +639,94 @@ mod tests {
         assert_eq!(back, want);
         // Only the two images: no temporary file is left.
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    /// The temporary file an image is written to has a random name, made afresh for each
+    /// write and created exclusively: a link planted where the old, predictable name
+    /// (`.NAME.PID.tmp`) pointed is never written through, and nothing is left beside the
+    /// image. Its permissions are an ordinary file's, not the 0600 of `tempfile`'s default.
+    #[test]
+    fn the_temporary_file_is_unpredictable_and_never_followed() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("x.png");
+        let a = temporary_beside(&out, ".tmp").unwrap();
+        let b = temporary_beside(&out, ".tmp").unwrap();
+        assert_ne!(a.path(), b.path());
+        for t in [&a, &b] {
+            let name = t.path().file_name().unwrap().to_string_lossy().into_owned();
+            assert!(
+                name.starts_with(".x.png.") && name.ends_with(".tmp"),
+                "{name}"
+            );
+            assert!(name.len() > ".x.png..tmp".len() + 5, "{name}");
+        }
+        drop((a, b));
+        assert!(
+            fs::read_dir(dir.path()).unwrap().next().is_none(),
+            "removed when dropped"
+        );
+
+        let victim = dir.path().join("victim.txt");
+        fs::write(&victim, "keep me").unwrap();
+        #[cfg(unix)]
+        std::os::unix::fs::symlink(
+            &victim,
+            dir.path()
+                .join(format!(".x.png.{}.tmp", std::process::id())),
+        )
+        .unwrap();
+        Image::new(4, 2).save(&out).unwrap();
+        assert_eq!(fs::read_to_string(&victim).unwrap(), "keep me");
+        assert_eq!(image::open(&out).unwrap().width(), 4);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt as _;
+            let mode = fs::metadata(&out).unwrap().permissions().mode() & 0o777;
+            let plain = dir.path().join("plain");
+            fs::File::create(&plain).unwrap();
+            let plain_mode = fs::metadata(&plain).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, plain_mode, "{mode:o}");
+        }
+        // The image, the victim, the link (and the plain file): no temporary file.
+        let left: Vec<String> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".tmp") && !n.contains(&std::process::id().to_string()))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
+
+    /// A file written to a free name never replaces one: the second and third writes to one
+    /// name go to `-1` and `-2`, a name held by a link (even a dangling one) is skipped, not
+    /// written through, and no temporary file is left.
+    #[test]
+    fn a_free_name_is_found_and_nothing_is_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.toml");
+        assert_eq!(write_to_free_name(&path, b"one").unwrap(), path);
+        #[cfg(unix)]
+        std::os::unix::fs::symlink(dir.path().join("elsewhere"), dir.path().join("s-1.toml"))
+            .unwrap();
+        let second = write_to_free_name(&path, b"two").unwrap();
+        let third = write_to_free_name(&path, b"three").unwrap();
+        assert_eq!(fs::read_to_string(&path).unwrap(), "one");
+        if cfg!(unix) {
+            assert_eq!(second, dir.path().join("s-2.toml"));
+            assert_eq!(third, dir.path().join("s-3.toml"));
+            assert!(
+                !dir.path().join("elsewhere").exists(),
+                "the link was not followed"
+            );
+        } else {
+            assert_eq!(second, dir.path().join("s-1.toml"));
+        }
+        assert_eq!(fs::read_to_string(&second).unwrap(), "two");
+        assert_eq!(fs::read_to_string(&third).unwrap(), "three");
+        let names: Vec<String> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
     }
 
     #[test]

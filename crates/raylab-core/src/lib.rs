@@ -25,6 +25,7 @@ pub mod camera;
 pub mod display;
 pub mod film;
 pub mod geometry;
+pub mod inputs;
 pub mod inspect;
 pub mod integrator;
 pub mod intersect;

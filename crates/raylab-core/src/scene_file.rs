@@ -96,12 +96,15 @@ pub enum SceneFileError {
 }
 
 /// Reads a scene file: the settings it describes, with model paths resolved against the
-/// file's folder.
+/// file's folder. Only a regular file of at most [`crate::inputs::MAX_SCENE_FILE_BYTES`] is
+/// read.
 pub fn load(path: &Path) -> Result<RenderSettings, SceneFileError> {
-    let bytes = std::fs::read(path).map_err(|e| SceneFileError::Read {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+    let bytes =
+        crate::inputs::read_capped(path, crate::inputs::MAX_SCENE_FILE_BYTES, "a scene file")
+            .map_err(|reason| SceneFileError::Read {
+                path: path.to_path_buf(),
+                reason,
+            })?;
     let text = std::str::from_utf8(&bytes).map_err(|e| SceneFileError::Invalid {
         path: path.to_path_buf(),
         message: format!("byte {}: not UTF-8 text", e.valid_up_to()),
@@ -317,13 +320,118 @@ struct ModelV1 {
     /// `bunny`, `teapot`, `textured-teapot`, or an OBJ file's path (relative to the scene file).
     file: PathBuf,
     height: f32,
-    floor_position: [f32; 2],
+    floor_position: Floats<2>,
     yaw: f32,
-    reflectance: Vec3,
+    reflectance: Floats<3>,
     /// `{ kind = "diffuse" }`, `{ kind = "mirror", tint = [r, g, b] }`,
     /// `{ kind = "glass", ior = 1.5, tint = [r, g, b] }` or
     /// `{ kind = "rough", alpha = 0.2, tint = [r, g, b] }`.
-    material: MaterialKind,
+    material: MaterialV1,
+}
+
+/// A model's material: each kind with exactly its own fields (a mirror has no `ior`).
+#[derive(Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+enum MaterialV1 {
+    // A struct variant, not a unit one: only then are unknown fields refused.
+    Diffuse {},
+    Mirror { tint: Floats<3> },
+    Glass { ior: f32, tint: Floats<3> },
+    Rough { alpha: f32, tint: Floats<3> },
+}
+
+impl From<MaterialKind> for MaterialV1 {
+    fn from(kind: MaterialKind) -> Self {
+        match kind {
+            MaterialKind::Diffuse => MaterialV1::Diffuse {},
+            MaterialKind::Mirror { tint } => MaterialV1::Mirror { tint: tint.into() },
+            MaterialKind::Glass { ior, tint } => MaterialV1::Glass {
+                ior,
+                tint: tint.into(),
+            },
+            MaterialKind::Rough { alpha, tint } => MaterialV1::Rough {
+                alpha,
+                tint: tint.into(),
+            },
+        }
+    }
+}
+
+impl From<MaterialV1> for MaterialKind {
+    fn from(kind: MaterialV1) -> Self {
+        match kind {
+            MaterialV1::Diffuse {} => MaterialKind::Diffuse,
+            MaterialV1::Mirror { tint } => MaterialKind::Mirror { tint: tint.into() },
+            MaterialV1::Glass { ior, tint } => MaterialKind::Glass {
+                ior,
+                tint: tint.into(),
+            },
+            MaterialV1::Rough { alpha, tint } => MaterialKind::Rough {
+                alpha,
+                tint: tint.into(),
+            },
+        }
+    }
+}
+
+/// Exactly `N` numbers, `[x, y, z]`: an array of any other length is refused (not cut to
+/// `N`), naming the length it has; reading stops at the first element too many, however long
+/// the array.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Floats<const N: usize>([f32; N]);
+
+impl From<Vec3> for Floats<3> {
+    fn from(v: Vec3) -> Self {
+        Floats(v.to_array())
+    }
+}
+
+impl From<Floats<3>> for Vec3 {
+    fn from(v: Floats<3>) -> Self {
+        Vec3::from_array(v.0)
+    }
+}
+
+impl<const N: usize> Serialize for Floats<N> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq as _;
+        let mut seq = s.serialize_seq(Some(N))?;
+        for x in &self.0 {
+            seq.serialize_element(x)?;
+        }
+        seq.end()
+    }
+}
+
+impl<'de, const N: usize> Deserialize<'de> for Floats<N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor<const N: usize>;
+        impl<'de, const N: usize> serde::de::Visitor<'de> for Visitor<N> {
+            type Value = Floats<N>;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "an array of exactly {N} numbers")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Floats<N>, A::Error> {
+                let mut out = [0.0; N];
+                for (i, x) in out.iter_mut().enumerate() {
+                    *x = seq
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+                }
+                if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    return Err(serde::de::Error::custom(format_args!(
+                        "invalid length: more than {N} elements, expected an array of exactly \
+                         {N} numbers"
+                    )));
+                }
+                Ok(Floats(out))
+            }
+        }
+        d.deserialize_seq(Visitor::<N>)
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -338,7 +446,7 @@ struct TerrainV1 {
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraV1 {
-    position: Vec3,
+    position: Floats<3>,
     yaw: f32,
     pitch: f32,
     focal_length: f32,
@@ -351,9 +459,9 @@ struct CameraV1 {
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightV1 {
-    position: Vec3,
+    position: Floats<3>,
     power: f32,
-    colour: Vec3,
+    colour: Floats<3>,
     /// The area light's size: the sphere's radius or the square's side.
     radius: f32,
     /// `point`, `sphere` or `quad`; a file without it means a sphere by any radius above 0.
@@ -367,7 +475,7 @@ struct ShadingV1 {
     stage: Stage,
     shadows: bool,
     indirect: bool,
-    indirect_light: Vec3,
+    indirect_light: Floats<3>,
     bounces: Bounces,
     specular_depth: u32,
     smooth: bool,
@@ -458,10 +566,10 @@ impl FileV1 {
                     .map(|m| ModelV1 {
                         file: m.file,
                         height: m.height,
-                        floor_position: m.floor_position,
+                        floor_position: Floats(m.floor_position),
                         yaw: m.yaw,
-                        reflectance: m.reflectance,
-                        material: m.kind,
+                        reflectance: m.reflectance.into(),
+                        material: m.kind.into(),
                     })
                     .collect(),
                 terrain: spec.terrain.map(|t| TerrainV1 {
@@ -472,7 +580,7 @@ impl FileV1 {
                 }),
             },
             camera: CameraV1 {
-                position: c.position,
+                position: c.position.into(),
                 yaw: c.yaw,
                 pitch: c.pitch,
                 focal_length: c.focal_length,
@@ -482,9 +590,9 @@ impl FileV1 {
                 focus_distance: c.focus_distance,
             },
             light: LightV1 {
-                position: l.position,
+                position: l.position.into(),
                 power: l.power,
-                colour: l.colour,
+                colour: l.colour.into(),
                 radius: l.radius,
                 shape: Some(l.shape),
             },
@@ -492,7 +600,7 @@ impl FileV1 {
                 stage: sh.stage,
                 shadows: sh.shadows,
                 indirect: sh.indirect,
-                indirect_light: sh.indirect_light,
+                indirect_light: sh.indirect_light.into(),
                 bounces: Bounces(sh.bounces),
                 specular_depth: sh.specular_depth,
                 smooth: sh.smooth,
@@ -521,10 +629,10 @@ impl FileV1 {
                 .map(|m| ModelSpec {
                     file: m.file,
                     height: m.height,
-                    floor_position: m.floor_position,
+                    floor_position: m.floor_position.0,
                     yaw: m.yaw,
-                    reflectance: m.reflectance,
-                    kind: m.material,
+                    reflectance: m.reflectance.into(),
+                    kind: m.material.into(),
                 })
                 .collect(),
             terrain: scene.terrain.map(|t| TerrainSpec {
@@ -541,7 +649,7 @@ impl FileV1 {
         RenderSettings {
             scene: SceneChoice::from_spec(spec),
             camera: Camera {
-                position: c.position,
+                position: c.position.into(),
                 yaw: c.yaw,
                 pitch: c.pitch,
                 focal_length: c.focal_length,
@@ -551,9 +659,9 @@ impl FileV1 {
                 focus_distance: c.focus_distance,
             },
             light: PointLight {
-                position: l.position,
+                position: l.position.into(),
                 power: l.power,
-                colour: l.colour,
+                colour: l.colour.into(),
                 radius: l.radius,
                 shape: l.shape.unwrap_or(if l.radius > 0.0 {
                     LightShape::Sphere
@@ -565,7 +673,7 @@ impl FileV1 {
                 stage: sh.stage,
                 shadows: sh.shadows,
                 indirect: sh.indirect,
-                indirect_light: sh.indirect_light,
+                indirect_light: sh.indirect_light.into(),
                 bounces: sh.bounces.0,
                 specular_depth: sh.specular_depth,
                 smooth: sh.smooth,
@@ -720,6 +828,74 @@ mod tests {
         );
         let e = error_of(|t| t.replace("stage = \"lab\"", "stage = \"lap\""));
         assert!(e.contains("line") && e.contains("lap"), "{e}");
+    }
+
+    /// Arrays of three numbers take exactly three: a fourth (or a million more) is refused,
+    /// not dropped, and so is a missing one; each error names the line.
+    #[test]
+    fn arrays_take_exactly_their_length() {
+        let text = to_text(&RenderSettings::default(), Path::new("/x")).unwrap();
+        let line = |key: &str| text.lines().position(|l| l.starts_with(key)).unwrap() + 1;
+        let position = "position = [0.0, 0.0, -3.001]";
+        assert!(text.contains(position), "{text}");
+        let e = error_of(|t| t.replace(position, "position = [0, 0, -3.001, 99]"));
+        assert!(
+            e.starts_with(&format!("line {}", line("position")))
+                && e.contains("more than 3 elements"),
+            "{e}"
+        );
+        let million = format!("position = [{}]", vec!["0"; 1_000_000].join(", "));
+        let e = error_of(|t| t.replace(position, &million));
+        assert!(
+            e.contains("more than 3 elements"),
+            "{}",
+            &e[..200.min(e.len())]
+        );
+        let e = error_of(|t| t.replace(position, "position = [0, 0]"));
+        assert!(
+            e.contains("invalid length 2") && e.contains("exactly 3"),
+            "{e}"
+        );
+        let e = error_of(|t| t.replace("colour = [1.0, 1.0, 1.0]", "colour = [1, 1, 1, 1]"));
+        assert!(e.contains("more than 3 elements"), "{e}");
+    }
+
+    /// A model's material has its kind's fields and no others: a mirror with an index of
+    /// refraction, or a diffuse material with a tint, is refused naming the field.
+    #[test]
+    fn a_material_takes_only_its_kinds_fields() {
+        let mut spec = SceneSpec::cornell("m");
+        let mut mirror = ModelSpec::new("bunny", &crate::scene::obj::Placement::FRONT_LEFT);
+        mirror.kind = MaterialKind::Mirror {
+            tint: Vec3::splat(0.9),
+        };
+        spec.models.push(mirror);
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(spec)),
+            ..RenderSettings::default()
+        };
+        let text = to_text(&s, Path::new("/x")).unwrap();
+        assert_eq!(parse(&text, Path::new("/x")).unwrap(), s);
+        let kind = "kind = \"mirror\"";
+        assert!(text.contains(kind), "{text}");
+        for (edit, field) in [
+            (format!("{kind}\nior = 1.5"), "ior"),
+            (format!("{kind}\ncolour = 1"), "colour"),
+            ("kind = \"diffuse\"".to_owned(), "tint"),
+        ] {
+            let e = parse(&text.replace(kind, &edit), Path::new("/x")).unwrap_err();
+            assert!(
+                e.contains(&format!("unknown field `{field}`")),
+                "{edit}: {e}"
+            );
+            assert!(e.starts_with("line "), "{e}");
+        }
+        let e = parse(
+            &text.replace("tint = [0.9, 0.9, 0.9]", "tint = [0.9, 0.9, 0.9, 0.9]"),
+            Path::new("/x"),
+        )
+        .unwrap_err();
+        assert!(e.contains("more than 3 elements"), "{e}");
     }
 
     #[test]

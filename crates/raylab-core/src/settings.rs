@@ -29,6 +29,13 @@ pub const MAX_IMAGE_SIDE: u32 = 16_384;
 /// overflows `f32` and every ray is lost (a black image).
 pub const MAX_FOCAL_LENGTH: f32 = 1e7;
 
+/// The shortest focal length, in pixels: a field of view within a hair of 180°. Every primary
+/// ray's direction is at least (0, 0, f) long, and normalising it divides by its length: far
+/// below this, f² underflows `f32` (at f = 1e−23 it is 0) and the centre ray has no direction
+/// (a black pixel). At 1e−3, f² = 1e−6 is an ordinary `f32` with its full precision, and so is
+/// it for the workbench's preview at an eighth of the width.
+pub const MIN_FOCAL_LENGTH: f32 = 1e-3;
+
 /// The largest exposure, either way, in stops.
 pub const MAX_EXPOSURE: f32 = 20.0;
 
@@ -138,6 +145,32 @@ impl RenderSettings {
         from_json(text).map(|loaded| loaded.settings)
     }
 
+    /// The settings as a file written into `folder` holds them (a screenshot's text, its
+    /// `.json`, a scene file): each model's path relative to `folder`
+    /// ([`crate::scene::spec::path_relative_to`]), so the file names the same models wherever
+    /// it is read from ([`RenderSettings::resolve_paths`]).
+    pub fn relative_to(&self, folder: &std::path::Path) -> RenderSettings {
+        let mut settings = self.clone();
+        match &mut settings.scene {
+            SceneChoice::Obj(path) => {
+                *path = crate::scene::spec::path_relative_to(path, folder);
+            }
+            SceneChoice::Custom(spec) => crate::scene::spec::relative_models(spec, folder),
+            _ => {}
+        }
+        settings
+    }
+
+    /// Settings read from a file in `folder`: relative model paths are taken from that folder
+    /// (the inverse of [`RenderSettings::relative_to`]).
+    pub fn resolve_paths(&mut self, folder: &std::path::Path) {
+        match &mut self.scene {
+            SceneChoice::Obj(path) => *path = crate::scene::spec::resolve_path(path, folder),
+            SceneChoice::Custom(spec) => crate::scene::spec::resolve_models(spec, folder),
+            _ => {}
+        }
+    }
+
     /// One line naming what most often explains a render: the scene, stage and switches,
     /// resolution, camera, light, samples and seed. For error reports (a render that panicked
     /// says which settings did it); the JSON (`serde_json::to_string`) has everything.
@@ -187,8 +220,10 @@ impl RenderSettings {
     ///
     /// So the image, its sums and the EXR file are always finite; outputs are not clamped.
     pub fn validate(&self) -> Result<(), SettingsError> {
-        if let SceneChoice::Custom(spec) = &self.scene {
-            spec.validate()?;
+        match &self.scene {
+            SceneChoice::Custom(spec) => spec.validate()?,
+            SceneChoice::Obj(path) => check_path("model path", path)?,
+            _ => {}
         }
         let c = &self.camera;
         check_side("width", c.width)?;
@@ -199,6 +234,10 @@ impl RenderSettings {
         check_finite("focal length", c.focal_length)?;
         if c.focal_length <= 0.0 {
             return Err(err("focal length", c.focal_length, "must be > 0"));
+        }
+        if c.focal_length < MIN_FOCAL_LENGTH {
+            let f = number(c.focal_length);
+            return Err(err("focal length", f, "must be at least 0.001 px"));
         }
         if c.focal_length > MAX_FOCAL_LENGTH {
             let f = c.focal_length;
@@ -289,9 +328,10 @@ fn err(name: &'static str, value: impl std::fmt::Display, reason: &'static str) 
     }
 }
 
-/// A number as a person would write it: 1e38, not 100000000000000000000000000000000000000.
+/// A number as a person would write it: 1e38, not 100000000000000000000000000000000000000,
+/// and 1e-23, not 0.00000000000000000000001.
 fn number(x: f32) -> String {
-    if x.abs() >= 1e7 {
+    if x.abs() >= 1e7 || (x != 0.0 && x.abs() < 1e-4) {
         format!("{x:e}")
     } else {
         x.to_string()
@@ -301,6 +341,24 @@ fn number(x: f32) -> String {
 /// A vector as [`number`] writes its components.
 fn vector(v: Vec3) -> String {
     format!("({}, {}, {})", number(v.x), number(v.y), number(v.z))
+}
+
+/// A path the settings carry must be UTF-8 text: screenshots and scene files hold them as
+/// text (JSON and TOML strings), so another would make a render whose settings cannot be
+/// written. Refused before anything is rendered, naming the path.
+pub(crate) fn check_path(
+    name: impl Into<std::borrow::Cow<'static, str>>,
+    path: &std::path::Path,
+) -> Result<(), SettingsError> {
+    if path.to_str().is_some() {
+        return Ok(());
+    }
+    Err(SettingsError {
+        name: name.into(),
+        value: format!("'{}'", path.display()),
+        reason: "is not UTF-8 text, and raylab writes the paths of its settings as text \
+                 (rename the file or its folder)",
+    })
 }
 
 fn check_side(name: &'static str, side: u32) -> Result<(), SettingsError> {
@@ -432,6 +490,21 @@ mod tests {
         // 2e19 px would overflow the rays' squared length: refused, not a black image.
         s.camera.focal_length = 2e19;
         assert_eq!(s.validate().unwrap_err().name, "focal length");
+        // 1e−23 px would underflow it: the centre ray of an odd-sized image, (0, 0, f), has a
+        // squared length of 0 in f32, so it cannot be normalised (it was a black pixel).
+        s.camera = Camera::default_for(5, 5);
+        s.camera.focal_length = 1e-23;
+        let centre = s.camera.pixel_ray(2, 2);
+        assert!(!centre.direction.is_normalized(), "{centre:?}");
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid focal length 1e-23: must be at least 0.001 px"
+        );
+        s.camera.focal_length = MIN_FOCAL_LENGTH;
+        s.validate().unwrap();
+        let centre = s.camera.pixel_ray(2, 2);
+        assert!(centre.direction.is_normalized(), "{centre:?}");
+        assert_eq!(centre.direction, glam::Vec3::Z);
         let mut s = RenderSettings::default();
         s.light.position.y = f32::NAN;
         let e = s.validate().unwrap_err();
@@ -527,15 +600,116 @@ mod tests {
                 assert!(brightest > 1e6, "{stage}: {brightest}");
             }
         }
-        // The incoming stage (D, no ρ) summed over the most samples, on a 1 × 1 image whose
-        // rays meet the back wall near (0, 0, 1): r = (0.5, 1, −0.7), r² = 1.74, r̂·n̂ = 0.7/1.319,
-        // D ≈ 1e9 · 0.5307 / (4π · 1.74) = 2.4e7 there.
+        // The incoming stage (D, no ρ) on a 1 × 1 image looking at (0, −0.8, 1) on the back
+        // wall, above both blocks: its one sample's ray (the pixel's centre) meets the wall
+        // there. r = (0.5, 1.8, −0.7), r² = 3.98, r̂·n̂ = 0.7/√3.98 = 0.35088,
+        // D = 1e9 · 0.35088 / (4π · 3.98) = 7.0156e6.
         s.shading = crate::Shading::for_stage(crate::Stage::Incoming);
         s.camera = s.camera.with_resolution(1, 1);
+        s.camera.look_at(Vec3::new(0.0, -0.8, 1.0));
+        s.samples_per_pixel = 1;
+        let one = crate::render::render(&scene, &s).pixels[0];
+        let d = 1e9 * (0.7 / 3.98f64.sqrt()) / (4.0 * std::f64::consts::PI * 3.98);
+        assert!(
+            (f64::from(one.x) / d - 1.0).abs() < 1e-4,
+            "{one} against {d}"
+        );
+        assert_eq!(one, Vec3::splat(one.x), "white light");
+        // Summed over the most samples (jittered across the whole view, each D at most the
+        // 8.0e13 derived in `validate`): finite, and a mean of values within that bound.
         s.samples_per_pixel = MAX_SAMPLES;
         let many = crate::render::render(&scene, &s);
         assert!(many.pixels[0].is_finite(), "{}", many.pixels[0]);
-        assert!(many.pixels[0].x > 1e7, "{}", many.pixels[0]);
+        assert!(
+            many.pixels[0].min_element() > 0.0 && many.pixels[0].max_element() <= 8.0e13,
+            "{}",
+            many.pixels[0]
+        );
+    }
+
+    /// A model path written into a file in another folder is written relative to that folder
+    /// (`../m.obj`, not the working folder's `m.obj`), and read back relative to it: the same
+    /// file, whichever folder reads it. Paths with nothing but the root in common stay
+    /// absolute; built-in models stay names.
+    #[test]
+    fn model_paths_are_relative_to_the_file_that_names_them() {
+        use std::path::{Path, PathBuf};
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().canonicalize().unwrap();
+        std::fs::create_dir_all(root.join("sub")).unwrap();
+        std::fs::create_dir_all(root.join("models")).unwrap();
+        std::fs::write(root.join("models/m.obj"), "").unwrap();
+        let model = root.join("models/m.obj");
+        let s = RenderSettings {
+            scene: SceneChoice::Obj(model.clone()),
+            ..RenderSettings::default()
+        };
+        let written = s.relative_to(&root.join("sub"));
+        assert_eq!(
+            written.scene,
+            SceneChoice::Obj(PathBuf::from("../models/m.obj"))
+        );
+        let mut read = written.clone();
+        read.resolve_paths(&root.join("sub"));
+        let SceneChoice::Obj(path) = &read.scene else {
+            panic!("{:?}", read.scene)
+        };
+        assert_eq!(path.canonicalize().unwrap(), model);
+        // Inside the folder: plain; a missing model is compared as written.
+        assert_eq!(
+            crate::scene::spec::path_relative_to(&model, &root),
+            Path::new("models/m.obj")
+        );
+        assert_eq!(
+            crate::scene::spec::path_relative_to(&root.join("gone/x.obj"), &root.join("sub")),
+            Path::new("../gone/x.obj")
+        );
+        // Only the root in common: absolute.
+        assert_eq!(
+            crate::scene::spec::path_relative_to(Path::new("/nowhere-a/x.obj"), &root),
+            Path::new("/nowhere-a/x.obj")
+        );
+        let mut custom = SceneChoice::Bunny.spec();
+        custom.models.push(crate::scene::ModelSpec::new(
+            model.clone(),
+            &crate::scene::obj::Placement::TEAPOT,
+        ));
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(custom)),
+            ..RenderSettings::default()
+        };
+        let SceneChoice::Custom(spec) = s.relative_to(&root.join("sub")).scene else {
+            panic!()
+        };
+        assert_eq!(spec.models[0].file, Path::new("bunny"));
+        assert_eq!(spec.models[1].file, Path::new("../models/m.obj"));
+    }
+
+    /// A model path that is not UTF-8 is refused before anything is rendered: the settings
+    /// that carry it could not be written into a screenshot or a scene file (it panicked
+    /// there, after the whole render, writing nothing).
+    #[cfg(unix)]
+    #[test]
+    fn a_model_path_that_is_not_utf8_is_refused() {
+        use std::os::unix::ffi::OsStrExt as _;
+        let path = std::path::PathBuf::from(std::ffi::OsStr::from_bytes(b"models/m\xff.obj"));
+        let s = RenderSettings {
+            scene: SceneChoice::Obj(path.clone()),
+            ..RenderSettings::default()
+        };
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid model path 'models/m\u{fffd}.obj': is not UTF-8 text, and raylab writes \
+             the paths of its settings as text (rename the file or its folder)"
+        );
+        let mut spec = SceneChoice::Bunny.spec();
+        spec.models[0].file = path;
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(spec)),
+            ..RenderSettings::default()
+        };
+        assert_eq!(s.validate().unwrap_err().name, "scene.models[0].file");
+        assert!(crate::settings_file::settings_text(&s).is_err(), "no panic");
     }
 
     #[test]

@@ -91,13 +91,43 @@ impl TextureImage {
     /// asking for far more before anything is decoded.
     pub const MAX_SIDE: u32 = 16384;
 
-    /// Loads a PNG or JPEG file.
+    /// The most memory decoding a texture takes, per texel: the linear texels (12 bytes)
+    /// beside the 8-bit RGB copy they are made from (3); before that, the decoded image (at
+    /// most 8 bytes: 16-bit RGBA) beside that copy. At most 15 at any moment, so 16.
+    pub const DECODING_BYTES_PER_TEXEL: u64 = 16;
+
+    /// The memory decoding a `width × height` texture takes at most, not counting its file.
+    pub fn decoding_bytes(width: u32, height: u32) -> u64 {
+        u64::from(width) * u64::from(height) * Self::DECODING_BYTES_PER_TEXEL
+    }
+
+    /// Loads a PNG or JPEG file (a regular file of at most
+    /// [`crate::inputs::MAX_TEXTURE_FILE_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, TextureError> {
-        let bytes = std::fs::read(path).map_err(|e| TextureError {
-            name: path.display().to_string(),
-            reason: e.to_string(),
-        })?;
-        Self::from_encoded(&bytes, &path.display().to_string())
+        let name = path.display().to_string();
+        let bytes =
+            crate::inputs::read_capped(path, crate::inputs::MAX_TEXTURE_FILE_BYTES, "a texture")
+                .map_err(|reason| TextureError {
+                    name: name.clone(),
+                    reason,
+                })?;
+        Self::from_encoded(&bytes, &name)
+    }
+
+    /// The width and height a texture file's header gives, without decoding it; `None` if it
+    /// is not a regular file or not a PNG or JPEG whose header can be read. For the memory
+    /// estimate ([`crate::scene::SceneSpec::memory_estimate`]).
+    pub fn dimensions(path: &Path) -> Option<(u32, u32)> {
+        let (file, _) = crate::inputs::open_regular(path).ok()?;
+        let reader = image::ImageReader::new(std::io::BufReader::new(file))
+            .with_guessed_format()
+            .ok()?;
+        match reader.format() {
+            Some(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {
+                reader.into_dimensions().ok()
+            }
+            _ => None,
+        }
     }
 
     /// Decodes a PNG or JPEG held in memory; `name` names it in errors.
@@ -106,8 +136,18 @@ impl TextureImage {
     /// and turned into linear RGB with the exact sRGB decoding curve, since ρ multiplies light
     /// and light adds linearly. Alpha is ignored: a texture here is a reflectance, not a cut-out.
     /// The size is read from the header and checked (1 to [`Self::MAX_SIDE`] a side) before
-    /// the pixels are decoded.
+    /// the pixels are decoded, and so is the memory decoding takes
+    /// ([`Self::decoding_bytes`], against [`crate::memory::available`]).
     pub fn from_encoded(bytes: &[u8], name: &str) -> Result<Self, TextureError> {
+        Self::from_encoded_within(bytes, name, crate::memory::available())
+    }
+
+    /// [`Self::from_encoded`] with the memory there is given.
+    fn from_encoded_within(
+        bytes: &[u8],
+        name: &str,
+        available: Option<crate::memory::Available>,
+    ) -> Result<Self, TextureError> {
         let error = |reason: String| TextureError {
             name: name.to_owned(),
             reason,
@@ -128,26 +168,38 @@ impl TextureImage {
             .into_dimensions()
             .map_err(|e| error(e.to_string()))?;
         check_size(width, height).map_err(error)?;
+        // What decoding takes is known from the header: refused before it is asked of the
+        // allocator (a 782 KB PNG of 16384² decodes to 4 GiB), rather than aborting.
+        crate::memory::check_against(
+            format!("decoding the {width}×{height} texture"),
+            Self::decoding_bytes(width, height),
+            available,
+        )
+        .map_err(|e| error(e.to_string()))?;
 
         let mut decoder = reader()?;
         // The size was checked above; the decoder's default 512 MiB cap would otherwise
-        // refuse large textures within it.
-        decoder.no_limits();
+        // refuse large textures within it. Its allocations are still bounded by the memory
+        // the process may use, so one it cannot have is an error, not an abort.
+        let mut limits = image::Limits::no_limits();
+        limits.max_alloc = available.map(|a| a.bytes);
+        decoder.limits(limits);
         let rgb = decoder
             .decode()
             .map_err(|e| error(e.to_string()))?
             .into_rgb8();
         let table = srgb8_to_linear_table();
-        let texels = rgb
-            .pixels()
-            .map(|p| {
-                Vec3::new(
-                    table[p[0] as usize],
-                    table[p[1] as usize],
-                    table[p[2] as usize],
-                )
-            })
-            .collect();
+        let mut texels = crate::memory::try_with_capacity(rgb.pixels().len(), || {
+            format!("the {width}×{height} texture's texels")
+        })
+        .map_err(|e| error(e.to_string()))?;
+        texels.extend(rgb.pixels().map(|p| {
+            Vec3::new(
+                table[p[0] as usize],
+                table[p[1] as usize],
+                table[p[2] as usize],
+            )
+        }));
         Self::from_linear(name, rgb.width(), rgb.height(), texels)
     }
 
@@ -270,6 +322,41 @@ pub fn planar_uv(position: Vec3, normal: Vec3) -> Vec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A PNG whose header says 16384² (the fault's file was 782 KB of black that decodes to
+    /// 4 GiB of texels; the header alone is what is read before decoding). Decoding is refused
+    /// when the memory is not there: an error saying both sizes (a warning when loading a
+    /// model), never an abort. The estimate reads the same size from the file.
+    #[test]
+    fn a_texture_too_large_for_the_memory_is_refused_before_decoding() {
+        let side = TextureImage::MAX_SIDE;
+        let mut png = Vec::new();
+        {
+            let mut encoder = png::Encoder::new(&mut png, side, side);
+            encoder.set_color(png::ColorType::Grayscale);
+            // The header, a few bytes of image data (what is read before decoding stops at
+            // its start), then (when the writer is dropped) the end.
+            let mut writer = encoder.write_header().unwrap();
+            writer.write_chunk(png::chunk::IDAT, &[0; 8]).unwrap();
+            drop(writer);
+        }
+        let limit = crate::memory::Available {
+            bytes: 3 << 30,
+            limit: "address-space limit: ulimit -v",
+        };
+        let e = TextureImage::from_encoded_within(&png, "huge.png", Some(limit)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "could not load texture 'huge.png': decoding the 16384×16384 texture needs about \
+             4.0 GiB but only 3.0 GiB is available (address-space limit: ulimit -v)"
+        );
+        assert_eq!(TextureImage::decoding_bytes(side, side), 4 << 30);
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("huge.png");
+        std::fs::write(&file, &png).unwrap();
+        assert_eq!(TextureImage::dimensions(&file), Some((side, side)));
+        assert_eq!(TextureImage::dimensions(dir.path()), None);
+    }
 
     const BLACK: Vec3 = Vec3::ZERO;
     const WHITE: Vec3 = Vec3::ONE;

@@ -16,7 +16,7 @@ use raylab_core::scene::{Scene, SceneChoice, cornell_box, terrain};
 /// Every structure that is not the brute-force loop, with every kernel set this CPU runs.
 fn configurations() -> Vec<(AccelKind, Isa)> {
     let mut out = vec![(AccelKind::Bvh2, Isa::Scalar)];
-    for isa in Isa::available() {
+    for isa in Isa::available_for_tests("bvh configurations") {
         out.push((AccelKind::Flat, isa));
         out.push((AccelKind::Bvh8, isa));
     }

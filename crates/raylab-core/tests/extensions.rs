@@ -56,23 +56,51 @@ fn checkerboard_squares_land_where_the_mapping_puts_them() {
     );
 }
 
-/// The grid walls keep ρ off the lines and darken it on them; the lab stages and the path
-/// tracer both read the texture (its grey squares show in the path-traced floor too).
+/// The lab stages and the path tracer read the texture: the flat stage shows ρ itself, and
+/// each other stage multiplies the same ρ into its value, so at every pixel the textured
+/// value is the plain one scaled by the textured ρ over the plain ρ (both read from the flat
+/// stage). The path tracer with no bounces (its value ρ·D at the first hit, figure 6) obeys
+/// the same rule. The grid's lines darken ρ, so the rule is tested on many pixels whose ρ
+/// changed.
 #[test]
 fn every_stage_reads_the_texture() {
     let scene = cornell_box();
-    for stage in [Stage::Flat, Stage::Lab, Stage::Path] {
+    let flat = |texture| {
+        let mut s = settings(Stage::Flat, 48);
+        s.texture_preset = texture;
+        render(&scene, &s)
+    };
+    let (rho_plain, rho_textured) = (flat(TexturePreset::None), flat(TexturePreset::Both));
+    let changed = rho_plain
+        .pixels
+        .iter()
+        .zip(&rho_textured.pixels)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(changed > 200, "{changed} pixels of ρ changed");
+    for stage in [
+        Stage::Incoming,
+        Stage::Direct,
+        Stage::Shadows,
+        Stage::Lab,
+        Stage::Path,
+    ] {
         let mut s = settings(stage, 48);
+        s.shading.bounces = Some(0);
         let plain = render(&scene, &s);
         s.texture_preset = TexturePreset::Both;
         let textured = render(&scene, &s);
-        let changed = plain
-            .pixels
-            .iter()
-            .zip(&textured.pixels)
-            .filter(|(a, b)| a != b)
-            .count();
-        assert!(changed > 200, "{stage}: {changed} pixels changed");
+        for i in 0..plain.pixels.len() {
+            let (p, t) = (plain.pixels[i], textured.pixels[i]);
+            let want = if stage == Stage::Incoming {
+                // D alone: no ρ, so no texture.
+                p
+            } else {
+                p / rho_plain.pixels[i] * rho_textured.pixels[i]
+            };
+            let close = (t - want).abs().max_element() <= 1e-5 * want.abs().max_element().max(1.0);
+            assert!(close, "{stage}, pixel {i}: {t} against {want}");
+        }
     }
 }
 

@@ -12,23 +12,23 @@ mod checks;
 
 use std::path::{Path, PathBuf};
 
-/// The inputs saved for `target`, in name order (none is fine: nothing has failed there yet).
+/// The inputs saved for `target`, in name order. The folder must exist and hold at least one:
+/// a folder that is missing or empty (a typo in its name, say) would replay nothing and pass.
 fn inputs(target: &str) -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fuzz-regressions")
         .join(target);
-    let mut files: Vec<PathBuf> = match std::fs::read_dir(&dir) {
-        Ok(entries) => entries
-            .map(|e| e.expect("a folder entry").path())
-            .filter(|p| p.is_file())
-            .collect(),
-        Err(_) => Vec::new(),
-    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.expect("a folder entry").path())
+        .filter(|p| p.is_file())
+        .collect();
     files.sort();
+    assert!(!files.is_empty(), "{} holds no input", dir.display());
     files
 }
 
-/// Runs `check` on every saved input of `target`, naming the file on the way.
+/// Runs `check` on every saved input of `target`, naming the file on the way; the number run.
 fn replay(target: &str, check: fn(&[u8])) -> usize {
     let files = inputs(target);
     for file in &files {
@@ -43,14 +43,39 @@ fn obj_inputs_that_once_failed() {
     assert!(replay("obj", checks::obj) >= 1);
 }
 
+/// Besides what the fuzzer found, each folder holds a valid input (from `fuzz/seeds`), so the
+/// check's whole way — parse, validate, save, read back, render — is replayed, and inputs that
+/// the hardening refuses now (a focal length whose rays cannot be normalised; a scene file's
+/// array of four numbers, a mirror with an index of refraction).
 #[test]
 fn settings_json_inputs_that_once_failed() {
-    replay("settings_json", checks::settings_json);
+    assert!(replay("settings_json", checks::settings_json) >= 3);
+    let valid = std::fs::read_to_string(
+        inputs("settings_json")
+            .into_iter()
+            .find(|p| p.ends_with("valid-sidecar.json"))
+            .unwrap(),
+    )
+    .unwrap();
+    raylab_core::RenderSettings::from_json(&valid)
+        .unwrap()
+        .validate()
+        .expect("the valid input is valid, so the check renders it");
 }
 
 #[test]
 fn scene_file_inputs_that_once_failed() {
-    replay("scene_file", checks::scene_file);
+    assert!(replay("scene_file", checks::scene_file) >= 3);
+    for file in inputs("scene_file") {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let parsed = raylab_core::scene_file::parse(&text, Path::new("/nonexistent-fuzz-folder"));
+        let name = file.file_name().unwrap().to_string_lossy().into_owned();
+        assert_eq!(
+            parsed.is_ok(),
+            name.starts_with("valid-"),
+            "{name}: {parsed:?}"
+        );
+    }
 }
 
 /// The scene-file check on every scene shipped in assets/scenes (the fuzz target's seeds): each

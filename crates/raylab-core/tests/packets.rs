@@ -43,7 +43,7 @@ fn check_view(scene: &Scene, settings: &raylab_core::RenderSettings) -> View {
         .par_iter()
         .map(|(ray, t_max)| occluded_brute_force(ray, &scene.triangles, *t_max))
         .collect();
-    for isa in Isa::available() {
+    for isa in Isa::available_for_tests("packets: check_view") {
         for kind in [AccelKind::Bvh8, AccelKind::Flat] {
             if kind == AccelKind::Flat && scene.triangles.len() > 5_000 {
                 continue; // the flat loop is for tiny scenes
@@ -208,7 +208,7 @@ fn the_lab_image_is_the_same_whatever_the_kernels() {
 
 fn same_image_whatever_the_kernels(scene: &Scene, sample: u32) {
     let settings = lab_settings(128, 128);
-    let images: Vec<_> = Isa::available()
+    let images: Vec<_> = Isa::available_for_tests("packets: same_image_whatever_the_kernels")
         .into_iter()
         .map(|isa| {
             let scene = scene.clone().rebuilt(AccelKind::Auto, isa);
@@ -245,7 +245,7 @@ fn shadow_rays_given_as_lanes_equal_brute_force() {
         let settings = lab_settings(96, 96);
         let shadow = shadow_rays(&scene, &settings.light, &primary_rays(&settings.camera));
         let mut rng = raylab_core::sampling::Rng::new(17);
-        for isa in Isa::available() {
+        for isa in Isa::available_for_tests("packets: shadow_rays_given_as_lanes") {
             let scene = scene.clone().rebuilt(AccelKind::Auto, isa);
             let mut checked = 0;
             for batch in shadow.chunks(64) {

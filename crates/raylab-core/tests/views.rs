@@ -56,7 +56,7 @@ fn counting_equals_closest(scene: &Scene, seed: u64) -> f64 {
         (AccelKind::Auto, Isa::Scalar),
         (AccelKind::Bvh2, Isa::Scalar),
     ];
-    for isa in Isa::available() {
+    for isa in Isa::available_for_tests("views: counting_equals_closest") {
         kinds.push((AccelKind::Auto, isa));
         kinds.push((AccelKind::Bvh8, isa));
     }

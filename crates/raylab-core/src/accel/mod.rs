@@ -172,6 +172,29 @@ pub enum Isa {
     Avx512(Avx512),
 }
 
+/// For tests of a kernel set this CPU does not run (`set`: `avx2` or `avx512`), which return
+/// without checking it: says so on the terminal (past the test harness's capture of output, so
+/// a passing run shows the skip), and fails instead when the `RAYLAB_REQUIRE_ISA` environment
+/// variable names the set (a comma-separated list: CI names each set its CPU has, so a kernel
+/// set it can test is never skipped unnoticed).
+#[doc(hidden)]
+pub fn skip_unless_required(set: &str, test: &str) {
+    use std::io::Write as _;
+    let required = std::env::var("RAYLAB_REQUIRE_ISA").unwrap_or_default();
+    if names(&required, set) {
+        panic!("{test}: RAYLAB_REQUIRE_ISA names {set}, but this CPU does not run it");
+    }
+    let _ = writeln!(
+        std::io::stderr(),
+        "note: {test}: the {set} kernels are not tested: this CPU does not run them"
+    );
+}
+
+/// Whether the comma-separated `list` names `set`.
+fn names(list: &str, set: &str) -> bool {
+    list.split(',').map(str::trim).any(|r| r == set)
+}
+
 /// The kernels every structure uses unless told otherwise: forced ([`Isa::force`], the
 /// `RAYLAB_ISA` variable) or measured ([`calibrate`]), once per process.
 static CHOSEN: OnceLock<(Isa, Option<Calibration>)> = OnceLock::new();
@@ -239,6 +262,43 @@ impl Isa {
     }
 
     /// The named kernel set, if this CPU runs it: `scalar`, `avx2` or `avx512`.
+    /// For tests: every kernel set this CPU runs ([`Isa::available`]), each set it does not
+    /// run reported by [`skip_unless_required`] under the name `test`.
+    #[doc(hidden)]
+    pub fn available_for_tests(test: &str) -> Vec<Isa> {
+        if Avx2::detect().is_none() {
+            skip_unless_required("avx2", test);
+        }
+        if Avx512::detect().is_none() {
+            skip_unless_required("avx512", test);
+        }
+        Isa::available()
+    }
+
+    /// What is wrong with the `RAYLAB_ISA` environment variable, when it is set to something
+    /// [`Isa::best_with`] cannot use and so does not (it measures, as if the variable were
+    /// unset): for a warning naming the sets that are accepted. `None` when it is unset, `best`
+    /// or a set this CPU runs.
+    pub fn environment_note() -> Option<String> {
+        let value = std::env::var_os("RAYLAB_ISA")?;
+        let text = value.to_string_lossy();
+        if text == "best" || Isa::by_name(&text).is_some() {
+            return None;
+        }
+        let known = ["avx512", "avx2", "scalar"].contains(&&*text);
+        let runs: Vec<&str> = Isa::available().iter().rev().map(|i| i.name()).collect();
+        Some(format!(
+            "RAYLAB_ISA={text:?} is {}: the kernels are chosen by measuring, as without it \
+             (accepted: best, {})",
+            if known {
+                "a kernel set this CPU does not run"
+            } else {
+                "not a kernel set"
+            },
+            runs.join(", ")
+        ))
+    }
+
     pub fn by_name(name: &str) -> Option<Isa> {
         match name {
             "scalar" => Some(Isa::Scalar),
@@ -876,6 +936,18 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+
+    /// `RAYLAB_REQUIRE_ISA=avx2,avx512` turns the skip of either set into a failure; a set it
+    /// does not name is skipped with a note.
+    #[test]
+    fn a_required_kernel_set_cannot_be_skipped() {
+        assert!(names("avx2,avx512", "avx512") && names(" avx2 ", "avx2"));
+        assert!(!names("avx2", "avx512") && !names("", "avx2"));
+        let required = std::env::var("RAYLAB_REQUIRE_ISA").unwrap_or_default();
+        if !names(&required, "made-up") {
+            skip_unless_required("made-up", "a_required_kernel_set_cannot_be_skipped");
+        }
+    }
 
     #[test]
     fn kernel_sets_are_named_only_where_the_cpu_runs_them() {

@@ -1226,7 +1226,9 @@ mod tests {
     /// (`transpose16`) equal the same read lane by lane (`gather16`), every float.
     #[test]
     fn transposed_packets_equal_gathered_ones() {
-        let Some(k) = Avx512::detect() else { return };
+        let Some(k) = Avx512::detect() else {
+            return crate::accel::skip_unless_required("avx512", "transposed_packets");
+        };
         let mut rng = crate::sampling::Rng::new(3);
         let mut v = || glam::Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
         let rays: Vec<Ray> = (0..16).map(|_| Ray::new(v(), v())).collect();
@@ -1259,7 +1261,9 @@ mod tests {
     /// bits; the unsigned comparison and the masked minimum lane by lane.
     #[test]
     fn avx2_masks_round_trip() {
-        let Some(k) = Avx2::detect() else { return };
+        let Some(k) = Avx2::detect() else {
+            return crate::accel::skip_unless_required("avx2", "avx2_masks_round_trip");
+        };
         for bits in 0..256u32 {
             assert_eq!(k.bits(k.mask(bits)), bits);
         }
@@ -1321,11 +1325,13 @@ mod tests {
                 }
             }
         }
-        if let Some(k) = Avx2::detect() {
-            check(k, &rays);
+        match Avx2::detect() {
+            Some(k) => check(k, &rays),
+            None => crate::accel::skip_unless_required("avx2", "rays_gather_into_lanes"),
         }
-        if let Some(k) = Avx512::detect() {
-            check(k, &rays);
+        match Avx512::detect() {
+            Some(k) => check(k, &rays),
+            None => crate::accel::skip_unless_required("avx512", "rays_gather_into_lanes"),
         }
     }
 }

@@ -592,6 +592,13 @@ mod tests {
         let mut rng = Rng::new(11);
         let avx2 = Avx2::detect();
         let avx512 = Avx512::detect();
+        let test = "packet_kernels_equal_intersect_triangle";
+        if avx2.is_none() {
+            crate::accel::skip_unless_required("avx2", test);
+        }
+        if avx512.is_none() {
+            crate::accel::skip_unless_required("avx512", test);
+        }
         let mut hits = 0;
         for _ in 0..20_000 {
             let (tris, ray) = case(&mut rng);
@@ -645,7 +652,9 @@ mod tests {
     #[test]
     fn box_kernels_agree_with_the_scalar_twin() {
         let mut rng = Rng::new(12);
-        let Some(k) = Avx2::detect() else { return };
+        let Some(k) = Avx2::detect() else {
+            return crate::accel::skip_unless_required("avx2", "box_kernels_agree");
+        };
         let mut disagreements = 0;
         for _ in 0..20_000 {
             let mut node = Node8 {

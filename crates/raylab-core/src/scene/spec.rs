@@ -135,6 +135,7 @@ impl SceneSpec {
         };
         for (i, m) in self.models.iter().enumerate() {
             let field = |f: &str| format!("scene.models[{i}].{f}");
+            crate::settings::check_path(field("file"), &m.file)?;
             if !(m.height.is_finite() && m.height > 0.0 && m.height <= 2.0) {
                 return Err(bad(
                     field("height"),
@@ -232,19 +233,19 @@ impl SceneSpec {
     }
 
     /// Roughly the most memory loading and building the scene takes, in bytes: nothing to
-    /// speak of for the lab's box; 16 MiB a built-in model; for an OBJ file, 8 times its size
-    /// (a face of some 40 bytes of text becomes a triangle, its corners' normals and texture
-    /// coordinates and its share of the structure, some 300 bytes), or 0 if it cannot be read
-    /// (loading it fails anyway); 320 MiB for the default terrain's million triangles (it runs
-    /// in about 350 MiB of address space in all), in proportion to its triangle count for
-    /// another grid.
+    /// speak of for the lab's box; 16 MiB a built-in model; for an OBJ file, 8 times its size,
+    /// its material libraries and its largest texture ([`obj::memory_estimate`]), or 0 if it
+    /// cannot be read (loading it fails anyway); 320 MiB for the default terrain's million
+    /// triangles (it runs in about 350 MiB of address space in all), in proportion to its
+    /// triangle count for another grid. A file named by several models is counted once a
+    /// model: each is loaded.
     pub fn memory_estimate(&self) -> u64 {
         let models: u64 = self
             .models
             .iter()
             .map(|m| match m.built_in() {
                 Some(_) => 16 << 20,
-                None => std::fs::metadata(&m.file).map_or(0, |f| 8 * f.len()),
+                None => obj::memory_estimate(&m.file),
             })
             .sum();
         let terrain = self.terrain.as_ref().map_or(0, |t| {
@@ -366,20 +367,67 @@ pub fn assemble(
 /// names and absolute paths alone.
 pub fn resolve_models(spec: &mut SceneSpec, folder: &Path) {
     for m in &mut spec.models {
-        if m.built_in().is_none() && m.file.is_relative() {
-            m.file = folder.join(&m.file);
+        if m.built_in().is_none() {
+            m.file = resolve_path(&m.file, folder);
         }
     }
 }
 
-/// The inverse of [`resolve_models`] for writing a scene file into `folder`: paths inside it
-/// become relative, so the file and its models can be sent together.
+/// The inverse of [`resolve_models`] for writing a scene file into `folder`: each model's path
+/// as [`path_relative_to`] makes it, so the file and its models can be sent together and the
+/// file names the same models from wherever it is read.
 pub fn relative_models(spec: &mut SceneSpec, folder: &Path) {
     for m in &mut spec.models {
-        if let Ok(rest) = m.file.strip_prefix(folder)
-            && m.built_in().is_none()
-        {
-            m.file = rest.to_path_buf();
+        if m.built_in().is_none() {
+            m.file = path_relative_to(&m.file, folder);
         }
     }
+}
+
+/// A path read from a file in `folder`: a relative one is relative to that folder, not to the
+/// working folder of whoever reads it.
+pub fn resolve_path(path: &Path, folder: &Path) -> PathBuf {
+    if path.is_relative() {
+        folder.join(path)
+    } else {
+        path.to_path_buf()
+    }
+}
+
+/// `path` (as the program holds it: relative to the working folder, or absolute) as a file
+/// written into `folder` holds it, so that [`resolve_path`] gives the same file back from
+/// wherever the file is read: relative to `folder` when the two share more than the root
+/// (`../models/m.obj`), else absolute.
+///
+/// Both are compared as the file system resolves them (symbolic links followed) when both
+/// exist; otherwise as written, made absolute against the working folder (a model that is
+/// missing stays missing, from the same place).
+pub fn path_relative_to(path: &Path, folder: &Path) -> PathBuf {
+    let folder = if folder.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        folder
+    };
+    let (path, folder) = match (std::fs::canonicalize(path), std::fs::canonicalize(folder)) {
+        (Ok(p), Ok(f)) => (p, f),
+        _ => match (std::path::absolute(path), std::path::absolute(folder)) {
+            (Ok(p), Ok(f)) => (p, f),
+            _ => return path.to_path_buf(),
+        },
+    };
+    let p: Vec<_> = path.components().collect();
+    let f: Vec<_> = folder.components().collect();
+    let common = p.iter().zip(&f).take_while(|(a, b)| a == b).count();
+    if common <= 1 || common == p.len() {
+        // Nothing in common but the root, or the folder itself: as it is.
+        return path;
+    }
+    let mut relative = PathBuf::new();
+    for _ in common..f.len() {
+        relative.push("..");
+    }
+    for c in &p[common..] {
+        relative.push(c);
+    }
+    relative
 }
