@@ -227,7 +227,7 @@ fn a_bad_scene_file_names_the_field_and_the_line_and_writes_nothing() {
 
 #[test]
 fn a_settings_file_with_only_a_size_means_what_width_and_height_mean() {
-    // Fault 8 of issue 10: `camera.width`/`height` alone kept a 512 px focal length (7.2°).
+    // `camera.width`/`height` alone once kept a 512 px focal length (7.2°).
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("size.json");
     // With a byte-order mark and a field raylab does not know.

@@ -534,7 +534,7 @@ fn a_missing_obj_file_shows_an_error_and_keeps_the_scene() {
     assert!(!shown(&h).settings.shading.shadows);
 }
 
-/// An OBJ file with faces left out (issue 10, fault 3: a copy of a face, a face on a line)
+/// An OBJ file with faces left out (a copy of a face, a face on a line)
 /// loads, and the status line says what was left out, as a notice.
 #[test]
 fn an_obj_with_faces_left_out_loads_with_a_notice_saying_so() {
@@ -1334,7 +1334,7 @@ fn the_view_selector_shows_a_debug_view_with_its_legend() {
     assert_eq!(h.state().stats.legend, None);
 }
 
-/// Issue 10, fault 9: with the camera behind the box (z = 2) the image is black, and the
+/// With the camera behind the box (z = 2) the image is black, and the
 /// status line says why; back in front of the box, the note goes.
 #[test]
 fn a_camera_that_sees_nothing_says_why() {

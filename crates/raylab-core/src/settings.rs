@@ -516,7 +516,7 @@ mod tests {
     }
 
     /// Huge but finite light is refused above its bound, naming the field and the bound
-    /// (issue 10, fault 5: 1e38 W and N = 1e38 wrote ∞ to EXR files); the bounds themselves
+    /// (without them 1e38 W and N = 1e38 wrote ∞ to EXR files); the bounds themselves
     /// are allowed.
     #[test]
     fn light_beyond_its_bounds_is_refused_naming_the_bound() {

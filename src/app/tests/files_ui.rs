@@ -266,7 +266,7 @@ fn type_number(h: &mut Harness<'_, WorkbenchApp>, label: &str, text: &str) {
     h.run_steps(2);
 }
 
-/// Fault 1 of issue 10: `NaN` typed into a number field set it to its maximum.
+/// `NaN` typed into a number field once set it to its maximum.
 #[test]
 fn a_typed_non_number_changes_nothing_and_a_clamped_value_says_so() {
     let mut h = harness(small_state());

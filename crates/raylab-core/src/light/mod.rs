@@ -317,7 +317,7 @@ pub fn near_an_edge(zones: &[f32; 3], u: f32, v: f32) -> bool {
 /// at `t = 0` whichever way it goes, into the room toward a light inside (which must not block
 /// it) or through the wall toward a light outside (which must). Skipping the ray's first
 /// steps let the second slip through the wall: a light outside the box lit a line of pixels
-/// along the floor's edge with the right wall (issue 10, fault 6). The ray that found the point
+/// along the floor's edge with the right wall. The ray that found the point
 /// tells the two apart: it reached the point through free space. So at an edge the ray starts
 /// [`SHADOW_OFFSET`] off the surface and [`SHADOW_OFFSET`] along it back toward where that ray
 /// came from (its part along the surface, so the lift off the surface is unchanged), which is
@@ -566,7 +566,7 @@ mod tests {
         assert_eq!(approach_at_edge(&t, 0.5, 0.4997, d), None);
     }
 
-    /// The same corners lit from outside the box (issue 10, fault 6): the wall the point
+    /// The same corners lit from outside the box: the wall the point
     /// touches stands between it and the light, whichever of the two walls' normals the point
     /// is shaded with. The floor's edge with the right wall (x = 1) under a light at
     /// (1.5, 0, 0), and the left wall's edge with the ceiling under a light above the box.
