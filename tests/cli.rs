@@ -357,6 +357,7 @@ fn the_extensions_on_the_command_line() {
             vec!["--light-radius", "0.2", "--samples", "4"],
             with(&|s| {
                 s.light.radius = 0.2;
+                s.light.shape = raylab_core::light::LightShape::Sphere;
                 s.samples_per_pixel = 4;
             }),
         ),

@@ -443,9 +443,10 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
              facing the floor. The lab's stages keep equation 27 from its centre and soften the \
              shadows; the path stage sees the real light, with multiple importance sampling",
         );
-    if light.shape != shape_before && light.radius == 0.0 {
+    if light.shape != shape_before {
         light.radius = match light.shape {
             LightShape::Point => 0.0,
+            _ if light.radius > 0.0 => light.radius,
             LightShape::Sphere => DEFAULT_SPHERE_RADIUS,
             LightShape::Quad => DEFAULT_QUAD_SIDE,
         };

@@ -55,7 +55,7 @@ pub struct PointLight {
     /// The light's colour: the power per channel is `power · colour`.
     pub colour: Vec3,
     /// The size of an area light in scene units: the sphere's radius or the square's side
-    /// (ignored for the point; 0 makes any shape the lab's point light).
+    /// (0 makes any shape the lab's point light; a point with a radius is a sphere).
     pub radius: f32,
     /// The light's shape: the lab's point, a sphere or a square.
     pub shape: LightShape,
@@ -81,21 +81,25 @@ impl PointLight {
         self.colour * self.power
     }
 
-    /// Whether the light is an area light (a sphere or square of some size), not the lab's
-    /// point: what makes its shadows soft and the path tracer see it.
+    /// Whether the light is an area light, not the lab's point: any size above 0 (a point
+    /// given a radius is the sphere of that radius, as the lab's extension had it).
     #[inline]
     pub fn is_area(&self) -> bool {
-        self.shape != LightShape::Point && self.radius > 0.0
+        self.radius > 0.0
+    }
+
+    /// The shape the light really has: a point with a radius is a sphere.
+    pub fn effective_shape(&self) -> LightShape {
+        match (self.is_area(), self.shape) {
+            (false, _) => LightShape::Point,
+            (true, LightShape::Point) => LightShape::Sphere,
+            (true, shape) => shape,
+        }
     }
 
     /// The emitter this light is, behind the [`Light`] interface.
     pub fn emitter(&self) -> AnyLight {
-        let shape = if self.is_area() {
-            self.shape
-        } else {
-            LightShape::Point
-        };
-        emitter(self, shape, self.radius)
+        emitter(self, self.effective_shape(), self.radius)
     }
 
     /// The point a lab-stage shadow ray from `position` aims at (`u1`, `u2` uniform in
@@ -104,12 +108,10 @@ impl PointLight {
     /// such points a surface sees unblocked estimates how much of the light it sees.
     #[inline]
     pub fn shadow_target(&self, position: Vec3, u1: f32, u2: f32) -> Vec3 {
-        match (self.is_area(), self.shape) {
-            (true, LightShape::Sphere) => self.sample_point(position, u1, u2),
-            (true, LightShape::Quad) => {
-                self.position + self.radius * Vec3::new(u1 - 0.5, 0.0, u2 - 0.5)
-            }
-            _ => self.position,
+        match self.effective_shape() {
+            LightShape::Sphere => self.sample_point(position, u1, u2),
+            LightShape::Quad => self.position + self.radius * Vec3::new(u1 - 0.5, 0.0, u2 - 0.5),
+            LightShape::Point => self.position,
         }
     }
 
