@@ -121,6 +121,39 @@ pub struct InspectArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Pixel(pub u32, pub u32);
 
+/// The options that set what a file given with `--settings` or `--scene-file` holds: either
+/// file takes them all, so none combines with it.
+const SETTINGS_OPTIONS: [&str; 28] = [
+    "scene",
+    "obj",
+    "stage",
+    "width",
+    "height",
+    "focal",
+    "camera",
+    "yaw",
+    "light",
+    "light_power",
+    "indirect",
+    "shadows",
+    "samples",
+    "seed",
+    "bounces",
+    "material_preset",
+    "roughness",
+    "specular_depth",
+    "texture_preset",
+    "smooth",
+    "light_radius",
+    "light_shape",
+    "light_size",
+    "light_colour",
+    "aperture",
+    "focus_distance",
+    "display",
+    "exposure",
+];
+
 /// What determines an image, shared by `render` and `inspect` (which explains a pixel of the
 /// very image `render` would write with the same options).
 #[derive(Debug, Args)]
@@ -132,12 +165,8 @@ pub struct RenderOptions {
     #[arg(
         long,
         value_name = "FILE",
-        conflicts_with_all = [
-            "scene_file", "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
-            "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
-            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius", "light_shape", "light_size",
-            "light_colour", "aperture", "focus_distance", "display", "exposure",
-        ]
+        conflicts_with = "scene_file",
+        conflicts_with_all = SETTINGS_OPTIONS
     )]
     pub settings: Option<PathBuf>,
     /// Take the scene and every setting from a scene file (.toml; see assets/scenes/). Only
@@ -145,12 +174,7 @@ pub struct RenderOptions {
     #[arg(
         long,
         value_name = "FILE.toml",
-        conflicts_with_all = [
-            "scene", "obj", "stage", "width", "height", "focal", "camera", "yaw",
-            "light", "light_power", "indirect", "shadows", "samples", "seed", "bounces",
-            "material_preset", "roughness", "specular_depth", "texture_preset", "smooth", "light_radius", "light_shape", "light_size",
-            "light_colour", "aperture", "focus_distance", "display", "exposure",
-        ]
+        conflicts_with_all = SETTINGS_OPTIONS
     )]
     pub scene_file: Option<PathBuf>,
     /// Scene: cornell, bunny, teapot, textured-teapot or terrain.
