@@ -160,7 +160,7 @@ impl Material {
     /// * every other material: [`Bsdf::sample`] in the shading frame of the surface's
     ///   geometric `normal` ([`ShadingFrame`]), with one number for the choice of lobe and,
     ///   where the BSDF is not a delta (the rough metal), two for the direction.
-    #[inline(always)]
+    #[inline(never)]
     pub fn sample(&self, direction: Vec3, normal: Vec3, rng: &mut Rng) -> Option<Scatter> {
         let bsdf = self.bsdf(self.reflectance);
         if let Bsdf::Lambertian { rho } = bsdf {
