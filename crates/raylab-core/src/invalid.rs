@@ -11,3 +11,21 @@ pub struct SettingsError {
     pub value: String,
     pub reason: &'static str,
 }
+
+/// A path the settings carry must be UTF-8 text: screenshots and scene files hold them as
+/// text (JSON and TOML strings), so another would make a render whose settings cannot be
+/// written. Refused before anything is rendered, naming the path.
+pub(crate) fn check_path(
+    name: impl Into<std::borrow::Cow<'static, str>>,
+    path: &std::path::Path,
+) -> Result<(), SettingsError> {
+    if path.to_str().is_some() {
+        return Ok(());
+    }
+    Err(SettingsError {
+        name: name.into(),
+        value: format!("'{}'", path.display()),
+        reason: "is not UTF-8 text, and raylab writes the paths of its settings as text \
+                 (rename the file or its folder)",
+    })
+}

@@ -14,6 +14,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 pub use crate::invalid::SettingsError;
+use crate::invalid::check_path;
 
 use crate::camera::Camera;
 use crate::display::Display;
@@ -341,24 +342,6 @@ fn number(x: f32) -> String {
 /// A vector as [`number`] writes its components.
 fn vector(v: Vec3) -> String {
     format!("({}, {}, {})", number(v.x), number(v.y), number(v.z))
-}
-
-/// A path the settings carry must be UTF-8 text: screenshots and scene files hold them as
-/// text (JSON and TOML strings), so another would make a render whose settings cannot be
-/// written. Refused before anything is rendered, naming the path.
-pub(crate) fn check_path(
-    name: impl Into<std::borrow::Cow<'static, str>>,
-    path: &std::path::Path,
-) -> Result<(), SettingsError> {
-    if path.to_str().is_some() {
-        return Ok(());
-    }
-    Err(SettingsError {
-        name: name.into(),
-        value: format!("'{}'", path.display()),
-        reason: "is not UTF-8 text, and raylab writes the paths of its settings as text \
-                 (rename the file or its folder)",
-    })
 }
 
 fn check_side(name: &'static str, side: u32) -> Result<(), SettingsError> {

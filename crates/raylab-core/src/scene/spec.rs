@@ -135,7 +135,7 @@ impl SceneSpec {
         };
         for (i, m) in self.models.iter().enumerate() {
             let field = |f: &str| format!("scene.models[{i}].{f}");
-            crate::settings::check_path(field("file"), &m.file)?;
+            crate::invalid::check_path(field("file"), &m.file)?;
             if !(m.height.is_finite() && m.height > 0.0 && m.height <= 2.0) {
                 return Err(bad(
                     field("height"),
