@@ -21,6 +21,7 @@
 use glam::{Mat3, Vec3};
 
 use crate::geometry::{Ray, Triangle};
+use crate::lanes::{Mask, Real, Vector};
 
 /// How far outside `[0, 1]` a barycentric coordinate may round and still count as on the edge.
 /// It widens each triangle by 1e-5 of its edge length: invisible, and far larger than the
@@ -41,18 +42,55 @@ pub struct Intersection {
     pub v: f32,
 }
 
-/// Whether barycentric `(u, v)` lies in the triangle, edges included (equations 7–9, closed).
-#[inline]
-pub fn inside_triangle(u: f32, v: f32) -> bool {
+/// Whether barycentric `(u, v)` lies in the triangle, edges included (equations 7–9, closed):
+/// one value (`bool`) or each lane's.
+#[inline(always)]
+pub fn inside_triangle<R: Real>(u: R, v: R) -> R::Mask {
     // Written so that NaN fails every comparison and is rejected.
-    u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE
+    let lo = R::splat(-EDGE_TOLERANCE);
+    u.simd_ge(lo) & v.simd_ge(lo) & (u + v).simd_le(R::splat(1.0 + EDGE_TOLERANCE))
+}
+
+/// Whether `0 < t < t_max` (equation 11, `t = 0` left out: see the module docs), one value or
+/// each lane's; NaN is out.
+#[inline(always)]
+fn in_range<R: Real>(t: R, t_max: R) -> R::Mask {
+    t.simd_gt(R::ZERO) & t.simd_lt(t_max)
 }
 
 /// Intersects `ray` with `tri`, returning `(t, u, v)` when the hit has `0 < t < t_max` and lies
-/// in the triangle (edges included).
+/// in the triangle (edges included): [`intersect_lanes`] for one ray and one triangle.
+#[inline]
+pub fn intersect_triangle(ray: &Ray, tri: &Triangle, t_max: f32) -> Option<(f32, f32, f32)> {
+    let (e1, e2) = tri.edges();
+    let h = intersect_lanes(
+        ray.origin,
+        ray.direction,
+        tri.v0,
+        e1,
+        e2,
+        e1.cross(e2),
+        t_max,
+    );
+    h.hit.then_some((h.t, h.u, h.v))
+}
+
+/// What [`intersect_lanes`] finds in each lane: `t`, `u`, `v` (meaningless where the lane
+/// misses) and whether the lane hits.
+#[derive(Clone, Copy, Debug)]
+pub struct Hits<R: Real> {
+    pub t: R,
+    pub u: R,
+    pub v: R,
+    pub hit: R::Mask,
+}
+
+/// The ray–triangle test, written once for every width: a ray from `origin` along `direction`
+/// against the triangle `v0`, `e1 = v1 − v0`, `e2 = v2 − v0` with `n = e1 × e2`, a hit when
+/// `0 < t < t_max` and `(u, v)` lies in the triangle (edges included).
 ///
 /// Cramer's rule on `A = (−d e1 e2)`, `b = s − v0` (equations 16–17), with the scalar triple
-/// product `det(a, b, c) = a · (b × c)` and `n = e1 × e2`:
+/// product `det(a, b, c) = a · (b × c)`:
 ///
 /// * `det A = −d · n`
 /// * `t = det(b, e1, e2) / det A = (b · n) / det A` — computed first, the cheap early exit;
@@ -60,22 +98,48 @@ pub fn inside_triangle(u: f32, v: f32) -> bool {
 /// * `v = det(−d, e1, b) / det A = −e1 · (b × d) / det A`.
 ///
 /// A ray parallel to the plane or a zero-area triangle gives `det A = 0`, so `t` is ±∞ or NaN,
-/// and the range test rejects both: no NaN hit ever leaves this function. A ray starting in the
+/// and the range test rejects both: no NaN hit ever comes out. A ray starting in the
 /// triangle's plane gives `t = ±0`, rejected too (see the module docs).
-#[inline]
-pub fn intersect_triangle(ray: &Ray, tri: &Triangle, t_max: f32) -> Option<(f32, f32, f32)> {
-    let (e1, e2) = tri.edges();
-    let n = e1.cross(e2);
-    let b = ray.origin - tri.v0;
-    let inv_det = 1.0 / -ray.direction.dot(n);
+///
+/// At `Vec3` it is [`intersect_triangle`]; the kernels run it a lane per triangle of a packet
+/// (one ray against eight or sixteen triangles, [`crate::accel::simd`]) or a lane per ray (a
+/// packet of rays against one triangle, `accel::packet`). Every lane does the same operations
+/// in the same order (no fused multiply-add), so the same bits as the scalar test: the fast
+/// structures return exactly what the brute-force loop returns. `n` is a parameter because
+/// the flat list's packets store it ([`crate::accel::simd::Packet16`]); computed as
+/// `e1.cross(e2)`, it has the same bits.
+#[inline(always)]
+pub fn intersect_lanes<V: Vector>(
+    origin: V,
+    direction: V,
+    v0: V,
+    e1: V,
+    e2: V,
+    n: V,
+    t_max: V::Real,
+) -> Hits<V::Real> {
+    let b = origin - v0;
+    let inv_det = V::Real::splat(1.0) / -direction.dot(n);
     let t = b.dot(n) * inv_det;
-    if !(t > 0.0 && t < t_max) {
-        return None;
+    if V::Real::ONE && !in_range(t, t_max).any() {
+        // One ray gives up here. Lanes go on, and test `t` with `u` and `v` (a mask kept
+        // from here would hold a register through the rest).
+        return Hits {
+            t,
+            u: t,
+            v: t,
+            hit: <V::Real as Real>::Mask::NONE,
+        };
     }
-    let m = b.cross(ray.direction);
+    let m = b.cross(direction);
     let u = e2.dot(m) * inv_det;
     let v = -e1.dot(m) * inv_det;
-    inside_triangle(u, v).then_some((t, u, v))
+    Hits {
+        t,
+        u,
+        v,
+        hit: in_range(t, t_max) & inside_triangle(u, v),
+    }
 }
 
 /// The lab's own form: `x = A⁻¹·b` with `A = (−d e1 e2)` (equations 16–23), then the checks

@@ -148,6 +148,16 @@ pub trait Vector:
         self.x() * o.x() + self.y() * o.y() + self.z() * o.z()
     }
 
+    /// glam's `cross`: `(y·z′ − y′·z, z·x′ − z′·x, x·y′ − x′·y)`.
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Self::new(
+            self.y() * o.z() - o.y() * self.z(),
+            self.z() * o.x() - o.z() * self.x(),
+            self.x() * o.y() - o.x() * self.y(),
+        )
+    }
+
     #[inline(always)]
     fn length_squared(self) -> Self::Real {
         self.dot(self)
@@ -295,6 +305,11 @@ impl Vector for Vec3 {
     #[inline(always)]
     fn dot(self, o: Self) -> f32 {
         Vec3::dot(self, o)
+    }
+
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Vec3::cross(self, o)
     }
 
     #[inline(always)]
@@ -481,14 +496,18 @@ impl Real for F32x16 {
     }
 }
 
-/// Sixteen 3-vectors as three [`F32x16`]s (structure of arrays: lane `i` is
-/// `(x[i], y[i], z[i])`).
+/// 3-vectors in lanes: three `R`s, structure of arrays (lane `i` is `(x[i], y[i], z[i])`). At
+/// [`F32x16`] it is [`Vec3x16`], the shading's sixteen hits; the ray–triangle kernels use it at
+/// their SIMD registers' width too ([`crate::intersect::hits`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Vec3x16 {
-    pub x: F32x16,
-    pub y: F32x16,
-    pub z: F32x16,
+pub struct Vec3x<R> {
+    pub x: R,
+    pub y: R,
+    pub z: R,
 }
+
+/// Sixteen 3-vectors as three [`F32x16`]s.
+pub type Vec3x16 = Vec3x<F32x16>;
 
 impl Vec3x16 {
     /// Lane `i` as a `Vec3`.
@@ -508,7 +527,7 @@ impl Vec3x16 {
 
 macro_rules! vec_op {
     ($trait:ident, $method:ident, $op:tt) => {
-        impl $trait for Vec3x16 {
+        impl<R: Real> $trait for Vec3x<R> {
             type Output = Self;
 
             #[inline(always)]
@@ -524,11 +543,11 @@ vec_op!(Sub, sub, -);
 vec_op!(Mul, mul, *);
 
 /// `v · s`, component by component (glam's `Vec3 * f32`).
-impl Mul<F32x16> for Vec3x16 {
+impl<R: Real> Mul<R> for Vec3x<R> {
     type Output = Self;
 
     #[inline(always)]
-    fn mul(self, s: F32x16) -> Self {
+    fn mul(self, s: R) -> Self {
         Self {
             x: self.x * s,
             y: self.y * s,
@@ -538,11 +557,11 @@ impl Mul<F32x16> for Vec3x16 {
 }
 
 /// `v / s`, component by component (glam's `Vec3 / f32`).
-impl Div<F32x16> for Vec3x16 {
+impl<R: Real> Div<R> for Vec3x<R> {
     type Output = Self;
 
     #[inline(always)]
-    fn div(self, s: F32x16) -> Self {
+    fn div(self, s: R) -> Self {
         Self {
             x: self.x / s,
             y: self.y / s,
@@ -551,40 +570,40 @@ impl Div<F32x16> for Vec3x16 {
     }
 }
 
-impl Vector for Vec3x16 {
-    type Real = F32x16;
+impl<R: Real> Vector for Vec3x<R> {
+    type Real = R;
     const ZERO: Self = Self {
-        x: F32x16::ZERO,
-        y: F32x16::ZERO,
-        z: F32x16::ZERO,
+        x: R::ZERO,
+        y: R::ZERO,
+        z: R::ZERO,
     };
 
     #[inline(always)]
     fn splat(v: Vec3) -> Self {
         Self {
-            x: F32x16::splat(v.x),
-            y: F32x16::splat(v.y),
-            z: F32x16::splat(v.z),
+            x: R::splat(v.x),
+            y: R::splat(v.y),
+            z: R::splat(v.z),
         }
     }
 
     #[inline(always)]
-    fn new(x: F32x16, y: F32x16, z: F32x16) -> Self {
+    fn new(x: R, y: R, z: R) -> Self {
         Self { x, y, z }
     }
 
     #[inline(always)]
-    fn x(self) -> F32x16 {
+    fn x(self) -> R {
         self.x
     }
 
     #[inline(always)]
-    fn y(self) -> F32x16 {
+    fn y(self) -> R {
         self.y
     }
 
     #[inline(always)]
-    fn z(self) -> F32x16 {
+    fn z(self) -> R {
         self.z
     }
 }

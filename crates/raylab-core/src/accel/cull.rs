@@ -268,6 +268,7 @@ mod lanes {
     use std::arch::x86_64::*;
 
     use super::super::packet::{MAX_WIDTH, PacketIsa};
+    use crate::lanes::Real;
 
     use super::super::SegmentLanes;
     use super::{Cone, Corners, MARGIN, MAX_SLOPE, MIN_RAYS, Slopes};
@@ -303,15 +304,10 @@ mod lanes {
         /// [`Acc::add`] for the lanes of `active` only.
         #[inline(always)]
         fn add_lanes(&mut self, k: P, (x, y, z): (P::F, P::F, P::F), active: u32) {
-            let (sx, sy) = (k.div(x, z), k.div(y, z));
+            let (sx, sy) = (x / z, y / z);
             let max = k.splat(MAX_SLOPE);
-            let good = k.both(
-                k.cmp::<_CMP_GT_OQ>(z, k.splat(0.0)),
-                k.both(
-                    k.cmp::<_CMP_LE_OQ>(k.abs(sx), max),
-                    k.cmp::<_CMP_LE_OQ>(k.abs(sy), max),
-                ),
-            );
+            let good = k.cmp::<_CMP_GT_OQ>(z, k.splat(0.0))
+                & (k.cmp::<_CMP_LE_OQ>(k.abs(sx), max) & k.cmp::<_CMP_LE_OQ>(k.abs(sy), max));
             self.bad |= !k.bits(good) & active;
             let (m, inf) = (k.mask(active), k.splat(f32::INFINITY));
             let neg_inf = k.splat(f32::NEG_INFINITY);
@@ -351,17 +347,14 @@ mod lanes {
 
     /// `a − b` per axis.
     #[inline(always)]
-    fn sub3<P: PacketIsa>(k: P, a: [P::F; 3], b: [P::F; 3]) -> [P::F; 3] {
-        [k.sub(a[0], b[0]), k.sub(a[1], b[1]), k.sub(a[2], b[2])]
+    fn sub3<R: Real>(a: [R; 3], b: [R; 3]) -> [R; 3] {
+        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
     }
 
     /// `|v|²` as `Vec3::length_squared` computes it.
     #[inline(always)]
-    fn length2<P: PacketIsa>(k: P, v: [P::F; 3]) -> P::F {
-        k.add(
-            k.add(k.mul(v[0], v[0]), k.mul(v[1], v[1])),
-            k.mul(v[2], v[2]),
-        )
+    fn length2<R: Real>(v: [R; 3]) -> R {
+        v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
     }
 
     #[inline(always)]
@@ -381,11 +374,7 @@ mod lanes {
     #[inline(always)]
     fn local<P: PacketIsa>(k: P, cone: &Cone, v: [P::F; 3]) -> (P::F, P::F, P::F) {
         let a = cone.axis;
-        (
-            v[(a + 1) % 3],
-            v[(a + 2) % 3],
-            k.mul(k.splat(cone.sign), v[a]),
-        )
+        (v[(a + 1) % 3], v[(a + 2) % 3], k.splat(cone.sign) * v[a])
     }
 
     impl Cone {
@@ -404,13 +393,8 @@ mod lanes {
                 // Lanes past the end repeat the last ray: the bounds do not change.
                 let [ox, oy, oz, dx, dy, dz] = k.rays(chunk);
                 // Every origin the apex (`==` as `Vec3`'s: a NaN is never equal).
-                let same = k.both(
-                    k.cmp::<_CMP_EQ_OQ>(ox, apex[0]),
-                    k.both(
-                        k.cmp::<_CMP_EQ_OQ>(oy, apex[1]),
-                        k.cmp::<_CMP_EQ_OQ>(oz, apex[2]),
-                    ),
-                );
+                let same = k.cmp::<_CMP_EQ_OQ>(ox, apex[0])
+                    & (k.cmp::<_CMP_EQ_OQ>(oy, apex[1]) & k.cmp::<_CMP_EQ_OQ>(oz, apex[2]));
                 acc.bad |= !k.bits(same) & ((1 << P::WIDTH) - 1);
                 acc.add(k, local(k, &cone, [dx, dy, dz]));
                 if acc.bad != 0 {
@@ -453,14 +437,10 @@ mod lanes {
             for chunk in segments.chunks(P::WIDTH) {
                 let [ox, oy, oz, dx, dy, dz, t] = k.segments(chunk);
                 // end = origin + t·direction, as `Vec3` computes it: lane by lane.
-                let end = [
-                    k.add(ox, k.mul(t, dx)),
-                    k.add(oy, k.mul(t, dy)),
-                    k.add(oz, k.mul(t, dz)),
-                ];
-                spread2 = k.max(spread2, length2(k, sub3(k, end, a)));
-                let start = sub3(k, [ox, oy, oz], a);
-                near2 = k.min(near2, length2(k, start));
+                let end = [ox + t * dx, oy + t * dy, oz + t * dz];
+                spread2 = k.max(spread2, length2(sub3(end, a)));
+                let start = sub3([ox, oy, oz], a);
+                near2 = k.min(near2, length2(start));
                 acc.add(k, local(k, &cone, start));
                 if acc.bad != 0 {
                     return None; // the path tracer's scattered shadow rays stop here
@@ -504,15 +484,11 @@ mod lanes {
                     let dy = load_at(k, g.direction[1], offset);
                     let dz = load_at(k, g.direction[2], offset);
                     let t = load_at(k, g.t_max, offset);
-                    let end = [
-                        k.add(ox, k.mul(t, dx)),
-                        k.add(oy, k.mul(t, dy)),
-                        k.add(oz, k.mul(t, dz)),
-                    ];
-                    let s2 = length2(k, sub3(k, end, a));
+                    let end = [ox + t * dx, oy + t * dy, oz + t * dz];
+                    let s2 = length2(sub3(end, a));
                     spread2 = k.max(spread2, k.blend(m, k.splat(0.0), s2));
-                    let start = sub3(k, [ox, oy, oz], a);
-                    let n2 = length2(k, start);
+                    let start = sub3([ox, oy, oz], a);
+                    let n2 = length2(start);
                     near2 = k.min(near2, k.blend(m, k.splat(f32::INFINITY), n2));
                     acc.add_lanes(k, local(k, &cone, start), active);
                     if acc.bad != 0 {
@@ -545,21 +521,21 @@ mod lanes {
                     load_at(k, &corner[1], offset),
                     load_at(k, &corner[2], offset),
                 ];
-                let (x, y, z) = local(k, self, sub3(k, v, apex));
-                let distance = k.add(k.add(k.abs(x), k.abs(y)), k.abs(z));
-                let base = k.add(delta, k.mul(margin, k.add(size, distance)));
+                let (x, y, z) = local(k, self, sub3(v, apex));
+                let distance = k.abs(x) + k.abs(y) + k.abs(z);
+                let base = delta + margin * (size + distance);
                 for (s, &(slope, across, norm)) in sides.iter().enumerate() {
                     let c = if s < 2 { x } else { y };
-                    let value = k.mul(k.splat(across), k.sub(c, k.mul(k.splat(slope), z)));
-                    let past = k.cmp::<_CMP_GT_OQ>(value, k.mul(base, k.splat(norm)));
-                    outside[s] = k.both(outside[s], past);
+                    let value = k.splat(across) * (c - k.splat(slope) * z);
+                    let past = k.cmp::<_CMP_GT_OQ>(value, base * k.splat(norm));
+                    outside[s] = outside[s] & past;
                 }
                 let behind = k.cmp::<_CMP_GT_OQ>(k.xor(z, k.splat(-0.0)), base);
-                outside[4] = k.both(outside[4], behind);
+                outside[4] = outside[4] & behind;
             }
             let mut culled = none;
             for o in outside {
-                culled = k.either(culled, o);
+                culled = culled | o;
             }
             !k.bits(culled) & ((1 << P::WIDTH) - 1)
         }

@@ -48,6 +48,8 @@ pub mod cull;
 pub mod packet;
 pub mod simd;
 pub mod wide;
+#[cfg(target_arch = "x86_64")]
+mod x86_lanes;
 
 use std::fmt;
 use std::str::FromStr;
@@ -59,14 +61,10 @@ use crate::intersect;
 
 use self::bvh::Bvh;
 use self::calibrate::Calibration;
-/// Rays per packet with AVX-512 (one lane a ray), and per chunk of a batch elsewhere.
-const PACKET: usize = 16;
-/// Rays per packet with AVX2 (one lane a ray).
-const PACKET_AVX2: usize = 8;
 use self::cull::Cone;
 use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
-use self::wide::{Bvh8Big, Flat};
+use self::wide::{Bvh8Big, Flat, KernelSet};
 
 /// Scenes with at most this many triangles use the flat packet list. Measured (PERFORMANCE.md,
 /// 512×512 lab pass, 2 threads): on the 30-triangle Cornell box the flat AVX-512 loop takes
@@ -395,30 +393,19 @@ impl Accel {
     }
 
     /// The closest hit with `0 < t < t_max`: the lowest index among hits at the same
-    /// distance, exactly as the brute-force loop.
+    /// distance, exactly as the brute-force loop. With SIMD kernels a batch of one
+    /// ([`Accel::closest_batch`]); the scalar kernels answer here, inlined into the caller.
+    /// (That inlining is kept on purpose: without it the compiler inlined the integrators' own
+    /// code differently, and the path pass ran 18 % more instructions,
+    /// `scripts/count-instructions.sh`.)
     #[inline(always)]
     pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
-        match (&self.structure, self.isa) {
-            (Structure::BruteForce, _) => {
-                intersect::closest_intersection_brute_force(ray, triangles, t_max).map(|h| Hit {
-                    index: h.triangle_index as u32,
-                    t: h.distance,
-                    u: h.u,
-                    v: h.v,
-                })
-            }
-            (Structure::Bvh2(b), _) => b.closest(triangles, ray, t_max),
-            (Structure::Flat(f), Isa::Scalar) => {
-                f.closest(Scalar, &RayK::for_triangles(ray), t_max)
-            }
-            (Structure::Bvh8(b), Isa::Scalar) => {
-                let r = RayK::new(ray);
-                let best = b.big.closest(Scalar, &r, t_max);
-                b.tree.closest(Scalar, &r, t_max, best)
-            }
-            (s, Isa::Avx512(k)) => closest_avx512(k, s, ray, t_max),
-            (s, Isa::Avx2(k)) => closest_avx2(k, s, ray, t_max),
+        if let Isa::Scalar = self.isa {
+            return self.structure.closest_with(Scalar, triangles, ray, t_max);
         }
+        let mut hit = [None];
+        self.closest_batch(triangles, std::slice::from_ref(ray), t_max, &mut hit);
+        hit[0]
     }
 
     /// [`Accel::closest`] and what it cost ([`TraversalCost`]), counted by the traversal this
@@ -459,50 +446,38 @@ impl Accel {
             (Structure::Bvh8(b), isa) => {
                 let r = RayK::new(ray);
                 let mut cost = every(b.big.triangle_count());
-                let hit = match isa {
-                    Isa::Scalar => {
-                        let best = b.big.closest(Scalar, &r, t_max);
-                        b.tree.closest_counting(Scalar, &r, t_max, best, &mut cost)
-                    }
-                    Isa::Avx2(k) => {
-                        let best = b.big.closest(k, &r, t_max);
-                        b.tree.closest_counting(k, &r, t_max, best, &mut cost)
-                    }
-                    Isa::Avx512(k) => {
-                        // As the fast path: the large triangles 16 wide, the tree with AVX2.
-                        let best = b.big.closest16(k, &r, t_max);
-                        b.tree
-                            .closest_counting(k.avx2(), &r, t_max, best, &mut cost)
-                    }
-                };
+                // As the fast path (`Bvh8Big::closest_with`), with counters in the tree.
+                let hit = with_kernels!(isa, |k| {
+                    let best = k.flat_closest(&b.big, &r, t_max);
+                    b.tree
+                        .closest_counting(k.tree(), &r, t_max, best, &mut cost)
+                });
                 (hit, cost)
             }
         }
     }
 
-    /// Whether anything is hit with `0 < t < t_max` (a shadow ray's any-hit query).
+    /// Whether anything is hit with `0 < t < t_max` (a shadow ray's any-hit query). As
+    /// [`Accel::closest`]: with SIMD kernels a batch of one ([`Accel::occluded_batch`]).
     #[inline(always)]
     pub fn occluded(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> bool {
-        match (&self.structure, self.isa) {
-            (Structure::BruteForce, _) => intersect::occluded_brute_force(ray, triangles, t_max),
-            (Structure::Bvh2(b), _) => b.occluded(triangles, ray, t_max),
-            (Structure::Flat(f), Isa::Scalar) => {
-                f.occluded(Scalar, &RayK::for_triangles(ray), t_max)
-            }
-            (Structure::Bvh8(b), Isa::Scalar) => {
-                let r = RayK::new(ray);
-                b.tree.occluded(Scalar, &r, t_max) || b.big.occluded(Scalar, &r, t_max)
-            }
-            (s, Isa::Avx512(k)) => occluded_avx512(k, s, ray, t_max),
-            (s, Isa::Avx2(k)) => occluded_avx2(k, s, ray, t_max),
+        if let Isa::Scalar = self.isa {
+            return self.structure.occluded_with(Scalar, triangles, ray, t_max);
         }
+        let mut blocked = [false];
+        self.occluded_batch(triangles, &[(*ray, t_max)], &mut blocked);
+        blocked[0]
     }
 }
 
+// The batch queries are calls, never inlined: their callers (the integrators' code, compiled
+// for the instruction set) were measured to be inlined differently, and to run more
+// instructions, whenever these grew or shrank (`scripts/count-instructions.sh`).
 impl Accel {
     /// [`Accel::closest`] for many rays, `out[i]` for `rays[i]`: the same answers, with the
     /// choice of structure and kernels made once for the batch instead of once per ray, and the
     /// loop over the rays compiled with the kernels' instruction set.
+    #[inline(never)]
     pub fn closest_batch(
         &self,
         triangles: &[Triangle],
@@ -511,62 +486,17 @@ impl Accel {
         out: &mut [Option<Hit>],
     ) {
         debug_assert_eq!(rays.len(), out.len());
-        match (&self.structure, self.isa) {
-            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx512(k)) => {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
-                unsafe {
-                    closest_batch_avx512(k, s, rays, t_max, out)
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                closest_batch_avx512(k, s, rays, t_max, out)
-            }
-            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx2(k)) => {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `k` proves the CPU has AVX2 and FMA.
-                unsafe {
-                    closest_batch_avx2(k, s, rays, t_max, out)
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                closest_batch_avx2(k, s, rays, t_max, out)
-            }
-            _ => {
-                for (ray, hit) in rays.iter().zip(out) {
-                    *hit = self.closest(triangles, ray, t_max);
-                }
-            }
-        }
+        let (s, isa) = (&self.structure, self.isa);
+        with_kernels!(isa, |k| k.closest_batch(s, triangles, rays, t_max, out))
     }
 
     /// [`Accel::occluded`] for many rays, each with its own `t_max`: `out[i]` for `rays[i]`,
     /// the same answers, the choice of structure and kernels made once for the batch.
+    #[inline(never)]
     pub fn occluded_batch(&self, triangles: &[Triangle], rays: &[(Ray, f32)], out: &mut [bool]) {
         debug_assert_eq!(rays.len(), out.len());
-        match (&self.structure, self.isa) {
-            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx512(k)) => {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as in `closest_batch`.
-                unsafe {
-                    occluded_batch_avx512(k, s, rays, out)
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                occluded_batch_avx512(k, s, rays, out)
-            }
-            (s @ (Structure::Flat(_) | Structure::Bvh8(_)), Isa::Avx2(k)) => {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as in `closest_batch`.
-                unsafe {
-                    occluded_batch_avx2(k, s, rays, out)
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                occluded_batch_avx2(k, s, rays, out)
-            }
-            _ => {
-                for ((ray, t_max), blocked) in rays.iter().zip(out) {
-                    *blocked = self.occluded(triangles, ray, *t_max);
-                }
-            }
-        }
+        let s = &self.structure;
+        with_kernels!(self.isa, |k| k.occluded_batch(s, triangles, rays, out))
     }
 }
 
@@ -606,6 +536,7 @@ impl Accel {
     /// cone may reach ([`cull`]) or, without a cone, against all of them; anything else copies
     /// the rays into arrays of up to [`BATCH_OF_LANES`] groups and asks
     /// [`Accel::occluded_batch`].
+    #[inline(never)]
     pub fn occluded_lanes(
         &self,
         triangles: &[Triangle],
@@ -613,18 +544,10 @@ impl Accel {
         blocked: &mut [u16],
     ) {
         debug_assert_eq!(groups.len(), blocked.len());
-        #[cfg(target_arch = "x86_64")]
-        if let Structure::Flat(f) = &self.structure {
-            let done = match self.isa {
-                // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
-                Isa::Avx512(k) => unsafe { occluded_lanes_avx512(k, f, groups, blocked) },
-                // SAFETY: `k` proves the CPU has AVX2 and FMA.
-                Isa::Avx2(k) => unsafe { occluded_lanes_avx2(k, f, groups, blocked) },
-                _ => false,
-            };
-            if done {
-                return;
-            }
+        if let Structure::Flat(f) = &self.structure
+            && with_kernels!(self.isa, |k| k.occluded_lanes(f, groups, blocked))
+        {
+            return;
         }
         // Elsewhere, the rays copied out, up to BATCH_OF_LANES groups' in one batch.
         const RAYS: usize = BATCH_OF_LANES * 16;
@@ -650,164 +573,263 @@ impl Accel {
     }
 }
 
-// The traversals compiled with the kernels' instruction set, so the kernels inline into them.
-// Each takes a batch: the structure is matched once, and a single query is a batch of one
-// (`closest_avx2` and friends), so each traversal is written once.
+/// `$body` with `$k` the kernels of `$isa`: the same source instantiated for each set (`$k`
+/// is an [`Avx512`], an [`Avx2`] or the [`Scalar`] kernels; elsewhere than x86-64 the SIMD
+/// sets are never detected, and only the scalar arm is compiled).
+macro_rules! with_kernels {
+    ($isa:expr, |$k:ident| $body:expr) => {
+        match $isa {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512($k) => $body,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2($k) => $body,
+            _ => {
+                let $k = Scalar;
+                $body
+            }
+        }
+    };
+}
+use with_kernels;
 
-#[cfg_attr(
-    target_arch = "x86_64",
-    target_feature(enable = "avx512f,avx512dq,avx2,fma")
-)]
-fn closest_batch_avx512(
-    k: Avx512,
+/// A structure's queries for a batch of rays with one kernel set: by default a ray at a time
+/// (the scalar kernels; kept out of line, so that the SIMD sets' batches hand the structures
+/// without kernels over to it rather than compile them in); the SIMD sets run them compiled
+/// with their instruction set ([`simd_batches!`]), so the kernels inline. A single query is a
+/// batch of one, so each is written once.
+trait Batches: KernelSet {
+    #[inline(never)]
+    fn closest_batch(
+        self,
+        s: &Structure,
+        triangles: &[Triangle],
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [Option<Hit>],
+    ) {
+        for (ray, hit) in rays.iter().zip(out) {
+            *hit = s.closest_with(self, triangles, ray, t_max);
+        }
+    }
+
+    #[inline(never)]
+    fn occluded_batch(
+        self,
+        s: &Structure,
+        triangles: &[Triangle],
+        rays: &[(Ray, f32)],
+        out: &mut [bool],
+    ) {
+        for ((ray, t_max), blocked) in rays.iter().zip(out) {
+            *blocked = s.occluded_with(self, triangles, ray, *t_max);
+        }
+    }
+
+    /// [`Accel::occluded_lanes`] on the flat list; false (nothing done) where it does not
+    /// take lanes (a list too long to cull, or no SIMD).
+    fn occluded_lanes(self, _f: &Flat, _groups: &[SegmentLanes], _blocked: &mut [u16]) -> bool {
+        false
+    }
+}
+
+impl Batches for Scalar {}
+
+impl Structure {
+    /// One ray's closest hit, with the kernels `k` where the structure has kernels.
+    #[inline(always)]
+    fn closest_with<K: KernelSet>(
+        &self,
+        k: K,
+        triangles: &[Triangle],
+        ray: &Ray,
+        t_max: f32,
+    ) -> Option<Hit> {
+        match self {
+            Structure::BruteForce => {
+                intersect::closest_intersection_brute_force(ray, triangles, t_max).map(|h| Hit {
+                    index: h.triangle_index as u32,
+                    t: h.distance,
+                    u: h.u,
+                    v: h.v,
+                })
+            }
+            Structure::Bvh2(b) => b.closest(triangles, ray, t_max),
+            Structure::Flat(f) => f.closest_with(k, ray, t_max),
+            Structure::Bvh8(b) => b.closest_with(k, ray, t_max),
+        }
+    }
+
+    /// Whether one ray is blocked before `t_max`, with the kernels `k` where the structure has
+    /// kernels.
+    #[inline(always)]
+    fn occluded_with<K: KernelSet>(
+        &self,
+        k: K,
+        triangles: &[Triangle],
+        ray: &Ray,
+        t_max: f32,
+    ) -> bool {
+        match self {
+            Structure::BruteForce => intersect::occluded_brute_force(ray, triangles, t_max),
+            Structure::Bvh2(b) => b.occluded(triangles, ray, t_max),
+            Structure::Flat(f) => f.occluded_with(k, ray, t_max),
+            Structure::Bvh8(b) => b.occluded_with(k, ray, t_max),
+        }
+    }
+}
+
+/// The batch queries of a SIMD kernel set: [`closest_packets`], [`occluded_packets`] and
+/// [`occluded_lanes_in`], each compiled inside a `#[target_feature(enable = $features)]`
+/// function, where the kernels and the packet traversal inline.
+macro_rules! simd_batches {
+    ($isa:ty, $features:literal) => {
+        #[cfg(target_arch = "x86_64")]
+        impl Batches for $isa {
+            fn closest_batch(
+                self,
+                s: &Structure,
+                triangles: &[Triangle],
+                rays: &[Ray],
+                t_max: f32,
+                out: &mut [Option<Hit>],
+            ) {
+                #[target_feature(enable = $features)]
+                fn compiled(
+                    k: $isa,
+                    s: &Structure,
+                    triangles: &[Triangle],
+                    rays: &[Ray],
+                    t_max: f32,
+                    out: &mut [Option<Hit>],
+                ) {
+                    closest_packets(k, s, triangles, rays, t_max, out)
+                }
+                // SAFETY: a value of the kernel set proves that the CPU runs its features.
+                unsafe { compiled(self, s, triangles, rays, t_max, out) }
+            }
+
+            fn occluded_batch(
+                self,
+                s: &Structure,
+                triangles: &[Triangle],
+                rays: &[(Ray, f32)],
+                out: &mut [bool],
+            ) {
+                #[target_feature(enable = $features)]
+                fn compiled(
+                    k: $isa,
+                    s: &Structure,
+                    triangles: &[Triangle],
+                    rays: &[(Ray, f32)],
+                    out: &mut [bool],
+                ) {
+                    occluded_packets(k, s, triangles, rays, out)
+                }
+                // SAFETY: as above.
+                unsafe { compiled(self, s, triangles, rays, out) }
+            }
+
+            fn occluded_lanes(
+                self,
+                f: &Flat,
+                groups: &[SegmentLanes],
+                blocked: &mut [u16],
+            ) -> bool {
+                #[target_feature(enable = $features)]
+                fn compiled(
+                    k: $isa,
+                    f: &Flat,
+                    groups: &[SegmentLanes],
+                    blocked: &mut [u16],
+                ) -> bool {
+                    occluded_lanes_in(k, f, groups, blocked)
+                }
+                // SAFETY: as above.
+                unsafe { compiled(self, f, groups, blocked) }
+            }
+        }
+    };
+}
+
+simd_batches!(Avx512, "avx512f,avx512dq,avx2,fma");
+simd_batches!(Avx2, "avx2,fma");
+
+/// Closest hits of a batch with a SIMD kernel set: the flat list culled for the batch where
+/// the batch has a cone, the wide BVH a packet of coherent rays at a time, the rest ray by ray.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn closest_packets<P: packet::PacketIsa>(
+    k: P,
     s: &Structure,
+    triangles: &[Triangle],
     rays: &[Ray],
     t_max: f32,
     out: &mut [Option<Hit>],
 ) {
     match s {
-        // The flat loop 16 wide; the tree with the AVX2 kernels, its large triangles 16 wide.
         Structure::Flat(f) => {
             // A batch in a narrow cone (a stretch of camera rays) skips what it cannot see, and
             // goes through the few triangles left as packets of rays.
-            #[cfg(target_arch = "x86_64")]
             if flat_closest_culled(k, f, rays, t_max, out) {
                 return;
             }
             for (ray, hit) in rays.iter().zip(out) {
-                *hit = f.closest16(k, &RayK::for_triangles(ray), t_max);
+                *hit = f.closest_with(k, ray, t_max);
             }
         }
         Structure::Bvh8(b) => {
-            for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-                #[cfg(target_arch = "x86_64")]
+            for (rays, out) in rays.chunks(P::WIDTH).zip(out.chunks_mut(P::WIDTH)) {
                 if packet::coherent(rays) {
                     b.closest_packet(k, rays, t_max, out);
                     continue;
                 }
                 for (ray, hit) in rays.iter().zip(out) {
-                    let r = RayK::new(ray);
-                    let best = b.big.closest16(k, &r, t_max);
-                    *hit = b.tree.closest(k.avx2(), &r, t_max, best);
+                    *hit = b.closest_with(k, ray, t_max);
                 }
             }
         }
-        Structure::BruteForce | Structure::Bvh2(_) => {}
+        // No kernels: the scalar loop.
+        Structure::BruteForce | Structure::Bvh2(_) => {
+            Scalar.closest_batch(s, triangles, rays, t_max, out)
+        }
     }
 }
 
-#[cfg_attr(
-    target_arch = "x86_64",
-    target_feature(enable = "avx512f,avx512dq,avx2,fma")
-)]
-fn occluded_batch_avx512(k: Avx512, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
+/// [`closest_packets`] for shadow rays, each with its own `t_max`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn occluded_packets<P: packet::PacketIsa>(
+    k: P,
+    s: &Structure,
+    triangles: &[Triangle],
+    rays: &[(Ray, f32)],
+    out: &mut [bool],
+) {
     match s {
         Structure::Flat(f) => {
             // Shadow rays to a point light skip what lies outside their cone.
-            #[cfg(target_arch = "x86_64")]
             if flat_occluded_culled(k, f, rays, out) {
                 return;
             }
             for ((ray, t_max), blocked) in rays.iter().zip(out) {
-                // No boxes: the ray needs no reciprocal direction.
-                *blocked = f.occluded16(k, &RayK::for_triangles(ray), *t_max);
+                *blocked = f.occluded_with(k, ray, *t_max);
             }
         }
         Structure::Bvh8(b) => {
-            for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-                #[cfg(target_arch = "x86_64")]
+            for (rays, out) in rays.chunks(P::WIDTH).zip(out.chunks_mut(P::WIDTH)) {
                 if packet::coherent_shadows(rays) {
                     b.occluded_packet(k, rays, out);
                     continue;
                 }
                 for ((ray, t_max), blocked) in rays.iter().zip(out) {
-                    let r = RayK::new(ray);
-                    *blocked =
-                        b.tree.occluded(k.avx2(), &r, *t_max) || b.big.occluded16(k, &r, *t_max);
+                    *blocked = b.occluded_with(k, ray, *t_max);
                 }
             }
         }
-        Structure::BruteForce | Structure::Bvh2(_) => {}
+        Structure::BruteForce | Structure::Bvh2(_) => {
+            Scalar.occluded_batch(s, triangles, rays, out)
+        }
     }
-}
-
-#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
-fn closest_batch_avx2(k: Avx2, s: &Structure, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
-    match s {
-        Structure::Flat(f) => {
-            #[cfg(target_arch = "x86_64")]
-            if flat_closest_culled(k, f, rays, t_max, out) {
-                return;
-            }
-            for (ray, hit) in rays.iter().zip(out) {
-                *hit = f.closest(k, &RayK::for_triangles(ray), t_max);
-            }
-        }
-        Structure::Bvh8(b) => {
-            for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
-                #[cfg(target_arch = "x86_64")]
-                if packet::coherent(rays) {
-                    b.closest_packet(k, rays, t_max, out);
-                    continue;
-                }
-                for (ray, hit) in rays.iter().zip(out) {
-                    let r = RayK::new(ray);
-                    let best = b.big.closest(k, &r, t_max);
-                    *hit = b.tree.closest(k, &r, t_max, best);
-                }
-            }
-        }
-        Structure::BruteForce | Structure::Bvh2(_) => {}
-    }
-}
-
-#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
-fn occluded_batch_avx2(k: Avx2, s: &Structure, rays: &[(Ray, f32)], out: &mut [bool]) {
-    match s {
-        Structure::Flat(f) => {
-            #[cfg(target_arch = "x86_64")]
-            if flat_occluded_culled(k, f, rays, out) {
-                return;
-            }
-            for ((ray, t_max), blocked) in rays.iter().zip(out) {
-                *blocked = f.occluded(k, &RayK::for_triangles(ray), *t_max);
-            }
-        }
-        Structure::Bvh8(b) => {
-            for (rays, out) in rays.chunks(PACKET_AVX2).zip(out.chunks_mut(PACKET_AVX2)) {
-                #[cfg(target_arch = "x86_64")]
-                if packet::coherent_shadows(rays) {
-                    b.occluded_packet(k, rays, out);
-                    continue;
-                }
-                for ((ray, t_max), blocked) in rays.iter().zip(out) {
-                    let r = RayK::new(ray);
-                    *blocked = b.tree.occluded(k, &r, *t_max) || b.big.occluded(k, &r, *t_max);
-                }
-            }
-        }
-        Structure::BruteForce | Structure::Bvh2(_) => {}
-    }
-}
-
-/// [`Accel::occluded_lanes`] on the flat list, AVX-512; false (nothing done) when the list is
-/// too long to cull.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-fn occluded_lanes_avx512(
-    k: Avx512,
-    f: &Flat,
-    groups: &[SegmentLanes],
-    blocked: &mut [u16],
-) -> bool {
-    occluded_lanes_in(k, f, groups, blocked)
-}
-
-/// [`occluded_lanes_avx512`] with AVX2, eight lanes at a time.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn occluded_lanes_avx2(k: Avx2, f: &Flat, groups: &[SegmentLanes], blocked: &mut [u16]) -> bool {
-    occluded_lanes_in(k, f, groups, blocked)
 }
 
 /// The flat list's culled closest hits for a batch of rays from one point ([`cull`]): the
@@ -881,54 +903,6 @@ fn occluded_lanes_in<P: packet::PacketIsa>(
         *blocked = packet::occluded_lanes_in_list(k, &f.packets16, kept, g);
     }
     true
-}
-
-fn closest_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
-    let mut hit = [None];
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: `k` proves the CPU has AVX2 and FMA.
-    unsafe {
-        closest_batch_avx2(k, s, std::slice::from_ref(ray), t_max, &mut hit)
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    closest_batch_avx2(k, s, std::slice::from_ref(ray), t_max, &mut hit);
-    hit[0]
-}
-
-fn occluded_avx2(k: Avx2, s: &Structure, ray: &Ray, t_max: f32) -> bool {
-    let mut blocked = [false];
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: `k` proves the CPU has AVX2 and FMA.
-    unsafe {
-        occluded_batch_avx2(k, s, &[(*ray, t_max)], &mut blocked)
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    occluded_batch_avx2(k, s, &[(*ray, t_max)], &mut blocked);
-    blocked[0]
-}
-
-fn closest_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> Option<Hit> {
-    let mut hit = [None];
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: `k` proves the CPU has AVX-512 F and DQ, and AVX2 and FMA.
-    unsafe {
-        closest_batch_avx512(k, s, std::slice::from_ref(ray), t_max, &mut hit)
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    closest_batch_avx512(k, s, std::slice::from_ref(ray), t_max, &mut hit);
-    hit[0]
-}
-
-fn occluded_avx512(k: Avx512, s: &Structure, ray: &Ray, t_max: f32) -> bool {
-    let mut blocked = [false];
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: as above.
-    unsafe {
-        occluded_batch_avx512(k, s, &[(*ray, t_max)], &mut blocked)
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    occluded_batch_avx512(k, s, &[(*ray, t_max)], &mut blocked);
-    blocked[0]
 }
 
 #[cfg(test)]

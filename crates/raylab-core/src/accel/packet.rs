@@ -8,17 +8,18 @@
 //! packet enters, a third of the instructions with AVX-512 (PERFORMANCE.md measures what it
 //! buys, for both widths).
 //!
-//! The traversal is written once, generic over [`PacketIsa`]: the lane width and the dozen
-//! operations it needs (arithmetic, comparisons to masks, blends, a masked horizontal minimum,
-//! the gather of the rays), implemented by the AVX-512 and the AVX2 kernel proof types. Every
-//! function of it is `#[inline(always)]`, so it is compiled inside the `#[target_feature]`
-//! entry points of [`super`] for each instruction set, where the intrinsics inline.
+//! The traversal is written once, generic over [`PacketIsa`]: the lane width, a lane type
+//! with the arithmetic of [`crate::lanes`], and the few operations it needs beyond (masks as
+//! bits, blends, a masked horizontal minimum, the gather of the rays), implemented by the
+//! AVX-512 and the AVX2 kernel proof types. Every function of it is `#[inline(always)]`, so it
+//! is compiled inside the `#[target_feature]` entry points of [`super`] for each instruction
+//! set, where the intrinsics inline.
 //!
 //! Each lane computes exactly what [`super::simd::Kernels::boxes`] computes for its ray (the
 //! same planes, the same fused multiply-subtract, the same order of `max` and `min`), against
-//! its own best hit; leaves are tested a triangle at a time against every lane with the same
-//! operations as the single ray's triangle kernel (no fused multiply-add), with the same rule
-//! for ties. So a packet returns exactly what each ray returns alone (tests/packets.rs checks
+//! its own best hit; leaves are tested a triangle at a time against every lane by the single
+//! ray's triangle test itself ([`crate::intersect::intersect_lanes`], a lane per ray), with
+//! the same rule for ties. So a packet returns exactly what each ray returns alone (tests/packets.rs checks
 //! it against the brute-force loop), whatever order the packet visits the nodes in.
 //!
 //! When few rays of a packet are left in a subtree (they diverged, or most of them found
@@ -28,19 +29,21 @@
 
 use std::arch::x86_64::*;
 
+use glam::Vec3;
+
 use super::Hit;
 use super::bvh::BOX_T_SLACK;
 use super::bvh::INV_HUGE;
 use super::simd::{Avx2, Avx512, Node8, Packet, Packet16, RayK};
-use super::wide::{Bvh8, Bvh8Big, EMPTY, LEAF, STACK_INLINE};
+use super::wide::{Bvh8, Bvh8Big, EMPTY, KernelSet, LEAF, STACK_INLINE};
+use super::x86_lanes::{Avx2F32, Avx2Mask, Avx512F32, Avx512Mask};
 use crate::geometry::Ray;
-use crate::intersect::EDGE_TOLERANCE;
+use crate::intersect::intersect_lanes;
+use crate::lanes::{Mask, Real, Vec3x, Vector};
 
 /// The most rays in a packet (AVX-512's sixteen lanes of `f32`): the length of the per-lane
 /// arrays, whatever the width.
 pub const MAX_WIDTH: usize = 16;
-const _: () = assert!(<Avx512 as PacketIsa>::WIDTH == super::PACKET);
-const _: () = assert!(<Avx2 as PacketIsa>::WIDTH == super::PACKET_AVX2);
 const _: () = assert!(<Avx512 as PacketIsa>::WIDTH <= MAX_WIDTH);
 
 /// A ray is six `f32` (origin, direction): lane i gathers floats 6i + c.
@@ -90,26 +93,24 @@ fn directions_agree(mut directions: impl ExactSizeIterator<Item = glam::Vec3>) -
 }
 
 /// What the packet traversal needs of a SIMD instruction set: one register of `f32` with a lane
-/// per ray, a register of `u32` (the best triangle's index), a comparison's result, and the few
-/// operations below, each one instruction or a short fixed sequence. Implemented by the kernel
-/// proof types, whose values exist only on a CPU that runs them: [`Avx512`] (sixteen rays,
-/// masks in mask registers) and [`Avx2`] (eight rays, masks as all-ones lanes).
+/// per ray ([`Real`]: the arithmetic and comparisons of [`crate::lanes`]), a register of `u32`
+/// (the best triangle's index), a comparison's result, and the few operations below, each one
+/// instruction or a short fixed sequence. Implemented by the kernel proof types, whose values
+/// exist only on a CPU that runs them: [`Avx512`] (sixteen rays, masks in mask registers) and
+/// [`Avx2`] (eight rays, masks as all-ones lanes).
 ///
 /// Every method is `#[inline(always)]` and every caller in this module too: the traversal is
-/// compiled inside the `#[target_feature]` entry points of [`super`] (`closest_batch_avx512`,
-/// `closest_batch_avx2`, ...), where the intrinsics inline.
-pub(super) trait PacketIsa: Copy {
+/// compiled inside the `#[target_feature]` entry points of [`super`] (one generic body per
+/// query, instantiated for each set), where the intrinsics inline.
+pub(super) trait PacketIsa: KernelSet {
     /// Lanes, so rays in a packet.
     const WIDTH: usize;
     /// `WIDTH` lanes of `f32`.
-    type F: Copy;
+    type F: Real<Mask = Self::Mask>;
     /// `WIDTH` lanes of `u32`.
     type U: Copy;
     /// A comparison's result, lane by lane.
-    type Mask: Copy;
-
-    /// The single-ray kernels, for the rays that go on alone.
-    fn avx2(self) -> Avx2;
+    type Mask: Mask;
 
     /// The rays' origins and directions (x, y, z, dx, dy, dz), one ray a lane; lanes past
     /// `rays.len()` (at least one, at most `WIDTH`) repeat the last ray.
@@ -117,18 +118,19 @@ pub(super) trait PacketIsa: Copy {
     /// [`PacketIsa::rays`] for shadow rays: (x, y, z, dx, dy, dz, t_max).
     fn segments(self, segments: &[(Ray, f32)]) -> [Self::F; 7];
 
-    fn splat(self, x: f32) -> Self::F;
+    #[inline(always)]
+    fn splat(self, x: f32) -> Self::F {
+        Self::F::splat(x)
+    }
     /// The first `WIDTH` floats of `a`.
     fn load(self, a: &[f32; MAX_WIDTH]) -> Self::F;
     /// Into the first `WIDTH` floats of `a`.
     fn store(self, a: &mut [f32; MAX_WIDTH], v: Self::F);
-    fn add(self, a: Self::F, b: Self::F) -> Self::F;
-    fn sub(self, a: Self::F, b: Self::F) -> Self::F;
-    fn mul(self, a: Self::F, b: Self::F) -> Self::F;
-    fn div(self, a: Self::F, b: Self::F) -> Self::F;
     /// `a·b − c` in one rounding.
     fn fmsub(self, a: Self::F, b: Self::F, c: Self::F) -> Self::F;
+    /// The instruction's maximum: `b` where either is NaN (unlike [`Real::simd_max`]).
     fn max(self, a: Self::F, b: Self::F) -> Self::F;
+    /// The instruction's minimum: `b` where either is NaN (unlike [`Real::simd_min`]).
     fn min(self, a: Self::F, b: Self::F) -> Self::F;
     fn and(self, a: Self::F, b: Self::F) -> Self::F;
     fn or(self, a: Self::F, b: Self::F) -> Self::F;
@@ -138,14 +140,15 @@ pub(super) trait PacketIsa: Copy {
 
     /// Lane by lane `a <C> b`, `C` one of the `_CMP_*` predicates.
     fn cmp<const C: i32>(self, a: Self::F, b: Self::F) -> Self::Mask;
-    fn both(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
-    fn either(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
     /// Lane `i` set: bit `i`.
     fn bits(self, m: Self::Mask) -> u32;
     /// Bit `i` (below `WIDTH`) set: lane `i`.
     fn mask(self, bits: u32) -> Self::Mask;
     /// `b` in the lanes of `m`, `a` elsewhere.
-    fn blend(self, m: Self::Mask, a: Self::F, b: Self::F) -> Self::F;
+    #[inline(always)]
+    fn blend(self, m: Self::Mask, a: Self::F, b: Self::F) -> Self::F {
+        Self::F::select(m, b, a)
+    }
     /// The least of the lanes of `m` (at least one).
     fn min_of(self, m: Self::Mask, v: Self::F) -> f32;
 
@@ -265,142 +268,100 @@ unsafe fn gather8<const K: usize>(base: *const f32, stride: i32, len: usize) -> 
 
 impl PacketIsa for Avx512 {
     const WIDTH: usize = 16;
-    type F = __m512;
+    type F = Avx512F32;
     type U = __m512i;
-    type Mask = __mmask16;
+    type Mask = Avx512Mask;
 
     #[inline(always)]
-    fn avx2(self) -> Avx2 {
-        Avx512::avx2(self)
-    }
-
-    #[inline(always)]
-    fn rays(self, rays: &[Ray]) -> [__m512; 6] {
+    fn rays(self, rays: &[Ray]) -> [Avx512F32; 6] {
         debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
         // SAFETY: AVX-512 F; `rays` holds rays.len() records of RAY_FLOATS floats.
-        unsafe {
+        let v = unsafe {
             if rays.len() == 16 {
                 transpose16::<{ RAY_FLOATS as usize }, 6>(rays.as_ptr().cast())
             } else {
                 gather16(rays.as_ptr().cast(), RAY_FLOATS, rays.len())
             }
-        }
+        };
+        v.map(Avx512F32)
     }
 
     #[inline(always)]
-    fn segments(self, segments: &[(Ray, f32)]) -> [__m512; 7] {
+    fn segments(self, segments: &[(Ray, f32)]) -> [Avx512F32; 7] {
         debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
         // SAFETY: AVX-512 F; `segments` holds segments.len() records of SEGMENT_FLOATS floats.
-        unsafe {
+        let v = unsafe {
             if segments.len() == 16 {
                 transpose16::<{ SEGMENT_FLOATS as usize }, 7>(segments.as_ptr().cast())
             } else {
                 gather16(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len())
             }
-        }
+        };
+        v.map(Avx512F32)
     }
 
     #[inline(always)]
-    fn splat(self, x: f32) -> __m512 {
-        // SAFETY: AVX-512 F.
-        unsafe { _mm512_set1_ps(x) }
+    fn load(self, a: &[f32; MAX_WIDTH]) -> Avx512F32 {
+        Avx512F32::load(a)
     }
     #[inline(always)]
-    fn load(self, a: &[f32; MAX_WIDTH]) -> __m512 {
-        // SAFETY: AVX-512 F; `a` is sixteen readable f32.
-        unsafe { _mm512_loadu_ps(a.as_ptr()) }
-    }
-    #[inline(always)]
-    fn store(self, a: &mut [f32; MAX_WIDTH], v: __m512) {
+    fn store(self, a: &mut [f32; MAX_WIDTH], v: Avx512F32) {
         // SAFETY: AVX-512 F; `a` is sixteen writable f32.
-        unsafe { _mm512_storeu_ps(a.as_mut_ptr(), v) }
+        unsafe { _mm512_storeu_ps(a.as_mut_ptr(), v.0) }
     }
     #[inline(always)]
-    fn add(self, a: __m512, b: __m512) -> __m512 {
+    fn fmsub(self, a: Avx512F32, b: Avx512F32, c: Avx512F32) -> Avx512F32 {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_add_ps(a, b) }
+        Avx512F32(unsafe { _mm512_fmsub_ps(a.0, b.0, c.0) })
     }
     #[inline(always)]
-    fn sub(self, a: __m512, b: __m512) -> __m512 {
+    fn max(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_sub_ps(a, b) }
+        Avx512F32(unsafe { _mm512_max_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn mul(self, a: __m512, b: __m512) -> __m512 {
+    fn min(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_mul_ps(a, b) }
+        Avx512F32(unsafe { _mm512_min_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn div(self, a: __m512, b: __m512) -> __m512 {
-        // SAFETY: AVX-512 F.
-        unsafe { _mm512_div_ps(a, b) }
-    }
-    #[inline(always)]
-    fn fmsub(self, a: __m512, b: __m512, c: __m512) -> __m512 {
-        // SAFETY: AVX-512 F.
-        unsafe { _mm512_fmsub_ps(a, b, c) }
-    }
-    #[inline(always)]
-    fn max(self, a: __m512, b: __m512) -> __m512 {
-        // SAFETY: AVX-512 F.
-        unsafe { _mm512_max_ps(a, b) }
-    }
-    #[inline(always)]
-    fn min(self, a: __m512, b: __m512) -> __m512 {
-        // SAFETY: AVX-512 F.
-        unsafe { _mm512_min_ps(a, b) }
-    }
-    #[inline(always)]
-    fn and(self, a: __m512, b: __m512) -> __m512 {
+    fn and(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
         // SAFETY: AVX-512 DQ.
-        unsafe { _mm512_and_ps(a, b) }
+        Avx512F32(unsafe { _mm512_and_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn or(self, a: __m512, b: __m512) -> __m512 {
+    fn or(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
         // SAFETY: AVX-512 DQ.
-        unsafe { _mm512_or_ps(a, b) }
+        Avx512F32(unsafe { _mm512_or_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn xor(self, a: __m512, b: __m512) -> __m512 {
+    fn xor(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
         // SAFETY: AVX-512 DQ.
-        unsafe { _mm512_xor_ps(a, b) }
+        Avx512F32(unsafe { _mm512_xor_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn abs(self, a: __m512) -> __m512 {
+    fn abs(self, a: Avx512F32) -> Avx512F32 {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_abs_ps(a) }
+        Avx512F32(unsafe { _mm512_abs_ps(a.0) })
     }
 
     #[inline(always)]
-    fn cmp<const C: i32>(self, a: __m512, b: __m512) -> __mmask16 {
+    fn cmp<const C: i32>(self, a: Avx512F32, b: Avx512F32) -> Avx512Mask {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_cmp_ps_mask::<C>(a, b) }
+        Avx512Mask(unsafe { _mm512_cmp_ps_mask::<C>(a.0, b.0) })
     }
     #[inline(always)]
-    fn both(self, a: __mmask16, b: __mmask16) -> __mmask16 {
-        a & b
+    fn bits(self, m: Avx512Mask) -> u32 {
+        m.0 as u32
     }
     #[inline(always)]
-    fn either(self, a: __mmask16, b: __mmask16) -> __mmask16 {
-        a | b
+    fn mask(self, bits: u32) -> Avx512Mask {
+        Avx512Mask(bits as __mmask16)
     }
     #[inline(always)]
-    fn bits(self, m: __mmask16) -> u32 {
-        m as u32
-    }
-    #[inline(always)]
-    fn mask(self, bits: u32) -> __mmask16 {
-        bits as __mmask16
-    }
-    #[inline(always)]
-    fn blend(self, m: __mmask16, a: __m512, b: __m512) -> __m512 {
+    fn min_of(self, m: Avx512Mask, v: Avx512F32) -> f32 {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_mask_blend_ps(m, a, b) }
-    }
-    #[inline(always)]
-    fn min_of(self, m: __mmask16, v: __m512) -> f32 {
-        // SAFETY: AVX-512 F.
-        unsafe { _mm512_mask_reduce_min_ps(m, v) }
+        unsafe { _mm512_mask_reduce_min_ps(m.0, v.0) }
     }
 
     #[inline(always)]
@@ -419,151 +380,106 @@ impl PacketIsa for Avx512 {
         unsafe { _mm512_storeu_si512(a.as_mut_ptr().cast(), v) }
     }
     #[inline(always)]
-    fn lt_u32(self, a: __m512i, b: __m512i) -> __mmask16 {
+    fn lt_u32(self, a: __m512i, b: __m512i) -> Avx512Mask {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_cmplt_epu32_mask(a, b) }
+        Avx512Mask(unsafe { _mm512_cmplt_epu32_mask(a, b) })
     }
     #[inline(always)]
-    fn blend_u32(self, m: __mmask16, a: __m512i, b: __m512i) -> __m512i {
+    fn blend_u32(self, m: Avx512Mask, a: __m512i, b: __m512i) -> __m512i {
         // SAFETY: AVX-512 F.
-        unsafe { _mm512_mask_blend_epi32(m, a, b) }
+        unsafe { _mm512_mask_blend_epi32(m.0, a, b) }
     }
 }
 
 impl PacketIsa for Avx2 {
     const WIDTH: usize = 8;
-    type F = __m256;
+    type F = Avx2F32;
     type U = __m256i;
-    /// All ones in the lanes set (a comparison's result).
-    type Mask = __m256;
+    type Mask = Avx2Mask;
 
     #[inline(always)]
-    fn avx2(self) -> Avx2 {
-        self
-    }
-
-    #[inline(always)]
-    fn rays(self, rays: &[Ray]) -> [__m256; 6] {
+    fn rays(self, rays: &[Ray]) -> [Avx2F32; 6] {
         debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
         // SAFETY: `rays` holds rays.len() records of RAY_FLOATS floats.
-        unsafe { gather8(rays.as_ptr().cast(), RAY_FLOATS, rays.len()) }
+        unsafe { gather8(rays.as_ptr().cast(), RAY_FLOATS, rays.len()) }.map(Avx2F32)
     }
 
     #[inline(always)]
-    fn segments(self, segments: &[(Ray, f32)]) -> [__m256; 7] {
+    fn segments(self, segments: &[(Ray, f32)]) -> [Avx2F32; 7] {
         debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
         // SAFETY: `segments` holds segments.len() records of SEGMENT_FLOATS floats.
-        unsafe { gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }
+        unsafe { gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }.map(Avx2F32)
     }
 
     #[inline(always)]
-    fn splat(self, x: f32) -> __m256 {
-        // SAFETY: AVX.
-        unsafe { _mm256_set1_ps(x) }
+    fn load(self, a: &[f32; MAX_WIDTH]) -> Avx2F32 {
+        Avx2F32::load(a.first_chunk().expect("sixteen floats hold eight"))
     }
     #[inline(always)]
-    fn load(self, a: &[f32; MAX_WIDTH]) -> __m256 {
-        // SAFETY: AVX; `a` holds at least eight readable f32.
-        unsafe { _mm256_loadu_ps(a.as_ptr()) }
-    }
-    #[inline(always)]
-    fn store(self, a: &mut [f32; MAX_WIDTH], v: __m256) {
+    fn store(self, a: &mut [f32; MAX_WIDTH], v: Avx2F32) {
         // SAFETY: AVX; `a` holds at least eight writable f32.
-        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) }
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v.0) }
     }
     #[inline(always)]
-    fn add(self, a: __m256, b: __m256) -> __m256 {
-        // SAFETY: AVX.
-        unsafe { _mm256_add_ps(a, b) }
-    }
-    #[inline(always)]
-    fn sub(self, a: __m256, b: __m256) -> __m256 {
-        // SAFETY: AVX.
-        unsafe { _mm256_sub_ps(a, b) }
-    }
-    #[inline(always)]
-    fn mul(self, a: __m256, b: __m256) -> __m256 {
-        // SAFETY: AVX.
-        unsafe { _mm256_mul_ps(a, b) }
-    }
-    #[inline(always)]
-    fn div(self, a: __m256, b: __m256) -> __m256 {
-        // SAFETY: AVX.
-        unsafe { _mm256_div_ps(a, b) }
-    }
-    #[inline(always)]
-    fn fmsub(self, a: __m256, b: __m256, c: __m256) -> __m256 {
+    fn fmsub(self, a: Avx2F32, b: Avx2F32, c: Avx2F32) -> Avx2F32 {
         // SAFETY: FMA.
-        unsafe { _mm256_fmsub_ps(a, b, c) }
+        Avx2F32(unsafe { _mm256_fmsub_ps(a.0, b.0, c.0) })
     }
     #[inline(always)]
-    fn max(self, a: __m256, b: __m256) -> __m256 {
+    fn max(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
         // SAFETY: AVX.
-        unsafe { _mm256_max_ps(a, b) }
+        Avx2F32(unsafe { _mm256_max_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn min(self, a: __m256, b: __m256) -> __m256 {
+    fn min(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
         // SAFETY: AVX.
-        unsafe { _mm256_min_ps(a, b) }
+        Avx2F32(unsafe { _mm256_min_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn and(self, a: __m256, b: __m256) -> __m256 {
+    fn and(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
         // SAFETY: AVX.
-        unsafe { _mm256_and_ps(a, b) }
+        Avx2F32(unsafe { _mm256_and_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn or(self, a: __m256, b: __m256) -> __m256 {
+    fn or(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
         // SAFETY: AVX.
-        unsafe { _mm256_or_ps(a, b) }
+        Avx2F32(unsafe { _mm256_or_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn xor(self, a: __m256, b: __m256) -> __m256 {
+    fn xor(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
         // SAFETY: AVX.
-        unsafe { _mm256_xor_ps(a, b) }
+        Avx2F32(unsafe { _mm256_xor_ps(a.0, b.0) })
     }
     #[inline(always)]
-    fn abs(self, a: __m256) -> __m256 {
+    fn abs(self, a: Avx2F32) -> Avx2F32 {
         // SAFETY: AVX.
-        unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), a) }
+        Avx2F32(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), a.0) })
     }
 
     #[inline(always)]
-    fn cmp<const C: i32>(self, a: __m256, b: __m256) -> __m256 {
+    fn cmp<const C: i32>(self, a: Avx2F32, b: Avx2F32) -> Avx2Mask {
         // SAFETY: AVX.
-        unsafe { _mm256_cmp_ps::<C>(a, b) }
+        Avx2Mask(unsafe { _mm256_cmp_ps::<C>(a.0, b.0) })
     }
     #[inline(always)]
-    fn both(self, a: __m256, b: __m256) -> __m256 {
-        self.and(a, b)
-    }
-    #[inline(always)]
-    fn either(self, a: __m256, b: __m256) -> __m256 {
-        self.or(a, b)
-    }
-    #[inline(always)]
-    fn bits(self, m: __m256) -> u32 {
+    fn bits(self, m: Avx2Mask) -> u32 {
         // SAFETY: AVX.
-        unsafe { _mm256_movemask_ps(m) as u32 }
+        unsafe { _mm256_movemask_ps(m.0) as u32 }
     }
     #[inline(always)]
-    fn mask(self, bits: u32) -> __m256 {
+    fn mask(self, bits: u32) -> Avx2Mask {
         // SAFETY: AVX2.
         unsafe {
             let lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
             let set = _mm256_and_si256(_mm256_set1_epi32(bits as i32), lane_bit);
-            _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane_bit))
+            Avx2Mask(_mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane_bit)))
         }
     }
     #[inline(always)]
-    fn blend(self, m: __m256, a: __m256, b: __m256) -> __m256 {
-        // SAFETY: AVX.
-        unsafe { _mm256_blendv_ps(a, b, m) }
-    }
-    #[inline(always)]
-    fn min_of(self, m: __m256, v: __m256) -> f32 {
+    fn min_of(self, m: Avx2Mask, v: Avx2F32) -> f32 {
         // SAFETY: AVX.
         unsafe {
-            let v = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), v, m);
+            let v = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), v.0, m.0);
             let v = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
             let v = _mm256_min_ps(v, _mm256_permute_ps::<0b01_00_11_10>(v));
             let v = _mm256_min_ps(v, _mm256_permute_ps::<0b10_11_00_01>(v));
@@ -587,23 +503,23 @@ impl PacketIsa for Avx2 {
         unsafe { _mm256_storeu_si256(a.as_mut_ptr().cast(), v) }
     }
     #[inline(always)]
-    fn lt_u32(self, a: __m256i, b: __m256i) -> __m256 {
+    fn lt_u32(self, a: __m256i, b: __m256i) -> Avx2Mask {
         // AVX2 compares signed only: flipping both sign bits orders u32 as i32.
         // SAFETY: AVX2.
         unsafe {
             let flip = _mm256_set1_epi32(i32::MIN);
             let lt = _mm256_cmpgt_epi32(_mm256_xor_si256(b, flip), _mm256_xor_si256(a, flip));
-            _mm256_castsi256_ps(lt)
+            Avx2Mask(_mm256_castsi256_ps(lt))
         }
     }
     #[inline(always)]
-    fn blend_u32(self, m: __m256, a: __m256i, b: __m256i) -> __m256i {
+    fn blend_u32(self, m: Avx2Mask, a: __m256i, b: __m256i) -> __m256i {
         // SAFETY: AVX.
         unsafe {
             _mm256_castps_si256(_mm256_blendv_ps(
                 _mm256_castsi256_ps(a),
                 _mm256_castsi256_ps(b),
-                m,
+                m.0,
             ))
         }
     }
@@ -679,7 +595,7 @@ impl<P: PacketIsa> Lanes<P> {
             t0 = k.max(t0, near);
             t1 = k.min(t1, far);
         }
-        let entered = k.both(active, k.cmp::<_CMP_LE_OQ>(t0, t1));
+        let entered = active & k.cmp::<_CMP_LE_OQ>(t0, t1);
         let bits = k.bits(entered);
         if bits == 0 {
             return (0, 0.0);
@@ -688,9 +604,8 @@ impl<P: PacketIsa> Lanes<P> {
     }
 
     /// Triangle `tri` of a leaf against every lane: `t`, `u`, `v` per lane (meaningless where
-    /// missed) and the lanes of `active` that hit it with `0 < t < limit`. Each lane does
-    /// exactly [`crate::intersect::intersect_triangle`]'s operations in its order, as the
-    /// 8-lane kernel does (no fused multiply-add), so the same bits.
+    /// missed) and the lanes of `active` that hit it with `0 < t < limit`:
+    /// [`intersect_lanes`], a lane per ray, so each lane has the single ray's bits.
     #[inline(always)]
     fn triangle<const N: usize>(
         &self,
@@ -699,45 +614,20 @@ impl<P: PacketIsa> Lanes<P> {
         active: P::Mask,
         limit: P::F,
     ) -> ([P::F; 3], P::Mask) {
-        let k = self.k;
+        let lane = |rows: &[[f32; N]; 3]| Vec3::new(rows[0][tri], rows[1][tri], rows[2][tri]);
+        let (e1, e2) = (Vec3x::splat(lane(&p.e1)), Vec3x::splat(lane(&p.e2)));
         let [ox, oy, oz] = self.origin;
         let [dx, dy, dz] = self.direction;
-        let e1x = k.splat(p.e1[0][tri]);
-        let e1y = k.splat(p.e1[1][tri]);
-        let e1z = k.splat(p.e1[2][tri]);
-        let e2x = k.splat(p.e2[0][tri]);
-        let e2y = k.splat(p.e2[1][tri]);
-        let e2z = k.splat(p.e2[2][tri]);
-        let nx = k.sub(k.mul(e1y, e2z), k.mul(e2y, e1z));
-        let ny = k.sub(k.mul(e1z, e2x), k.mul(e2z, e1x));
-        let nz = k.sub(k.mul(e1x, e2y), k.mul(e2x, e1y));
-        let bx = k.sub(ox, k.splat(p.v0[0][tri]));
-        let by = k.sub(oy, k.splat(p.v0[1][tri]));
-        let bz = k.sub(oz, k.splat(p.v0[2][tri]));
-        let sign = k.splat(-0.0);
-        let det = k.add(k.add(k.mul(dx, nx), k.mul(dy, ny)), k.mul(dz, nz));
-        let inv_det = k.div(k.splat(1.0), k.xor(det, sign));
-        let t = k.mul(
-            k.add(k.add(k.mul(bx, nx), k.mul(by, ny)), k.mul(bz, nz)),
-            inv_det,
+        let h = intersect_lanes(
+            Vec3x::new(ox, oy, oz),
+            Vec3x::new(dx, dy, dz),
+            Vec3x::splat(lane(&p.v0)),
+            e1,
+            e2,
+            e1.cross(e2),
+            limit,
         );
-        let mx = k.sub(k.mul(by, dz), k.mul(dy, bz));
-        let my = k.sub(k.mul(bz, dx), k.mul(dz, bx));
-        let mz = k.sub(k.mul(bx, dy), k.mul(dx, by));
-        let u = k.mul(
-            k.add(k.add(k.mul(e2x, mx), k.mul(e2y, my)), k.mul(e2z, mz)),
-            inv_det,
-        );
-        let e1m = k.add(k.add(k.mul(e1x, mx), k.mul(e1y, my)), k.mul(e1z, mz));
-        let v = k.mul(k.xor(e1m, sign), inv_det);
-        let lo = k.splat(-EDGE_TOLERANCE);
-        let mut hit = k.both(active, k.cmp::<_CMP_GT_OQ>(t, k.splat(0.0)));
-        hit = k.both(hit, k.cmp::<_CMP_LT_OQ>(t, limit));
-        hit = k.both(hit, k.cmp::<_CMP_GE_OQ>(u, lo));
-        hit = k.both(hit, k.cmp::<_CMP_GE_OQ>(v, lo));
-        let uv = k.add(u, v);
-        hit = k.both(hit, k.cmp::<_CMP_LE_OQ>(uv, k.splat(1.0 + EDGE_TOLERANCE)));
-        ([t, u, v], hit)
+        ([h.t, h.u, h.v], active & h.hit)
     }
 
     /// A leaf's triangles against the `active` lanes, one triangle at a time: each lane keeps
@@ -776,10 +666,10 @@ impl<P: PacketIsa> Lanes<P> {
             let index_v = k.splat_u32(p.index[tri]);
             // Nearer, or as near with a lower index (a lane without a hit has best_t = t_max,
             // which no hit reaches, so the index test only ever compares real hits).
-            let nearer = k.both(hit, k.cmp::<_CMP_LT_OQ>(t, best_t));
-            let tie = k.both(hit, k.cmp::<_CMP_EQ_OQ>(t, best_t));
-            let tie = k.both(tie, k.lt_u32(index_v, best_i));
-            let better = k.either(nearer, tie);
+            let nearer = hit & k.cmp::<_CMP_LT_OQ>(t, best_t);
+            let tie = hit & k.cmp::<_CMP_EQ_OQ>(t, best_t);
+            let tie = tie & k.lt_u32(index_v, best_i);
+            let better = nearer | tie;
             best_t = k.blend(better, best_t, t);
             best_i = k.blend_u32(better, best_i, index_v);
             best_u = k.blend(better, best_u, u);
@@ -833,8 +723,8 @@ impl<P: PacketIsa> Lanes<P> {
 fn axis<P: PacketIsa>(k: P, o: P::F, d: P::F) -> (P::F, P::F, P::Mask) {
     let huge = k.or(k.splat(INV_HUGE), k.and(d, k.splat(-0.0)));
     let small = k.cmp::<_CMP_NGT_UQ>(k.abs(d), k.splat(1.0 / INV_HUGE));
-    let inv = k.blend(small, k.div(k.splat(1.0), d), huge);
-    (inv, k.mul(o, inv), k.cmp::<_CMP_LT_OQ>(inv, k.splat(0.0)))
+    let inv = k.blend(small, k.splat(1.0) / d, huge);
+    (inv, o * inv, k.cmp::<_CMP_LT_OQ>(inv, k.splat(0.0)))
 }
 
 /// The lanes set in `mask`, lowest first.
@@ -895,7 +785,7 @@ impl Best {
     /// Each lane's box limit: its best `t` with the boxes' slack.
     #[inline(always)]
     fn box_limit<P: PacketIsa>(&self, k: P) -> P::F {
-        k.mul(k.load(&self.t), k.splat(BOX_T_SLACK))
+        k.load(&self.t) * k.splat(BOX_T_SLACK)
     }
 }
 
@@ -1078,7 +968,7 @@ impl Bvh8 {
             return;
         }
         let k = lanes.k;
-        let k8 = k.avx2();
+        let k8 = k.tree();
         if self.max_stack > STACK_INLINE {
             for lane in lanes_of(active) {
                 if let Some(h) = self.closest(k8, &RayK::new(&rays[lane]), t_max, b.get(lane)) {
@@ -1159,7 +1049,7 @@ impl Bvh8 {
             return 0;
         }
         let k = lanes.k;
-        let k8 = k.avx2();
+        let k8 = k.tree();
         let mut done = 0;
         if self.max_stack > STACK_INLINE {
             for lane in lanes_of(active) {
@@ -1170,7 +1060,7 @@ impl Bvh8 {
             return done;
         }
         let limit_t = k.load(t_max);
-        let limit = k.mul(limit_t, k.splat(BOX_T_SLACK));
+        let limit = limit_t * k.splat(BOX_T_SLACK);
         let mut stack = [(0u32, 0u32); STACK];
         let mut alone = [0u32; STACK_INLINE];
         let mut sp = 0;
@@ -1233,7 +1123,7 @@ mod tests {
         let mut v = || glam::Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
         let rays: Vec<Ray> = (0..16).map(|_| Ray::new(v(), v())).collect();
         let segments: Vec<(Ray, f32)> = rays.iter().map(|r| (*r, r.origin.x + 1.0)).collect();
-        let floats = |vs: &[__m512]| -> Vec<[f32; MAX_WIDTH]> {
+        let floats = |vs: &[Avx512F32]| -> Vec<[f32; MAX_WIDTH]> {
             vs.iter()
                 .map(|&x| {
                     let mut a = [0.0; MAX_WIDTH];
@@ -1245,8 +1135,8 @@ mod tests {
         // SAFETY: AVX-512 F (detected); 16 records of RAY_FLOATS and SEGMENT_FLOATS floats.
         let (gathered, gathered_segments) = unsafe {
             (
-                gather16::<6>(rays.as_ptr().cast(), RAY_FLOATS, 16),
-                gather16::<7>(segments.as_ptr().cast(), SEGMENT_FLOATS, 16),
+                gather16::<6>(rays.as_ptr().cast(), RAY_FLOATS, 16).map(Avx512F32),
+                gather16::<7>(segments.as_ptr().cast(), SEGMENT_FLOATS, 16).map(Avx512F32),
             )
         };
         assert_eq!(floats(&k.rays(&rays)), floats(&gathered));

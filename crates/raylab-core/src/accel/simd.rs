@@ -3,12 +3,15 @@
 //!
 //! Each kernel has a scalar twin ([`Scalar`]) — plain loops over the lanes, the readable
 //! definition — and an AVX2 version ([`Avx2`]) chosen at run time when the CPU has AVX2 and
-//! FMA. The triangle kernels do exactly the operations of
-//! [`crate::intersect::intersect_triangle`] in the same order (no fused multiply-add), so every
-//! lane's `t`, `u`, `v` are bit-identical to the scalar test's: the fast path accepts the very
-//! same edges and returns the very same hits as the brute-force loop.
+//! FMA (and sixteen-wide AVX-512 ones for the flat list, [`Avx512`]). The triangle kernels are
+//! the scalar test's own source, [`crate::intersect::intersect_lanes`], a lane per triangle
+//! (no fused multiply-add), so every lane's `t`, `u`, `v` are bit-identical to
+//! [`crate::intersect::intersect_triangle`]'s: the fast path accepts the very same edges and
+//! returns the very same hits as the brute-force loop.
 
-use crate::intersect::EDGE_TOLERANCE;
+use glam::Vec3;
+
+use crate::intersect::intersect_lanes;
 
 use super::bvh::RayBoxData;
 
@@ -201,7 +204,7 @@ pub struct LaneHit {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Scalar;
 
-/// `intersect_triangle` on one lane: the same operations in the same order.
+/// `intersect_triangle` on one lane: [`intersect_lanes`] at `Vec3`.
 #[inline(always)]
 fn lane_hit<const N: usize>(
     p: &Packet<N>,
@@ -209,31 +212,19 @@ fn lane_hit<const N: usize>(
     r: &RayK,
     t_limit: f32,
 ) -> Option<(f32, f32, f32)> {
-    let [ox, oy, oz] = r.origin;
-    let [dx, dy, dz] = r.direction;
-    let (e1x, e1y, e1z) = (p.e1[0][i], p.e1[1][i], p.e1[2][i]);
-    let (e2x, e2y, e2z) = (p.e2[0][i], p.e2[1][i], p.e2[2][i]);
-    // n = e1 × e2
-    let nx = e1y * e2z - e2y * e1z;
-    let ny = e1z * e2x - e2z * e1x;
-    let nz = e1x * e2y - e2x * e1y;
-    // b = s − v0
-    let bx = ox - p.v0[0][i];
-    let by = oy - p.v0[1][i];
-    let bz = oz - p.v0[2][i];
-    let inv_det = 1.0 / -(dx * nx + dy * ny + dz * nz);
-    let t = (bx * nx + by * ny + bz * nz) * inv_det;
-    if !(t > 0.0 && t < t_limit) {
-        return None;
-    }
-    // m = b × d
-    let mx = by * dz - dy * bz;
-    let my = bz * dx - dz * bx;
-    let mz = bx * dy - dx * by;
-    let u = (e2x * mx + e2y * my + e2z * mz) * inv_det;
-    let v = -(e1x * mx + e1y * my + e1z * mz) * inv_det;
-    (u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE)
-        .then_some((t, u, v))
+    let lane = |rows: &[[f32; N]; 3]| Vec3::new(rows[0][i], rows[1][i], rows[2][i]);
+    let (e1, e2) = (lane(&p.e1), lane(&p.e2));
+    let (origin, direction) = (Vec3::from(r.origin), Vec3::from(r.direction));
+    let h = intersect_lanes(
+        origin,
+        direction,
+        lane(&p.v0),
+        e1,
+        e2,
+        e1.cross(e2),
+        t_limit,
+    );
+    h.hit.then_some((h.t, h.u, h.v))
 }
 
 impl Kernels for Scalar {
@@ -377,8 +368,12 @@ impl Kernels for Avx2 {
 mod x86 {
     use std::arch::x86_64::*;
 
+    use glam::Vec3;
+
+    use super::super::x86_lanes::{Avx2F32, Avx512F32};
     use super::{LANES, LaneHit, Node8, Packet8, Packet16, RayK};
-    use crate::intersect::EDGE_TOLERANCE;
+    use crate::intersect::{Hits, intersect_lanes};
+    use crate::lanes::{Real, Vec3x, Vector};
 
     #[inline]
     #[target_feature(enable = "avx2,fma")]
@@ -409,47 +404,15 @@ mod x86 {
         (mask, t_near)
     }
 
-    /// `t`, `u`, `v` of every lane (meaningless for a miss) and the mask of hits.
+    /// `t`, `u`, `v` of every lane (meaningless for a miss) and the mask of hits:
+    /// [`intersect_lanes`], a lane per triangle.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
     fn hits(p: &Packet8, r: &RayK, t_limit: f32) -> ([__m256; 3], __m256) {
-        let [ox, oy, oz] = r.origin.map(|x| _mm256_set1_ps(x));
-        let [dx, dy, dz] = r.direction.map(|x| _mm256_set1_ps(x));
-        let (e1x, e1y, e1z) = (load(&p.e1[0]), load(&p.e1[1]), load(&p.e1[2]));
-        let (e2x, e2y, e2z) = (load(&p.e2[0]), load(&p.e2[1]), load(&p.e2[2]));
-        let mul = |a, b| _mm256_mul_ps(a, b);
-        let sub = |a, b| _mm256_sub_ps(a, b);
-        let add = |a, b| _mm256_add_ps(a, b);
-        // Exactly `intersect_triangle`, lane by lane: see `lane_hit`.
-        let nx = sub(mul(e1y, e2z), mul(e2y, e1z));
-        let ny = sub(mul(e1z, e2x), mul(e2z, e1x));
-        let nz = sub(mul(e1x, e2y), mul(e2x, e1y));
-        let bx = sub(ox, load(&p.v0[0]));
-        let by = sub(oy, load(&p.v0[1]));
-        let bz = sub(oz, load(&p.v0[2]));
-        let sign = _mm256_set1_ps(-0.0);
-        let det = add(add(mul(dx, nx), mul(dy, ny)), mul(dz, nz));
-        let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), _mm256_xor_ps(det, sign));
-        let t = mul(add(add(mul(bx, nx), mul(by, ny)), mul(bz, nz)), inv_det);
-        let mx = sub(mul(by, dz), mul(dy, bz));
-        let my = sub(mul(bz, dx), mul(dz, bx));
-        let mz = sub(mul(bx, dy), mul(dx, by));
-        let u = mul(add(add(mul(e2x, mx), mul(e2y, my)), mul(e2z, mz)), inv_det);
-        let e1m = add(add(mul(e1x, mx), mul(e1y, my)), mul(e1z, mz));
-        let v = mul(_mm256_xor_ps(e1m, sign), inv_det);
-        let lo = _mm256_set1_ps(-EDGE_TOLERANCE);
-        let in_t = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(t, _mm256_setzero_ps()),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_limit)),
-        );
-        let in_uv = _mm256_and_ps(
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(u, lo),
-                _mm256_cmp_ps::<_CMP_GE_OQ>(v, lo),
-            ),
-            _mm256_cmp_ps::<_CMP_LE_OQ>(add(u, v), _mm256_set1_ps(1.0 + EDGE_TOLERANCE)),
-        );
-        ([t, u, v], _mm256_and_ps(in_t, in_uv))
+        let (e1, e2) = (rows8(&p.e1), rows8(&p.e2));
+        let n = e1.cross(e2);
+        let h = ray_lanes(r, rows8(&p.v0), e1, e2, n, t_limit);
+        ([h.t.0, h.u.0, h.v.0], h.hit.0)
     }
 
     #[inline]
@@ -487,46 +450,54 @@ mod x86 {
         _mm256_movemask_ps(hit) != 0
     }
 
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn load16(a: &[f32; 16]) -> __m512 {
-        // SAFETY: `a` is a valid reference to sixteen f32, readable as 64 bytes.
-        unsafe { _mm512_loadu_ps(a.as_ptr()) }
-    }
-
-    /// The AVX-512 form of `hits`: the same operations on sixteen lanes.
+    /// The AVX-512 form of `hits`: sixteen lanes, the normals read from the packet.
     #[inline]
     #[target_feature(enable = "avx512f,avx512dq")]
     fn hits16(p: &Packet16, r: &RayK, t_limit: f32) -> ([__m512; 3], __mmask16) {
-        let [ox, oy, oz] = r.origin.map(|x| _mm512_set1_ps(x));
-        let [dx, dy, dz] = r.direction.map(|x| _mm512_set1_ps(x));
-        let (e1x, e1y, e1z) = (load16(&p.e1[0]), load16(&p.e1[1]), load16(&p.e1[2]));
-        let (e2x, e2y, e2z) = (load16(&p.e2[0]), load16(&p.e2[1]), load16(&p.e2[2]));
-        let mul = |a, b| _mm512_mul_ps(a, b);
-        let sub = |a, b| _mm512_sub_ps(a, b);
-        let add = |a, b| _mm512_add_ps(a, b);
-        // n = e1 × e2, stored in the packet.
-        let (nx, ny, nz) = (load16(&p.n[0]), load16(&p.n[1]), load16(&p.n[2]));
-        let bx = sub(ox, load16(&p.v0[0]));
-        let by = sub(oy, load16(&p.v0[1]));
-        let bz = sub(oz, load16(&p.v0[2]));
-        let sign = _mm512_set1_ps(-0.0);
-        let det = add(add(mul(dx, nx), mul(dy, ny)), mul(dz, nz));
-        let inv_det = _mm512_div_ps(_mm512_set1_ps(1.0), _mm512_xor_ps(det, sign));
-        let t = mul(add(add(mul(bx, nx), mul(by, ny)), mul(bz, nz)), inv_det);
-        let mx = sub(mul(by, dz), mul(dy, bz));
-        let my = sub(mul(bz, dx), mul(dz, bx));
-        let mz = sub(mul(bx, dy), mul(dx, by));
-        let u = mul(add(add(mul(e2x, mx), mul(e2y, my)), mul(e2z, mz)), inv_det);
-        let e1m = add(add(mul(e1x, mx), mul(e1y, my)), mul(e1z, mz));
-        let v = mul(_mm512_xor_ps(e1m, sign), inv_det);
-        let lo = _mm512_set1_ps(-EDGE_TOLERANCE);
-        let mut hit = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, _mm512_setzero_ps());
-        hit &= _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, _mm512_set1_ps(t_limit));
-        hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(u, lo);
-        hit &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, lo);
-        hit &= _mm512_cmp_ps_mask::<_CMP_LE_OQ>(add(u, v), _mm512_set1_ps(1.0 + EDGE_TOLERANCE));
-        ([t, u, v], hit)
+        let h = ray_lanes(
+            r,
+            rows16(&p.v0),
+            rows16(&p.e1),
+            rows16(&p.e2),
+            rows16(&p.n),
+            t_limit,
+        );
+        ([h.t.0, h.u.0, h.v.0], h.hit.0)
+    }
+
+    /// A packet's rows of x, y and z as lanes. (Not closures: a closure inside a
+    /// `#[target_feature]` function may be compiled without its features.)
+    #[inline(always)]
+    fn rows8(rows: &[[f32; LANES]; 3]) -> Vec3x<Avx2F32> {
+        Vec3x::new(
+            Avx2F32::load(&rows[0]),
+            Avx2F32::load(&rows[1]),
+            Avx2F32::load(&rows[2]),
+        )
+    }
+
+    #[inline(always)]
+    fn rows16(rows: &[[f32; 16]; 3]) -> Vec3x<Avx512F32> {
+        Vec3x::new(
+            Avx512F32::load(&rows[0]),
+            Avx512F32::load(&rows[1]),
+            Avx512F32::load(&rows[2]),
+        )
+    }
+
+    /// One ray, in every lane, against a lane per triangle.
+    #[inline(always)]
+    fn ray_lanes<R: Real>(
+        r: &RayK,
+        v0: Vec3x<R>,
+        e1: Vec3x<R>,
+        e2: Vec3x<R>,
+        n: Vec3x<R>,
+        t_limit: f32,
+    ) -> Hits<R> {
+        let origin = Vec3x::splat(Vec3::from(r.origin));
+        let direction = Vec3x::splat(Vec3::from(r.direction));
+        intersect_lanes(origin, direction, v0, e1, e2, n, R::splat(t_limit))
     }
 
     #[inline]

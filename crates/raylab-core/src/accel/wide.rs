@@ -11,11 +11,11 @@
 
 use glam::Vec3;
 
-use crate::geometry::Triangle;
+use crate::geometry::{Ray, Triangle};
 
 use super::bvh::{BOX_T_SLACK, Bvh};
 use super::cull::Corners;
-use super::simd::{Avx512, Kernels, LANES, Node8, Packet8, Packet16, RayK};
+use super::simd::{Avx2, Avx512, Kernels, LANES, Node8, Packet8, Packet16, RayK, Scalar};
 use super::{Hit, TraversalCost};
 
 pub const LEAF: u32 = 1 << 31;
@@ -129,6 +129,69 @@ impl Flat {
     #[inline(always)]
     pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
         self.packets.iter().any(|p| k.any(p, r, t_max))
+    }
+}
+
+/// A kernel set as the structures use it: the flat list's loop at the set's width and the
+/// kernels of the wide tree's nodes and leaves. Implemented by [`Scalar`] and [`Avx2`] (both
+/// eight wide) and [`Avx512`] (the flat list sixteen wide, the tree with its AVX2 kernels), so
+/// a query is written once for all three ([`Bvh8Big::closest_with`], the batches of
+/// [`super::Accel`]).
+pub trait KernelSet: Copy {
+    /// The kernels of the wide tree.
+    type Tree: Kernels;
+    fn tree(self) -> Self::Tree;
+    /// One ray's closest hit in a flat list, lowest index among equal `t`.
+    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit>;
+    /// Whether one ray hits anything in a flat list.
+    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool;
+}
+
+impl KernelSet for Scalar {
+    type Tree = Scalar;
+    #[inline(always)]
+    fn tree(self) -> Scalar {
+        self
+    }
+    #[inline(always)]
+    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
+        f.closest(self, r, t_max)
+    }
+    #[inline(always)]
+    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
+        f.occluded(self, r, t_max)
+    }
+}
+
+impl KernelSet for Avx2 {
+    type Tree = Avx2;
+    #[inline(always)]
+    fn tree(self) -> Avx2 {
+        self
+    }
+    #[inline(always)]
+    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
+        f.closest(self, r, t_max)
+    }
+    #[inline(always)]
+    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
+        f.occluded(self, r, t_max)
+    }
+}
+
+impl KernelSet for Avx512 {
+    type Tree = Avx2;
+    #[inline(always)]
+    fn tree(self) -> Avx2 {
+        self.avx2()
+    }
+    #[inline(always)]
+    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
+        f.closest16(self, r, t_max)
+    }
+    #[inline(always)]
+    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
+        f.occluded16(self, r, t_max)
     }
 }
 
@@ -597,7 +660,39 @@ pub const MAX_BIG: usize = 16;
 /// A triangle is large when its box's surface area is at least this fraction of the scene's.
 pub const BIG_AREA_FRACTION: f32 = 0.15;
 
+impl Flat {
+    /// One ray's closest hit with the kernels `k`. (No boxes: the ray needs no reciprocal
+    /// direction.)
+    #[inline(always)]
+    pub fn closest_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
+        k.flat_closest(self, &RayK::for_triangles(ray), t_max)
+    }
+
+    /// Whether one ray hits anything, with the kernels `k`.
+    #[inline(always)]
+    pub fn occluded_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
+        k.flat_occluded(self, &RayK::for_triangles(ray), t_max)
+    }
+}
+
 impl Bvh8Big {
+    /// One ray's closest hit with the kernels `k`: the large triangles first (their hit bounds
+    /// the tree's), then the tree.
+    #[inline(always)]
+    pub fn closest_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let r = RayK::new(ray);
+        let best = k.flat_closest(&self.big, &r, t_max);
+        self.tree.closest(k.tree(), &r, t_max, best)
+    }
+
+    /// Whether one ray hits anything, with the kernels `k`: the tree first, then the large
+    /// triangles.
+    #[inline(always)]
+    pub fn occluded_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
+        let r = RayK::new(ray);
+        self.tree.occluded(k.tree(), &r, t_max) || k.flat_occluded(&self.big, &r, t_max)
+    }
+
     pub fn build(triangles: &[Triangle]) -> Self {
         let (bvh, big) = Bvh::build_apart(triangles, MAX_BIG, BIG_AREA_FRACTION);
         let tree = Bvh8::collapsed(&bvh, triangles);
