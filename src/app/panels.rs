@@ -5,10 +5,11 @@
 //! find them by.
 
 use eframe::egui;
-use raylab_core::display::{Display, DisplayTransform};
+use raylab_core::display::Display;
 use raylab_core::integrator::MAX_SPECULAR_DEPTH;
 use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
 use raylab_core::material::{MIN_ROUGHNESS, TexturePreset};
+use raylab_core::named::NamedEnum;
 use raylab_core::scene::SceneChoice;
 use raylab_core::view::{Legend, View};
 use raylab_core::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
@@ -34,20 +35,47 @@ pub const MAX_EXPOSURE_UI: f32 = 10.0;
 /// The most render threads the panel offers.
 pub const MAX_THREADS_UI: usize = 64;
 
-/// The stage's name in the selector: what it is and the lab figure it reproduces.
-pub fn stage_label(stage: Stage) -> String {
-    let what = match stage {
-        Stage::Flat => "Flat colour",
-        Stage::Incoming => "Incoming light",
-        Stage::Direct => "Direct light",
-        Stage::Shadows => "Shadows",
-        Stage::Lab => "Lab",
-        Stage::Path => "Path tracing (real light)",
-    };
-    match stage.figure() {
-        Some(figure) => format!("{what} (figure {figure})"),
-        None => what.to_owned(),
+/// A selector of one of `T`'s values by their labels ([`NamedEnum::label`]), showing
+/// `current`: its response (for its own tooltip) and the value clicked, if any. `hover` gives
+/// each value's tooltip.
+fn choice<T: NamedEnum>(
+    ui: &mut egui::Ui,
+    id: &str,
+    label: &str,
+    current: T,
+    hover: Option<fn(T) -> &'static str>,
+) -> (egui::Response, Option<T>) {
+    let mut clicked = None;
+    let response = egui::ComboBox::new(id, label)
+        .selected_text(current.label())
+        .show_ui(ui, |ui| {
+            for &value in T::ALL {
+                let mut item = ui.selectable_label(value == current, value.label());
+                if let Some(hover) = hover {
+                    item = item.on_hover_text(hover(value));
+                }
+                if item.clicked() {
+                    clicked = Some(value);
+                }
+            }
+        })
+        .response;
+    (response, clicked)
+}
+
+/// [`choice`] setting `value` to the value clicked.
+fn choice_ui<T: NamedEnum>(
+    ui: &mut egui::Ui,
+    id: &str,
+    label: &str,
+    value: &mut T,
+    hover: Option<fn(T) -> &'static str>,
+) -> egui::Response {
+    let (response, clicked) = choice(ui, id, label, *value, hover);
+    if let Some(v) = clicked {
+        *value = v;
     }
+    response
 }
 
 /// The whole side panel.
@@ -171,10 +199,10 @@ pub fn scene_ui(
 ) {
     ui.horizontal(|ui| {
         egui::ComboBox::new("scene", "Scene")
-            .selected_text(scene_label(scene))
+            .selected_text(scene.label())
             .show_ui(ui, |ui| {
                 for choice in SceneChoice::BUILT_IN {
-                    let label = scene_label(&choice);
+                    let label = choice.label();
                     if ui.selectable_label(*scene == choice, label).clicked() {
                         *scene = choice;
                     }
@@ -241,19 +269,6 @@ pub fn scene_ui(
             commands.push(Command::ShowScreenshotDialog);
         }
     });
-}
-
-/// The scene's name in the selector.
-pub fn scene_label(choice: &SceneChoice) -> String {
-    match choice {
-        SceneChoice::Cornell => "Cornell box (the lab)".to_owned(),
-        SceneChoice::Bunny => "Stanford bunny".to_owned(),
-        SceneChoice::Teapot => "Utah teapot".to_owned(),
-        SceneChoice::TexturedTeapot => "Textured teapot (porcelain)".to_owned(),
-        SceneChoice::Terrain => "Fractal terrain (1M triangles)".to_owned(),
-        SceneChoice::Obj(_) => format!("OBJ: {choice}"),
-        SceneChoice::Custom(_) => format!("Scene: {choice}"),
-    }
 }
 
 pub fn camera_ui(ui: &mut egui::Ui, camera: &mut Camera, commands: &mut Vec<Command>) {
@@ -430,14 +445,7 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
         }
     });
     let shape_before = light.shape;
-    egui::ComboBox::new("light_shape", "Light shape")
-        .selected_text(light_shape_label(light.shape))
-        .show_ui(ui, |ui| {
-            for shape in LightShape::ALL {
-                ui.selectable_value(&mut light.shape, shape, light_shape_label(shape));
-            }
-        })
-        .response
+    choice_ui(ui, "light_shape", "Light shape", &mut light.shape, None)
         .on_hover_text(
             "The lab's point light, or an area light of the same power: a sphere, or a square \
              facing the floor. The lab's stages keep equation 27 from its centre and soften the \
@@ -472,15 +480,6 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
     // A radius given to the point light makes it the sphere it always meant.
     if light.shape == LightShape::Point && radius_before == 0.0 && light.radius > 0.0 {
         light.shape = LightShape::Sphere;
-    }
-}
-
-/// The light shape's name in the selector.
-pub fn light_shape_label(shape: LightShape) -> &'static str {
-    match shape {
-        LightShape::Point => "Point (the lab)",
-        LightShape::Sphere => "Sphere",
-        LightShape::Quad => "Square (quad)",
     }
 }
 
@@ -590,30 +589,20 @@ pub fn map_ui(ui: &mut egui::Ui, settings: &RenderSettings) {
     ));
 }
 
-/// The display transform's name in the selector.
-pub fn display_label(transform: DisplayTransform) -> &'static str {
-    match transform {
-        DisplayTransform::Lab => "Lab (clamp, no gamma)",
-        DisplayTransform::Srgb => "sRGB",
-        DisplayTransform::Filmic => "Filmic (ACES fit)",
-    }
-}
-
 /// How the image is shown: changing it never re-traces.
 pub fn display_ui(ui: &mut egui::Ui, display: &mut Display) {
-    egui::ComboBox::new("display", "Display transform")
-        .selected_text(display_label(display.transform))
-        .show_ui(ui, |ui| {
-            for t in DisplayTransform::ALL {
-                ui.selectable_value(&mut display.transform, t, display_label(t));
-            }
-        })
-        .response
-        .on_hover_text(
-            "How linear values become screen pixels (and PNG screenshots). Lab: clamped to \
+    choice_ui(
+        ui,
+        "display",
+        "Display transform",
+        &mut display.transform,
+        None,
+    )
+    .on_hover_text(
+        "How linear values become screen pixels (and PNG screenshots). Lab: clamped to \
              [0, 1], no gamma, the lab's figures. sRGB: the standard encoding. Filmic: \
              highlights roll off instead of clipping.",
-        );
+    );
     ui.add(
         egui::Slider::new(&mut display.exposure, -MAX_EXPOSURE_UI..=MAX_EXPOSURE_UI)
             .custom_parser(typed_number("Exposure", -MAX_EXPOSURE_UI, MAX_EXPOSURE_UI))
@@ -625,43 +614,9 @@ pub fn display_ui(ui: &mut egui::Ui, display: &mut Display) {
     .on_hover_text("Stops: +1 doubles every value before the display curve");
 }
 
-/// The materials preset's name in the selector.
-pub fn material_label(preset: MaterialPreset) -> &'static str {
-    match preset {
-        MaterialPreset::None => "Diffuse (the lab)",
-        MaterialPreset::Mirror => "Mirror tall block",
-        MaterialPreset::Glass => "Glass short block",
-        MaterialPreset::Both => "Mirror and glass",
-        MaterialPreset::Rough => "Rough metal tall block",
-    }
-}
-
-/// The view's name in the selector.
-pub fn view_label(view: View) -> &'static str {
-    match view {
-        View::Shaded => "Shaded (the stage)",
-        View::Normals => "Normals",
-        View::Depth => "Depth t",
-        View::Barycentric => "Barycentric u, v",
-        View::Triangle => "Triangle id",
-        View::BvhCost => "BVH cost",
-        View::Shadow => "Shadow rays",
-        View::Variance => "Variance",
-    }
-}
-
 /// The view selector and, for a debug view, its legend: what the colours mean and their range.
 fn view_ui(ui: &mut egui::Ui, view: &mut View, legend: Option<&Legend>) {
-    egui::ComboBox::new("view", "View")
-        .selected_text(view_label(*view))
-        .show_ui(ui, |ui| {
-            for v in View::ALL {
-                ui.selectable_value(view, v, view_label(v))
-                    .on_hover_text(v.description());
-            }
-        })
-        .response
-        .on_hover_text("What the image shows: the stage's shaded image, or a debug view traced from the same camera");
+    choice_ui(ui, "view", "View", view, Some(View::description)).on_hover_text("What the image shows: the stage's shaded image, or a debug view traced from the same camera");
     if *view == View::Shaded {
         return;
     }
@@ -676,16 +631,6 @@ fn view_ui(ui: &mut egui::Ui, view: &mut View, legend: Option<&Legend>) {
             ui.weak(view.description());
         }
     });
-}
-
-/// The texture preset's name in the selector.
-pub fn texture_label(preset: TexturePreset) -> &'static str {
-    match preset {
-        TexturePreset::None => "None (the lab)",
-        TexturePreset::CheckerFloor => "Checkerboard floor",
-        TexturePreset::GridWalls => "Grid on the walls",
-        TexturePreset::Both => "Checkerboard and grid",
-    }
 }
 
 /// What each materials preset does, for its hover text.
@@ -719,29 +664,19 @@ pub fn shading_ui(
     let textures = &mut settings.texture_preset;
     let shading = &mut settings.shading;
     let path = shading.stage == Stage::Path;
-    egui::ComboBox::new("stage", "Stage")
-        .selected_text(stage_label(shading.stage))
-        .show_ui(ui, |ui| {
-            for stage in Stage::ALL {
-                let label = stage_label(stage);
-                if ui
-                    .selectable_label(shading.stage == stage, label)
-                    .on_hover_text(stage.equation())
-                    .clicked()
-                {
-                    commands.push(Command::SetStage(stage));
-                }
-            }
-        });
+    // A stage chosen is a command: it also sets the stage's switches.
+    let (_, stage) = choice(ui, "stage", "Stage", shading.stage, Some(Stage::equation));
+    if let Some(stage) = stage {
+        commands.push(Command::SetStage(stage));
+    }
     view_ui(ui, view, legend);
-    egui::ComboBox::new("materials", "Materials")
-        .selected_text(material_label(*materials))
-        .show_ui(ui, |ui| {
-            for preset in MaterialPreset::ALL {
-                ui.selectable_value(materials, preset, material_label(preset))
-                    .on_hover_text(material_hover(preset));
-            }
-        });
+    choice_ui(
+        ui,
+        "materials",
+        "Materials",
+        materials,
+        Some(material_hover),
+    );
     if *materials == MaterialPreset::Rough {
         ui.add(
             egui::Slider::new(roughness, MIN_ROUGHNESS..=1.0)
@@ -753,18 +688,10 @@ pub fn shading_ui(
              reflection over the whole hemisphere",
         );
     }
-    egui::ComboBox::new("textures", "Textures")
-        .selected_text(texture_label(*textures))
-        .show_ui(ui, |ui| {
-            for preset in TexturePreset::ALL {
-                ui.selectable_value(textures, preset, texture_label(preset));
-            }
-        })
-        .response
-        .on_hover_text(
-            "Textures for the box: ρ read from a checkerboard or a grid at each hit (a textured \
+    choice_ui(ui, "textures", "Textures", textures, None).on_hover_text(
+        "Textures for the box: ρ read from a checkerboard or a grid at each hit (a textured \
              model keeps its own)",
-        );
+    );
     ui.checkbox(&mut shading.smooth, "Smooth shading")
         .on_hover_text(
             "Light models with their vertex normals interpolated across each triangle; the box is \

@@ -13,13 +13,13 @@
 //! every step and over a sweep of `f32` values; an ignored one, for every `f32` up to 8).
 //! Whole images are converted in parallel (rayon), in the pool of whoever calls.
 
-use std::fmt;
-use std::str::FromStr;
 use std::sync::OnceLock;
 
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+
+use crate::named::named_enum;
 
 /// The lab's display: clamp to [0, 1], scale to 255, round (halves up). NaN shows as 0.
 #[allow(clippy::manual_clamp)]
@@ -48,38 +48,11 @@ pub enum DisplayTransform {
     Filmic,
 }
 
-impl DisplayTransform {
-    pub const ALL: [DisplayTransform; 3] = [
-        DisplayTransform::Lab,
-        DisplayTransform::Srgb,
-        DisplayTransform::Filmic,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            DisplayTransform::Lab => "lab",
-            DisplayTransform::Srgb => "srgb",
-            DisplayTransform::Filmic => "filmic",
-        }
-    }
-}
-
-impl fmt::Display for DisplayTransform {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for DisplayTransform {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        DisplayTransform::ALL
-            .into_iter()
-            .find(|t| t.name() == s)
-            .ok_or_else(|| format!("unknown display '{s}' (expected lab, srgb or filmic)"))
-    }
-}
+named_enum!(DisplayTransform as "display" {
+    Lab => "lab", "Lab (clamp, no gamma)";
+    Srgb => "srgb", "sRGB";
+    Filmic => "filmic", "Filmic (ACES fit)";
+});
 
 /// A display transform and the exposure before it.
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]

@@ -34,6 +34,7 @@ pub mod lanes;
 pub mod light;
 pub mod material;
 pub mod memory;
+pub mod named;
 pub mod progressive;
 pub mod render;
 pub mod sampling;

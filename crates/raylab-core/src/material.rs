@@ -17,14 +17,12 @@
 //! (Whitted-style, [`Material::specular_branches`]); the path tracer picks one branch at random
 //! with the same weights ([`Material::sample`]).
 
-use std::fmt;
-use std::str::FromStr;
-
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::bsdf::{Bsdf, ShadingFrame};
 pub use crate::bsdf::{fresnel_dielectric, reflect};
+use crate::named::named_enum;
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
 use crate::texture::Texture;
 
@@ -287,25 +285,15 @@ pub const PRESET_GLASS: MaterialKind = MaterialKind::Glass {
     tint: Vec3::ONE,
 };
 
+named_enum!(MaterialPreset as "material preset" {
+    None => "none", "Diffuse (the lab)";
+    Mirror => "mirror", "Mirror tall block";
+    Glass => "glass", "Glass short block";
+    Both => "both", "Mirror and glass";
+    Rough => "rough", "Rough metal tall block";
+});
+
 impl MaterialPreset {
-    pub const ALL: [MaterialPreset; 5] = [
-        MaterialPreset::None,
-        MaterialPreset::Mirror,
-        MaterialPreset::Glass,
-        MaterialPreset::Both,
-        MaterialPreset::Rough,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            MaterialPreset::None => "none",
-            MaterialPreset::Mirror => "mirror",
-            MaterialPreset::Glass => "glass",
-            MaterialPreset::Both => "both",
-            MaterialPreset::Rough => "rough",
-        }
-    }
-
     /// The materials with the preset applied: by name, the tall block's (`blue`) becomes the
     /// mirror (or the rough metal of roughness `roughness`), the short block's (`red`) the
     /// glass. Scenes without those names are unchanged.
@@ -330,27 +318,6 @@ impl MaterialPreset {
                 m
             })
             .collect()
-    }
-}
-
-impl fmt::Display for MaterialPreset {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for MaterialPreset {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        MaterialPreset::ALL
-            .into_iter()
-            .find(|p| p.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown material preset '{s}' (expected none, mirror, glass, both or rough)"
-                )
-            })
     }
 }
 
@@ -379,23 +346,14 @@ pub const WALLS: [&str; 4] = ["purple", "yellow", "cyan", "white"];
 /// Texture cells per unit of scene length in the presets: 0.25 a side.
 pub const PRESET_TEXTURE_SCALE: f32 = 4.0;
 
+named_enum!(TexturePreset as "texture preset" {
+    None => "none", "None (the lab)";
+    CheckerFloor => "checker-floor", "Checkerboard floor";
+    GridWalls => "grid-walls", "Grid on the walls";
+    Both => "both", "Checkerboard and grid";
+});
+
 impl TexturePreset {
-    pub const ALL: [TexturePreset; 4] = [
-        TexturePreset::None,
-        TexturePreset::CheckerFloor,
-        TexturePreset::GridWalls,
-        TexturePreset::Both,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            TexturePreset::None => "none",
-            TexturePreset::CheckerFloor => "checker-floor",
-            TexturePreset::GridWalls => "grid-walls",
-            TexturePreset::Both => "both",
-        }
-    }
-
     /// The materials with this preset's textures (the box's surfaces are found by name).
     pub fn apply(self, materials: &[Material]) -> Vec<Material> {
         let checker = matches!(self, TexturePreset::CheckerFloor | TexturePreset::Both);
@@ -420,27 +378,6 @@ impl TexturePreset {
                 m
             })
             .collect()
-    }
-}
-
-impl fmt::Display for TexturePreset {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for TexturePreset {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        TexturePreset::ALL
-            .into_iter()
-            .find(|p| p.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown texture preset '{s}' (expected none, checker-floor, grid-walls or both)"
-                )
-            })
     }
 }
 

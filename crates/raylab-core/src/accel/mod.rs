@@ -51,13 +51,12 @@ pub mod wide;
 #[cfg(target_arch = "x86_64")]
 mod x86_lanes;
 
-use std::fmt;
-use std::str::FromStr;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use crate::geometry::{Ray, Triangle};
 use crate::intersect;
+use crate::named::named_enum;
 
 use self::bvh::Bvh;
 use self::calibrate::Calibration;
@@ -121,43 +120,13 @@ pub enum AccelKind {
     Bvh8,
 }
 
-impl AccelKind {
-    pub const ALL: [AccelKind; 5] = [
-        AccelKind::Auto,
-        AccelKind::BruteForce,
-        AccelKind::Flat,
-        AccelKind::Bvh2,
-        AccelKind::Bvh8,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            AccelKind::Auto => "auto",
-            AccelKind::BruteForce => "brute",
-            AccelKind::Flat => "flat",
-            AccelKind::Bvh2 => "bvh2",
-            AccelKind::Bvh8 => "bvh8",
-        }
-    }
-}
-
-impl fmt::Display for AccelKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for AccelKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        AccelKind::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                format!("unknown accelerator '{s}' (expected auto, brute, flat, bvh2 or bvh8)")
-            })
-    }
-}
+named_enum!(AccelKind as "accelerator" {
+    Auto => "auto";
+    BruteForce => "brute";
+    Flat => "flat";
+    Bvh2 => "bvh2";
+    Bvh8 => "bvh8";
+});
 
 /// Which kernels run the flat list and the wide BVH.
 #[derive(Clone, Copy, Debug)]

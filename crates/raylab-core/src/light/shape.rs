@@ -1,13 +1,11 @@
 //! Which emitter the lab's light is: a point, a sphere or a square, and the light that makes.
 
-use std::fmt;
-use std::str::FromStr;
-
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::{Light, LightSample, PointLight, QuadLight, SphereLight};
 use crate::geometry::Ray;
+use crate::named::named_enum;
 
 /// The shape of the emitter the lab's light is turned into by [`emitter`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -22,36 +20,11 @@ pub enum LightShape {
     Quad,
 }
 
-impl LightShape {
-    /// Every shape, the lab's point first.
-    pub const ALL: [LightShape; 3] = [LightShape::Point, LightShape::Sphere, LightShape::Quad];
-
-    /// The name used on the command line and in settings files.
-    pub fn name(self) -> &'static str {
-        match self {
-            LightShape::Point => "point",
-            LightShape::Sphere => "sphere",
-            LightShape::Quad => "quad",
-        }
-    }
-}
-
-impl fmt::Display for LightShape {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for LightShape {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        LightShape::ALL
-            .into_iter()
-            .find(|shape| shape.name() == s)
-            .ok_or_else(|| format!("unknown light shape '{s}' (expected point, sphere or quad)"))
-    }
-}
+named_enum!(LightShape as "light shape" {
+    Point => "point", "Point (the lab)";
+    Sphere => "sphere", "Sphere";
+    Quad => "quad", "Square (quad)";
+});
 
 /// One of the lab's lights, whichever its shape: enum dispatch, so a light is a plain `Copy`
 /// value (no allocation, no virtual call, `Send + Sync` for the render threads) and each call

@@ -332,6 +332,19 @@ impl SceneChoice {
         }
     }
 
+    /// The label in the workbench's scene selector.
+    pub fn label(&self) -> String {
+        match self {
+            SceneChoice::Cornell => "Cornell box (the lab)".to_owned(),
+            SceneChoice::Bunny => "Stanford bunny".to_owned(),
+            SceneChoice::Teapot => "Utah teapot".to_owned(),
+            SceneChoice::TexturedTeapot => "Textured teapot (porcelain)".to_owned(),
+            SceneChoice::Terrain => "Fractal terrain (1M triangles)".to_owned(),
+            SceneChoice::Obj(_) => format!("OBJ: {self}"),
+            SceneChoice::Custom(_) => format!("Scene: {self}"),
+        }
+    }
+
     /// The parts the scene is made of: every choice is built from its spec
     /// ([`SceneSpec::build`]).
     pub fn spec(&self) -> SceneSpec {
@@ -431,10 +444,7 @@ impl FromStr for SceneChoice {
             .into_iter()
             .find(|c| c.name() == s)
             .ok_or_else(|| {
-                format!(
-                    "unknown scene '{s}' (expected cornell, bunny, teapot, textured-teapot or \
-                     terrain)"
-                )
+                crate::named::unknown("scene", s, SceneChoice::BUILT_IN.map(|c| c.name()))
             })
     }
 }

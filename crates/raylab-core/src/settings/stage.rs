@@ -2,13 +2,11 @@
 //! that change what a stage adds (shadows, the constant indirect term, bounces, smooth normals).
 //! Plain choices, read by the integrators ([`crate::integrator`]).
 
-use std::fmt;
-use std::str::FromStr;
-
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::material::MaterialPreset;
+use crate::named::named_enum;
 
 /// A step of the lab, named after what it shows, or the path tracer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -30,17 +28,16 @@ pub enum Stage {
     Path,
 }
 
-impl Stage {
-    /// Every stage, the lab's five then `path`.
-    pub const ALL: [Stage; 6] = [
-        Stage::Flat,
-        Stage::Incoming,
-        Stage::Direct,
-        Stage::Shadows,
-        Stage::Lab,
-        Stage::Path,
-    ];
+named_enum!(Stage as "stage" {
+    Flat => "flat", "Flat colour (figure 2)";
+    Incoming => "incoming", "Incoming light (figure 3)";
+    Direct => "direct", "Direct light (figure 5)";
+    Shadows => "shadows", "Shadows (figure 6)";
+    Lab => "lab", "Lab (figure 7)";
+    Path => "path", "Path tracing (real light)";
+});
 
+impl Stage {
     /// The lab's stages, in the order of its figures.
     pub const LAB: [Stage; 5] = [
         Stage::Flat,
@@ -49,18 +46,6 @@ impl Stage {
         Stage::Shadows,
         Stage::Lab,
     ];
-
-    /// The name used on the command line and in settings files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Flat => "flat",
-            Stage::Incoming => "incoming",
-            Stage::Direct => "direct",
-            Stage::Shadows => "shadows",
-            Stage::Lab => "lab",
-            Stage::Path => "path",
-        }
-    }
 
     /// The lab figure this stage reproduces with its preset switches (`None` for `path`, which
     /// goes beyond the lab).
@@ -104,27 +89,6 @@ impl Stage {
             Stage::Path => Integrator::Path,
             _ => Integrator::Lab,
         }
-    }
-}
-
-impl fmt::Display for Stage {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Stage {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Stage::ALL
-            .into_iter()
-            .find(|stage| stage.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown stage '{s}' (expected flat, incoming, direct, shadows, lab or path)"
-                )
-            })
     }
 }
 

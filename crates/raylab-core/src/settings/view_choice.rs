@@ -1,10 +1,9 @@
 //! The debug views by name: what the viewport shows instead of the shaded image. Rendered by
 //! [`crate::view`].
 
-use std::fmt;
-use std::str::FromStr;
-
 use serde::{Deserialize, Serialize};
+
+use crate::named::named_enum;
 
 /// What the stage shows: the shaded image or one of the debug views.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -29,32 +28,18 @@ pub enum View {
     Variance,
 }
 
+named_enum!(View as "view" {
+    Shaded => "shaded", "Shaded (the stage)";
+    Normals => "normals", "Normals";
+    Depth => "depth", "Depth t";
+    Barycentric => "barycentric", "Barycentric u, v";
+    Triangle => "triangle", "Triangle id";
+    BvhCost => "bvh-cost", "BVH cost";
+    Shadow => "shadow", "Shadow rays";
+    Variance => "variance", "Variance";
+});
+
 impl View {
-    pub const ALL: [View; 8] = [
-        View::Shaded,
-        View::Normals,
-        View::Depth,
-        View::Barycentric,
-        View::Triangle,
-        View::BvhCost,
-        View::Shadow,
-        View::Variance,
-    ];
-
-    /// The name on the command line and in settings files (kebab-case).
-    pub fn name(self) -> &'static str {
-        match self {
-            View::Shaded => "shaded",
-            View::Normals => "normals",
-            View::Depth => "depth",
-            View::Barycentric => "barycentric",
-            View::Triangle => "triangle",
-            View::BvhCost => "bvh-cost",
-            View::Shadow => "shadow",
-            View::Variance => "variance",
-        }
-    }
-
     /// One line on what the view shows, for a selector's tooltip.
     pub fn description(self) -> &'static str {
         match self {
@@ -91,27 +76,5 @@ impl View {
                 View::Shadow => 1,
                 View::Variance => 20,
             }
-    }
-}
-
-impl fmt::Display for View {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for View {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        View::ALL
-            .into_iter()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown view '{s}' (expected shaded, normals, depth, barycentric, triangle, \
-                 bvh-cost, shadow or variance)"
-                )
-            })
     }
 }
