@@ -215,11 +215,7 @@ fn trees_are_the_same_on_any_number_of_threads() {
         ..terrain::TerrainSpec::default()
     });
     let on = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::on_threads(threads, || {
             (
                 Bvh::build(&scene.triangles),
                 Bvh8Big::build(&scene.triangles),

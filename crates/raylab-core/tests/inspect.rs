@@ -6,18 +6,14 @@ mod common;
 
 use std::f32::consts::PI;
 
-use common::settings;
+use common::{assert_pixels_trace_alone, every_pixel, settings, vec3_bits};
 use glam::Vec3;
 use raylab_core::inspect::{InspectError, Inspection, ShadedHit, inspect_pixel};
 use raylab_core::light::direct_light;
 use raylab_core::material::TexturePreset;
-use raylab_core::render::{render, trace_pixel};
+use raylab_core::render::render;
 use raylab_core::scene::{Scene, SceneChoice, cornell_box};
 use raylab_core::{MaterialPreset, RenderSettings, Stage};
-
-fn bits(v: Vec3) -> [u32; 3] {
-    v.to_array().map(f32::to_bits)
-}
 
 fn inspect(scene: &Scene, s: &RenderSettings, x: u32, y: u32) -> Inspection {
     inspect_pixel(scene, s, x, y).expect("a pixel of the image")
@@ -27,13 +23,14 @@ fn inspect(scene: &Scene, s: &RenderSettings, x: u32, y: u32) -> Inspection {
 /// pixel) and `trace_pixel`'s value, bit for bit.
 fn assert_every_pixel_matches(scene: &Scene, s: &RenderSettings, what: &str) {
     let image = render(scene, s);
-    for y in 0..s.camera.height {
-        for x in 0..s.camera.width {
-            let i = inspect(scene, s, x, y);
-            let traced = trace_pixel(scene, s, x, y, 0);
-            assert_eq!(bits(i.r), bits(traced), "{what}: pixel ({x}, {y})");
-            assert_eq!(bits(i.r), bits(image.get(x, y)), "{what}: pixel ({x}, {y})");
-        }
+    assert_pixels_trace_alone(scene, s, &image, 0, every_pixel(s), what);
+    for (x, y) in every_pixel(s) {
+        let i = inspect(scene, s, x, y);
+        assert_eq!(
+            vec3_bits(i.r),
+            vec3_bits(image.get(x, y)),
+            "{what}: pixel ({x}, {y})"
+        );
     }
 }
 
@@ -52,13 +49,13 @@ fn assert_terms_are_equation_27(s: &RenderSettings, hit: &ShadedHit) {
     };
     if !t.light_behind_surface {
         assert_eq!(
-            bits(d),
-            bits(direct_light(&s.light, hit.position, hit.normal))
+            vec3_bits(d),
+            vec3_bits(direct_light(&s.light, hit.position, hit.normal))
         );
     }
     let parts = t.power.unwrap() * t.cos_theta.unwrap().max(0.0) / t.four_pi_r2.unwrap();
     if !t.light_behind_surface {
-        assert_eq!(bits(parts), bits(d), "the parts printed make D");
+        assert_eq!(vec3_bits(parts), vec3_bits(d), "the parts printed make D");
     }
     assert_eq!(
         t.four_pi_r2.unwrap(),
@@ -137,8 +134,7 @@ fn find(
     s: &RenderSettings,
     pick: impl Fn(&Inspection) -> bool,
 ) -> Option<Inspection> {
-    (0..s.camera.height)
-        .flat_map(|y| (0..s.camera.width).map(move |x| (x, y)))
+    every_pixel(s)
         .map(|(x, y)| inspect(scene, s, x, y))
         .find(|i| pick(i))
 }
@@ -146,13 +142,9 @@ fn find(
 /// Checks one inspected pixel: R as rendered, D as equation 27, the JSON keys present.
 fn check(scene: &Scene, s: &RenderSettings, i: &Inspection) {
     let [x, y] = i.pixel;
-    assert_eq!(
-        bits(i.r),
-        bits(trace_pixel(scene, s, x, y, 0)),
-        "{:?}",
-        i.pixel
-    );
-    assert_eq!(bits(i.r), bits(render(scene, s).get(x, y)));
+    let image = render(scene, s);
+    assert_pixels_trace_alone(scene, s, &image, 0, [(x, y)], "the inspected pixel");
+    assert_eq!(vec3_bits(i.r), vec3_bits(image.get(x, y)), "{:?}", i.pixel);
     if let Some(first) = i.shaded.first() {
         assert_terms_are_equation_27(s, first);
         assert_eq!(i.terms, first.terms);
@@ -217,7 +209,10 @@ fn lit_shadowed_empty_and_back_facing_pixels_in_every_stage() {
             if stage != Stage::Path {
                 // ρ·(0 + N): the shadowed pixel keeps only the indirect term.
                 let rho = shadowed.terms.rho.unwrap();
-                assert_eq!(bits(shadowed.r), bits(rho * (Vec3::ZERO + shadowed.n)));
+                assert_eq!(
+                    vec3_bits(shadowed.r),
+                    vec3_bits(rho * (Vec3::ZERO + shadowed.n))
+                );
             }
         }
 
@@ -284,7 +279,10 @@ fn a_mirror_pixel_reports_its_chain_and_the_hit_it_reaches() {
         let reached = &mirror.shaded[0];
         assert_eq!(reached.depth, 1);
         assert_ne!(Some(reached.triangle), mirror.triangle);
-        assert_eq!(bits(mirror.r), bits(Vec3::splat(0.9) * reached.value));
+        assert_eq!(
+            vec3_bits(mirror.r),
+            vec3_bits(Vec3::splat(0.9) * reached.value)
+        );
         let text = mirror.to_text();
         assert!(
             text.contains("mirror") && text.contains("reflection"),
@@ -346,8 +344,8 @@ fn path_vertices_add_up_to_r() {
             .iter()
             .fold(Vec3::ZERO, |sum, v| sum + v.light_added);
         assert_eq!(
-            bits(sum),
-            bits(i.r),
+            vec3_bits(sum),
+            vec3_bits(i.r),
             "the vertices' light is added in order"
         );
         for pair in i.bounces.windows(2) {
@@ -368,7 +366,7 @@ fn path_vertices_add_up_to_r() {
             .contains("direct light only")
     );
     let shadows = inspect(&scene, &settings(Stage::Shadows, 16), 8, 8);
-    assert_eq!(bits(i.r), bits(shadows.r));
+    assert_eq!(vec3_bits(i.r), vec3_bits(shadows.r));
 }
 
 /// Figure 7 at 32 × 32 (the library's example): the centre pixel (16, 16) looks through

@@ -4,6 +4,9 @@
 //! and kernel set this CPU runs. The answers must be exactly the brute-force loop's (same
 //! triangle, `t`, `u`, `v`); and a lab image is the same bit for bit whichever kernels made it.
 
+mod common;
+
+use common::assert_same_image;
 use raylab_core::accel::{AccelKind, Isa};
 use raylab_core::bench::{lab_settings, primary_rays, shadow_rays};
 use raylab_core::geometry::Ray;
@@ -218,17 +221,9 @@ fn same_image_whatever_the_kernels(scene: &Scene, sample: u32) {
             )
         })
         .collect();
-    let (_, first) = &images[0];
+    let (first_name, first) = &images[0];
     for (name, image) in &images[1..] {
-        assert!(
-            image
-                .pixels
-                .iter()
-                .zip(&first.pixels)
-                .all(|(a, b)| a.to_array() == b.to_array()),
-            "{name} differs from {}",
-            images[0].0
-        );
+        assert_same_image(image, first, format!("{name} against {first_name}"));
     }
 }
 

@@ -7,11 +7,11 @@
 
 mod common;
 
-use common::{bits, settings};
+use common::{assert_pixels_trace_alone, assert_renders, assert_same_image, on_threads, settings};
 use glam::Vec3;
 use raylab_core::geometry::{Ray, Triangle};
 use raylab_core::integrator::Tracer;
-use raylab_core::render::{render, render_pass, trace_pixel};
+use raylab_core::render::{render, render_pass};
 use raylab_core::sampling::{Rng, cosine_hemisphere, orthonormal_basis, uniform_hemisphere};
 use raylab_core::scene::{Scene, cornell_box};
 use raylab_core::{Material, MaterialPreset, PointLight, Stage};
@@ -24,11 +24,11 @@ fn path_with_no_bounces_is_the_shadows_stage() {
     let shadows = render(&scene, &settings(Stage::Shadows, 128));
     let mut path = settings(Stage::Path, 128);
     path.shading.bounces = Some(0);
-    assert_eq!(bits(&render(&scene, &path)), bits(&shadows));
+    assert_renders(&scene, &path, &shadows, "no bounces");
     // The indirect switch off means the same.
     let mut off = settings(Stage::Path, 128);
     off.shading.indirect = false;
-    assert_eq!(bits(&render(&scene, &off)), bits(&shadows));
+    assert_renders(&scene, &off, &shadows, "indirect off");
 }
 
 /// The closed box for the furnace tests: the lab's room (blocks left out) with its open front
@@ -149,9 +149,8 @@ fn bounces_only_add_light_and_black_surfaces_add_none() {
             m.reflectance = Vec3::ZERO;
         }
     }
-    let path = render(&black, &settings(Stage::Path, 64));
     let shadows = render(&black, &settings(Stage::Shadows, 64));
-    assert_eq!(bits(&path), bits(&shadows));
+    assert_renders(&black, &settings(Stage::Path, 64), &shadows, "black walls");
 }
 
 /// Two estimators of one integral: the light arriving at the floor's centre, E = ∫ L(ω) cos θ
@@ -211,17 +210,9 @@ fn path_traced_images_do_not_depend_on_the_thread_count() {
         s.samples_per_pixel = 3;
         s.seed = 11;
         s.material_preset = preset;
-        let images: Vec<Vec<[u32; 3]>> = [1, 2]
-            .into_iter()
-            .map(|threads| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                bits(&pool.install(|| render(&scene, &s)))
-            })
-            .collect();
-        assert_eq!(images[0], images[1], "{preset}");
+        let one = on_threads(1, || render(&scene, &s));
+        let two = on_threads(2, || render(&scene, &s));
+        assert_same_image(&two, &one, preset);
     }
 }
 
@@ -233,14 +224,8 @@ fn a_pixel_can_be_recomputed_alone() {
     s.material_preset = MaterialPreset::Both;
     for sample in [0, 5] {
         let image = render_pass(&scene, &s, sample, &|| false).unwrap();
-        for (x, y) in [(0, 0), (16, 16), (20, 25), (31, 31), (10, 28)] {
-            let alone = trace_pixel(&scene, &s, x, y, sample);
-            assert_eq!(
-                alone.to_array().map(f32::to_bits),
-                image.get(x, y).to_array().map(f32::to_bits),
-                "({x}, {y}) sample {sample}"
-            );
-        }
+        let pixels = [(0, 0), (16, 16), (20, 25), (31, 31), (10, 28)];
+        assert_pixels_trace_alone(&scene, &s, &image, sample, pixels, "path");
     }
 }
 

@@ -219,7 +219,7 @@ impl Ui {
         let last = self.latest.as_ref().unwrap();
         assert!(last.settings.renders_like(settings));
         let direct = render(&self.scene, settings);
-        assert_eq!(common::bits(&last.image), common::bits(&direct));
+        common::assert_same_image(&last.image, &direct, "the last frame");
         assert_eq!(last.rgba, display.to_rgba8(&last.image.pixels));
     }
 }

@@ -395,11 +395,7 @@ fn views_ignore_the_lens_and_the_thread_count() {
     lens.camera.focus_distance = 2.0;
     for v in [View::Depth, View::Triangle, View::Shadow] {
         let a = view(&scene, &pinhole, v);
-        let b = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap()
-            .install(|| view(&scene, &lens, v));
+        let b = common::on_threads(3, || view(&scene, &lens, v));
         assert_eq!(a, b, "{v}");
     }
 }
@@ -419,7 +415,7 @@ fn shaded_and_variance_come_from_the_renderer() {
     let mut s = settings(32, 24);
     s.samples_per_pixel = 2;
     let v = view(&scene, &s, View::Shaded);
-    assert_eq!(v.image, render(&scene, &s));
+    common::assert_renders(&scene, &s, &v.image, "the shaded view");
     s.shading = Shading::for_stage(Stage::Flat);
     s.samples_per_pixel = 1;
     let v = view(&scene, &s, View::Variance);
