@@ -8,7 +8,7 @@ use eframe::egui;
 use raylab_core::display::Display;
 use raylab_core::integrator::MAX_SPECULAR_DEPTH;
 use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
-use raylab_core::material::{MIN_ROUGHNESS, TexturePreset};
+use raylab_core::material::MIN_ROUGHNESS;
 use raylab_core::named::NamedEnum;
 use raylab_core::scene::SceneChoice;
 use raylab_core::view::{Legend, View};
