@@ -445,12 +445,11 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
         }
     });
     let shape_before = light.shape;
-    choice_ui(ui, "light_shape", "Light shape", &mut light.shape, None)
-        .on_hover_text(
-            "The lab's point light, or an area light of the same power: a sphere, or a square \
+    choice_ui(ui, "light_shape", "Light shape", &mut light.shape, None).on_hover_text(
+        "The lab's point light, or an area light of the same power: a sphere, or a square \
              facing the floor. The lab's stages keep equation 27 from its centre and soften the \
              shadows; the path stage sees the real light, with multiple importance sampling",
-        );
+    );
     if light.shape != shape_before {
         light.radius = match light.shape {
             LightShape::Point => 0.0,
