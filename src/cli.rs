@@ -710,6 +710,12 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
         })
         .context(format!("--pixel {x},{y}")));
     }
+    // Refused before the scene is loaded if it cannot fit: inspecting holds the scene (its
+    // models and textures), not the image.
+    raylab_core::memory::check(
+        format!("inspecting a pixel of {}", settings.scene.name()),
+        settings.scene.memory_estimate() + raylab_core::settings::BASE_MEMORY,
+    )?;
     let pool = thread_pool("inspect", args.options.threads)?;
     let scene = pool.install(|| settings.scene.load())?;
     let inspection =

@@ -774,6 +774,17 @@ fn a_texture_too_large_for_the_memory_is_refused_before_the_render() {
         "{err}"
     );
     assert!(!dir.path().join("x.png").exists());
+    // Inspecting a pixel loads the same scene: refused the same way.
+    let out = raylab_limited(
+        3_000_000,
+        &["inspect", "--obj", obj.to_str().unwrap(), "--pixel", "4,4"],
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with("error: inspecting a pixel of m.obj needs about 4.1 GiB but only "),
+        "{err}"
+    );
 }
 
 /// An OBJ naming one library of 2,000 materials 8,000 times (it asked for 5.4 GB) renders
@@ -1035,6 +1046,30 @@ fn a_focal_length_too_short_to_normalise_the_rays_is_refused() {
         &out,
         &["invalid focal length 1e-23: must be at least 0.001 px"],
     );
+}
+
+/// A focus distance of 1e38 (or an aperture of 1e30) overflowed the lens rays: a black image,
+/// silently. Refused before anything is rendered or written.
+#[test]
+fn a_lens_beyond_its_bounds_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &[
+            "render",
+            "--out",
+            "x.png",
+            "--focus-distance",
+            "1e38",
+            "--aperture",
+            "0.1",
+        ],
+    );
+    assert_one_line_error(
+        &out,
+        &["invalid focus distance 1e38: must be at most 1e6 (scene units)"],
+    );
+    assert!(!dir.path().join("x.png").exists());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -42,21 +42,37 @@ pub fn open(path: &Path) -> Result<Opened, String> {
     Ok(Opened::Settings(loaded))
 }
 
-/// Writes the settings as a scene file at `path` (`.toml` added when it has no extension).
-/// Returns the path written.
-pub fn save_scene(settings: &RenderSettings, path: &Path) -> Result<PathBuf, String> {
-    let path = match path.extension() {
-        None => path.with_extension(raylab_core::scene_file::EXTENSION),
-        Some(e) if e == raylab_core::scene_file::EXTENSION => path.to_path_buf(),
-        Some(_) => {
-            return Err(format!(
-                "not saved: a scene file's name ends in .toml ('{}')",
-                path.display()
-            ));
-        }
-    };
-    raylab_core::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
-    Ok(path)
+/// The scene file a typed or chosen `path` names: `.toml` added when it has no extension;
+/// another extension is refused.
+pub fn scene_path(path: &Path) -> Result<PathBuf, String> {
+    match path.extension() {
+        None => Ok(path.with_extension(raylab_core::scene_file::EXTENSION)),
+        Some(e) if e == raylab_core::scene_file::EXTENSION => Ok(path.to_path_buf()),
+        Some(_) => Err(format!(
+            "not saved: a scene file's name ends in .toml ('{}')",
+            path.display()
+        )),
+    }
+}
+
+/// Writes the settings as a scene file at `path` ([`scene_path`]). A file already there is
+/// replaced only when `replace` says so (the Save dialog asked); otherwise the scene goes to
+/// the first free name `NAME-1.toml`, `NAME-2.toml`, … as the command line's `--save-scene`
+/// does, and nothing is lost. Returns the path written.
+pub fn save_scene(
+    settings: &RenderSettings,
+    path: &Path,
+    replace: bool,
+) -> Result<PathBuf, String> {
+    let path = scene_path(path)?;
+    if replace {
+        raylab_core::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
+        return Ok(path);
+    }
+    let folder = path.parent().unwrap_or(Path::new(""));
+    let text = raylab_core::scene_file::to_text(settings, folder)
+        .map_err(|reason| format!("could not write '{}': {reason}", path.display()))?;
+    raylab_core::film::write_to_free_name(&path, text.as_bytes()).map_err(|e| e.to_string())
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,6 +90,8 @@ pub enum DialogOutcome {
     Open,
     Cancelled,
     Chosen(PathBuf),
+    /// A scene file to save over the one there, the user having said so.
+    Replace(PathBuf),
 }
 
 /// The Open / Save dialog: a folder's sub-folders and the files of the kinds it offers.
@@ -85,6 +103,8 @@ pub struct FileDialog {
     /// Sub-folders, then files, by name.
     entries: Vec<(String, bool)>,
     error: Option<String>,
+    /// The file a save would replace, while the dialog asks whether to.
+    replacing: Option<PathBuf>,
 }
 
 impl FileDialog {
@@ -96,6 +116,7 @@ impl FileDialog {
             name: name.to_owned(),
             entries: Vec::new(),
             error: None,
+            replacing: None,
         };
         dialog.list();
         dialog
@@ -210,13 +231,38 @@ impl FileDialog {
                     } else {
                         "Open file"
                     };
+                    if field.changed() {
+                        self.replacing = None;
+                    }
                     if (ui.button(action).clicked() || entered) && !self.name.trim().is_empty() {
-                        outcome = DialogOutcome::Chosen(self.folder.join(self.name.trim()));
+                        let chosen = self.folder.join(self.name.trim());
+                        // Saving onto a file there asks first, as a desktop's dialog does.
+                        match scene_path(&chosen) {
+                            Ok(file) if self.mode == DialogMode::SaveScene && file.exists() => {
+                                self.replacing = Some(file);
+                            }
+                            _ => outcome = DialogOutcome::Chosen(chosen),
+                        }
                     }
                     if ui.button("Cancel").clicked() {
                         outcome = DialogOutcome::Cancelled;
                     }
                 });
+                if let Some(file) = self.replacing.clone() {
+                    let name = file.file_name().unwrap_or_default().to_string_lossy();
+                    ui.colored_label(
+                        ui.visuals().warn_fg_color,
+                        format!("'{name}' already exists. Replace it?"),
+                    );
+                    ui.horizontal(|ui| {
+                        if ui.button("Replace").clicked() {
+                            outcome = DialogOutcome::Replace(file);
+                        }
+                        if ui.button("Keep it").clicked() {
+                            self.replacing = None;
+                        }
+                    });
+                }
             });
         if !open {
             outcome = DialogOutcome::Cancelled;
@@ -251,13 +297,40 @@ mod tests {
             "{e}"
         );
 
-        let saved = save_scene(&RenderSettings::default(), &dir.path().join("setup")).unwrap();
+        let saved =
+            save_scene(&RenderSettings::default(), &dir.path().join("setup"), false).unwrap();
         assert_eq!(saved, dir.path().join("setup.toml"));
         match open(&saved).unwrap() {
             Opened::Settings(loaded) => assert_eq!(loaded.settings, RenderSettings::default()),
             other => panic!("{other:?}"),
         }
-        let e = save_scene(&RenderSettings::default(), &dir.path().join("x.png")).unwrap_err();
-        assert!(e.contains("ends in .toml"), "{e}");
+        let e = save_scene(&RenderSettings::default(), &dir.path().join("x.png"), false);
+        assert!(e.unwrap_err().contains("ends in .toml"));
+    }
+
+    /// A file already there is kept unless the save replaces it: the scene goes to the next
+    /// free name, and only `replace` writes over it.
+    #[test]
+    fn saving_keeps_a_file_already_there_unless_told_to_replace_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let there = dir.path().join("mine.toml");
+        std::fs::write(&there, "# my hand-written scene\n").unwrap();
+        let mut other = RenderSettings::default();
+        other.seed = 9;
+        let saved = save_scene(&other, &there, false).unwrap();
+        assert_eq!(saved, dir.path().join("mine-1.toml"));
+        assert_eq!(
+            std::fs::read_to_string(&there).unwrap(),
+            "# my hand-written scene\n"
+        );
+        match open(&saved).unwrap() {
+            Opened::Settings(loaded) => assert_eq!(loaded.settings.seed, 9),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(save_scene(&other, &there, true).unwrap(), there);
+        match open(&there).unwrap() {
+            Opened::Settings(loaded) => assert_eq!(loaded.settings.seed, 9),
+            other => panic!("{other:?}"),
+        }
     }
 }

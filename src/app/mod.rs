@@ -561,8 +561,10 @@ impl WorkbenchApp {
         }
     }
 
-    fn save_scene_to(&mut self, path: &std::path::Path) {
-        match files::save_scene(&self.state.settings, path) {
+    /// Saves the scene file at `path`; a file there is replaced only when `replace` (the Save
+    /// dialog asked), otherwise the scene goes to the next free name, as the status says.
+    fn save_scene_to(&mut self, path: &std::path::Path, replace: bool) {
+        match files::save_scene(&self.state.settings, path, replace) {
             Ok(written) => {
                 self.state.obj_path = written.display().to_string();
                 self.set_status(
@@ -596,10 +598,14 @@ impl WorkbenchApp {
             files::DialogOutcome::Chosen(path) => {
                 self.file_dialog = None;
                 if mode == files::DialogMode::SaveScene {
-                    self.save_scene_to(&path);
+                    self.save_scene_to(&path, false);
                 } else {
                     self.open_path(&path);
                 }
+            }
+            files::DialogOutcome::Replace(path) => {
+                self.file_dialog = None;
+                self.save_scene_to(&path, true);
             }
         }
     }
@@ -951,7 +957,7 @@ impl WorkbenchApp {
                 if typed.is_empty() {
                     self.set_status(StatusKind::Notice, "Type a path ending in .toml to save to");
                 } else {
-                    self.save_scene_to(std::path::Path::new(&typed));
+                    self.save_scene_to(std::path::Path::new(&typed), false);
                 }
             }
             Command::ShowOpenDialog | Command::ShowScreenshotDialog => {

@@ -37,6 +37,20 @@ pub const MAX_FOCAL_LENGTH: f32 = 1e7;
 /// it for the workbench's preview at an eighth of the width.
 pub const MIN_FOCAL_LENGTH: f32 = 1e-3;
 
+/// The farthest a camera or light may stand from the origin, per coordinate, in scene units:
+/// a million times the lab's box (2 across). Far beyond it, squared distances (r² in equation
+/// 27, the ray–box and ray–triangle products) overflow `f32` and a render is silently black.
+pub const MAX_COORDINATE: f32 = 1e6;
+
+/// The longest focus distance, in scene units: a million times the lab's box, as good as
+/// infinitely far. The lens ray aims at `d · F / f` (`Camera::lens_ray_rotated`); far beyond
+/// this, with the shortest focal length, that point overflows `f32` and every ray is lost.
+pub const MAX_FOCUS_DISTANCE: f32 = 1e6;
+
+/// The widest lens aperture (radius), in scene units: a thousand times the lab's box. A lens
+/// wider than the scene blurs everything alike; far beyond it, lens points overflow `f32`.
+pub const MAX_APERTURE: f32 = 1e3;
+
 /// The largest exposure, either way, in stops.
 pub const MAX_EXPOSURE: f32 = 20.0;
 
@@ -229,7 +243,7 @@ impl RenderSettings {
         let c = &self.camera;
         check_side("width", c.width)?;
         check_side("height", c.height)?;
-        check_vec("camera position", c.position)?;
+        check_position("camera position", c.position)?;
         check_finite("yaw", c.yaw)?;
         check_finite("pitch", c.pitch)?;
         check_finite("focal length", c.focal_length)?;
@@ -244,14 +258,26 @@ impl RenderSettings {
             let f = c.focal_length;
             return Err(err("focal length", f, "must be at most 1e7 px"));
         }
-        check_vec("light position", self.light.position)?;
+        check_position("light position", self.light.position)?;
         check_finite("aperture", c.aperture)?;
         if c.aperture < 0.0 {
             return Err(err("aperture", c.aperture, "must be ≥ 0"));
         }
+        if c.aperture > MAX_APERTURE {
+            let a = number(c.aperture);
+            return Err(err("aperture", a, "must be at most 1000 (scene units)"));
+        }
         check_finite("focus distance", c.focus_distance)?;
         if c.focus_distance <= 0.0 {
             return Err(err("focus distance", c.focus_distance, "must be > 0"));
+        }
+        if c.focus_distance > MAX_FOCUS_DISTANCE {
+            let d = number(c.focus_distance);
+            return Err(err(
+                "focus distance",
+                d,
+                "must be at most 1e6 (scene units)",
+            ));
         }
         let light = &self.light;
         check_finite("light power", light.power)?;
@@ -366,6 +392,19 @@ fn check_vec(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
     } else {
         Err(err(name, v, "must be finite"))
     }
+}
+
+/// A camera's or light's position: finite and within [`MAX_COORDINATE`] on each axis.
+fn check_position(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
+    check_vec(name, v)?;
+    if v.abs().max_element() > MAX_COORDINATE {
+        return Err(err(
+            name,
+            vector(v),
+            "must lie within 1e6 of the origin on each axis",
+        ));
+    }
+    Ok(())
 }
 
 /// Settings read from a file, and what in it was not understood.
@@ -496,6 +535,59 @@ mod tests {
         let mut s = RenderSettings::default();
         s.camera.yaw = f32::INFINITY;
         assert_eq!(s.validate().unwrap_err().name, "yaw");
+    }
+
+    /// A focus distance, aperture or position far enough out to overflow `f32` in the lens ray
+    /// or in r² is refused (each made a silently black image); each bound itself renders.
+    #[test]
+    fn lens_and_positions_beyond_their_bounds_are_refused() {
+        let msg = |f: &dyn Fn(&mut RenderSettings)| {
+            let mut s = RenderSettings::default();
+            f(&mut s);
+            s.validate().map_err(|e| e.to_string())
+        };
+        assert_eq!(
+            msg(&|s| s.camera.focus_distance = 1e38),
+            Err("invalid focus distance 1e38: must be at most 1e6 (scene units)".into())
+        );
+        assert_eq!(
+            msg(&|s| s.camera.aperture = 1e30),
+            Err("invalid aperture 1e30: must be at most 1000 (scene units)".into())
+        );
+        assert_eq!(
+            msg(&|s| s.camera.position.x = -3e38),
+            Err(
+                "invalid camera position (-3e38, 0, -3.001): must lie within 1e6 of the \
+                 origin on each axis"
+                    .into()
+            )
+        );
+        assert_eq!(
+            msg(&|s| s.light.position.z = 1e20),
+            Err(
+                "invalid light position (0, -0.5, 1e20): must lie within 1e6 of the origin \
+                 on each axis"
+                    .into()
+            )
+        );
+        // The bounds themselves, with the shortest focal length (the lens ray's aim point is
+        // d·F/f, largest there): every pixel's lens ray is finite and normalised.
+        let mut s = RenderSettings::default();
+        s.camera = Camera::default_for(9, 9);
+        s.camera.focus_distance = MAX_FOCUS_DISTANCE;
+        s.camera.aperture = MAX_APERTURE;
+        s.camera.focal_length = MIN_FOCAL_LENGTH;
+        s.camera.position = glam::Vec3::splat(-MAX_COORDINATE);
+        s.light.position = glam::Vec3::splat(MAX_COORDINATE);
+        s.validate().unwrap();
+        let rotation = s.camera.rotation();
+        for (px, py) in [(0.0, 0.0), (9.0, 9.0), (4.5, 0.0)] {
+            let ray = s
+                .camera
+                .lens_ray_rotated(&rotation, px, py, glam::Vec2::new(1.0, 0.0));
+            assert!(ray.direction.is_normalized(), "{ray:?}");
+            assert!(ray.origin.is_finite(), "{ray:?}");
+        }
     }
 
     /// Huge but finite light is refused above its bound, naming the field and the bound

@@ -299,3 +299,56 @@ fn a_typed_non_number_changes_nothing_and_a_clamped_value_says_so() {
     type_number(&mut h, "Light power", "20");
     assert_eq!(settings(&h).light.power, 20.0);
 }
+
+/// Saving onto a scene file already there asks first: "Keep it" leaves the file as it was,
+/// "Replace" writes over it; the typed path never replaces, it saves beside (`NAME-1.toml`).
+#[test]
+fn saving_over_a_scene_file_asks_first_and_the_typed_path_never_replaces() {
+    let dir = tempfile::tempdir().unwrap();
+    let mine = dir.path().join("cornell.toml");
+    let hand_written = "# my own scene, with comments\n";
+    std::fs::write(&mine, hand_written).unwrap();
+    let mut state = small_state();
+    state.screenshot_folder = dir.path().to_owned();
+    let mut h = harness(state);
+    a_setup(&mut h);
+    let saved = settings(&h);
+
+    h.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, Key::S);
+    h.run_steps(2);
+    h.get_by_label("cornell.toml").click();
+    h.step();
+    click(&mut h, "Save file");
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains("already exists. Replace it?")
+            .is_some()
+    );
+    click(&mut h, "Keep it");
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("Replace it?").is_none());
+    assert!(h.query_by_label("Save scene as").is_some(), "still open");
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), hand_written);
+
+    click(&mut h, "Save file");
+    h.run_steps(2);
+    click(&mut h, "Replace");
+    h.run_steps(2);
+    assert!(
+        h.query_by_label("Save scene as").is_none(),
+        "the dialog closed"
+    );
+    match files::open(&mine).unwrap() {
+        files::Opened::Settings(loaded) => assert_eq!(loaded.settings, saved),
+        other => panic!("{other:?}"),
+    }
+
+    // The File field's path, already there: saved beside it, the status naming where.
+    type_path(&mut h, mine.to_str().unwrap());
+    click(&mut h, "Save scene");
+    let beside = dir.path().join("cornell-1.toml");
+    assert!(beside.is_file());
+    let (text, kind) = status(&h);
+    assert_eq!(kind, StatusKind::Info, "{text}");
+    assert!(text.contains("cornell-1.toml"), "{text}");
+}
