@@ -113,6 +113,9 @@ def scene_dict(width=512, height=512, spp=64, integrator="path", max_depth=-1, r
     d = {"type": "scene"}
     for name, tris in groups.items():
         d[name] = mesh(name, tris, preset, roughness)
+    # An emitter's surface reflects nothing, as raylab's lights: without a BSDF Mitsuba would
+    # give it a white-ish diffuse one (reflectance 0.5), lighting the room a second time.
+    black = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
     if light_shape == "quad":
         # A square of side S in the plane y = light.y, emitting toward +y (the floor), of
         # radiance P/(pi S^2): the rectangle [-1, 1]^2 (normal +z) scaled by S/2, turned so its
@@ -122,11 +125,12 @@ def scene_dict(width=512, height=512, spp=64, integrator="path", max_depth=-1, r
                       "to_world": mi.ScalarTransform4f().translate(list(light))
                       @ mi.ScalarTransform4f().rotate([1, 0, 0], -90)
                       @ mi.ScalarTransform4f().scale([s / 2, s / 2, 1]),
+                      "bsdf": black,
                       "emitter": {"type": "area", "radiance": {
                           "type": "rgb", "value": [light_power / (math.pi * s * s)] * 3}}}
     elif light_shape == "sphere":
         r = light_size
-        d["light"] = {"type": "sphere", "center": list(light), "radius": r,
+        d["light"] = {"type": "sphere", "center": list(light), "radius": r, "bsdf": black,
                       "emitter": {"type": "area", "radiance": {
                           "type": "rgb",
                           "value": [light_power / (4 * math.pi ** 2 * r * r)] * 3}}}

@@ -361,6 +361,16 @@ impl Bsdf {
     }
 }
 
+/// Snell's law: cos θ_t = √(1 − sin²θ_i / η²) for light meeting a surface at cos θ_i, η the
+/// far side's index over the near side's (0 past the critical angle, where Fresnel's F is 1
+/// and nothing is refracted).
+#[inline(always)]
+pub fn snell_cos_t(cos_i: f32, eta: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    (1.0 - sin2_t).max(0.0).sqrt()
+}
+
 /// [`Bsdf::sample`] for the glass: Fresnel's F picks reflection (`uc < F`) or refraction.
 /// `wo.z > 0` is outside (η = ior, the far side's index over the near side's), `wo.z < 0`
 /// inside (η = 1/ior); at wo.z = 0, F = 1.
@@ -379,10 +389,8 @@ fn sample_glass(wo: Vec3, ior: f32, tint: Vec3, uc: f32) -> BsdfSample {
         };
     }
     // Snell's law in vector form (pbrt's `Refract`): the tangential part shrinks by 1/η, the
-    // normal part is cos θ_t = √(1 − sin²θ_i/η²) on the far side.
-    let cos_i = cos_i.clamp(0.0, 1.0);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    // normal part is cos θ_t on the far side.
+    let cos_t = snell_cos_t(cos_i, eta);
     let z = if outside { -cos_t } else { cos_t };
     BsdfSample {
         wi: Vec3::new(-wo.x / eta, -wo.y / eta, z).normalize(),

@@ -261,25 +261,9 @@ pub struct PathVertex {
     pub light_sample: Option<NextEvent>,
 }
 
-/// Next-event estimation at a vertex of the general path tracer
-/// ([`crate::integrator::path_mis`]).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct NextEvent {
-    /// The direction toward the light's sampled point.
-    pub wi: Vec3,
-    /// f(wo, wi), the BSDF's value toward it.
-    pub f: Vec3,
-    /// The light's density of `wi` (solid angle; 1 for the point light).
-    pub pdf_light: f32,
-    /// The BSDF's density of `wi` (0 for the point light, which BSDF sampling never finds).
-    pub pdf_bsdf: f32,
-    /// The power heuristic's weight p_light²/(p_light² + p_bsdf²) (1 for the point light, or
-    /// where the path ends here).
-    pub mis_weight: f32,
-    pub blocked: bool,
-    /// β·f·Li·|cos θ|/p_light·weight, added to R.
-    pub added: Vec3,
-}
+/// Next-event estimation at a path vertex, as the general path tracer computed it
+/// ([`crate::integrator::path_mis::LightTerms`]).
+pub use crate::integrator::path_mis::LightTerms as NextEvent;
 
 /// One line of the explanation: the equation it evaluates and the text.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
@@ -684,15 +668,7 @@ impl Inspection {
                 Event::Vertex(v) => {
                     if let (Some(vertex), Some(l)) = (inspection.bounces.last_mut(), v.light) {
                         vertex.light_added = l.added;
-                        vertex.light_sample = Some(NextEvent {
-                            wi: l.wi,
-                            f: l.f,
-                            pdf_light: l.pdf_light,
-                            pdf_bsdf: l.pdf_bsdf,
-                            mis_weight: l.mis_weight,
-                            blocked: l.blocked,
-                            added: l.added,
-                        });
+                        vertex.light_sample = Some(l);
                     }
                 }
                 Event::Scattered {

@@ -20,7 +20,7 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::bsdf::{Bsdf, ShadingFrame};
+use crate::bsdf::{Bsdf, ShadingFrame, snell_cos_t};
 pub use crate::bsdf::{fresnel_dielectric, reflect};
 use crate::named::named_enum;
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
@@ -235,9 +235,8 @@ impl GlassHit {
         let refracted = (fresnel < 1.0).then(|| {
             // Snell's law in vector form (pbrt's `Refract`), with the ratio of the indices
             // near/far = 1/eta.
+            let cos_t = snell_cos_t(cos_i, eta);
             let cos_i = cos_i.clamp(0.0, 1.0);
-            let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-            let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
             (direction / eta + (cos_i / eta - cos_t) * n).normalize()
         });
         Self { fresnel, refracted }

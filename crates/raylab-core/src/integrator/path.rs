@@ -37,8 +37,11 @@ use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
 use crate::material::{Scatter, facing};
 use crate::sampling::{Rng, Rng16, Uniform, cosine_hemisphere_by_rejection, hemisphere_around};
 
-/// Vertices before Russian roulette may end a path.
-pub const ROULETTE_DEPTH: u32 = 3;
+/// The vertex from which Russian roulette may end a path: the fifth, as in Mitsuba 3's path
+/// tracer (`rr_depth` = 5), so that at equal samples the two are equally noisy. From the third
+/// vertex a sample cost 16 % less time but the image's RMSE was 8 % higher (16 samples at 256²,
+/// against a converged image): the same variance × time, but a noisier image a sample.
+pub const ROULETTE_DEPTH: u32 = 5;
 
 /// The largest survival probability of Russian roulette: even a path that keeps all its
 /// throughput (clear glass) ends after about 20 more vertices on average.

@@ -32,6 +32,7 @@
 //! [`Shading::max_bounces`]: crate::settings::Shading::max_bounces
 
 use glam::{Vec2, Vec3};
+use serde::Serialize;
 
 use super::path::{MAX_DEPTH, ROULETTE_DEPTH, ROULETTE_MAX_SURVIVAL};
 use super::{Recorder, Tracer, continue_ray};
@@ -69,20 +70,23 @@ pub struct PathVertex {
     pub light: Option<LightTerms>,
 }
 
-/// Next-event estimation at a vertex (see [`PathVertex`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Next-event estimation at a vertex (see [`PathVertex`]); the inspector shows it as it is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct LightTerms {
+    /// The direction toward the light's sampled point.
     pub wi: Vec3,
-    /// The BSDF's value toward the light, f(wo, wi).
+    /// f(wo, wi), the BSDF's value toward it.
     pub f: Vec3,
     /// The light's density of `wi` (solid angle; 1 for a point light).
     pub pdf_light: f32,
     /// The BSDF's density of `wi` (0 for a delta light: BSDF sampling never finds it).
     pub pdf_bsdf: f32,
-    /// The power heuristic's weight of the light sample (1 for a point light).
+    /// The power heuristic's weight of the light sample, p_light²/(p_light² + p_bsdf²) (1 for
+    /// a point light).
     pub mis_weight: f32,
+    /// Whether the shadow ray toward the sampled point is blocked.
     pub blocked: bool,
-    /// β · f · Li · |cos θ| / p_light · weight, or 0 when blocked.
+    /// β · f · Li · |cos θ| / p_light · weight, added to R; 0 when blocked.
     pub added: Vec3,
 }
 

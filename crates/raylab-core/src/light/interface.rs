@@ -29,6 +29,25 @@ pub struct LightSample {
     pub is_delta: bool,
 }
 
+impl LightSample {
+    /// The sample of `point`, a point of an area light, seen from `p`: the unit direction and
+    /// distance toward it, the radiance `li` arriving from it, and its density per solid angle,
+    /// `pdf(distance)`.
+    #[inline(always)]
+    pub fn area(p: Vec3, point: Vec3, li: Vec3, pdf: impl FnOnce(f32) -> f32) -> Self {
+        let to_point = point - p;
+        let distance = to_point.length();
+        LightSample {
+            wi: to_point / distance,
+            li,
+            pdf: pdf(distance),
+            distance,
+            point,
+            is_delta: false,
+        }
+    }
+}
+
 /// A light, as an integrator sees it: where light arrives from, with what radiance, and how
 /// likely each direction is to be drawn.
 ///

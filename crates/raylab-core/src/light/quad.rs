@@ -11,7 +11,7 @@ use crate::geometry::Ray;
 /// so it shines on the floor, like the panel in a Cornell box's ceiling.
 ///
 /// Every point of its front sends the same radiance `L = P / (π S²)` into every direction
-/// with y > 0 (its exitance `π L` times its area `S²` is `P`); its back is dark. In lab units
+/// with y > 0 (its exitance `π L` times its area `S²` is `P`); its back is dark and opaque. In lab units
 /// (π ×) a viewer in front sees `Li = π L = P / S²`. Only points with `y > centre.y` are lit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QuadLight {
@@ -56,23 +56,19 @@ impl Light for QuadLight {
             return None;
         }
         let point = self.centre + Vec3::new((u.x - 0.5) * self.side, 0.0, (u.y - 0.5) * self.side);
-        let to_point = point - p;
-        let distance = to_point.length();
-        let cos_light = (p.y - self.centre.y) / distance;
-        Some(LightSample {
-            wi: to_point / distance,
-            li: self.radiance(),
-            pdf: self.solid_angle_pdf(distance, cos_light),
-            distance,
-            point,
-            is_delta: false,
-        })
+        Some(LightSample::area(p, point, self.radiance(), |distance| {
+            let cos_light = (p.y - self.centre.y) / distance;
+            self.solid_angle_pdf(distance, cos_light)
+        }))
     }
 
     /// The density of the point where `wi` meets the square, per solid angle; 0 for a `wi`
     /// that misses it or a `p` it does not light.
     #[inline]
     fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        if !self.lights(p) {
+            return 0.0;
+        }
         let ray = Ray {
             origin: p,
             direction: wi,
@@ -83,13 +79,10 @@ impl Light for QuadLight {
         }
     }
 
-    /// Where the ray crosses the square from its front (travelling toward −y from a point
-    /// below the light); rays reaching its back pass, as it emits nothing that way.
+    /// Where the ray crosses the square, from either side: the panel is opaque, its back dark
+    /// ([`QuadLight::le`] is 0 there), as a real light's housing is; a path that meets it ends.
     #[inline]
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        if !(ray.direction.y < 0.0) {
-            return None;
-        }
         let t = (self.centre.y - ray.origin.y) / ray.direction.y;
         if !(t > 0.0 && t < t_max) {
             return None;
@@ -272,7 +265,7 @@ mod tests {
     /// greater than the light's), a ray looking up at it (direction with y < 0) sees its
     /// radiance `P / S² = 56`; from above it (on the ceiling's far side) or level with it
     /// nothing is drawn, no direction has a density, and a ray looking down at its back
-    /// (y > 0) sees nothing and passes.
+    /// (y > 0) stops on it and sees nothing.
     #[test]
     fn the_quad_shines_on_the_floor_only() {
         let light = quad(0.5);
@@ -301,7 +294,9 @@ mod tests {
         assert_eq!(light.le(Vec3::Y), Vec3::ZERO);
         assert_eq!(light.le(Vec3::new(0.3, 0.1, 0.2).normalize()), Vec3::ZERO);
         assert_eq!(light.pdf_li(above, Vec3::Y), 0.0);
-        assert_eq!(light.intersect(&Ray::new(above, Vec3::Y), 2.0), None);
+        // Its back is opaque and dark: a ray from above stops on it and sees nothing.
+        assert_eq!(light.intersect(&Ray::new(above, Vec3::Y), 2.0), Some(1.0));
+        assert_eq!(light.le(Vec3::Y), Vec3::ZERO);
     }
 
     /// Crossings and densities by hand: straight up from 1 below the centre the square is at

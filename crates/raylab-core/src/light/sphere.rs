@@ -90,16 +90,7 @@ impl Light for SphereLight {
     fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         let pdf = self.cone_pdf(p)?;
         let point = self.as_lab_light().sample_point(p, u.x, u.y);
-        let to_point = point - p;
-        let distance = to_point.length();
-        Some(LightSample {
-            wi: to_point / distance,
-            li: self.radiance(),
-            pdf,
-            distance,
-            point,
-            is_delta: false,
-        })
+        Some(LightSample::area(p, point, self.radiance(), |_| pdf))
     }
 
     /// The cone's uniform density for a `wi` that meets the sphere, else 0.
