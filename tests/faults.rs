@@ -239,8 +239,8 @@ fn assert_render_refused(args: &[&str], names: &[&str]) {
     );
 }
 
-/// The fault's two commands wrote ∞ into the EXR and exited 0; they are refused now, saying
-/// which value and what its bound is.
+/// Light beyond its bounds would write ∞ into the EXR; it is refused, saying which value and
+/// what its bound is.
 #[test]
 fn huge_light_and_indirect_light_are_refused_with_their_bound() {
     assert_render_refused(
@@ -319,7 +319,7 @@ fn a_light_outside_the_box_lights_nothing_inside() {
             assert_eq!(lit, 0, "light at {light}, {side}²: {lit} pixels lit");
         }
     }
-    // The fault's command, as a user runs it (the lab stage: with N, so not black; the floor's
+    // The command as a user runs it (the lab stage: with N, so not black; the floor's
     // edge pixels must be ρ·N exactly, not ρ·(D + N)).
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("outside.png");
@@ -655,7 +655,7 @@ fn fifos_and_devices_are_refused_at_once() {
 }
 
 /// A screenshot whose settings text is compressed and inflates far beyond any settings (8 MiB
-/// of spaces in a few kilobytes; the fault's file held 3 GiB in 3 MB and aborted
+/// of spaces in a few kilobytes; 3 MB can hold 3 GiB, enough to abort
 /// `render --settings`) is refused at once, saying so.
 #[test]
 fn a_screenshot_whose_settings_inflate_without_end_is_refused() {
@@ -732,7 +732,7 @@ fn control_characters_from_files_are_escaped_in_what_is_printed() {
     assert!(!out.stdout.contains(&0x1b) && !out.stderr.contains(&0x1b));
 }
 
-/// A texture whose header says 16384² (the fault's 782 KB PNG decodes to 4 GiB) is counted in
+/// A texture whose header says 16384² (782 KB of PNG that decodes to 4 GiB) is counted in
 /// the memory estimate from its header: refused before the render under a 3 GB limit, rather
 /// than aborting while it decodes.
 #[test]

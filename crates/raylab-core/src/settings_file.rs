@@ -358,7 +358,7 @@ mod tests {
     }
 
     /// Compressed settings are inflated no further than 1 MiB: a few kilobytes that inflate to
-    /// 8 MiB (the fault's file: 3 MB to 3 GiB) are refused at once, saying so, and so is an
+    /// 8 MiB (as 3 MB can inflate to 3 GiB) are refused at once, saying so, and so is an
     /// uncompressed chunk above the cap.
     #[test]
     fn compressed_settings_are_inflated_no_further_than_the_cap() {

@@ -323,8 +323,8 @@ pub fn planar_uv(position: Vec3, normal: Vec3) -> Vec2 {
 mod tests {
     use super::*;
 
-    /// A PNG whose header says 16384² (the fault's file was 782 KB of black that decodes to
-    /// 4 GiB of texels; the header alone is what is read before decoding). Decoding is refused
+    /// A PNG whose header says 16384² (782 KB of black can decode to 4 GiB
+    /// of texels; the header alone is what is read before decoding). Decoding is refused
     /// when the memory is not there: an error saying both sizes (a warning when loading a
     /// model), never an abort. The estimate reads the same size from the file.
     #[test]

@@ -1638,8 +1638,8 @@ mod tests {
         }
     }
 
-    /// One library of 2,000 materials named by 8,000 `mtllib` lines (the fault's file asked
-    /// for 5.4 GB): read once, its 2,000 materials in once, and the estimate counts it once.
+    /// One library of 2,000 materials named by 8,000 `mtllib` lines (read once a line, it
+    /// would ask for 5.4 GB): read once, its 2,000 materials in once, and the estimate counts it once.
     #[test]
     fn a_library_named_many_times_is_read_once() {
         let dir = tempfile::tempdir().unwrap();
