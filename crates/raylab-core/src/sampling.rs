@@ -121,13 +121,17 @@ impl Rng16 {
 impl Uniform<F32x16> for Rng16 {
     #[inline(always)]
     fn draw(&mut self, wanted: M16) -> F32x16 {
-        // Every lane steps (one vector step); the lanes not wanted keep their state.
-        F32x16(std::array::from_fn(|i| {
+        // Every lane steps (one vector step); the lanes not wanted keep their state and draw
+        // 0. A plain loop over the arrays: LLVM vectorises it (through `array::from_fn` and its
+        // closure it did not, quite).
+        let mut out = [0.0; LANES];
+        for i in 0..LANES {
             let (state, bits) = pcg_step(self.state[i]);
             let wanted = wanted.0[i];
             self.state[i] = if wanted { state } else { self.state[i] };
-            if wanted { unit_f32(bits) } else { 0.0 }
-        }))
+            out[i] = if wanted { unit_f32(bits) } else { 0.0 };
+        }
+        F32x16(out)
     }
 }
 
