@@ -22,6 +22,7 @@ pub mod accel;
 pub mod bench;
 pub mod bsdf;
 pub mod camera;
+pub mod check;
 pub mod display;
 pub mod film;
 pub mod geometry;
