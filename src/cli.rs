@@ -51,6 +51,11 @@ pub enum Command {
     /// Measure the tracer per scene: BVH build time, Mrays/s of primary and shadow rays, and
     /// the milliseconds of one lab pass (medians over repeated passes).
     Bench(BenchArgs),
+    /// Check your own render of the lab against the exact figure: how much of it matches,
+    /// where it differs most, and the classic mistake that explains the difference (or none,
+    /// or unknown). The figure is rendered at the image's size, with the lab's focal length
+    /// (the image's width) unless --focal says otherwise.
+    Check(CheckArgs),
 }
 
 #[derive(Debug, Args)]
@@ -62,10 +67,10 @@ pub struct BenchArgs {
     #[arg(long, value_name = "FILE")]
     pub obj: Option<PathBuf>,
     /// Image width in pixels.
-    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "W")]
+    #[arg(long, default_value_t = DEFAULT_SIDE, value_parser = parse_side, value_name = "W")]
     pub width: u32,
     /// Image height in pixels.
-    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "H")]
+    #[arg(long, default_value_t = DEFAULT_SIDE, value_parser = parse_side, value_name = "H")]
     pub height: u32,
     /// Threads [default: one per core].
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024), value_name = "N")]
@@ -117,6 +122,28 @@ pub struct InspectArgs {
     pub options: RenderOptions,
 }
 
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// Your render: PNG, BMP (what SDL saves), PPM or JPEG, 8 bits a channel, any size.
+    #[arg(value_name = "IMAGE")]
+    pub image: PathBuf,
+    /// Print one JSON object (the match, the verdict and every candidate mistake, best first)
+    /// instead of the report.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the difference picture: |yours − figure| per channel, amplified 8×, black
+    /// where they agree (a PNG).
+    #[arg(long, value_name = "FILE.png")]
+    pub diff_out: Option<PathBuf>,
+    /// The settings your image was rendered with: the stage, camera, light, --shadows and
+    /// --indirect as for render. --width and --height are the image's.
+    #[command(flatten)]
+    pub options: RenderOptions,
+}
+
+/// The image's width and height when not given: the lab's 512 × 512 figures.
+const DEFAULT_SIDE: u32 = 512;
+
 /// The `--pixel` value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Pixel(pub u32, pub u32);
@@ -156,7 +183,7 @@ const SETTINGS_OPTIONS: [&str; 28] = [
 
 /// What determines an image, shared by `render` and `inspect` (which explains a pixel of the
 /// very image `render` would write with the same options).
-#[derive(Debug, Args)]
+#[derive(Clone, Debug, Args)]
 pub struct RenderOptions {
     /// Take every setting from a file: a workbench screenshot (its .png, which carries them,
     /// or the .json beside it, either reproducing the screenshot exactly), a bare settings
@@ -215,10 +242,10 @@ pub struct RenderOptions {
     #[arg(long, default_value_t = DEFAULT_SPECULAR_DEPTH, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SPECULAR_DEPTH)), value_name = "D")]
     pub specular_depth: u32,
     /// Image width in pixels.
-    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "W")]
+    #[arg(long, default_value_t = DEFAULT_SIDE, value_parser = parse_side, value_name = "W")]
     pub width: u32,
     /// Image height in pixels.
-    #[arg(long, default_value_t = 512, value_parser = parse_side, value_name = "H")]
+    #[arg(long, default_value_t = DEFAULT_SIDE, value_parser = parse_side, value_name = "H")]
     pub height: u32,
     /// Focal length in pixels [default: the width, a 53.13° horizontal field of view].
     #[arg(long, value_parser = parse_positive, value_name = "F", allow_hyphen_values = true)]
@@ -466,6 +493,7 @@ pub fn main() -> ExitCode {
             Some(Command::Render(args)) => run_render(&args),
             Some(Command::Inspect(args)) => run_inspect(&args),
             Some(Command::Bench(args)) => run_bench(&args),
+            Some(Command::Check(args)) => run_check(&args),
             None => crate::start_workbench(),
         },
     };
@@ -726,6 +754,73 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
         writeln!(out, "{}", serde_json::to_string(&inspection)?)?;
     } else {
         write!(out, "{}", printable_lines(&inspection.to_text()))?;
+    }
+    Ok(())
+}
+
+fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
+    use raylab_core::check;
+    if let Some(path) = &args.diff_out {
+        if OutputFormat::from_path(path)? != OutputFormat::Png {
+            anyhow::bail!(
+                "--diff-out '{}': the difference picture is written as PNG (.png)",
+                path.display()
+            );
+        }
+        raylab_core::film::check_file_destination(path)?;
+    }
+    let image = check::read_image(&args.image)?;
+    // The figure at the image's size: settings from a file keep their own camera (a size
+    // that differs is refused by name), the arguments get the image's width and height.
+    let settings = if args.options.settings.is_some() || args.options.scene_file.is_some() {
+        args.options.resolve_settings()?
+    } else {
+        // Given sides other than the default must be the image's (the default cannot be told
+        // from a typed 512, so it is taken as "the image's").
+        for (name, given, actual) in [
+            ("--width", args.options.width, image.width),
+            ("--height", args.options.height, image.height),
+        ] {
+            if given != DEFAULT_SIDE && given != actual {
+                anyhow::bail!(
+                    "{name} {given}: the image '{}' is {}×{}; the figure is rendered at the \
+                     image's size, so --width and --height can be left out",
+                    args.image.display(),
+                    image.width,
+                    image.height
+                );
+            }
+        }
+        RenderOptions {
+            width: image.width,
+            height: image.height,
+            ..args.options.clone()
+        }
+        .settings()
+    };
+    check::check_settings(&settings)?;
+    raylab_core::memory::check(
+        format!("checking a {}×{} image", image.width, image.height),
+        check::memory_estimate(image.width, image.height) + settings.scene.memory_estimate(),
+    )?;
+    let pool = thread_pool("check", args.options.threads)?;
+    let checked = pool.install(|| -> anyhow::Result<check::Checked> {
+        let scene = settings.scene.load()?;
+        Ok(check::check(&scene, &settings, &image)?)
+    })?;
+    if let Some(path) = &args.diff_out {
+        check::compare::difference_picture(&image, &checked.figure)
+            .to_image()
+            .save(path)?;
+    }
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        writeln!(out, "{}", serde_json::to_string(&checked.report)?)?;
+    } else {
+        write!(out, "{}", printable_lines(&checked.report.to_text()))?;
+        if let Some(path) = &args.diff_out {
+            writeln!(out, "difference picture: {}", path.display())?;
+        }
     }
     Ok(())
 }

@@ -720,3 +720,108 @@ fn the_inspect_command() {
         assert!(out.stdout.is_empty());
     }
 }
+
+// ---- Checking a student's image. ----
+
+/// `raylab check IMAGE` on what a student's tracer would write: the exact figure (as
+/// `raylab render` writes it) is `none`; the figure drawn upside down and saved as SDL does
+/// (BMP) is `upside-down`, in text and in JSON, candidates best first; `--diff-out` writes
+/// |image − figure| amplified; what cannot be checked is one line naming why.
+#[test]
+fn the_check_command() {
+    use raylab_core::check::{self, Mistake, Rgb8};
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    // A non-square image and a turned camera: the figure follows the image's size and the
+    // options.
+    let exact = path("exact.png");
+    let render = raylab(&[
+        "render", "--stage", "direct", "--width", "48", "--height", "36", "--yaw", "10", "--out",
+        &exact,
+    ]);
+    assert!(render.status.success(), "{}", stderr(&render));
+    let out = raylab(&["check", &exact, "--stage", "direct", "--yaw", "10"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("match: 100.0 %"), "{text}");
+    assert!(text.contains("verdict: none"), "{text}");
+    assert!(
+        text.contains("figure 5") && text.contains("48×36"),
+        "{text}"
+    );
+
+    // The figure upside down, as a BMP.
+    let mut s = settings(Stage::Direct, 48);
+    s.camera = s.camera.with_resolution(48, 36);
+    s.camera.yaw = 10f32.to_radians();
+    let flipped = &check::mistakes::looks(&cornell_box(), &s, Mistake::UpsideDown)[0];
+    let bmp = path("flipped.bmp");
+    image::RgbImage::from_raw(48, 36, flipped.data.clone())
+        .unwrap()
+        .save(&bmp)
+        .unwrap();
+    let diff = path("diff.png");
+    let out = raylab(&[
+        "check",
+        &bmp,
+        "--stage",
+        "direct",
+        "--yaw",
+        "10",
+        "--json",
+        "--diff-out",
+        &diff,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["stage"], "direct");
+    assert_eq!(json["best"]["mistake"], "upside-down");
+    assert_eq!(json["best"]["explains"], 1.0);
+    assert!(
+        json["best"]["equation"]
+            .as_str()
+            .unwrap()
+            .contains("equation 24")
+    );
+    assert!(!json["best"]["fix"].as_str().unwrap().is_empty());
+    let share = json["match"].as_f64().unwrap();
+    assert!(share < 0.5, "{share}");
+    let candidates = json["candidates"].as_array().unwrap();
+    assert_eq!(candidates[0]["mistake"], "upside-down");
+    let explains: Vec<f64> = candidates
+        .iter()
+        .map(|c| c["explains"].as_f64().unwrap())
+        .collect();
+    assert!(explains.windows(2).all(|w| w[0] >= w[1]), "{explains:?}");
+    // yaw-sign is offered: the camera is turned.
+    assert!(candidates.iter().any(|c| c["mistake"] == "yaw-sign"));
+    // The difference picture is |flipped − figure| × 8, clamped.
+    let figure = Rgb8 {
+        width: 48,
+        height: 36,
+        data: image::open(&exact).unwrap().to_rgb8().into_raw(),
+    };
+    let written = image::open(&diff).unwrap().to_rgb8().into_raw();
+    assert_eq!(
+        written,
+        check::compare::difference_picture(flipped, &figure).data
+    );
+
+    for (args, names) in [
+        (vec!["check", bmp.as_str(), "--stage", "path"], "path stage"),
+        (vec!["check", bmp.as_str(), "--width", "100"], "48×36"),
+        (vec!["check", bmp.as_str(), "--diff-out", "d.exr"], "PNG"),
+        (vec!["check", "no-such-image.bmp"], "no-such-image.bmp"),
+        (
+            vec!["check", exact.as_str(), "--samples", "4"],
+            "one sample",
+        ),
+    ] {
+        let out = raylab(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = stderr(&out);
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(names), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+}

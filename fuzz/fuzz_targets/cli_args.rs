@@ -58,6 +58,7 @@ fuzz_target!(|data: &[u8]| {
     match cli.command {
         Some(Command::Render(args)) => resolve(&args.options),
         Some(Command::Inspect(args)) => resolve(&args.options),
+        Some(Command::Check(args)) => resolve(&args.options),
         Some(Command::Bench(_)) | None => {}
     }
 });
