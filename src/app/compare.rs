@@ -65,14 +65,14 @@ struct BSide {
 
 /// A texture and the pixels it was last given, so the filter can change without a new frame.
 #[derive(Default)]
-struct Texture {
+pub(super) struct Texture {
     handle: Option<egui::TextureHandle>,
     pixels: Option<Arc<egui::ColorImage>>,
     options: egui::TextureOptions,
 }
 
 impl Texture {
-    fn set(&mut self, ctx: &egui::Context, name: &str, image: egui::ColorImage) {
+    pub(super) fn set(&mut self, ctx: &egui::Context, name: &str, image: egui::ColorImage) {
         let image = Arc::new(image);
         match &mut self.handle {
             Some(handle) => handle.set(Arc::clone(&image), self.options),
@@ -85,7 +85,11 @@ impl Texture {
 
     /// The texture to draw into `rect`, with nearest filtering when magnified as the viewport
     /// does for B, so both sides of the divider show pixels alike.
-    fn id_for(&mut self, rect: egui::Rect, pixels_per_point: f32) -> Option<egui::TextureId> {
+    pub(super) fn id_for(
+        &mut self,
+        rect: egui::Rect,
+        pixels_per_point: f32,
+    ) -> Option<egui::TextureId> {
         let (handle, pixels) = (self.handle.as_mut()?, self.pixels.as_ref()?);
         let wanted = filter_for(rect, pixels_per_point, pixels.size[0]);
         if wanted != self.options {
@@ -96,7 +100,7 @@ impl Texture {
     }
 
     #[cfg(test)]
-    fn rgba(&self) -> Option<Vec<u8>> {
+    pub(super) fn rgba(&self) -> Option<Vec<u8>> {
         self.pixels
             .as_ref()
             .map(|p| p.pixels.iter().flat_map(|c| c.to_array()).collect())
@@ -140,12 +144,9 @@ pub struct Compare {
     a_pass_ms: Option<f64>,
     texture: Texture,
     b: Option<BSide>,
-    /// The divider's position, a fraction of the image's width from its left edge.
-    pub divider: f32,
+    pub divider: Divider,
     /// Show |A − B| instead of the wipe.
     pub difference: bool,
-    /// A drag that started on the divider is going on.
-    dragging_divider: bool,
     diff: Diff,
 }
 
@@ -170,9 +171,8 @@ impl Compare {
             a_pass_ms: None,
             texture: Texture::default(),
             b: None,
-            divider: DEFAULT_DIVIDER,
+            divider: Divider::default(),
             difference: false,
-            dragging_divider: false,
             diff: Diff::default(),
         })
     }
@@ -398,53 +398,13 @@ impl Compare {
         ppp: f32,
         with_divider: bool,
     ) {
-        let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
-        let x = self.divider_x(rect);
-        let left = egui::Rect::from_min_max(rect.min, egui::pos2(x, rect.max.y));
-        let right = egui::Rect::from_min_max(egui::pos2(x, rect.min.y), rect.max);
-        match self.texture.id_for(rect, ppp) {
-            Some(a) => {
-                painter
-                    .with_clip_rect(left)
-                    .image(a, rect, uv, egui::Color32::WHITE);
-            }
-            // A's first frame is on its way: an empty side rather than B passing for A.
-            None => {
-                painter.rect_filled(left, 0.0, egui::Color32::from_gray(20));
-            }
-        }
-        painter
-            .with_clip_rect(right)
-            .image(b, rect, uv, egui::Color32::WHITE);
-        if with_divider {
-            let top = egui::pos2(x, rect.min.y);
-            let bottom = egui::pos2(x, rect.max.y);
-            painter.line_segment([top, bottom], egui::Stroke::new(3.0, egui::Color32::BLACK));
-            painter.line_segment([top, bottom], egui::Stroke::new(1.5, egui::Color32::WHITE));
-            let handle = egui::Rect::from_center_size(
-                egui::pos2(x, rect.center().y),
-                egui::vec2(2.0 * DIVIDER_GRAB, 30.0),
-            );
-            painter.rect(
-                handle,
-                3.0,
-                egui::Color32::WHITE,
-                egui::Stroke::new(1.0, egui::Color32::BLACK),
-                egui::StrokeKind::Outside,
-            );
-        }
-        tag(painter, rect.left_top(), egui::Align2::LEFT_TOP, "A");
-        tag(painter, rect.right_top(), egui::Align2::RIGHT_TOP, "B");
+        let a = self.texture.id_for(rect, ppp);
+        let x = self.divider.x(rect);
+        paint_wipe(painter, rect, x, [a, Some(b)], ["A", "B"], with_divider);
     }
 
-    fn divider_x(&self, rect: egui::Rect) -> f32 {
-        rect.left() + self.divider.clamp(0.0, 1.0) * rect.width()
-    }
-
-    /// Pointer input for the divider, given the viewport's `response` over the image `rect`:
-    /// a drag that starts within [`DIVIDER_GRAB`] of it (and not on the light's marker,
-    /// `on_marker`, the smaller target) moves it. Returns whether the divider has the drag, in
-    /// which case the camera must not turn.
+    /// Pointer input for the divider ([`Divider::input`]); none in difference mode. Returns
+    /// whether the divider has the drag, in which case the camera must not turn.
     pub fn divider_input(
         &mut self,
         ui: &egui::Ui,
@@ -452,35 +412,8 @@ impl Compare {
         rect: egui::Rect,
         on_marker: bool,
     ) -> bool {
-        if self.difference {
-            self.dragging_divider = false;
-            return false;
-        }
-        let x = self.divider_x(rect);
-        let near = |p: egui::Pos2| {
-            (p.x - x).abs() <= DIVIDER_GRAB && (rect.min.y..=rect.max.y).contains(&p.y)
-        };
-        if response.drag_started() && !on_marker {
-            // Where the button went down, not where the drag was recognised a few points on.
-            let origin = ui
-                .input(|i| i.pointer.press_origin())
-                .or_else(|| response.interact_pointer_pos());
-            self.dragging_divider = origin.is_some_and(near);
-        }
-        if !response.dragged() {
-            self.dragging_divider = false;
-        }
-        if self.dragging_divider {
-            if let Some(p) = response.interact_pointer_pos()
-                && rect.width() > 0.0
-            {
-                self.divider = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
-            }
-            ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
-        } else if response.hover_pos().is_some_and(near) {
-            ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
-        }
-        self.dragging_divider
+        self.divider
+            .input(ui, response, rect, on_marker, !self.difference)
     }
 
     /// The Stats lines while comparing: each side's pass time and samples (`b`: the app's).
@@ -520,6 +453,126 @@ impl Compare {
     }
 }
 
+/// The wipe's divider: where it stands and whether a drag holds it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Divider {
+    /// A fraction of the image's width from its left edge.
+    pub at: f32,
+    /// A drag that started on the divider is going on.
+    dragging: bool,
+}
+
+impl Default for Divider {
+    fn default() -> Self {
+        Self {
+            at: DEFAULT_DIVIDER,
+            dragging: false,
+        }
+    }
+}
+
+impl Divider {
+    /// Its x in `rect`, the image's rect.
+    pub fn x(&self, rect: egui::Rect) -> f32 {
+        rect.left() + self.at.clamp(0.0, 1.0) * rect.width()
+    }
+
+    /// Pointer input, given the viewport's `response` over the image `rect`: a drag that starts
+    /// within [`DIVIDER_GRAB`] of the divider (and not on the light's marker, `on_marker`, the
+    /// smaller target) moves it; none while it is not `shown`. Returns whether the divider has
+    /// the drag.
+    pub fn input(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        rect: egui::Rect,
+        on_marker: bool,
+        shown: bool,
+    ) -> bool {
+        if !shown {
+            self.dragging = false;
+            return false;
+        }
+        let x = self.x(rect);
+        let near = |p: egui::Pos2| {
+            (p.x - x).abs() <= DIVIDER_GRAB && (rect.min.y..=rect.max.y).contains(&p.y)
+        };
+        if response.drag_started() && !on_marker {
+            // Where the button went down, not where the drag was recognised a few points on.
+            let origin = ui
+                .input(|i| i.pointer.press_origin())
+                .or_else(|| response.interact_pointer_pos());
+            self.dragging = origin.is_some_and(near);
+        }
+        if !response.dragged() {
+            self.dragging = false;
+        }
+        if self.dragging {
+            if let Some(p) = response.interact_pointer_pos()
+                && rect.width() > 0.0
+            {
+                self.at = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+            }
+            ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+        } else if response.hover_pos().is_some_and(near) {
+            ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+        }
+        self.dragging
+    }
+}
+
+/// The wipe: `sides[0]` left of `x` and `sides[1]` right of it, each fitted into `rect` (a side
+/// not there yet is a dark panel rather than the other side passing for it), with the divider
+/// and its handle when `with_divider`, and `labels` in the top corners.
+pub fn paint_wipe(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    x: f32,
+    sides: [Option<egui::TextureId>; 2],
+    labels: [&str; 2],
+    with_divider: bool,
+) {
+    let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+    let left = egui::Rect::from_min_max(rect.min, egui::pos2(x, rect.max.y));
+    let right = egui::Rect::from_min_max(egui::pos2(x, rect.min.y), rect.max);
+    for (side, part) in sides.into_iter().zip([left, right]) {
+        match side {
+            Some(id) => {
+                painter
+                    .with_clip_rect(part)
+                    .image(id, rect, uv, egui::Color32::WHITE);
+            }
+            None => {
+                painter.rect_filled(part, 0.0, egui::Color32::from_gray(20));
+            }
+        }
+    }
+    if with_divider {
+        let top = egui::pos2(x, rect.min.y);
+        let bottom = egui::pos2(x, rect.max.y);
+        painter.line_segment([top, bottom], egui::Stroke::new(3.0, egui::Color32::BLACK));
+        painter.line_segment([top, bottom], egui::Stroke::new(1.5, egui::Color32::WHITE));
+        let handle = egui::Rect::from_center_size(
+            egui::pos2(x, rect.center().y),
+            egui::vec2(2.0 * DIVIDER_GRAB, 30.0),
+        );
+        painter.rect(
+            handle,
+            3.0,
+            egui::Color32::WHITE,
+            egui::Stroke::new(1.0, egui::Color32::BLACK),
+            egui::StrokeKind::Outside,
+        );
+    }
+    tag(painter, rect.left_top(), egui::Align2::LEFT_TOP, labels[0]);
+    tag(
+        painter,
+        rect.right_top(),
+        egui::Align2::RIGHT_TOP,
+        labels[1],
+    );
+}
+
 /// "pass 12.3 ms · 16/16 samples", or "preview" before the first full pass.
 fn side_line(pass_ms: Option<f64>, is_preview: bool, samples: u32, target: u32) -> String {
     let pass = pass_ms.map_or_else(|| "pass -".to_owned(), |ms| format!("pass {ms:.1} ms"));
@@ -532,7 +585,7 @@ fn side_line(pass_ms: Option<f64>, is_preview: bool, samples: u32, target: u32) 
 
 /// Text on a dark plate at an edge of the image (a little inside it), legible on light and
 /// dark renders alike.
-fn tag(painter: &egui::Painter, pos: egui::Pos2, anchor: egui::Align2, text: &str) {
+pub(super) fn tag(painter: &egui::Painter, pos: egui::Pos2, anchor: egui::Align2, text: &str) {
     let pos = pos - 4.0 * anchor.to_sign();
     let margin = egui::vec2(4.0, 2.0);
     let galley = painter.layout_no_wrap(

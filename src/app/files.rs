@@ -20,7 +20,13 @@ pub enum Opened {
     Settings(Loaded),
     /// An OBJ model, to stand in the box (it is read by the scene loader, off this thread).
     Model(PathBuf),
+    /// An image that is no raylab screenshot (a BMP, PPM or JPEG, or a PNG without settings):
+    /// a student's render, to check against the exact figure.
+    StudentImage(PathBuf),
 }
+
+/// The extensions of the images `raylab check` reads besides PNG.
+pub const CHECKED_IMAGES: [&str; 6] = ["bmp", "ppm", "pgm", "pnm", "jpg", "jpeg"];
 
 /// Reads what `path` holds. Settings are validated here, so a file with a bad value changes
 /// nothing: the error names the file and the value.
@@ -34,7 +40,20 @@ pub fn open(path: &Path) -> Result<Opened, String> {
             .map_err(|reason| format!("could not open '{}': {reason}", path.display()))?;
         return Ok(Opened::Model(path.to_path_buf()));
     }
-    let loaded = settings_file::read_file(path).map_err(|e| e.to_string())?;
+    if extension
+        .as_deref()
+        .is_some_and(|e| CHECKED_IMAGES.contains(&e))
+    {
+        return Ok(Opened::StudentImage(path.to_path_buf()));
+    }
+    let loaded = match settings_file::read_file(path) {
+        Ok(loaded) => loaded,
+        // A PNG that carries no settings: the student's own render.
+        Err(settings_file::ReadError::NoSettings { .. }) => {
+            return Ok(Opened::StudentImage(path.to_path_buf()));
+        }
+        Err(e) => return Err(e.to_string()),
+    };
     loaded
         .settings
         .validate()
@@ -82,6 +101,8 @@ pub enum DialogMode {
     /// A screenshot's settings (PNG and JSON only).
     OpenScreenshot,
     SaveScene,
+    /// A student's render to check against the exact figure.
+    CheckImage,
 }
 
 /// What the dialog ended with this frame.
@@ -126,7 +147,12 @@ impl FileDialog {
         let lower = name.to_ascii_lowercase();
         let ends = |e: &[&str]| e.iter().any(|e| lower.ends_with(e));
         match self.mode {
-            DialogMode::Open => ends(&[".toml", ".png", ".json", ".obj"]),
+            DialogMode::Open => ends(&[
+                ".toml", ".png", ".json", ".obj", ".bmp", ".ppm", ".pgm", ".pnm", ".jpg", ".jpeg",
+            ]),
+            DialogMode::CheckImage => {
+                ends(&[".png", ".bmp", ".ppm", ".pgm", ".pnm", ".jpg", ".jpeg"])
+            }
             DialogMode::OpenScreenshot => ends(&[".png", ".json"]),
             DialogMode::SaveScene => ends(&[".toml"]),
         }
@@ -164,6 +190,7 @@ impl FileDialog {
             DialogMode::Open => "Open",
             DialogMode::OpenScreenshot => "Open settings from screenshot",
             DialogMode::SaveScene => "Save scene as",
+            DialogMode::CheckImage => "Check an image",
         }
     }
 

@@ -7,6 +7,7 @@
 //! any change to the [`Controller`], which renders on its own threads. The UI thread only polls
 //! for finished frames and never waits on the renderer.
 
+mod check;
 mod compare;
 mod files;
 mod input;
@@ -70,6 +71,12 @@ pub enum Command {
     CancelLoading,
     /// Compare A/B: drop A and its renderer.
     StopComparing,
+    /// Check my image: show the dialog for a student's render ([`check`]).
+    ShowCheckDialog,
+    /// Check the image whose path is typed in the File field.
+    CheckTyped,
+    /// Stop checking: back to the live image.
+    StopChecking,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -156,6 +163,8 @@ pub struct WorkbenchApp {
     started: Instant,
     /// Compare A/B: the frozen A and its renderer, while comparing ([`compare`]).
     compare: Option<compare::Compare>,
+    /// Check my image: a student's render held against the exact figure ([`check`]).
+    check: Option<check::StudentCheck>,
     /// The Open or Save scene dialog, while shown.
     file_dialog: Option<files::FileDialog>,
     /// Scenes loaded before, newest first, so switching back is instant (at most
@@ -290,6 +299,7 @@ impl WorkbenchApp {
             log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
             started: Instant::now(),
             compare: None,
+            check: None,
             file_dialog: None,
             scene_cache: Vec::new(),
             restore_on_failure: None,
@@ -532,9 +542,10 @@ impl WorkbenchApp {
 
     /// Opens a scene file, a screenshot (PNG or JSON) or an OBJ model: from the File field,
     /// the dialog or a drop on the window. A file that cannot be used changes nothing.
-    fn open_path(&mut self, path: &std::path::Path) {
+    fn open_path(&mut self, path: &std::path::Path, ctx: &egui::Context) {
         self.state.obj_path = path.display().to_string();
         match files::open(path) {
+            Ok(files::Opened::StudentImage(image)) => self.start_check(ctx, image),
             Ok(files::Opened::Model(model)) => {
                 self.state.settings.scene = SceneChoice::Obj(model);
             }
@@ -599,8 +610,10 @@ impl WorkbenchApp {
                 self.file_dialog = None;
                 if mode == files::DialogMode::SaveScene {
                     self.save_scene_to(&path, false);
+                } else if mode == files::DialogMode::CheckImage {
+                    self.start_check(ctx, path);
                 } else {
-                    self.open_path(&path);
+                    self.open_path(&path, ctx);
                 }
             }
             files::DialogOutcome::Replace(path) => {
@@ -615,7 +628,7 @@ impl WorkbenchApp {
         let dropped = ctx.input(|i| i.raw.dropped_files.clone());
         if let Some(file) = dropped.last() {
             let path = file.path().to_path_buf();
-            self.open_path(&path);
+            self.open_path(&path, ctx);
         }
     }
 
@@ -721,6 +734,11 @@ impl WorkbenchApp {
     /// The inspector: the pinned pixel's lines, each beside the lab equation it evaluates.
     fn inspector_ui(&mut self, ui: &mut egui::Ui) {
         let (mut copied, mut unpin) = (false, false);
+        // While checking a student's image: its pixel beside the exact figure's.
+        let check_line = match (&self.check, self.state.pinned) {
+            (Some(check), Some([x, y])) => check.pixel_line(&self.state.settings, x, y),
+            _ => None,
+        };
         match self.inspection() {
             None => {
                 ui.label("Click a pixel of the image to see how its value is computed.");
@@ -741,6 +759,9 @@ impl WorkbenchApp {
                     unpin = ui.button("Unpin").clicked();
                 });
                 ui.weak("Shift + arrows move the pixel by one.");
+                if let Some(line) = check_line {
+                    ui.strong(line);
+                }
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     egui::Grid::new("inspector-lines")
                         .num_columns(2)
@@ -942,14 +963,18 @@ impl WorkbenchApp {
                     raylab_core::walkthrough::STEPS[n].apply(&mut self.state.settings);
                 }
             }
-            Command::FreezeA => self.freeze_a(ctx),
+            Command::FreezeA => {
+                // One overlay at a time: A/B or the check.
+                self.check = None;
+                self.freeze_a(ctx);
+            }
             Command::StopComparing => self.compare = None,
             Command::OpenTyped => {
                 let typed = self.state.obj_path.trim().to_owned();
                 if typed.is_empty() {
                     self.set_status(StatusKind::Notice, "Type a file's path to open it");
                 } else {
-                    self.open_path(std::path::Path::new(&typed));
+                    self.open_path(std::path::Path::new(&typed), ctx);
                 }
             }
             Command::SaveSceneTyped => {
@@ -980,6 +1005,68 @@ impl WorkbenchApp {
                 self.file_dialog = Some(dialog);
             }
             Command::CancelLoading => self.cancel_loading(),
+            Command::ShowCheckDialog => {
+                let (folder, name) = self.dialog_folder();
+                self.file_dialog = Some(files::FileDialog::new(
+                    files::DialogMode::CheckImage,
+                    &folder,
+                    &name,
+                ));
+            }
+            Command::CheckTyped => {
+                let typed = self.state.obj_path.trim().to_owned();
+                if typed.is_empty() {
+                    self.set_status(
+                        StatusKind::Notice,
+                        "Type the path of your image in the File field to check it",
+                    );
+                } else {
+                    self.start_check(ctx, typed.into());
+                }
+            }
+            Command::StopChecking => self.check = None,
+        }
+    }
+
+    /// Check my image: reads `path` and holds it against the exact figure for the current
+    /// settings, in place of an A/B comparison.
+    fn start_check(&mut self, ctx: &egui::Context, path: std::path::PathBuf) {
+        self.compare = None;
+        let check = check::StudentCheck::start(ctx, path);
+        self.set_status(StatusKind::Info, format!("Reading {}…", check.name()));
+        self.check = Some(check);
+    }
+
+    /// Once a frame: the check's image once read (the camera then renders at its size, with
+    /// the same field of view) and its diagnosis.
+    fn receive_check(&mut self, ctx: &egui::Context) {
+        let scene_ready = self.state.settings.scene == self.scene_choice;
+        let Some(check) = &mut self.check else {
+            return;
+        };
+        match check.update(ctx, &self.state.settings, &self.scene, scene_ready) {
+            None => {}
+            Some(check::Event::Read { width, height }) => {
+                let name = check.name();
+                let camera = &mut self.state.settings.camera;
+                if (camera.width, camera.height) != (width, height) {
+                    let scale = width as f32 / camera.width as f32;
+                    camera.focal_length *= scale;
+                    camera.width = width;
+                    camera.height = height;
+                }
+                self.set_status(
+                    StatusKind::Info,
+                    format!(
+                        "Checking {name} ({width} × {height}) against the exact figure: set the \
+                         stage, camera and light it was made with"
+                    ),
+                );
+            }
+            Some(check::Event::Unreadable(e)) => {
+                self.check = None;
+                self.set_status(StatusKind::Error, e);
+            }
         }
     }
 
@@ -1143,6 +1230,10 @@ impl WorkbenchApp {
                 .compare
                 .as_ref()
                 .is_none_or(compare::Compare::is_settled)
+            && self
+                .check
+                .as_ref()
+                .is_none_or(|c| c.is_settled(&self.state.settings))
     }
 }
 
@@ -1157,6 +1248,7 @@ impl eframe::App for WorkbenchApp {
         self.receive_scene();
         self.receive_frames(&ctx);
         self.receive_compare(&ctx);
+        self.receive_check(&ctx);
         self.receive_screenshots();
         self.clear_fixed_error();
 
@@ -1174,6 +1266,7 @@ impl eframe::App for WorkbenchApp {
                     &self.stats,
                     loading,
                     self.compare.as_mut(),
+                    self.check.as_mut(),
                 ));
             });
         if self.state.inspect_mode {
@@ -1204,7 +1297,13 @@ impl eframe::App for WorkbenchApp {
                         )
                     });
             let marker = light_marker(&self.state.settings);
-            let pointer = self.viewport.viewport_ui(ui, marker, self.compare.as_mut());
+            let overlay: Option<&mut dyn viewport::Overlay> =
+                match (&mut self.check, &mut self.compare) {
+                    (Some(check), _) => Some(check),
+                    (None, Some(compare)) => Some(compare),
+                    (None, None) => None,
+                };
+            let pointer = self.viewport.viewport_ui(ui, marker, overlay);
             if pointer.pressed
                 && let Some(id) = ui.memory(|m| m.focused())
             {

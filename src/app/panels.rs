@@ -85,6 +85,7 @@ pub fn controls_ui(
     stats: &Stats,
     loading: Option<&SceneChoice>,
     mut compare: Option<&mut super::compare::Compare>,
+    check: Option<&mut super::check::StudentCheck>,
 ) -> Vec<Command> {
     let mut commands = Vec::new();
     ui.horizontal_wrapped(|ui| {
@@ -172,6 +173,12 @@ pub fn controls_ui(
             .show(ui, |ui| {
                 let compare = compare.as_deref_mut();
                 super::compare::compare_ui(ui, compare, &state.settings, &mut commands)
+            });
+        egui::CollapsingHeader::new("Check my image")
+            .default_open(true)
+            .open(check.is_some().then_some(true))
+            .show(ui, |ui| {
+                super::check::check_ui(ui, check, &state.settings, &mut commands)
             });
         egui::CollapsingHeader::new("Stats")
             .default_open(true)

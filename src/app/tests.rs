@@ -21,6 +21,7 @@ use raylab_core::{Image, MaterialPreset, RenderSettings, Shading, Stage};
 use super::persistence::{WorkbenchState, lab_defaults};
 use super::*;
 
+mod check_ui;
 mod files_ui;
 
 const DEADLINE: Duration = Duration::from_secs(90);
@@ -1143,7 +1144,7 @@ fn compare_divider_drags_and_elsewhere_the_camera_turns() {
     freeze_a(&mut h);
     h.step();
     let rect = h.state().viewport.shown_rect().unwrap();
-    assert_eq!(comparing(&h).divider, 0.5);
+    assert_eq!(comparing(&h).divider.at, 0.5);
     let s0 = settings(&h);
     let drag = |h: &mut Harness<'_, WorkbenchApp>, from: egui::Pos2, to: egui::Pos2| {
         h.drag_at(from);
@@ -1164,7 +1165,7 @@ fn compare_divider_drags_and_elsewhere_the_camera_turns() {
         on_divider,
         egui::pos2(rect.left() + 0.25 * rect.width(), rect.bottom() - 40.0),
     );
-    let divider = comparing(&h).divider;
+    let divider = comparing(&h).divider.at;
     assert!((divider - 0.25).abs() < 0.01, "{divider}");
     assert_eq!(
         settings(&h),
@@ -1182,11 +1183,11 @@ fn compare_divider_drags_and_elsewhere_the_camera_turns() {
         s1.camera.yaw,
         s0.camera.yaw
     );
-    assert_eq!(comparing(&h).divider, divider);
+    assert_eq!(comparing(&h).divider.at, divider);
     settle(&mut h);
 
     // The light's marker, even on the divider, moves the light.
-    comparing_mut(&mut h).divider = light_marker(&s1).unwrap().x;
+    comparing_mut(&mut h).divider.at = light_marker(&s1).unwrap().x;
     h.step();
     let rect = h.state().viewport.shown_rect().unwrap();
     let marker = rect.min + light_marker(&s1).unwrap() * rect.size();
@@ -1194,7 +1195,7 @@ fn compare_divider_drags_and_elsewhere_the_camera_turns() {
     let s2 = settings(&h);
     assert_eq!(s2.camera, s1.camera);
     assert!(s2.light.position.x > s1.light.position.x + 0.05);
-    assert_eq!(comparing(&h).divider, light_marker(&s1).unwrap().x);
+    assert_eq!(comparing(&h).divider.at, light_marker(&s1).unwrap().x);
     settle(&mut h);
 }
 

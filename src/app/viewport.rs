@@ -8,8 +8,6 @@ use std::sync::Arc;
 
 use eframe::egui;
 
-use super::compare::Compare;
-
 /// Magnification from which pixels are shown as blocks (nearest filtering).
 const NEAREST_FROM_SCALE: f32 = 2.0;
 
@@ -95,7 +93,7 @@ impl Viewport {
         &mut self,
         ui: &mut egui::Ui,
         marker: Option<egui::Vec2>,
-        mut compare: Option<&mut Compare>,
+        mut overlay: Option<&mut dyn Overlay>,
     ) -> ViewportInput {
         let available = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(available, egui::Sense::click_and_drag());
@@ -114,9 +112,9 @@ impl Viewport {
             texture.set(Arc::clone(pixels), wanted);
         }
 
-        // While comparing, the A/B wipe (or |A − B|) stands in for the one image.
-        if let Some(compare) = compare.as_deref_mut() {
-            compare.paint(ui, rect, texture.id());
+        // While comparing or checking, the wipe (or the difference) stands in for the image.
+        if let Some(overlay) = overlay.as_deref_mut() {
+            overlay.paint(ui, rect, texture.id());
         } else {
             let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
             ui.painter()
@@ -158,7 +156,7 @@ impl Viewport {
                 .zip(press)
                 .is_some_and(|(m, p)| m.distance(p) <= MARKER_GRAB_RADIUS);
         let on_divider =
-            compare.is_some_and(|c| c.divider_input(ui, &response, rect, drag_started_on_marker));
+            overlay.is_some_and(|o| o.divider_input(ui, &response, rect, drag_started_on_marker));
         let pointer_at = response
             .interact_pointer_pos()
             .or_else(|| response.hover_pos())
@@ -188,6 +186,55 @@ impl Viewport {
             dragging: response.dragged(),
             on_divider,
         }
+    }
+}
+
+/// What stands in for the live image: the A/B wipe ([`super::compare::Compare`]) or a
+/// student's image against the exact figure ([`super::check::StudentCheck`]).
+pub trait Overlay {
+    /// Draws into `rect`, the live image's rect; `live` is the live image's texture.
+    fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, live: egui::TextureId);
+
+    /// Pointer input for its divider; returns whether the divider has the drag (then the
+    /// camera must not turn).
+    fn divider_input(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        rect: egui::Rect,
+        on_marker: bool,
+    ) -> bool;
+}
+
+impl Overlay for super::compare::Compare {
+    fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, live: egui::TextureId) {
+        super::compare::Compare::paint(self, ui, rect, live);
+    }
+
+    fn divider_input(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        rect: egui::Rect,
+        on_marker: bool,
+    ) -> bool {
+        super::compare::Compare::divider_input(self, ui, response, rect, on_marker)
+    }
+}
+
+impl Overlay for super::check::StudentCheck {
+    fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, _live: egui::TextureId) {
+        super::check::StudentCheck::paint(self, ui, rect);
+    }
+
+    fn divider_input(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        rect: egui::Rect,
+        on_marker: bool,
+    ) -> bool {
+        super::check::StudentCheck::divider_input(self, ui, response, rect, on_marker)
     }
 }
 

@@ -125,6 +125,7 @@ impl Uniform<F32x16> for Rng16 {
         // 0. A plain loop over the arrays: LLVM vectorises it (through `array::from_fn` and its
         // closure it did not, quite).
         let mut out = [0.0; LANES];
+        #[allow(clippy::needless_range_loop)] // three arrays indexed alike: the vectorised form
         for i in 0..LANES {
             let (state, bits) = pcg_step(self.state[i]);
             let wanted = wanted.0[i];

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use super::*;
 
 /// Types `text` into the File field.
-fn type_path(h: &mut Harness<'_, WorkbenchApp>, text: &str) {
+pub(super) fn type_path(h: &mut Harness<'_, WorkbenchApp>, text: &str) {
     h.get_by_role_and_label(Role::TextInput, "File").focus();
     h.step();
     // Select what is there, so the typing replaces it.
@@ -18,7 +18,7 @@ fn type_path(h: &mut Harness<'_, WorkbenchApp>, text: &str) {
     assert_eq!(h.state().state.obj_path, text);
 }
 
-fn click(h: &mut Harness<'_, WorkbenchApp>, button: &str) {
+pub(super) fn click(h: &mut Harness<'_, WorkbenchApp>, button: &str) {
     h.get_by_role_and_label(Role::Button, button).click();
     h.step();
 }
@@ -36,7 +36,7 @@ impl egui::DroppedFile for Dropped {
     }
 }
 
-fn drop_file(h: &mut Harness<'_, WorkbenchApp>, path: &Path) {
+pub(super) fn drop_file(h: &mut Harness<'_, WorkbenchApp>, path: &Path) {
     h.input_mut()
         .dropped_files
         .push(Arc::new(Dropped(path.to_path_buf())));
