@@ -126,6 +126,13 @@ pub fn controls_ui(
         egui::CollapsingHeader::new("Lab walk-through")
             .default_open(state.walk_step.is_some())
             .show(ui, |ui| walkthrough_ui(ui, state.walk_step, &mut commands));
+        // Near the top: while checking, the diagnosis is what the student reads.
+        egui::CollapsingHeader::new("Check my image")
+            .default_open(false)
+            .open(check.is_some().then_some(true))
+            .show(ui, |ui| {
+                super::check::check_ui(ui, check, &state.settings, &mut commands)
+            });
         egui::CollapsingHeader::new("Scene")
             .default_open(true)
             .show(ui, |ui| {
@@ -173,12 +180,6 @@ pub fn controls_ui(
             .show(ui, |ui| {
                 let compare = compare.as_deref_mut();
                 super::compare::compare_ui(ui, compare, &state.settings, &mut commands)
-            });
-        egui::CollapsingHeader::new("Check my image")
-            .default_open(true)
-            .open(check.is_some().then_some(true))
-            .show(ui, |ui| {
-                super::check::check_ui(ui, check, &state.settings, &mut commands)
             });
         egui::CollapsingHeader::new("Stats")
             .default_open(true)

@@ -132,6 +132,8 @@ fn the_exact_figure_typed_in_is_none() {
     let exact = Rgb8::from_linear(&render(&cornell_box(), &s));
     let path = write(&exact, dir.path(), "exact.png");
     type_path(&mut h, path.to_str().unwrap());
+    h.get_by_label("Check my image").click();
+    h.step();
     click(&mut h, "Check the typed file");
     settle(&mut h);
     assert_eq!(verdict(&h), "none");
