@@ -123,7 +123,7 @@ fn acne_from_another_tracer_is_acne() {
         state ^= state << 13;
         state ^= state >> 7;
         state ^= state << 17;
-        if state % 3 == 0 {
+        if state.is_multiple_of(3) {
             image.data[3 * i..3 * i + 3].copy_from_slice(&dark.data[3 * i..3 * i + 3]);
         }
     }
