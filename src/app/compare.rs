@@ -822,8 +822,10 @@ impl WorkbenchApp {
                     compare.difference = difference;
                 }
                 self.compare = Some(compare);
-                self.set_status(
+                // Advice for while comparing: it goes when comparing stops.
+                self.set_status_while(
                     StatusKind::Info,
+                    super::Cause::Comparing,
                     "Frozen as A: change anything for B; drag the divider to compare",
                 );
             }

@@ -40,6 +40,11 @@ pub const TITLE: &str = "raylab";
 /// until about this many samples are averaged.
 pub const PATH_SAMPLE_TARGET: u32 = 1024;
 
+/// The least sample target the lab stages get when soft shadows or depth of field are turned
+/// on: both are averages over random points (of the light, of the lens), grainy at the 16
+/// samples that anti-alias the lab's image.
+pub const SOFT_SAMPLE_TARGET: u32 = 256;
+
 /// A UI action, handled in one place ([`WorkbenchApp::handle`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Command {
@@ -99,9 +104,14 @@ pub struct Status {
     pub details: Option<String>,
 }
 
-/// A condition an error reports, checked every frame ([`WorkbenchApp::clear_fixed_error`]).
+/// A condition a message reports, checked every frame ([`WorkbenchApp::clear_fixed_error`]).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Cause {
+    /// Compare A/B is on (what to do while comparing): taken down when comparing stops.
+    Comparing,
+    /// The text typed into the number field of this name could not be used as it stood:
+    /// taken down when a good number is typed there ([`panels::Typed`]).
+    TypedNumber(String),
     /// The settings could not be rendered.
     InvalidSettings,
     /// The screenshot folder did not exist.
@@ -176,10 +186,56 @@ pub struct WorkbenchApp {
     /// The scene of the saved state is the one loading (at start): if it cannot be loaded,
     /// the lab's box stays, and the notice says so.
     saved_scene_loading: bool,
+    /// The effects in force that average random points ([`Sampled`]), as of the last frame:
+    /// one turned on raises the sample target ([`WorkbenchApp::refine_sampled_effects`]).
+    sampled: Sampled,
     /// Test hook: the next scene load panics on its thread.
     #[cfg(test)]
     inject_loader_panic: bool,
 }
+
+/// The lab stages' effects that average random points, and so need many samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Sampled {
+    /// Shadows from an area light: each sample's shadow ray goes to a random point of it.
+    soft_shadows: bool,
+    /// A lens of some aperture: each sample's ray leaves from a random point of it.
+    depth_of_field: bool,
+}
+
+impl Sampled {
+    /// Those `settings` use. The path stage samples everything anyway, at its own target
+    /// ([`PATH_SAMPLE_TARGET`]); the flat stage computes no light.
+    fn of(settings: &RenderSettings) -> Self {
+        let stage = settings.shading.stage;
+        if stage == Stage::Path {
+            return Self::default();
+        }
+        Self {
+            soft_shadows: stage != Stage::Flat
+                && settings.shading.shadows
+                && settings.light.is_area(),
+            depth_of_field: settings.camera.aperture > 0.0,
+        }
+    }
+
+    /// What the user calls them, those of `self` that are on.
+    fn name(self) -> Option<&'static str> {
+        match (self.soft_shadows, self.depth_of_field) {
+            (true, true) => Some("Soft shadows and depth of field"),
+            (true, false) => Some("Soft shadows"),
+            (false, true) => Some("Depth of field"),
+            (false, false) => None,
+        }
+    }
+}
+
+/// The inspector panel's width when there is room, and its least (its lines then scroll
+/// sideways).
+const INSPECTOR_WIDTH: f32 = 420.0;
+const INSPECTOR_MIN_WIDTH: f32 = 200.0;
+/// The central panel's margins either side of the image, and the panels' separator.
+const CENTRAL_MARGINS: f32 = 20.0;
 
 /// How many scenes besides the one on screen stay loaded for switching back.
 pub const SCENE_CACHE: usize = 4;
@@ -254,6 +310,9 @@ impl WorkbenchApp {
 
     fn with_state(ctx: &egui::Context, state: WorkbenchState, notice: Option<String>) -> Self {
         let saved_scene = state.settings.scene != SceneChoice::Cornell;
+        // The saved settings' sample target is the user's: only an effect turned on later
+        // raises it.
+        let sampled = Sampled::of(&state.settings);
         let repaint = ctx.clone();
         let (controller, error) = match Controller::new(
             state.render_threads,
@@ -304,6 +363,7 @@ impl WorkbenchApp {
             scene_cache: Vec::new(),
             restore_on_failure: None,
             saved_scene_loading: saved_scene,
+            sampled,
             #[cfg(test)]
             inject_loader_panic: false,
         }
@@ -314,6 +374,16 @@ impl WorkbenchApp {
             text: text.into(),
             kind,
             cause: None,
+            details: None,
+        });
+    }
+
+    /// A message that goes away by itself once `cause` no longer holds.
+    fn set_status_while(&mut self, kind: StatusKind, cause: Cause, text: impl Into<String>) {
+        self.status = Some(Status {
+            text: text.into(),
+            kind,
+            cause: Some(cause),
             details: None,
         });
     }
@@ -341,11 +411,13 @@ impl WorkbenchApp {
         });
     }
 
-    /// Takes down an error whose condition is fixed: a stale red line would send the user
-    /// looking for a problem that is gone.
+    /// Takes down a message whose condition is fixed: a stale red line would send the user
+    /// looking for a problem that is gone, and stale advice would ask for the impossible.
     fn clear_fixed_error(&mut self) {
         let fixed = match self.status.as_ref().and_then(|s| s.cause.as_ref()) {
             Some(Cause::InvalidSettings) => self.state.settings.validate().is_ok(),
+            Some(Cause::Comparing) => self.compare.is_none(),
+            Some(Cause::TypedNumber(_)) => false,
             Some(Cause::MissingFolder(_)) => self.state.screenshot_folder.is_dir(),
             Some(Cause::CameraSeesNothing | Cause::RenderFailed { .. }) => false,
             None => false,
@@ -481,6 +553,7 @@ impl WorkbenchApp {
     fn put_back_settings(&mut self, failed: &SceneChoice) {
         if let Some(old) = self.restore_on_failure.take() {
             self.state.settings = old;
+            self.sampled = Sampled::of(&self.state.settings);
         } else if self.state.settings.scene == *failed {
             self.state.settings.scene = self.scene_choice.clone();
         }
@@ -555,6 +628,9 @@ impl WorkbenchApp {
                     self.restore_on_failure = Some(old);
                 }
                 self.state.walk_step = None;
+                self.state.walk_restore = None;
+                // The file's sample target is its own: not raised.
+                self.sampled = Sampled::of(&self.state.settings);
                 let name = path.file_name().map_or_else(
                     || path.display().to_string(),
                     |n| n.to_string_lossy().into_owned(),
@@ -762,7 +838,7 @@ impl WorkbenchApp {
                 if let Some(line) = check_line {
                     ui.strong(line);
                 }
-                egui::ScrollArea::vertical().show(ui, |ui| {
+                egui::ScrollArea::both().show(ui, |ui| {
                     egui::Grid::new("inspector-lines")
                         .num_columns(2)
                         .striped(true)
@@ -865,6 +941,7 @@ impl WorkbenchApp {
         self.stats.target = frame.target;
         self.stats.is_preview = frame.is_preview;
         self.stats.noise = frame.noise;
+        self.stats.elapsed_ms = frame.since_submit_ms;
         self.stats.legend = frame.legend.clone();
         if !frame.is_preview {
             self.stats.full_pass = Some((frame.pass_ms, w, h));
@@ -925,7 +1002,14 @@ impl WorkbenchApp {
                 }
             }
             Command::ResetToLabDefaults => {
+                let scene_before = settings.scene.clone();
                 *settings = persistence::lab_defaults();
+                // A click on the image turns the camera again, as in the lab.
+                self.state.focus_mode = false;
+                if scene_before != self.state.settings.scene {
+                    // The lab's box comes from no file.
+                    self.state.obj_path.clear();
+                }
                 self.set_status(StatusKind::Info, "Reset to the lab's defaults (figure 7)");
             }
             Command::SaveScreenshot => {
@@ -958,17 +1042,39 @@ impl WorkbenchApp {
             }
             Command::WalkTo(step) => {
                 let step = step.filter(|&n| n < raylab_core::walkthrough::STEPS.len());
-                self.state.walk_step = step;
-                if let Some(n) = step {
-                    raylab_core::walkthrough::STEPS[n].apply(&mut self.state.settings);
+                if self.state.walk_step.is_none() && step.is_some() {
+                    // Starting: what the steps will change, to put back on leaving.
+                    self.state.walk_restore = Some(self.state.settings.clone());
                 }
+                self.state.walk_step = step;
+                match step {
+                    Some(n) => {
+                        raylab_core::walkthrough::STEPS[n].apply(&mut self.state.settings);
+                    }
+                    None => {
+                        if let Some(before) = self.state.walk_restore.take() {
+                            raylab_core::walkthrough::restore(&before, &mut self.state.settings);
+                            self.set_status(
+                                StatusKind::Info,
+                                "Left the walk-through: your stage, materials and samples are \
+                                 back as they were",
+                            );
+                        }
+                    }
+                }
+                // A step's sample target, or the user's put back, is chosen: not raised.
+                self.sampled = Sampled::of(&self.state.settings);
             }
             Command::FreezeA => {
                 // One overlay at a time: A/B or the check.
                 self.check = None;
                 self.freeze_a(ctx);
             }
-            Command::StopComparing => self.compare = None,
+            Command::StopComparing => {
+                self.compare = None;
+                // What to do while comparing goes with it.
+                self.clear_fixed_error();
+            }
             Command::OpenTyped => {
                 let typed = self.state.obj_path.trim().to_owned();
                 if typed.is_empty() {
@@ -1068,6 +1174,35 @@ impl WorkbenchApp {
                 self.set_status(StatusKind::Error, e);
             }
         }
+    }
+
+    /// Soft shadows or depth of field just turned on in a lab stage: they average random points
+    /// of the light or the lens, grainy at the lab's 16 samples, so the sample target is raised
+    /// to [`SOFT_SAMPLE_TARGET`] as the path stage raises its own, and the status line says so.
+    /// Only on the change: a target the user lowers afterwards stays as set.
+    fn refine_sampled_effects(&mut self) {
+        let now = Sampled::of(&self.state.settings);
+        let turned_on = Sampled {
+            soft_shadows: now.soft_shadows && !self.sampled.soft_shadows,
+            depth_of_field: now.depth_of_field && !self.sampled.depth_of_field,
+        };
+        self.sampled = now;
+        let settings = &mut self.state.settings;
+        let Some(what) = turned_on.name() else {
+            return;
+        };
+        if settings.samples_per_pixel >= SOFT_SAMPLE_TARGET {
+            return;
+        }
+        let from = settings.samples_per_pixel;
+        settings.samples_per_pixel = SOFT_SAMPLE_TARGET;
+        self.set_status(
+            StatusKind::Info,
+            format!(
+                "{what}: refining to {SOFT_SAMPLE_TARGET} samples (the target was {from}), so \
+                 the grain of random points averages out (noise: see Stats)"
+            ),
+        );
     }
 
     /// Saves the current full-resolution image on a short-lived thread (PNG encoding of a large
@@ -1270,10 +1405,15 @@ impl eframe::App for WorkbenchApp {
                 ));
             });
         if self.state.inspect_mode {
+            // The inspector takes what the image leaves at 1:1 (between its least and its
+            // widest), so at the default window size the 512² image is not scaled down; its
+            // lines scroll sideways when it is narrow.
+            let image = self.state.settings.camera.width as f32 / ctx.pixels_per_point();
+            let room = ui.available_width() - image - CENTRAL_MARGINS;
             egui::Panel::right("inspector")
                 .resizable(true)
-                .min_size(380.0)
-                .default_size(420.0)
+                .min_size(INSPECTOR_MIN_WIDTH)
+                .default_size(room.clamp(INSPECTOR_MIN_WIDTH, INSPECTOR_WIDTH))
                 .show(ui, |ui| {
                     let title = match self.state.pinned {
                         Some([x, y]) => format!("Inspector: pixel ({x}, {y})"),
@@ -1322,12 +1462,25 @@ impl eframe::App for WorkbenchApp {
                 }
             }
         });
-        if let Some(message) = panels::take_clamped() {
-            self.set_status(StatusKind::Notice, message);
+        match panels::take_typed() {
+            Some(panels::Typed::Problem { field, message }) => {
+                self.set_status_while(StatusKind::Notice, Cause::TypedNumber(field), message);
+            }
+            Some(panels::Typed::Fine { field }) => {
+                let stale = self
+                    .status
+                    .as_ref()
+                    .is_some_and(|s| s.cause == Some(Cause::TypedNumber(field.clone())));
+                if stale {
+                    self.status = None;
+                }
+            }
+            None => {}
         }
         for command in commands {
             self.handle(command, &ctx);
         }
+        self.refine_sampled_effects();
         self.receive_dropped_files(&ctx);
         self.file_dialog_ui(&ctx);
         self.help_ui(&ctx);

@@ -212,6 +212,11 @@ pub fn scene_ui(
                 for choice in SceneChoice::BUILT_IN {
                     let label = choice.label();
                     if ui.selectable_label(*scene == choice, label).clicked() {
+                        if *scene != choice {
+                            // The built-in scenes come from no file: a path left in the File
+                            // field would name another scene's.
+                            file_path.clear();
+                        }
                         *scene = choice;
                     }
                 }
@@ -326,15 +331,33 @@ fn position_slider(
     );
 }
 
+/// What the newest text typed into a number field came to, for the status line.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Typed {
+    /// The field named `field` got a text it could not use as it stands: not a number, or one
+    /// outside its range (then clamped). `message` says which.
+    Problem { field: String, message: String },
+    /// The field named `field` got a number in its range: a message about it is stale.
+    Fine { field: String },
+}
+
 thread_local! {
-    /// The newest "typed value was clamped" message, until the app takes it.
-    static CLAMPED: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+    /// The newest [`Typed`], until the app takes it.
+    static TYPED: std::cell::RefCell<Option<Typed>> = const { std::cell::RefCell::new(None) };
+}
+
+fn report_typed(typed: Typed) {
+    TYPED.with(|t| *t.borrow_mut() = Some(typed));
 }
 
 /// The parser of every number field. egui's own turns `NaN` into the field's maximum (NaN
 /// compares false with both ends of the range); here a text that is not a finite number —
-/// `NaN`, `inf`, `abc` — parses to nothing, so the value stays as it was. A number outside
-/// `lo..=hi` is clamped by the field as before, and [`take_clamped`] says so.
+/// `NaN`, `inf`, `abc` — parses to nothing, so the value stays as it was, and [`take_typed`]
+/// says so. A number outside `lo..=hi` is clamped by the field as before, and [`take_typed`]
+/// says so too; a number in range reports the field fine, so a message about it goes.
+///
+/// egui parses the text at every keystroke: the last report is the text as it stands. A text
+/// that is empty or only a sign or point (the start of a number being typed) reports nothing.
 pub fn typed_number<'a, T: Into<f64> + Copy>(
     name: &'a str,
     lo: T,
@@ -348,25 +371,48 @@ pub fn typed_number<'a, T: Into<f64> + Copy>(
             .trim_end_matches(" px")
             .trim_end_matches(" W")
             .trim_end_matches(" EV");
-        let v: f64 = number.trim().parse().ok().filter(|v: &f64| v.is_finite())?;
+        let number = number.trim();
+        let v = match number.parse::<f64>() {
+            Ok(v) if v.is_finite() => v,
+            parsed => {
+                if !number.chars().all(|c| matches!(c, '-' | '+' | '.')) {
+                    let what = if parsed.is_ok() {
+                        "not a finite number"
+                    } else {
+                        "not a number"
+                    };
+                    report_typed(Typed::Problem {
+                        field: name.to_owned(),
+                        message: format!("{name}: \"{number}\" is {what}, so the value was kept"),
+                    });
+                }
+                return None;
+            }
+        };
         if v < lo || v > hi {
             let to = v.clamp(lo, hi);
             let message = format!(
-                "{name}: {} is outside {} to {}, so it was set to {}",
-                number.trim(),
+                "{name}: {number} is outside {} to {}, so it was set to {}",
                 fixed(lo, 2).trim_end_matches(".00"),
                 fixed(hi, 2).trim_end_matches(".00"),
                 fixed(to, 2).trim_end_matches(".00")
             );
-            CLAMPED.with(|c| *c.borrow_mut() = Some(message));
+            report_typed(Typed::Problem {
+                field: name.to_owned(),
+                message,
+            });
+        } else {
+            report_typed(Typed::Fine {
+                field: name.to_owned(),
+            });
         }
         Some(v)
     }
 }
 
-/// The message of the newest typed value that was clamped, once.
-pub fn take_clamped() -> Option<String> {
-    CLAMPED.with(|c| c.borrow_mut().take())
+/// The newest [`Typed`] report of a number field, once.
+pub fn take_typed() -> Option<Typed> {
+    TYPED.with(|t| t.borrow_mut().take())
 }
 
 /// `v` with `decimals` decimals, never "-0.00": a value that rounds to zero shows as zero
@@ -656,6 +702,23 @@ fn material_hover(preset: MaterialPreset) -> &'static str {
     }
 }
 
+/// Why a reflecting block's front face is dark, for the Materials row: it faces the box's open
+/// front, so it reflects the void behind the camera. `None` for a preset that reflects
+/// nothing there (diffuse, glass; the rough metal in the lab stages, shaded by its highlight).
+fn reflection_hint(preset: MaterialPreset, path: bool) -> Option<&'static str> {
+    match preset {
+        MaterialPreset::Mirror | MaterialPreset::Both => Some(
+            "The mirror's front face is black: it reflects the box's open front, the void \
+             behind the camera (physically right: the lab's box has no front wall)",
+        ),
+        MaterialPreset::Rough if path => Some(
+            "The metal's front face is dark: it reflects the box's open front, the void \
+             behind the camera (physically right: the lab's box has no front wall)",
+        ),
+        _ => None,
+    }
+}
+
 /// The stage, its switches, the path tracer's bounces and the materials. `limited_bounces` is
 /// the bounce count the "Bounces" slider remembers while "Unlimited bounces" is ticked.
 pub fn shading_ui(
@@ -665,6 +728,7 @@ pub fn shading_ui(
     legend: Option<&Legend>,
     commands: &mut Vec<Command>,
 ) {
+    let computes = settings.description();
     let view = &mut settings.view;
     let roughness = &mut settings.roughness;
     let materials = &mut settings.material_preset;
@@ -677,13 +741,18 @@ pub fn shading_ui(
         commands.push(Command::SetStage(stage));
     }
     view_ui(ui, view, legend);
-    choice_ui(
-        ui,
-        "materials",
-        "Materials",
-        materials,
-        Some(material_hover),
-    );
+    ui.horizontal_wrapped(|ui| {
+        choice_ui(
+            ui,
+            "materials",
+            "Materials",
+            materials,
+            Some(material_hover),
+        );
+        if let Some(hint) = reflection_hint(*materials, path) {
+            ui.weak(hint);
+        }
+    });
     if *materials == MaterialPreset::Rough {
         ui.add(
             egui::Slider::new(roughness, MIN_ROUGHNESS..=1.0)
@@ -704,24 +773,33 @@ pub fn shading_ui(
             "Light models with their vertex normals interpolated across each triangle; the box is \
          flat either way (the lab's look). Off: every triangle flat (faceted).",
         );
-    // What the switches compute, as they are now: the one text the library keeps true.
+    // What the settings compute, as they are now: the one text the library keeps true.
     ui.horizontal_wrapped(|ui| {
         ui.weak("Computes");
-        ui.label(shading.description(*materials));
+        ui.label(computes);
     });
-    ui.checkbox(&mut shading.shadows, "Shadows")
-        .on_hover_text("Cast a shadow ray from each hit to the light (section 5.1)");
+    // The flat stage shows ρ alone: no light is computed, so neither switch changes anything.
+    let flat = shading.stage == Stage::Flat;
+    let flat_why = "The flat stage shows the reflectance ρ alone: it computes no light, so \
+                    this changes nothing (choose another stage)";
+    ui.add_enabled(!flat, egui::Checkbox::new(&mut shading.shadows, "Shadows"))
+        .on_hover_text("Cast a shadow ray from each hit to the light (section 5.1)")
+        .on_disabled_hover_text(flat_why);
     let indirect_hover = if path {
         "Follow bounces of real indirect light; off: direct light only"
     } else {
         "Add the lab's constant indirect light N (section 5.2)"
     };
-    ui.checkbox(&mut shading.indirect, "Indirect light")
-        .on_hover_text(indirect_hover);
+    ui.add_enabled(
+        !flat,
+        egui::Checkbox::new(&mut shading.indirect, "Indirect light"),
+    )
+    .on_hover_text(indirect_hover)
+    .on_disabled_hover_text(flat_why);
     let mut n = shading.indirect_light.x;
     let response = ui
         .add_enabled(
-            shading.indirect && !path,
+            shading.indirect && !path && !flat,
             egui::Slider::new(&mut n, 0.0..=1.0)
                 .custom_parser(typed_number("Indirect N", 0.0, 1.0))
                 .text("Indirect N"),
@@ -730,6 +808,8 @@ pub fn shading_ui(
         .on_disabled_hover_text(if path {
             "Not used by the path tracer: it computes the real indirect light instead, by \
              following bounces"
+        } else if flat {
+            flat_why
         } else {
             "Tick \"Indirect light\" to add N"
         });

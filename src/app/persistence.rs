@@ -43,6 +43,9 @@ pub struct WorkbenchState {
     pub focus_mode: bool,
     /// The lab walk-through's current step, if it is open.
     pub walk_step: Option<usize>,
+    /// The settings when the walk-through started: what its steps change is put back from
+    /// them on leaving ([`raylab_core::walkthrough::restore`]).
+    pub walk_restore: Option<RenderSettings>,
     /// Inspect pixels: a click on the image pins a pixel, the inspector explains it.
     pub inspect_mode: bool,
     /// The inspected pixel.
@@ -60,6 +63,7 @@ impl Default for WorkbenchState {
             limited_bounces: DEFAULT_LIMITED_BOUNCES,
             focus_mode: false,
             walk_step: None,
+            walk_restore: None,
             inspect_mode: false,
             pinned: None,
         }
@@ -102,12 +106,21 @@ impl WorkbenchState {
                 "it is from another version of raylab (format {found}, expected {STATE_VERSION})"
             ));
         }
-        let state: Self =
+        let mut state: Self =
             serde_json::from_value(value).map_err(|e| format!("it does not fit ({e})"))?;
         state
             .settings
             .validate()
             .map_err(|e| format!("it holds an {e}"))?;
+        // Settings to put back that could not be rendered are dropped: leaving the walk-through
+        // then keeps the settings on screen, which are valid.
+        if state
+            .walk_restore
+            .as_ref()
+            .is_some_and(|s| s.validate().is_err())
+        {
+            state.walk_restore = None;
+        }
         if state.render_threads == 0 {
             return Err("it asks for 0 render threads".to_owned());
         }

@@ -2,14 +2,13 @@
 //! estimated remaining noise and the time from a change to its first image on screen.
 
 use eframe::egui;
-use raylab_core::film::NoiseEstimate;
+use raylab_core::film::{CLEAN_RELATIVE_ERROR, NoiseEstimate};
 
 /// What the noise figures mean, for their hover text.
-const NOISE_HOVER: &str = "The standard error of the accumulated mean, estimated from the spread \
-    of each pixel's samples: how far the image may still be from the converged one. \
-    \"Noise\" is that error for the whole image's mean value, relative to it; \
-    \"Pixels above 1 %\" counts the pixels whose own error is above 1 % of their value \
-    (visible grain). Both shrink as 1/√samples.";
+const NOISE_HOVER: &str = "How far the image may still be from the converged one: each pixel's \
+    standard error, estimated from the spread of its samples, as an RMS over the image relative \
+    to the image's RMS brightness. Grain stops showing at about 1 %. The error shrinks as \
+    1/√samples: four times the samples halve it, which is how the time to 1 % is estimated.";
 
 #[derive(Clone, Debug, Default)]
 pub struct Stats {
@@ -31,6 +30,8 @@ pub struct Stats {
     pub threads: usize,
     /// The estimated remaining noise of the shown image (from 2 samples on).
     pub noise: Option<NoiseEstimate>,
+    /// From the change to the shown frame's pass, in ms: what its samples took.
+    pub elapsed_ms: f64,
     /// What the shown debug view's colours mean (none for the shaded image).
     pub legend: Option<raylab_core::view::Legend>,
 }
@@ -47,7 +48,48 @@ pub fn percent(fraction: f64) -> String {
     format!("{p:.decimals$} %")
 }
 
+/// A duration for a person: "under 1 s", "40 s", "3 min", "2.5 h".
+pub fn duration(seconds: f64) -> String {
+    if seconds < 1.0 {
+        "under 1 s".to_owned()
+    } else if seconds < 90.0 {
+        format!("{seconds:.0} s")
+    } else if seconds < 90.0 * 60.0 {
+        format!("{:.0} min", seconds / 60.0)
+    } else {
+        format!("{:.1} h", seconds / 3600.0)
+    }
+}
+
+/// Where the noise stands against [`CLEAN_RELATIVE_ERROR`] (1 %), and what it takes to get
+/// there: the samples so far, the target, and the time they took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ToClean {
+    /// At or below 1 %.
+    Clean,
+    /// 1 % is reached before the target, in about this many seconds.
+    In(f64),
+    /// 1 % needs about this many samples, more than the target.
+    Needs(f64),
+}
+
 impl Stats {
+    /// The way to a clean image, once there is a noise estimate.
+    pub fn to_clean(&self) -> Option<ToClean> {
+        let noise = self.noise.filter(|_| !self.is_preview)?;
+        if noise.relative_rms_error <= CLEAN_RELATIVE_ERROR {
+            return Some(ToClean::Clean);
+        }
+        let needed = noise.samples_to_reach(self.samples, CLEAN_RELATIVE_ERROR);
+        if needed > f64::from(self.target) {
+            return Some(ToClean::Needs(needed));
+        }
+        let elapsed = self.elapsed_ms / 1e3;
+        Some(ToClean::In(
+            noise.seconds_to_reach(CLEAN_RELATIVE_ERROR, elapsed),
+        ))
+    }
+
     /// Whether more passes are on their way.
     pub fn rendering(&self) -> bool {
         self.is_preview || self.samples < self.target
@@ -65,14 +107,18 @@ impl Stats {
             format!("{}/{} spp", self.samples, self.target)
         };
         let frame = self.frame_cpu_ms.unwrap_or(self.ui_frame_ms);
-        match self.noise.filter(|_| !self.is_preview) {
-            Some(noise) => format!(
-                "{pass} · UI {frame:.1} ms · {samples} · noise ±{}, {} px > 1 %",
-                percent(noise.relative_error_of_mean),
-                percent(noise.share_of_pixels_above_1_percent)
-            ),
-            None => format!("{pass} · UI {frame:.1} ms · {samples}"),
-        }
+        let Some((noise, to_clean)) = self.noise.zip(self.to_clean()) else {
+            return format!("{pass} · UI {frame:.1} ms · {samples}");
+        };
+        let to_clean = match to_clean {
+            ToClean::Clean => "clean".to_owned(),
+            ToClean::In(s) => format!("1 % in {}", duration(s)),
+            ToClean::Needs(n) => format!("1 % at ~{n:.0} spp"),
+        };
+        format!(
+            "{pass} · UI {frame:.1} ms · {samples} · noise ±{}, {to_clean}",
+            percent(noise.relative_rms_error)
+        )
     }
 
     /// The figures a user watches, in two lines pinned above the scrolled panel: the pass time,
@@ -132,17 +178,25 @@ impl Stats {
             format!("Samples: {} / {}", self.samples, self.target)
         };
         ui.label(&text);
-        if let Some(noise) = self.noise.filter(|_| !self.is_preview) {
+        if let Some((noise, to_clean)) = self.noise.zip(self.to_clean()) {
             ui.label(format!(
-                "Noise: ±{} of the image mean",
-                percent(noise.relative_error_of_mean)
+                "Noise: ±{} (RMS over the image)",
+                percent(noise.relative_rms_error)
             ))
             .on_hover_text(NOISE_HOVER);
-            ui.label(format!(
-                "Pixels above 1 %: {}",
-                percent(noise.share_of_pixels_above_1_percent)
-            ))
-            .on_hover_text(NOISE_HOVER);
+            let text = match to_clean {
+                ToClean::Clean => "Below 1 %: clean to the eye".to_owned(),
+                ToClean::In(s) if self.rendering() => {
+                    format!("1 % (clean) in about {}", duration(s))
+                }
+                // Rounding: at the target, with the error a hair above 1 %.
+                ToClean::In(_) => "About 1 %: clean to the eye".to_owned(),
+                ToClean::Needs(n) => format!(
+                    "1 % (clean) needs about {n:.0} samples: raise the sample target (now {})",
+                    self.target
+                ),
+            };
+            ui.label(text).on_hover_text(NOISE_HOVER);
         }
         let fraction = self.progress();
         // No animation once done: an animated bar would keep the app repainting.
@@ -178,16 +232,42 @@ mod tests {
         };
         assert!(!stats.summary().contains("noise"));
         stats.samples = 2;
+        // 4 % after 2 samples in 0.5 s: 1 % needs 2 · 4² = 32 samples, above the target.
         stats.noise = Some(NoiseEstimate {
             relative_error_of_mean: 0.0042,
             share_of_pixels_above_1_percent: 0.5,
+            relative_rms_error: 0.04,
         });
+        stats.elapsed_ms = 600.0;
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
+        assert!(
+            matches!(stats.to_clean(), Some(ToClean::Needs(n)) if near(n, 32.0)),
+            "{:?}",
+            stats.to_clean()
+        );
         assert!(
             stats
                 .summary()
-                .ends_with("2/8 spp · noise ±0.42 %, 50.0 % px > 1 %"),
+                .ends_with("2/8 spp · noise ±4.0 %, 1 % at ~32 spp"),
             "{}",
             stats.summary()
         );
+        // With a target of 64: 0.6 s · (4² − 1) = 9 s more.
+        stats.target = 64;
+        assert!(
+            matches!(stats.to_clean(), Some(ToClean::In(s)) if near(s, 9.0)),
+            "{:?}",
+            stats.to_clean()
+        );
+        assert!(
+            stats.summary().ends_with("noise ±4.0 %, 1 % in 9 s"),
+            "{}",
+            stats.summary()
+        );
+        stats.noise = stats.noise.map(|n| NoiseEstimate {
+            relative_rms_error: 0.009,
+            ..n
+        });
+        assert!(stats.summary().ends_with("noise ±0.90 %, clean"));
     }
 }

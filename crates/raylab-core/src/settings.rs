@@ -213,6 +213,53 @@ impl RenderSettings {
         )
     }
 
+    /// What a render of these settings computes: the stage and its switches in the lab's
+    /// terms ([`Shading::description`]), then one short clause for each extension that changes
+    /// it: textures (where ρ is used), an area light (the lab stages soften their shadows with
+    /// it; the path tracer sees it whole), a coloured light, depth of field, and the lab stages'
+    /// anti-aliasing over more than one sample. An extension that does nothing in the stage
+    /// (the light in the flat stage, ρ in the incoming-light stage) is not named.
+    pub fn description(&self) -> String {
+        let s = &self.shading;
+        let mut text = s.description(self.material_preset);
+        let lit = s.stage != Stage::Flat;
+        let mut add = |clause: String| {
+            text.push_str(" · ");
+            text.push_str(&clause);
+        };
+        if self.texture_preset != TexturePreset::None && s.stage != Stage::Incoming {
+            add("textured ρ".to_owned());
+        }
+        if lit && self.light.is_area() {
+            let size = short(self.light.radius);
+            let light = match self.light.effective_shape() {
+                crate::light::LightShape::Quad => format!("a square light of side {size}"),
+                _ => format!("a light of radius {size}"),
+            };
+            if s.stage == Stage::Path {
+                add(format!("{light}, seen and sampled"));
+            } else if s.shadows {
+                add(format!("soft shadows from {light}"));
+            }
+        }
+        if lit && self.light.colour != Vec3::ONE {
+            add("coloured light".to_owned());
+        }
+        if self.camera.aperture > 0.0 {
+            add(format!(
+                "depth of field (aperture {})",
+                short(self.camera.aperture)
+            ));
+        }
+        if self.samples_per_pixel > 1 && s.stage != Stage::Path {
+            add(format!(
+                "anti-aliased over {} samples",
+                self.samples_per_pixel
+            ));
+        }
+        text
+    }
+
     /// Checks every value before a render: sizes in 1..=16384, finite numbers, a positive focal
     /// length, light power, colour and indirect light from 0 to their maxima, 1..=65536
     /// samples.
@@ -338,6 +385,17 @@ impl RenderSettings {
     }
 }
 
+/// A length for a sentence: at most three decimals, without trailing zeros (0.15, 0.1, 2).
+fn short(v: f32) -> String {
+    let text = format!("{v:.3}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".to_owned()
+    } else {
+        text.to_owned()
+    }
+}
+
 /// The GGX roughness α a rough metal may have: from [`MIN_ROUGHNESS`] (nearly a mirror; below
 /// it the microfacet distribution's peak exceeds what `f32` evaluates well) to 1.
 pub fn check_roughness(name: &'static str, alpha: f32) -> Result<(), SettingsError> {
@@ -442,6 +500,55 @@ pub fn from_json(text: &str) -> Result<Loaded, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The description names each extension in force, once, and none that does nothing in
+    /// the stage.
+    #[test]
+    fn the_description_names_the_extensions() {
+        let mut s = RenderSettings::default();
+        assert_eq!(s.description(), "ρ·(D + N) (eq. 30) with shadows (§5.1)");
+        s.texture_preset = TexturePreset::CheckerFloor;
+        s.light.radius = 0.15;
+        s.camera.aperture = 0.1;
+        s.light.colour = Vec3::new(1.0, 0.5, 0.2);
+        s.samples_per_pixel = 16;
+        assert_eq!(
+            s.description(),
+            "ρ·(D + N) (eq. 30) with shadows (§5.1) · textured ρ · soft shadows from a light of \
+             radius 0.15 · coloured light · depth of field (aperture 0.1) · anti-aliased over 16 \
+             samples"
+        );
+        // Without shadows the lab stages take the light from its centre: its size does nothing.
+        s.shading.shadows = false;
+        assert!(!s.description().contains("radius"), "{}", s.description());
+        // The flat stage computes no light; the incoming light no ρ.
+        s.shading = Shading::for_stage(Stage::Flat);
+        assert_eq!(
+            s.description(),
+            "ρ, the reflectance · textured ρ · depth of field (aperture 0.1) · anti-aliased \
+             over 16 samples"
+        );
+        s.shading = Shading::for_stage(Stage::Incoming);
+        assert!(!s.description().contains("textured"), "{}", s.description());
+        // The path tracer sees the area light itself; its samples are not anti-aliasing alone.
+        s.shading = Shading::for_stage(Stage::Path);
+        s.light.shape = crate::light::LightShape::Quad;
+        let path = s.description();
+        assert!(
+            path.contains("· a square light of side 0.15, seen and sampled"),
+            "{path}"
+        );
+        assert!(!path.contains("anti-aliased"), "{path}");
+        s.material_preset = MaterialPreset::Mirror;
+        assert!(s.description().contains("; mirror tall block sampled"));
+        s.shading = Shading::for_stage(Stage::Lab);
+        assert!(
+            s.description()
+                .contains("; mirror tall block followed up to 6 deep (Whitted)")
+        );
+        s.material_preset = MaterialPreset::Rough;
+        assert!(s.description().contains("GGX highlight"));
+    }
 
     #[test]
     fn defaults_are_valid_and_round_trip_through_json() {

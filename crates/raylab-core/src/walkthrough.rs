@@ -55,6 +55,19 @@ impl Step {
     }
 }
 
+/// Leaving the walk: puts back in `settings` what the steps set ([`Step::apply`]: the shading,
+/// the materials and textures, the sample target, the light's size and shape) as `before`, the
+/// settings when the walk started, had them. What the user changed meanwhile that the steps
+/// never set (the camera, the light's position, power and colour, the scene) stays as it is now.
+pub fn restore(before: &RenderSettings, settings: &mut RenderSettings) {
+    settings.shading = before.shading;
+    settings.material_preset = before.material_preset;
+    settings.texture_preset = before.texture_preset;
+    settings.samples_per_pixel = before.samples_per_pixel;
+    settings.light.radius = before.light.radius;
+    settings.light.shape = before.light.shape;
+}
+
 /// The walk: the lab's figures 2, 3, 5, 6 and 7, then anti-aliasing, path tracing, soft shadows,
 /// and mirror and glass.
 pub const STEPS: [Step; 9] = [
@@ -158,7 +171,7 @@ pub const STEPS: [Step; 9] = [
                partly lit: the shadows' edges soften into penumbrae.",
         settings: StepSettings {
             stage: Stage::Lab,
-            samples: 64,
+            samples: 256,
             materials: MaterialPreset::None,
             light_radius: 0.1,
         },
@@ -210,6 +223,31 @@ mod tests {
             assert_eq!(walked.light.position, user.light.position);
             assert_eq!(walked.light.power, user.light.power);
             walked.validate().unwrap();
+        }
+    }
+
+    /// Leaving after any step gives back the settings the walk started from, with the camera
+    /// and light position the user moved meanwhile.
+    #[test]
+    fn leaving_restores_what_the_steps_set() {
+        let mut user = RenderSettings::default();
+        user.shading = Shading::for_stage(Stage::Shadows);
+        user.shading.specular_depth = 3;
+        user.material_preset = MaterialPreset::Glass;
+        user.texture_preset = TexturePreset::GridWalls;
+        user.samples_per_pixel = 5;
+        user.light.radius = 0.2;
+        user.light.shape = crate::light::LightShape::Quad;
+        for step in STEPS {
+            let mut walked = user.clone();
+            step.apply(&mut walked);
+            walked.camera.position.x = 0.4;
+            walked.light.position.y = -0.2;
+            restore(&user, &mut walked);
+            let mut expected = user.clone();
+            expected.camera.position.x = 0.4;
+            expected.light.position.y = -0.2;
+            assert_eq!(walked, expected, "{}", step.title);
         }
     }
 }

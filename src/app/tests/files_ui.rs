@@ -249,7 +249,7 @@ fn a_long_load_shows_progress_and_can_be_cancelled() {
 }
 
 /// Types `text` into the value box of the number field labelled `label`, then Enter.
-fn type_number(h: &mut Harness<'_, WorkbenchApp>, label: &str, text: &str) {
+pub(super) fn type_number(h: &mut Harness<'_, WorkbenchApp>, label: &str, text: &str) {
     let node = h
         .query_all_by_label(label)
         .find(|n| n.accesskit_node().role() == Role::SpinButton)

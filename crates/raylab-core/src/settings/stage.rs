@@ -201,15 +201,30 @@ impl Shading {
                 format!("π × radiance: ρ·D{shadows} at every diffuse hit; {bounces}")
             }
         };
-        if materials != MaterialPreset::None {
-            if self.stage == Stage::Path {
-                text.push_str("; mirror and glass sampled");
-            } else {
-                text.push_str(&format!(
-                    "; mirror and glass followed up to {} deep (Whitted)",
-                    self.specular_depth
-                ));
+        // The preset named as the selector names it ("mirror tall block", …).
+        let named = || {
+            let label = materials.label();
+            let mut chars = label.chars();
+            chars.next().map_or_else(String::new, |first| {
+                first.to_lowercase().chain(chars).collect::<String>()
+            })
+        };
+        match (materials, self.stage) {
+            (MaterialPreset::None, _) => {}
+            (MaterialPreset::Rough, Stage::Path) => {
+                text.push_str("; rough metal tall block sampled (GGX)");
             }
+            // The lab stages shade the rough metal as a surface whose ρ is its GGX reflection
+            // toward the light's centre: a highlight, no reflected ray.
+            (MaterialPreset::Rough, _) => {
+                text.push_str("; rough metal tall block: its GGX highlight from the light");
+            }
+            (_, Stage::Path) => text.push_str(&format!("; {} sampled", named())),
+            _ => text.push_str(&format!(
+                "; {} followed up to {} deep (Whitted)",
+                named(),
+                self.specular_depth
+            )),
         }
         text
     }
