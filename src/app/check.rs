@@ -23,6 +23,7 @@ use raylab_core::scene::Scene;
 
 use super::Command;
 use super::compare::{Divider, Texture, paint_wipe, tag};
+use super::viewport::Overlay;
 
 /// What [`StudentCheck::update`] tells the app.
 #[derive(Debug, PartialEq)]
@@ -289,6 +290,22 @@ impl StudentCheck {
             "Your image: ({}, {}, {}) · exact figure: ({}, {}, {}) · {verdict}",
             a[0], a[1], a[2], b[0], b[1], b[2]
         ))
+    }
+}
+
+impl Overlay for StudentCheck {
+    fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, _live: egui::TextureId) {
+        StudentCheck::paint(self, ui, rect);
+    }
+
+    fn divider_input(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        rect: egui::Rect,
+        on_marker: bool,
+    ) -> bool {
+        StudentCheck::divider_input(self, ui, response, rect, on_marker)
     }
 }
 

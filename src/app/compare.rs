@@ -27,7 +27,7 @@ use raylab_core::scene::Scene;
 use raylab_core::{Camera, Image, RenderSettings, Shading};
 
 use super::stats::Stats;
-use super::viewport::filter_for;
+use super::viewport::{Overlay, filter_for};
 use super::{Command, Shown, StatusKind, WorkbenchApp};
 
 /// A drag that starts this close to the divider, in points, moves it.
@@ -450,6 +450,22 @@ impl Compare {
     #[cfg(test)]
     pub fn inject_panic_on_next_pass(&self) {
         self.controller.inject_panic_on_next_pass();
+    }
+}
+
+impl Overlay for Compare {
+    fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, live: egui::TextureId) {
+        Compare::paint(self, ui, rect, live);
+    }
+
+    fn divider_input(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        rect: egui::Rect,
+        on_marker: bool,
+    ) -> bool {
+        Compare::divider_input(self, ui, response, rect, on_marker)
     }
 }
 

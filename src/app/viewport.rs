@@ -189,8 +189,8 @@ impl Viewport {
     }
 }
 
-/// What stands in for the live image: the A/B wipe ([`super::compare::Compare`]) or a
-/// student's image against the exact figure ([`super::check::StudentCheck`]).
+/// What stands in for the live image: the A/B wipe, or a student's image against the exact
+/// figure. Implemented where each is defined (the viewport knows neither).
 pub trait Overlay {
     /// Draws into `rect`, the live image's rect; `live` is the live image's texture.
     fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, live: egui::TextureId);
@@ -204,38 +204,6 @@ pub trait Overlay {
         rect: egui::Rect,
         on_marker: bool,
     ) -> bool;
-}
-
-impl Overlay for super::compare::Compare {
-    fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, live: egui::TextureId) {
-        super::compare::Compare::paint(self, ui, rect, live);
-    }
-
-    fn divider_input(
-        &mut self,
-        ui: &egui::Ui,
-        response: &egui::Response,
-        rect: egui::Rect,
-        on_marker: bool,
-    ) -> bool {
-        super::compare::Compare::divider_input(self, ui, response, rect, on_marker)
-    }
-}
-
-impl Overlay for super::check::StudentCheck {
-    fn paint(&mut self, ui: &egui::Ui, rect: egui::Rect, _live: egui::TextureId) {
-        super::check::StudentCheck::paint(self, ui, rect);
-    }
-
-    fn divider_input(
-        &mut self,
-        ui: &egui::Ui,
-        response: &egui::Response,
-        rect: egui::Rect,
-        on_marker: bool,
-    ) -> bool {
-        super::check::StudentCheck::divider_input(self, ui, response, rect, on_marker)
-    }
 }
 
 /// The light where the camera sees it: a small sun, yellow with a dark rim so it shows on light
