@@ -804,10 +804,13 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
         check::memory_estimate(image.width, image.height) + settings.scene.memory_estimate(),
     )?;
     let pool = thread_pool("check", args.options.threads)?;
-    let checked = pool.install(|| -> anyhow::Result<check::Checked> {
+    let mut checked = pool.install(|| -> anyhow::Result<check::Checked> {
         let scene = settings.scene.load()?;
         Ok(check::check(&scene, &settings, &image)?)
     })?;
+    if let Some(note) = check::lossy_note(&args.image) {
+        checked.report.notes.push(note.to_owned());
+    }
     if let Some(path) = &args.diff_out {
         check::compare::difference_picture(&image, &checked.figure)
             .to_image()

@@ -161,10 +161,13 @@ impl StudentCheck {
         {
             let (tx, rx) = mpsc::channel();
             let (scene, image, settings) = (Arc::clone(scene), Arc::clone(image), wanted.clone());
-            let repaint = ctx.clone();
+            let (repaint, lossy) = (ctx.clone(), check::lossy_note(&self.path));
             std::thread::spawn(move || {
                 let result = catch_panic(|| {
-                    check::check(&scene, &settings, &image).map_err(|e| e.to_string())
+                    let mut checked =
+                        check::check(&scene, &settings, &image).map_err(|e| e.to_string())?;
+                    checked.report.notes.extend(lossy.map(str::to_owned));
+                    Ok(checked)
                 })
                 .and_then(|r| r);
                 let _ = tx.send(result);

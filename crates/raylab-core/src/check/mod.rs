@@ -23,7 +23,7 @@ use serde::{Serialize, Serializer};
 
 pub use compare::{Rgb8, WorstBlock};
 pub use mistakes::{Kind, Mistake};
-pub use student::{ReadError, read_image};
+pub use student::{LOSSY_NOTE, ReadError, lossy_note, read_image};
 
 use crate::integrator::Stage;
 use crate::scene::Scene;

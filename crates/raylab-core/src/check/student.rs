@@ -28,6 +28,17 @@ pub struct ReadError {
     pub reason: String,
 }
 
+/// The note a check of a JPEG gets: its compression moves pixels by a few levels, so even the
+/// exact figure saved as JPEG leaves some of them beyond 2/255.
+pub const LOSSY_NOTE: &str = "the image is a JPEG: its compression moves pixels by a few levels, \
+     so the match is lower than the tracer's own; save PNG, BMP or PPM for an exact check";
+
+/// [`LOSSY_NOTE`] when `path` names a JPEG.
+pub fn lossy_note(path: &Path) -> Option<&'static str> {
+    let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
+    matches!(ext.as_str(), "jpg" | "jpeg").then_some(LOSSY_NOTE)
+}
+
 /// The image at `path`, as 8-bit RGB (grey images made RGB, alpha dropped: SDL's 32-bit BMPs
 /// carry an unused fourth byte).
 pub fn read_image(path: &Path) -> Result<Rgb8, ReadError> {
