@@ -232,7 +232,8 @@ pub struct RenderOptions {
     #[arg(long, value_parser = parse_finite, value_name = "A", allow_hyphen_values = true)]
     pub roughness: Option<f32>,
     /// Textures: none (the lab's plain colours), checker-floor (a checkerboard floor),
-    /// grid-walls (grid lines on the walls and ceiling) or both.
+    /// grid-walls (grid lines on the walls and ceiling), both, or clouds (fBm clouds on the
+    /// ceiling).
     #[arg(long, default_value = "none", value_name = "PRESET")]
     pub texture_preset: TexturePreset,
     /// Smooth shading of models (interpolated vertex normals); the box stays flat either way.

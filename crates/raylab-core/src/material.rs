@@ -87,13 +87,19 @@ impl Material {
         }
     }
 
-    /// ρ at a hit with texture coordinates `uv`: the texture's value where there is one, else
-    /// the constant reflectance (exactly, for the lab's box).
+    /// ρ at a hit at `position` with unit `normal` and texture coordinates `uv` (asked for
+    /// only by a texture that uses them): the texture's value where there is one, else the
+    /// constant reflectance (exactly, for the lab's box).
     #[inline(always)]
-    pub fn reflectance_at(&self, uv: impl FnOnce() -> glam::Vec2) -> Vec3 {
+    pub fn reflectance_at(
+        &self,
+        uv: impl FnOnce() -> glam::Vec2,
+        position: Vec3,
+        normal: Vec3,
+    ) -> Vec3 {
         match &self.texture {
             None => self.reflectance,
-            Some(texture) => texture.eval(uv()),
+            Some(texture) => texture.at(uv, position, normal),
         }
     }
 
@@ -335,6 +341,8 @@ pub enum TexturePreset {
     GridWalls,
     /// Both.
     Both,
+    /// White fBm clouds drift over the cyan ceiling ([`clouds`]).
+    Clouds,
 }
 
 /// The Cornell box's floor material, which the checkerboard presets texture.
@@ -350,7 +358,27 @@ named_enum!(TexturePreset as "texture preset" {
     CheckerFloor => "checker-floor", "Checkerboard floor";
     GridWalls => "grid-walls", "Grid on the walls";
     Both => "both", "Checkerboard and grid";
+    Clouds => "clouds", "Clouds on the ceiling";
 });
+
+/// The Cornell box's ceiling, which the clouds preset textures.
+pub const CEILING: &str = "cyan";
+
+/// The clouds preset: fBm of 7 octaves, about two cloud cells across the ceiling, over the
+/// ceiling's own cyan.
+pub fn clouds(sky: Vec3) -> Texture {
+    Texture::Clouds {
+        noise: crate::noise::Fbm {
+            seed: 7,
+            octaves: 7,
+            ..crate::noise::Fbm::default()
+        },
+        scale: 1.5,
+        sky,
+        cloud: Vec3::splat(0.9),
+        cover: 0.45,
+    }
+}
 
 impl TexturePreset {
     /// The materials with this preset's textures (the box's surfaces are found by name).
@@ -361,7 +389,9 @@ impl TexturePreset {
             .iter()
             .map(|m| {
                 let mut m = m.clone();
-                if checker && m.name == FLOOR {
+                if self == TexturePreset::Clouds && m.name == CEILING {
+                    m.texture = Some(clouds(m.reflectance));
+                } else if checker && m.name == FLOOR {
                     m.texture = Some(Texture::Checker {
                         scale: PRESET_TEXTURE_SCALE,
                         colours: [m.reflectance, Vec3::splat(0.8)],
@@ -390,6 +420,20 @@ mod tests {
             reflectance: Vec3::ZERO,
             kind: PRESET_GLASS,
             texture: None,
+        }
+    }
+
+    /// The clouds preset textures the ceiling alone, over its own colour.
+    #[test]
+    fn the_clouds_preset_textures_only_the_ceiling() {
+        let box_materials = crate::scene::cornell_box().materials;
+        let clouded = TexturePreset::Clouds.apply(&box_materials);
+        for (before, after) in box_materials.iter().zip(&clouded) {
+            if before.name == CEILING {
+                assert_eq!(after.texture, Some(clouds(before.reflectance)));
+            } else {
+                assert_eq!(after, before);
+            }
         }
     }
 

@@ -17,6 +17,8 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+use crate::noise::Fbm;
+
 /// A reflectance that varies with the texture coordinates.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Texture {
@@ -34,6 +36,53 @@ pub enum Texture {
     },
     /// An image, looked up with bilinear filtering and wrapping ([`TextureImage::bilinear`]).
     Image(Arc<TextureImage>),
+    /// Clouds: fBm noise at `uv · scale`, taken from [−1, 1] to [0, 1], blends from `sky` to
+    /// `cloud` over [`cover`, `cover` + 0.3] (a larger cover, fewer clouds).
+    Clouds {
+        noise: Fbm,
+        scale: f32,
+        sky: Vec3,
+        cloud: Vec3,
+        cover: f32,
+    },
+    /// A landscape's colours by height and slope ([`terrain_colour`]): grass, rock where
+    /// steep, snow up high, their borders broken up by fBm `noise`. Looked up by position and
+    /// normal, not texture coordinates.
+    Terrain {
+        /// The y of the ground the heights are measured from (raylab's y points down).
+        floor: f32,
+        /// The height that counts as the top.
+        height: f32,
+        noise: Fbm,
+    },
+}
+
+/// The terrain's grass, rock and snow (linear reflectances).
+pub const GRASS: Vec3 = Vec3::new(0.18, 0.38, 0.10);
+pub const ROCK: Vec3 = Vec3::new(0.42, 0.38, 0.33);
+pub const SNOW: Vec3 = Vec3::new(0.85, 0.87, 0.90);
+
+/// 0 below `a`, 1 above `b`, and 3t² − 2t³ between.
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The colour of a landscape at `position` with unit normal `normal`: its altitude
+/// a = (floor − y)/height (0 on the ground, 1 at the top) and steepness s = 1 − |n_y| (0 flat,
+/// 1 a cliff), the noise n ∈ [−1, 1] at the point's (x, z) moving each border a little:
+/// rock takes over from grass for s from 0.3 to 0.5 (+ 0.08·n), and snow lies above
+/// a = 0.4 (+ 0.08·n) where s is under about 0.5.
+pub fn terrain_colour(floor: f32, height: f32, noise: &Fbm, position: Vec3, normal: Vec3) -> Vec3 {
+    let altitude = ((floor - position.y) / height).clamp(0.0, 1.0);
+    let steep = 1.0 - normal.y.abs().min(1.0);
+    let n = noise.at(Vec2::new(position.x, position.z) * 6.0);
+    let rock = smoothstep(0.3, 0.5, steep + 0.08 * n);
+    let snow_line = 0.4 + 0.08 * n;
+    let snow = smoothstep(snow_line - 0.04, snow_line + 0.04, altitude)
+        * (1.0 - smoothstep(0.45, 0.6, steep));
+    let ground = GRASS + (ROCK - GRASS) * rock;
+    ground + (SNOW - ground) * snow
 }
 
 impl Texture {
@@ -62,6 +111,32 @@ impl Texture {
                 if on_line { *line } else { *background }
             }
             Texture::Image(image) => image.bilinear(uv),
+            Texture::Clouds {
+                noise,
+                scale,
+                sky,
+                cloud,
+                cover,
+            } => {
+                let n = 0.5 * noise.at(uv * *scale) + 0.5;
+                *sky + (*cloud - *sky) * smoothstep(*cover, *cover + 0.3, n)
+            }
+            // Without a position: the ground's colour.
+            Texture::Terrain { .. } => GRASS,
+        }
+    }
+
+    /// ρ at a hit: at `position` with unit `normal`, and texture coordinates `uv` (computed
+    /// only for the textures that use them).
+    #[inline]
+    pub fn at(&self, uv: impl FnOnce() -> Vec2, position: Vec3, normal: Vec3) -> Vec3 {
+        match self {
+            Texture::Terrain {
+                floor,
+                height,
+                noise,
+            } => terrain_colour(*floor, *height, noise, position, normal),
+            _ => self.eval(uv()),
         }
     }
 }
@@ -322,6 +397,78 @@ pub fn planar_uv(position: Vec3, normal: Vec3) -> Vec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The landscape's colours at the ends of its ramps, where the noise cannot move a border
+    /// (it moves each by at most 0.08): flat ground on the floor is grass, a cliff low down is
+    /// rock, flat ground at the top is snow, a cliff at the top is rock (snow does not hold
+    /// there); between, a blend of the two.
+    #[test]
+    fn terrain_colours_by_height_and_slope() {
+        let noise = Fbm::default();
+        let at = |y: f32, normal: Vec3| {
+            terrain_colour(
+                1.0,
+                0.9,
+                &noise,
+                Vec3::new(0.3, y, -0.2),
+                normal.normalize(),
+            )
+        };
+        let up = Vec3::new(0.0, -1.0, 0.0);
+        let cliff = Vec3::new(1.0, 0.0, 0.0);
+        assert_eq!(at(1.0, up), GRASS);
+        assert_eq!(at(1.0, cliff), ROCK);
+        assert_eq!(at(1.0 - 0.9, up), SNOW);
+        assert_eq!(at(1.0 - 0.9, cliff), ROCK);
+        // Half-way up a 45° slope: steepness 1 − cos 45° = 0.29, at most 0.37 with the noise,
+        // so some rock in the grass, no snow at altitude 0.2.
+        let c = at(1.0 - 0.18, Vec3::new(1.0, -1.0, 0.0));
+        for k in 0..3 {
+            let (lo, hi) = (GRASS[k].min(ROCK[k]), GRASS[k].max(ROCK[k]));
+            assert!((lo..=hi).contains(&c[k]), "{c}");
+        }
+        // Looked up by position, whatever the texture coordinates.
+        let t = Texture::Terrain {
+            floor: 1.0,
+            height: 0.9,
+            noise,
+        };
+        assert_eq!(
+            t.at(|| Vec2::new(9.0, 9.0), Vec3::new(0.0, 1.0, 0.0), up),
+            GRASS
+        );
+    }
+
+    /// Clouds are the sky where the noise (taken to [0, 1]) is under the cover, the cloud's
+    /// colour where it is 0.3 above it, a blend between; the cover decides how much is sky.
+    #[test]
+    fn clouds_follow_the_noise() {
+        let noise = Fbm::default();
+        let (sky, cloud) = (Vec3::new(0.1, 0.7, 0.7), Vec3::splat(0.9));
+        let t = Texture::Clouds {
+            noise,
+            scale: 2.0,
+            sky,
+            cloud,
+            cover: 0.3,
+        };
+        let (mut skies, mut clouds) = (0, 0);
+        for i in 0..2000 {
+            let uv = Vec2::new(i as f32 * 0.0137, (i % 53) as f32 * 0.031);
+            let n = 0.5 * noise.at(uv * 2.0) + 0.5;
+            let got = t.eval(uv);
+            if n <= 0.3 {
+                assert_eq!(got, sky);
+                skies += 1;
+            } else if n >= 0.6 {
+                assert_eq!(got, cloud);
+                clouds += 1;
+            } else {
+                assert!(got.x > sky.x && got.x < cloud.x, "{got}");
+            }
+        }
+        assert!(skies >= 10 && clouds >= 10, "{skies} {clouds}");
+    }
 
     /// A PNG whose header says 16384² (782 KB of black can decode to 4 GiB
     /// of texels; the header alone is what is read before decoding). Decoding is refused

@@ -692,15 +692,20 @@ impl<'a> Tracer<'a> {
                 at_edge,
             };
         }
+        let normal = scene.shading_normal(index, u, v, self.shading.smooth);
         Surface {
             position: hit.position,
-            normal: scene.shading_normal(index, u, v, self.shading.smooth),
+            normal,
             geometric,
-            rho: material.reflectance_at(|| {
-                scene
-                    .uv(index, u, v)
-                    .unwrap_or_else(|| planar_uv(hit.position, geometric))
-            }),
+            rho: material.reflectance_at(
+                || {
+                    scene
+                        .uv(index, u, v)
+                        .unwrap_or_else(|| planar_uv(hit.position, geometric))
+                },
+                hit.position,
+                normal,
+            ),
             at_edge,
         }
     }

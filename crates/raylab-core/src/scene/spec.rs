@@ -342,7 +342,7 @@ pub fn assemble(
         }
     }
     if let Some(spec) = terrain {
-        materials.push(Material::diffuse("terrain", terrain::TERRAIN_REFLECTANCE));
+        materials.push(terrain::terrain_material(spec));
         let material = (materials.len() - 1) as u32;
         terrain::extend_with_terrain(spec, material, &mut triangles, &mut normals);
         uvs.resize(triangles.len(), None);

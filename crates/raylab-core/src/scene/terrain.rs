@@ -8,9 +8,29 @@ use rayon::prelude::*;
 
 use super::Scene;
 use crate::geometry::Triangle;
+use crate::material::Material;
+use crate::noise::{Fbm, value_noise};
+use crate::texture::{GRASS, Texture};
 
-/// The terrain's diffuse reflectance ρ: a sandy brown.
-pub const TERRAIN_REFLECTANCE: Vec3 = Vec3::new(0.75, 0.65, 0.45);
+/// The terrain's material: diffuse, coloured by height and slope ([`crate::texture::terrain_colour`]) with
+/// the borders between grass, rock and snow broken up by fBm noise of the terrain's seed.
+pub fn terrain_material(spec: &TerrainSpec) -> Material {
+    Material {
+        texture: Some(Texture::Terrain {
+            floor: FLOOR_Y,
+            height: spec.height,
+            noise: Fbm {
+                seed: spec.seed ^ 0x7e55_a1e5_0c01_0a25,
+                octaves: 5,
+                ..Fbm::default()
+            },
+        }),
+        ..Material::diffuse("terrain", GRASS)
+    }
+}
+
+/// The floor's y (raylab's y points down: heights go towards −y).
+pub const FLOOR_Y: f32 = 1.0;
 
 /// What to generate.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -35,31 +55,6 @@ impl Default for TerrainSpec {
             octaves: 9,
         }
     }
-}
-
-/// Uniform in [0, 1) from a lattice point: a hash, so any point can be evaluated alone.
-fn lattice(seed: u64, x: i64, z: i64) -> f32 {
-    let mut h = seed ^ (x as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    h ^= (z as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f);
-    h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    h ^= h >> 31;
-    (h >> 40) as f32 / (1u64 << 24) as f32
-}
-
-/// Smoothly interpolated value noise in [0, 1).
-fn value_noise(seed: u64, x: f32, z: f32) -> f32 {
-    let (xf, zf) = (x.floor(), z.floor());
-    let (xi, zi) = (xf as i64, zf as i64);
-    let smooth = |t: f32| t * t * (3.0 - 2.0 * t);
-    let (sx, sz) = (smooth(x - xf), smooth(z - zf));
-    let a = lattice(seed, xi, zi);
-    let b = lattice(seed, xi + 1, zi);
-    let c = lattice(seed, xi, zi + 1);
-    let d = lattice(seed, xi + 1, zi + 1);
-    let top = a + (b - a) * sx;
-    let bottom = c + (d - c) * sx;
-    top + (bottom - top) * sz
 }
 
 /// Fractional Brownian motion at `(x, z)` in [−1, 1]², normalised to [0, 1), faded to 0 at the
