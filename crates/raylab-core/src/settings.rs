@@ -228,7 +228,10 @@ impl RenderSettings {
             text.push_str(&clause);
         };
         if self.texture_preset != TexturePreset::None && s.stage != Stage::Incoming {
-            add("textured ρ".to_owned());
+            add(match self.texture_preset {
+                TexturePreset::Clouds => "ρ of fBm clouds on the ceiling".to_owned(),
+                _ => "textured ρ".to_owned(),
+            });
         }
         if lit && self.light.is_area() {
             let size = short(self.light.radius);
