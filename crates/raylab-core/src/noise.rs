@@ -87,6 +87,27 @@ pub fn perlin(seed: u64, p: Vec2) -> f32 {
     bottom + (top - bottom) * v
 }
 
+/// [`perlin`] that repeats every `period` lattice cells in x and y (the lattice's
+/// coordinates taken modulo the period): a tile whose copies meet without a seam.
+pub fn perlin_periodic(seed: u64, p: Vec2, period: i64) -> f32 {
+    let period = period.max(1);
+    let f = p.floor();
+    let (xi, yi) = (f.x as i64, f.y as i64);
+    let d = p - f;
+    let corner = |cx: i64, cy: i64| {
+        let g = gradient(
+            seed,
+            (xi + cx).rem_euclid(period),
+            (yi + cy).rem_euclid(period),
+        );
+        g.x * (d.x - cx as f32) + g.y * (d.y - cy as f32)
+    };
+    let (u, v) = (fade(d.x), fade(d.y));
+    let bottom = corner(0, 0) + (corner(1, 0) - corner(0, 0)) * u;
+    let top = corner(0, 1) + (corner(1, 1) - corner(0, 1)) * u;
+    bottom + (top - bottom) * v
+}
+
 /// Fractional Brownian motion: `octaves` octaves of [`perlin`] noise, octave k at frequency
 /// lacunarityᵏ with amplitude gainᵏ, each with its own seed, normalised by the sum of the
 /// amplitudes so the result stays within [−1, 1].
@@ -124,6 +145,27 @@ impl Fbm {
                 .seed
                 .wrapping_add(u64::from(octave).wrapping_mul(0x632b_e59b_d9b4_e019));
             sum += amplitude * perlin(seed, p * frequency);
+            norm += amplitude;
+            amplitude *= self.gain;
+            frequency *= self.lacunarity;
+        }
+        if norm > 0.0 { sum / norm } else { 0.0 }
+    }
+
+    /// The noise at `p` in [0, 1)² of a tile that repeats with period 1, octave k drifting by
+    /// `drift[k % 4] · time` (each octave along its own direction, so the pattern changes as
+    /// it moves, as waves do): every octave is [`perlin_periodic`] with `cells · ⌊lacunarityᵏ⌉`
+    /// lattice cells across the tile, so the lacunarity is rounded to whole numbers of cells.
+    pub fn tile_at(&self, p: Vec2, cells: u32, time: f32, drift: [Vec2; 4]) -> f32 {
+        let (mut sum, mut norm) = (0.0, 0.0);
+        let (mut amplitude, mut frequency) = (1.0f32, 1.0f32);
+        for octave in 0..self.octaves.clamp(1, MAX_OCTAVES) {
+            let seed = self
+                .seed
+                .wrapping_add(u64::from(octave).wrapping_mul(0x632b_e59b_d9b4_e019));
+            let n = (cells as f32 * frequency).round().max(1.0);
+            let q = (p + drift[octave as usize % 4] * time) * n;
+            sum += amplitude * perlin_periodic(seed, q, n as i64);
             norm += amplitude;
             amplitude *= self.gain;
             frequency *= self.lacunarity;
@@ -241,6 +283,29 @@ mod tests {
         assert!((g.x - slope_x).abs() < 0.05, "{} {slope_x}", g.x);
         // A noise of one octave is exactly the Perlin noise of its seed.
         assert_eq!(fbm.at(p), perlin(fbm.seed, p));
+    }
+
+    /// A tile repeats: its values at p and p + (1, 0) or (0, 1) are the same, at any time.
+    #[test]
+    fn a_tile_repeats_without_a_seam() {
+        let fbm = Fbm::default();
+        let drift = [
+            Vec2::new(0.1, 0.0),
+            Vec2::new(0.0, 0.13),
+            Vec2::new(-0.07, 0.05),
+            Vec2::ZERO,
+        ];
+        for (i, time) in [0.0f32, 0.7, 3.25].into_iter().enumerate() {
+            let p = Vec2::new(0.123 + i as f32 * 0.2, 0.456);
+            let a = fbm.tile_at(p, 4, time, drift);
+            for shift in [Vec2::X, Vec2::Y, Vec2::new(-2.0, 3.0)] {
+                let b = fbm.tile_at(p + shift, 4, time, drift);
+                assert!((a - b).abs() < 1e-5, "{a} {b} at {p} + {shift}");
+            }
+        }
+        // The periodic noise is Perlin's inside the first period.
+        let q = Vec2::new(1.3, 2.7);
+        assert_eq!(perlin_periodic(3, q, 8), perlin(3, q));
     }
 
     /// Value noise reaches the lattice's values at its points and stays in [0, 1).
