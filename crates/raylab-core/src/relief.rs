@@ -440,6 +440,53 @@ mod tests {
         assert!(close(n, Vec3::new(0.447_214, 0.0, -0.894_427), 1e-6), "{n}");
     }
 
+    /// Maps are checked as colour textures are: a non-image, a 16-bit PNG (not reduced to 8
+    /// bits as a colour is: refused, saying so) and a header too large are errors naming the
+    /// file, never a panic.
+    #[test]
+    fn bad_maps_are_errors_naming_the_file() {
+        let message = |bytes: &[u8], decoding| {
+            TextureImage::from_encoded_as(bytes, "bumps.png", decoding)
+                .unwrap_err()
+                .to_string()
+        };
+        for decoding in [Decoding::Normal, Decoding::Height] {
+            let m = message(b"this is no image", decoding);
+            assert!(
+                m.contains("bumps.png") && m.contains("not a PNG or JPEG"),
+                "{m}"
+            );
+            let deep = image::ImageBuffer::<image::Rgb<u16>, _>::from_pixel(
+                2,
+                2,
+                image::Rgb([32768, 32768, 65535]),
+            );
+            let mut png = std::io::Cursor::new(Vec::new());
+            image::DynamicImage::from(deep)
+                .write_to(&mut png, image::ImageFormat::Png)
+                .unwrap();
+            let m = message(png.get_ref(), decoding);
+            assert!(
+                m.contains("bumps.png")
+                    && m.contains(&format!("a 16-bit {} is not read", decoding.what())),
+                "{m}"
+            );
+            let wide = image::GrayImage::new(TextureImage::MAX_SIDE + 1, 1);
+            let mut png = std::io::Cursor::new(Vec::new());
+            wide.write_to(&mut png, image::ImageFormat::Png).unwrap();
+            let m = message(png.get_ref(), decoding);
+            assert!(m.contains("too large"), "{m}");
+        }
+        // A colour texture of 16 bits is still read, reduced to 8.
+        let grey16 =
+            image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(1, 1, image::Luma([65535]));
+        let mut png = std::io::Cursor::new(Vec::new());
+        image::DynamicImage::from(grey16)
+            .write_to(&mut png, image::ImageFormat::Png)
+            .unwrap();
+        assert!(TextureImage::from_encoded(png.get_ref(), "c.png").is_ok());
+    }
+
     /// A flat map and a constant height map change nothing.
     #[test]
     fn flat_maps_are_no_relief() {

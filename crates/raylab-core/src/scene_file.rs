@@ -866,6 +866,53 @@ mod tests {
         assert_eq!(parse(&text, Path::new("/scenes")).unwrap(), s);
     }
 
+    /// Normal and height maps on a model and on a part of the box: written relative to the
+    /// file, with their strength and depth, and read back exactly; the defaults are left out.
+    #[test]
+    fn maps_round_trip_relative_to_the_file() {
+        let mut spec = SceneSpec::cornell("maps");
+        let mut model = ModelSpec::new(
+            "/scenes/models/statue.obj",
+            &crate::scene::obj::Placement::TEAPOT,
+        );
+        model.relief = ReliefSpec {
+            normal_map: Some("/scenes/maps/statue-normal.png".into()),
+            normal_strength: 0.5,
+            height_map: Some("/scenes/maps/statue-height.png".into()),
+            height_scale: 0.05,
+        };
+        spec.models.push(model);
+        spec.surfaces.push(PartRelief {
+            part: BoxPart::Floor,
+            relief: ReliefSpec {
+                height_map: Some("/scenes/maps/tiles.png".into()),
+                ..ReliefSpec::default()
+            },
+        });
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(spec)),
+            ..RenderSettings::default()
+        };
+        let text = to_text(&s, Path::new("/scenes")).unwrap();
+        for line in [
+            "normal_map = \"maps/statue-normal.png\"",
+            "normal_strength = 0.5",
+            "height_map = \"maps/statue-height.png\"",
+            "height_scale = 0.05",
+            "[[scene.surfaces]]",
+            "part = \"floor\"",
+            "height_map = \"maps/tiles.png\"",
+        ] {
+            assert!(text.contains(line), "{line}:\n{text}");
+        }
+        assert_eq!(text.matches("height_scale").count(), 1, "{text}");
+        assert_eq!(parse(&text, Path::new("/scenes")).unwrap(), s);
+        // A depth out of range names its field.
+        let bad = text.replace("height_scale = 0.05", "height_scale = 2.0");
+        let e = parse(&bad, Path::new("/scenes")).unwrap_err();
+        assert!(e.contains("scene.models[0].height_scale"), "{e}");
+    }
+
     #[test]
     fn a_built_in_scene_read_from_a_file_is_that_scene() {
         let s = RenderSettings {

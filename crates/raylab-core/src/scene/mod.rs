@@ -479,9 +479,25 @@ pub enum SceneError {
     Empty,
     #[error("loading the scene was cancelled")]
     Cancelled,
-    /// A normal or height map a scene file names could not be read.
-    #[error(transparent)]
-    Map(#[from] crate::texture::TextureError),
+    /// A normal or height map a scene file names could not be read: `what` it is, the file,
+    /// and why.
+    #[error("could not load the {what} '{name}': {reason}")]
+    Map {
+        what: &'static str,
+        name: String,
+        reason: String,
+    },
+}
+
+impl SceneError {
+    /// The error of a map (`decoding` says which kind) that could not be loaded.
+    pub fn map(decoding: crate::texture::Decoding, e: crate::texture::TextureError) -> Self {
+        SceneError::Map {
+            what: decoding.what(),
+            name: e.name,
+            reason: e.reason,
+        }
+    }
 }
 
 /// Whether the segment from a surface point to the light is blocked (lab section 5.1): a shadow

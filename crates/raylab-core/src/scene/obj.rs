@@ -1724,6 +1724,109 @@ mod tests {
         (scene, warnings)
     }
 
+    /// A PNG of one colour, 2×2.
+    fn png_of(rgb: [u8; 3]) -> Vec<u8> {
+        let image = image::RgbImage::from_pixel(2, 2, image::Rgb(rgb));
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        image.write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+        bytes.into_inner()
+    }
+
+    /// The MTL's map statements: the options skipped with their values, `-bm` kept.
+    #[test]
+    fn map_options_give_the_file_and_the_bump_multiplier() {
+        assert_eq!(
+            map_options("-bm 0.5 file.png"),
+            ("file.png".into(), Some(0.5))
+        );
+        assert_eq!(map_options("file.png"), ("file.png".into(), None));
+        assert_eq!(
+            map_options("-s 2 2 1 -o 0.5 -bm 0.25 -clamp on maps/n m.png"),
+            ("maps/n m.png".into(), Some(0.25))
+        );
+        // `-s` with one number, then the file (a number is not taken past the last word).
+        assert_eq!(map_options("-s 2 3.png"), ("3.png".into(), None));
+        assert_eq!(map_options(""), (String::new(), None));
+    }
+
+    /// `map_Bump -bm 0.5 file.png` (as Blender writes a normal map) gives the model a normal map
+    /// of strength 0.5, found beside the library; `norm file.png` is read as a normal map too,
+    /// and wins over `map_Bump`. The memory estimate counts the normal map beside the texture.
+    #[test]
+    fn a_material_librarys_normal_map_is_read() {
+        let obj = format!("mtllib model.mtl\n{TRIANGLE}");
+        let tilted = png_of([192, 128, 255]);
+        let flat = png_of([128, 128, 255]);
+        let blender = b"newmtl glaze\nKd 0.9 0.9 0.9\nmap_Bump -bm 0.5 bumps.png\n";
+        let (scene, warnings) = load_from_folder(&[
+            ("model.obj", obj.as_bytes()),
+            ("model.mtl", blender),
+            ("bumps.png", &tilted),
+        ]);
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let relief = scene.material_of(BOX).relief.clone().unwrap();
+        let map = relief.normal.as_ref().unwrap();
+        assert_eq!(map.strength, 0.5);
+        assert!(map.image.name.ends_with("bumps.png"), "{}", map.image.name);
+        assert_eq!(map.image.texels[0], Vec3::new(64.0 / 127.0, 0.0, 1.0));
+        assert!(relief.height.is_none());
+
+        let both = b"newmtl glaze\nmap_Bump bumps.png\nnorm flat.png\n";
+        let (scene, _) = load_from_folder(&[
+            ("model.obj", obj.as_bytes()),
+            ("model.mtl", both),
+            ("bumps.png", &tilted),
+            ("flat.png", &flat),
+        ]);
+        let relief = scene.material_of(BOX).relief.clone().unwrap();
+        let map = relief.normal.as_ref().unwrap();
+        assert_eq!((map.strength, map.image.texels[0]), (1.0, Vec3::Z));
+
+        // A library in a folder: the map's name is relative to it.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("lib")).unwrap();
+        std::fs::write(dir.path().join("lib/model.mtl"), blender).unwrap();
+        std::fs::write(dir.path().join("lib/bumps.png"), &tilted).unwrap();
+        let path = dir.path().join("model.obj");
+        std::fs::write(&path, format!("mtllib lib/model.mtl\n{TRIANGLE}")).unwrap();
+        let (scene, warnings) = obj_scene_with_warnings(&path).unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let relief = scene.material_of(BOX).relief.clone().unwrap();
+        assert_eq!(relief.normal.as_ref().unwrap().strength, 0.5);
+        let (_, _, normal_maps) = scan_library(blender);
+        assert_eq!(normal_maps, ["bumps.png"]);
+        let obj_len = std::fs::metadata(&path).unwrap().len();
+        let png_len = tilted.len() as u64;
+        assert_eq!(
+            memory_estimate(&path),
+            OBJ_BYTES_FACTOR * obj_len
+                + library_bytes(blender.len() as u64, 1)
+                + TextureImage::decoding_bytes(2, 2)
+                + png_len
+        );
+    }
+
+    /// A grey `map_Bump` is a bump map of heights, not a normal map: a warning, no map. A
+    /// missing or broken one is a warning too; the model loads either way.
+    #[test]
+    fn a_grey_or_missing_bump_map_is_a_warning() {
+        let obj = format!("mtllib model.mtl\n{TRIANGLE}");
+        let mtl = b"newmtl glaze\nmap_Bump bumps.png\n";
+        let grey = png_of([90, 90, 90]);
+        for (file, says) in [
+            (Some(grey.as_slice()), "is grey: a bump map of heights"),
+            (None, "bumps.png"),
+            (Some(b"not a PNG".as_slice()), "not a PNG or JPEG"),
+        ] {
+            let mut files = vec![("model.obj", obj.as_bytes()), ("model.mtl", mtl.as_slice())];
+            files.extend(file.map(|f| ("bumps.png", f)));
+            let (scene, warnings) = load_from_folder(&files);
+            assert!(scene.material_of(BOX).relief.is_none());
+            assert_eq!(warnings.len(), 1, "{warnings:?}");
+            assert!(warnings[0].contains(says), "{warnings:?}");
+        }
+    }
+
     #[test]
     fn a_missing_or_broken_material_library_or_texture_is_a_warning() {
         let obj = format!("mtllib model.mtl\n{TRIANGLE}");

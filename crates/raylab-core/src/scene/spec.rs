@@ -102,16 +102,21 @@ impl ReliefSpec {
         if self.normal_map.is_none() && self.height_map.is_none() {
             return Ok(None);
         }
+        let load = |file: &Path, decoding| {
+            TextureImage::load_as(file, decoding)
+                .map(Arc::new)
+                .map_err(|e| SceneError::map(decoding, e))
+        };
         let normal = match &self.normal_map {
             Some(file) => Some(NormalMap {
-                image: Arc::new(TextureImage::load_as(file, Decoding::Normal)?),
+                image: load(file, Decoding::Normal)?,
                 strength: self.normal_strength,
             }),
             None => None,
         };
         let height = match &self.height_map {
             Some(file) => Some(HeightMap::new(
-                Arc::new(TextureImage::load_as(file, Decoding::Height)?),
+                load(file, Decoding::Height)?,
                 self.height_scale,
             )),
             None => None,
