@@ -232,8 +232,9 @@ pub struct RenderOptions {
     #[arg(long, value_parser = parse_finite, value_name = "A", allow_hyphen_values = true)]
     pub roughness: Option<f32>,
     /// Textures: none (the lab's plain colours), checker-floor (a checkerboard floor),
-    /// grid-walls (grid lines on the walls and ceiling), both, or clouds (fBm clouds on the
-    /// ceiling).
+    /// grid-walls (grid lines on the walls and ceiling), both, clouds (fBm clouds on the
+    /// ceiling), bumpy-walls (a normal map of rounded bricks on the back and side walls) or
+    /// parallax-floor (checkerboard tiles with grout, carved by parallax occlusion mapping).
     #[arg(long, default_value = "none", value_name = "PRESET")]
     pub texture_preset: TexturePreset,
     /// Smooth shading of models (interpolated vertex normals); the box stays flat either way.

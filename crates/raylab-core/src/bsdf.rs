@@ -536,6 +536,29 @@ impl ShadingFrame {
     /// nearly grazing wo above the geometric surface.
     #[inline]
     pub fn new(shading_normal: Vec3, geometric_normal: Vec3, wo_world: Vec3) -> ShadingFrame {
+        let (ns, ng, front) = Self::normals(shading_normal, geometric_normal, wo_world);
+        ShadingFrame {
+            frame: Frame::from_normal(ns),
+            geometric: ng,
+            front,
+        }
+    }
+
+    /// The shading normal [`ShadingFrame::new`] would use (rules 1 and 2: on the geometric
+    /// side of `wo`, bent so that cos θ_o ≥ [`MIN_SHADING_COS`]), turned back to the side of
+    /// `geometric_normal` as given. For a normal map's perturbed normal, which the lab's
+    /// stages light by its cosine (equation 27) without a frame: the same rules, so a tilted
+    /// normal never faces away from the viewer (no black patches) nor crosses the surface.
+    #[inline]
+    pub fn bent_normal(shading_normal: Vec3, geometric_normal: Vec3, wo_world: Vec3) -> Vec3 {
+        let (ns, _, front) = Self::normals(shading_normal, geometric_normal, wo_world);
+        if front { ns } else { -ns }
+    }
+
+    /// Rules 1 and 2 of [`ShadingFrame::new`]: the shading normal and the geometric normal on
+    /// the side of `wo`, the first bent, and whether `wo` is on the geometric normal's side.
+    #[inline(always)]
+    fn normals(shading_normal: Vec3, geometric_normal: Vec3, wo_world: Vec3) -> (Vec3, Vec3, bool) {
         let front = wo_world.dot(geometric_normal) > 0.0;
         let ng = if front {
             geometric_normal
@@ -560,11 +583,7 @@ impl ShadingFrame {
                 ng
             };
         }
-        ShadingFrame {
-            frame: Frame::from_normal(ns),
-            geometric: ng,
-            front,
-        }
+        (ns, ng, front)
     }
 
     /// The (bent) shading frame: its normal is local z for the BSDFs.

@@ -38,6 +38,7 @@ pub mod memory;
 pub mod named;
 pub mod noise;
 pub mod progressive;
+pub mod relief;
 pub mod render;
 pub mod sampling;
 pub mod scene;

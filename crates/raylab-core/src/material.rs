@@ -23,8 +23,10 @@ use serde::{Deserialize, Serialize};
 use crate::bsdf::{Bsdf, ShadingFrame, snell_cos_t};
 pub use crate::bsdf::{fresnel_dielectric, reflect};
 use crate::named::named_enum;
+use crate::relief::Relief;
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
 use crate::texture::Texture;
+use std::sync::Arc;
 
 /// How a surface scatters light.
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
@@ -68,6 +70,10 @@ pub struct Material {
     /// the hit's texture coordinates, not `reflectance`.
     #[serde(skip)]
     pub texture: Option<Texture>,
+    /// A normal map and/or a height map ([`crate::relief`]): where set, the shading normal
+    /// and the texture coordinates at a hit are the relief's.
+    #[serde(skip)]
+    pub relief: Option<Arc<Relief>>,
 }
 
 /// A direction to continue along and the weight it carries.
@@ -84,6 +90,7 @@ impl Material {
             reflectance,
             kind: MaterialKind::Diffuse,
             texture: None,
+            relief: None,
         }
     }
 
@@ -343,6 +350,76 @@ pub enum TexturePreset {
     Both,
     /// White fBm clouds drift over the cyan ceiling ([`clouds`]).
     Clouds,
+    /// The back and side walls get a normal map of rounded bricks (generated in code,
+    /// [`crate::relief::bricks`]): relief under the point light, the walls still flat.
+    BumpyWalls,
+    /// The floor becomes the checkerboard's tiles with grout between them, carved by
+    /// parallax occlusion mapping and lit by the matching normal map
+    /// ([`crate::relief::tile`]).
+    ParallaxFloor,
+}
+
+/// The Cornell box's back and side walls (left, right, back), which the bumpy preset
+/// normal-maps.
+pub const SIDE_AND_BACK_WALLS: [&str; 3] = ["purple", "yellow", "white"];
+
+/// The bumpy walls' bricks: one pattern (four courses of two bricks) every 0.5 scene units,
+/// mortar 0.012 deep.
+pub const BRICK_PERIOD: f32 = 0.5;
+pub const BRICK_DEPTH: f32 = 0.012;
+/// The parallax floor's tiles: one a checker square (0.25), grout 0.03 deep.
+pub const TILE_DEPTH: f32 = 0.03;
+
+/// The bumpy walls' relief, made once: a 256² normal map of [`crate::relief::bricks`].
+fn brick_relief() -> Arc<Relief> {
+    static RELIEF: std::sync::OnceLock<Arc<Relief>> = std::sync::OnceLock::new();
+    RELIEF
+        .get_or_init(|| {
+            let size = 256;
+            let at = |i: u32| (i as f32 + 0.5) / size as f32;
+            let heights = |i, j| crate::relief::bricks(at(i), at(j));
+            let image = crate::relief::normal_map_of_heights(
+                "bricks",
+                size,
+                BRICK_PERIOD,
+                BRICK_DEPTH,
+                &heights,
+            );
+            Arc::new(Relief {
+                normal: Some(crate::relief::NormalMap {
+                    image: Arc::new(image),
+                    strength: 1.0,
+                }),
+                height: None,
+                uv_scale: 1.0 / BRICK_PERIOD,
+            })
+        })
+        .clone()
+}
+
+/// The parallax floor's relief, made once: a 128² height map of [`crate::relief::tile`],
+/// [`TILE_DEPTH`] deep, and the normal map of the same heights.
+fn tile_relief() -> Arc<Relief> {
+    static RELIEF: std::sync::OnceLock<Arc<Relief>> = std::sync::OnceLock::new();
+    RELIEF
+        .get_or_init(|| {
+            let size = 128;
+            let period = 1.0 / PRESET_TEXTURE_SCALE;
+            let at = |i: u32| (i as f32 + 0.5) / size as f32;
+            let heights = |i, j| crate::relief::tile(at(i), at(j));
+            let normals =
+                crate::relief::normal_map_of_heights("tiles", size, period, TILE_DEPTH, &heights);
+            let height = crate::relief::height_image("tile heights", size, &heights);
+            Arc::new(Relief {
+                normal: Some(crate::relief::NormalMap {
+                    image: Arc::new(normals),
+                    strength: 1.0,
+                }),
+                height: Some(crate::relief::HeightMap::new(Arc::new(height), TILE_DEPTH)),
+                uv_scale: PRESET_TEXTURE_SCALE,
+            })
+        })
+        .clone()
 }
 
 /// The Cornell box's floor material, which the checkerboard presets texture.
@@ -359,6 +436,8 @@ named_enum!(TexturePreset as "texture preset" {
     GridWalls => "grid-walls", "Grid on the walls";
     Both => "both", "Checkerboard and grid";
     Clouds => "clouds", "Clouds on the ceiling";
+    BumpyWalls => "bumpy-walls", "Bumpy brick walls (normal map)";
+    ParallaxFloor => "parallax-floor", "Tiled floor with depth (parallax)";
 });
 
 /// The Cornell box's ceiling, which the clouds preset textures.
@@ -383,15 +462,27 @@ pub fn clouds(sky: Vec3) -> Texture {
 impl TexturePreset {
     /// The materials with this preset's textures (the box's surfaces are found by name).
     pub fn apply(self, materials: &[Material]) -> Vec<Material> {
-        let checker = matches!(self, TexturePreset::CheckerFloor | TexturePreset::Both);
+        let checker = matches!(
+            self,
+            TexturePreset::CheckerFloor | TexturePreset::Both | TexturePreset::ParallaxFloor
+        );
         let grid = matches!(self, TexturePreset::GridWalls | TexturePreset::Both);
+        let bumpy = self == TexturePreset::BumpyWalls;
+        let parallax = self == TexturePreset::ParallaxFloor;
         materials
             .iter()
             .map(|m| {
                 let mut m = m.clone();
                 if self == TexturePreset::Clouds && m.name == CEILING {
                     m.texture = Some(clouds(m.reflectance));
-                } else if checker && m.name == FLOOR {
+                }
+                if bumpy && SIDE_AND_BACK_WALLS.contains(&m.name.as_str()) {
+                    m.relief = Some(brick_relief());
+                }
+                if parallax && m.name == FLOOR {
+                    m.relief = Some(tile_relief());
+                }
+                if checker && m.name == FLOOR {
                     m.texture = Some(Texture::Checker {
                         scale: PRESET_TEXTURE_SCALE,
                         colours: [m.reflectance, Vec3::splat(0.8)],
@@ -420,6 +511,7 @@ mod tests {
             reflectance: Vec3::ZERO,
             kind: PRESET_GLASS,
             texture: None,
+            relief: None,
         }
     }
 
@@ -458,6 +550,7 @@ mod tests {
             reflectance: Vec3::ZERO,
             kind: PRESET_MIRROR,
             texture: None,
+            relief: None,
         };
         // Sampled through the BSDF, in the shading frame: the same direction up to the
         // rounding of the change of frame.
@@ -570,6 +663,7 @@ mod tests {
                 tint: Vec3::new(0.5, 1.0, 0.25),
             },
             texture: None,
+            relief: None,
         };
         let b = tinted.specular_branches(Vec3::Y, n);
         let total: Vec3 = b.as_slice().iter().map(|(_, w)| *w).sum();

@@ -72,7 +72,7 @@ use crate::integrator::{Shading, Stage};
 use crate::light::{LightShape, PointLight};
 use crate::material::{MaterialKind, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
-use crate::scene::spec::{self, ModelSpec, SceneSpec};
+use crate::scene::spec::{self, BoxPart, ModelSpec, PartRelief, ReliefSpec, SceneSpec};
 use crate::scene::terrain::TerrainSpec;
 use crate::settings::RenderSettings;
 use crate::view::View;
@@ -308,10 +308,52 @@ struct SceneV1 {
     models: Vec<ModelV1>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     terrain: Option<TerrainV1>,
+    /// Normal and height maps for parts of the box, `[[scene.surfaces]]` with `part =
+    /// "back-wall"` (floor, left-wall, right-wall, back-wall, ceiling, short-block,
+    /// tall-block) and the maps' fields as a model has them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    surfaces: Vec<SurfaceV1>,
 }
 
 fn default_roughness() -> f32 {
     crate::material::DEFAULT_ROUGHNESS
+}
+
+fn default_strength() -> f32 {
+    1.0
+}
+
+fn is_default_strength(v: &f32) -> bool {
+    *v == default_strength()
+}
+
+fn default_height_scale() -> f32 {
+    spec::DEFAULT_HEIGHT_SCALE
+}
+
+fn is_default_height_scale(v: &f32) -> bool {
+    *v == default_height_scale()
+}
+
+/// A part of the box and its maps.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SurfaceV1 {
+    part: BoxPart,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    normal_map: Option<PathBuf>,
+    #[serde(
+        default = "default_strength",
+        skip_serializing_if = "is_default_strength"
+    )]
+    normal_strength: f32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    height_map: Option<PathBuf>,
+    #[serde(
+        default = "default_height_scale",
+        skip_serializing_if = "is_default_height_scale"
+    )]
+    height_scale: f32,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -327,6 +369,36 @@ struct ModelV1 {
     /// `{ kind = "glass", ior = 1.5, tint = [r, g, b] }` or
     /// `{ kind = "rough", alpha = 0.2, tint = [r, g, b] }`.
     material: MaterialV1,
+    /// A tangent-space normal map (PNG or JPEG, +Y up), relative to the scene file; replaces
+    /// one the model's material library names. Optional, as are the three below.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    normal_map: Option<PathBuf>,
+    /// How strongly the normal map tilts the normal (1 unless given).
+    #[serde(
+        default = "default_strength",
+        skip_serializing_if = "is_default_strength"
+    )]
+    normal_strength: f32,
+    /// A height map for parallax occlusion mapping (white is high).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    height_map: Option<PathBuf>,
+    /// How deep a height difference of 1 is, in scene units (0.02 unless given).
+    #[serde(
+        default = "default_height_scale",
+        skip_serializing_if = "is_default_height_scale"
+    )]
+    height_scale: f32,
+}
+
+impl SurfaceV1 {
+    fn relief(&self) -> ReliefSpec {
+        ReliefSpec {
+            normal_map: self.normal_map.clone(),
+            normal_strength: self.normal_strength,
+            height_map: self.height_map.clone(),
+            height_scale: self.height_scale,
+        }
+    }
 }
 
 /// A model's material: each kind with exactly its own fields (a mirror has no `ior`).
@@ -570,6 +642,21 @@ impl FileV1 {
                         yaw: m.yaw,
                         reflectance: m.reflectance.into(),
                         material: m.kind.into(),
+                        normal_map: m.relief.normal_map,
+                        normal_strength: m.relief.normal_strength,
+                        height_map: m.relief.height_map,
+                        height_scale: m.relief.height_scale,
+                    })
+                    .collect(),
+                surfaces: spec
+                    .surfaces
+                    .into_iter()
+                    .map(|p| SurfaceV1 {
+                        part: p.part,
+                        normal_map: p.relief.normal_map,
+                        normal_strength: p.relief.normal_strength,
+                        height_map: p.relief.height_map,
+                        height_scale: p.relief.height_scale,
                     })
                     .collect(),
                 terrain: spec.terrain.map(|t| TerrainV1 {
@@ -633,6 +720,20 @@ impl FileV1 {
                     yaw: m.yaw,
                     reflectance: m.reflectance.into(),
                     kind: m.material.into(),
+                    relief: ReliefSpec {
+                        normal_map: m.normal_map,
+                        normal_strength: m.normal_strength,
+                        height_map: m.height_map,
+                        height_scale: m.height_scale,
+                    },
+                })
+                .collect(),
+            surfaces: scene
+                .surfaces
+                .iter()
+                .map(|p| PartRelief {
+                    part: p.part,
+                    relief: p.relief(),
                 })
                 .collect(),
             terrain: scene.terrain.map(|t| TerrainSpec {
@@ -763,6 +864,53 @@ mod tests {
         assert!(text.contains("file = \"models/dragon.obj\""), "{text}");
         assert!(text.contains("kind = \"glass\""), "{text}");
         assert_eq!(parse(&text, Path::new("/scenes")).unwrap(), s);
+    }
+
+    /// Normal and height maps on a model and on a part of the box: written relative to the
+    /// file, with their strength and depth, and read back exactly; the defaults are left out.
+    #[test]
+    fn maps_round_trip_relative_to_the_file() {
+        let mut spec = SceneSpec::cornell("maps");
+        let mut model = ModelSpec::new(
+            "/scenes/models/statue.obj",
+            &crate::scene::obj::Placement::TEAPOT,
+        );
+        model.relief = ReliefSpec {
+            normal_map: Some("/scenes/maps/statue-normal.png".into()),
+            normal_strength: 0.5,
+            height_map: Some("/scenes/maps/statue-height.png".into()),
+            height_scale: 0.05,
+        };
+        spec.models.push(model);
+        spec.surfaces.push(PartRelief {
+            part: BoxPart::Floor,
+            relief: ReliefSpec {
+                height_map: Some("/scenes/maps/tiles.png".into()),
+                ..ReliefSpec::default()
+            },
+        });
+        let s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(spec)),
+            ..RenderSettings::default()
+        };
+        let text = to_text(&s, Path::new("/scenes")).unwrap();
+        for line in [
+            "normal_map = \"maps/statue-normal.png\"",
+            "normal_strength = 0.5",
+            "height_map = \"maps/statue-height.png\"",
+            "height_scale = 0.05",
+            "[[scene.surfaces]]",
+            "part = \"floor\"",
+            "height_map = \"maps/tiles.png\"",
+        ] {
+            assert!(text.contains(line), "{line}:\n{text}");
+        }
+        assert_eq!(text.matches("height_scale").count(), 1, "{text}");
+        assert_eq!(parse(&text, Path::new("/scenes")).unwrap(), s);
+        // A depth out of range names its field.
+        let bad = text.replace("height_scale = 0.05", "height_scale = 2.0");
+        let e = parse(&bad, Path::new("/scenes")).unwrap_err();
+        assert!(e.contains("scene.models[0].height_scale"), "{e}");
     }
 
     #[test]

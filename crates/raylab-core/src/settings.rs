@@ -227,11 +227,21 @@ impl RenderSettings {
             text.push_str(" · ");
             text.push_str(&clause);
         };
-        if self.texture_preset != TexturePreset::None && s.stage != Stage::Incoming {
-            add(match self.texture_preset {
-                TexturePreset::Clouds => "ρ of fBm clouds on the ceiling".to_owned(),
-                _ => "textured ρ".to_owned(),
-            });
+        match self.texture_preset {
+            TexturePreset::None => {}
+            // A normal changes the light (equation 27), so even the incoming-light stage.
+            TexturePreset::BumpyWalls if lit => add("normal-mapped walls".to_owned()),
+            // Shifts ρ's coordinates and tilts the normal: something in every stage.
+            TexturePreset::ParallaxFloor => add("parallax-mapped floor".to_owned()),
+            TexturePreset::Clouds if s.stage != Stage::Incoming => {
+                add("ρ of fBm clouds on the ceiling".to_owned())
+            }
+            TexturePreset::CheckerFloor | TexturePreset::GridWalls | TexturePreset::Both
+                if s.stage != Stage::Incoming =>
+            {
+                add("textured ρ".to_owned())
+            }
+            _ => {}
         }
         if lit && self.light.is_area() {
             let size = short(self.light.radius);

@@ -160,6 +160,41 @@ pub struct TextureError {
     pub reason: String,
 }
 
+/// What an image's 8-bit values stand for, and so how they are decoded into texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Decoding {
+    /// A colour (a reflectance ρ): sRGB, decoded to linear RGB with the exact curve.
+    Colour,
+    /// A tangent-space normal map, RGB = (n + 1)/2 as OpenGL and Blender write them: each
+    /// channel c becomes (c − 128)/127, clamped to [−1, 1] (the 8-bit signed-normalised
+    /// reading), so the 128 a flat map is written with is exactly 0 and a flat texel
+    /// (128, 128, 255) is exactly (0, 0, 1). Not sRGB: a direction is not a colour.
+    Normal,
+    /// A height map: c/255 in each channel (its red channel is the height; a grey image has
+    /// the same in all three).
+    Height,
+}
+
+impl Decoding {
+    /// What the image is, for messages.
+    pub fn what(self) -> &'static str {
+        match self {
+            Decoding::Colour => "texture",
+            Decoding::Normal => "normal map",
+            Decoding::Height => "height map",
+        }
+    }
+
+    /// The value of each 8-bit channel value.
+    fn table(self) -> [f32; 256] {
+        match self {
+            Decoding::Colour => srgb8_to_linear_table(),
+            Decoding::Normal => std::array::from_fn(|c| ((c as f32 - 128.0) / 127.0).max(-1.0)),
+            Decoding::Height => std::array::from_fn(|c| c as f32 / 255.0),
+        }
+    }
+}
+
 impl TextureImage {
     /// The largest width or height accepted. A texture is held as 12-byte linear texels, so
     /// even this is 3 GiB at full size; the limit stops a corrupt or hostile header from
@@ -179,6 +214,12 @@ impl TextureImage {
     /// Loads a PNG or JPEG file (a regular file of at most
     /// [`crate::inputs::MAX_TEXTURE_FILE_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, TextureError> {
+        Self::load_as(path, Decoding::Colour)
+    }
+
+    /// [`Self::load`] with the file's values decoded as `decoding` says (a colour, a normal
+    /// map's directions or a height map's heights).
+    pub fn load_as(path: &Path, decoding: Decoding) -> Result<Self, TextureError> {
         let name = path.display().to_string();
         let bytes =
             crate::inputs::read_capped(path, crate::inputs::MAX_TEXTURE_FILE_BYTES, "a texture")
@@ -186,7 +227,7 @@ impl TextureImage {
                     name: name.clone(),
                     reason,
                 })?;
-        Self::from_encoded(&bytes, &name)
+        Self::from_encoded_as(&bytes, &name, decoding)
     }
 
     /// The width and height a texture file's header gives, without decoding it; `None` if it
@@ -214,14 +255,24 @@ impl TextureImage {
     /// the pixels are decoded, and so is the memory decoding takes
     /// ([`Self::decoding_bytes`], against [`crate::memory::available`]).
     pub fn from_encoded(bytes: &[u8], name: &str) -> Result<Self, TextureError> {
-        Self::from_encoded_within(bytes, name, crate::memory::available())
+        Self::from_encoded_as(bytes, name, Decoding::Colour)
     }
 
-    /// [`Self::from_encoded`] with the memory there is given.
+    /// [`Self::from_encoded`] with the values decoded as `decoding` says.
+    pub fn from_encoded_as(
+        bytes: &[u8],
+        name: &str,
+        decoding: Decoding,
+    ) -> Result<Self, TextureError> {
+        Self::from_encoded_within(bytes, name, crate::memory::available(), decoding)
+    }
+
+    /// [`Self::from_encoded_as`] with the memory there is given.
     fn from_encoded_within(
         bytes: &[u8],
         name: &str,
         available: Option<crate::memory::Available>,
+        decoding: Decoding,
     ) -> Result<Self, TextureError> {
         let error = |reason: String| TextureError {
             name: name.to_owned(),
@@ -259,11 +310,18 @@ impl TextureImage {
         let mut limits = image::Limits::no_limits();
         limits.max_alloc = available.map(|a| a.bytes);
         decoder.limits(limits);
-        let rgb = decoder
-            .decode()
-            .map_err(|e| error(e.to_string()))?
-            .into_rgb8();
-        let table = srgb8_to_linear_table();
+        let decoded = decoder.decode().map_err(|e| error(e.to_string()))?;
+        let colour = decoded.color();
+        if decoding != Decoding::Colour && colour.bytes_per_pixel() > colour.channel_count() {
+            // Reduced to 8 bits as a colour is, a 16-bit map would lose the precision it was
+            // saved for without a word: refused, saying what to do.
+            return Err(error(format!(
+                "a 16-bit {} is not read (save it with 8 bits per channel)",
+                decoding.what()
+            )));
+        }
+        let rgb = decoded.into_rgb8();
+        let table = decoding.table();
         let mut texels = crate::memory::try_with_capacity(rgb.pixels().len(), || {
             format!("the {width}×{height} texture's texels")
         })
@@ -491,7 +549,8 @@ mod tests {
             bytes: 3 << 30,
             limit: "address-space limit: ulimit -v",
         };
-        let e = TextureImage::from_encoded_within(&png, "huge.png", Some(limit)).unwrap_err();
+        let e = TextureImage::from_encoded_within(&png, "huge.png", Some(limit), Decoding::Colour)
+            .unwrap_err();
         assert_eq!(
             e.to_string(),
             "could not load texture 'huge.png': decoding the 16384×16384 texture needs about \

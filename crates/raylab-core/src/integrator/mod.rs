@@ -639,7 +639,9 @@ impl<'a> Tracer<'a> {
             || materials
                 .iter()
                 .any(|m| !m.is_diffuse() && !m.is_specular());
-        let plain = materials.iter().all(|m| m.texture.is_none())
+        let plain = materials
+            .iter()
+            .all(|m| m.texture.is_none() && m.relief.is_none())
             && (scene.vertex_normals.is_empty() || !settings.shading.smooth);
         Self {
             scene,
@@ -666,16 +668,22 @@ impl<'a> Tracer<'a> {
         } else {
             None
         };
-        self.surface_with(hit, material, at_edge)
+        self.surface_with(hit, material, incoming, at_edge)
     }
 
     /// [`Tracer::surface`] with `at_edge` given: the path tracer asks it of every hit anyway,
     /// for the ray that leaves it ([`continue_ray`]).
+    ///
+    /// A material with a relief ([`crate::relief`]: a normal map, parallax occlusion mapping)
+    /// changes the texture coordinates ρ is looked up at and the shading normal, here for
+    /// every integrator; the perturbed normal is held to the shading frame's rules
+    /// ([`ShadingFrame::bent_normal`]) toward the viewer, `-incoming`.
     #[inline(always)]
     pub fn surface_with(
         &self,
         hit: &Intersection,
         material: &Material,
+        incoming: Vec3,
         at_edge: Option<Vec3>,
     ) -> Surface {
         let (index, u, v) = (hit.triangle_index, hit.u, hit.v);
@@ -693,19 +701,33 @@ impl<'a> Tracer<'a> {
             };
         }
         let normal = scene.shading_normal(index, u, v, self.shading.smooth);
+        let uv = || {
+            scene
+                .uv(index, u, v)
+                .unwrap_or_else(|| planar_uv(hit.position, geometric))
+        };
+        let Some(relief) = &material.relief else {
+            return Surface {
+                position: hit.position,
+                normal,
+                geometric,
+                rho: material.reflectance_at(uv, hit.position, normal),
+                at_edge,
+            };
+        };
+        let wo = -incoming;
+        let frame = scene.tangent_frame(index, normal);
+        let (uv, bumped) = relief.at(&frame, uv(), wo);
+        let normal = if relief.normal.is_some() {
+            ShadingFrame::bent_normal(bumped, geometric, wo)
+        } else {
+            normal
+        };
         Surface {
             position: hit.position,
             normal,
             geometric,
-            rho: material.reflectance_at(
-                || {
-                    scene
-                        .uv(index, u, v)
-                        .unwrap_or_else(|| planar_uv(hit.position, geometric))
-                },
-                hit.position,
-                normal,
-            ),
+            rho: material.reflectance_at(|| uv, hit.position, normal),
             at_edge,
         }
     }

@@ -261,7 +261,7 @@ fn batch<R: Recorder>(
             let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, incoming);
             if material.is_diffuse() {
                 // Two-sided: both normals turned to face the arriving ray.
-                let mut surface = tracer.surface_with(&hit, material, at_edge);
+                let mut surface = tracer.surface_with(&hit, material, incoming, at_edge);
                 let turned = facing(geometric, incoming);
                 if turned != geometric {
                     surface.geometric = turned;

@@ -147,7 +147,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         let triangle = &scene.triangles[hit.triangle_index];
         let material = tracer.material_of(hit.triangle_index);
         let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction);
-        let surface = tracer.surface_with(&hit, material, at_edge);
+        let surface = tracer.surface_with(&hit, material, ray.direction, at_edge);
         let bsdf = material.bsdf(surface.rho);
         let wo = -ray.direction;
         let frame = ShadingFrame::new(surface.normal, triangle.normal, wo);

@@ -27,6 +27,8 @@ use crate::geometry::{Ray, Triangle};
 use crate::intersect::{self, Intersection};
 use crate::light;
 pub use crate::material::{Material, MaterialKind};
+use crate::relief::TangentFrame;
+use crate::texture::planar_uv;
 
 /// Geometry and materials to trace. Every triangle's `material` indexes `materials`.
 ///
@@ -152,6 +154,21 @@ impl Scene {
             Some(Some([t0, t1, t2])) => Some((1.0 - u - v) * *t0 + u * *t1 + v * *t2),
             _ => None,
         }
+    }
+
+    /// The tangent frame of triangle `index` about the shading normal `normal`
+    /// ([`TangentFrame::new`]), from its corners' texture coordinates, or for a triangle
+    /// without them, the planar projection [`planar_uv`] of its corners: the coordinates its
+    /// hits are textured with either way.
+    #[inline]
+    pub fn tangent_frame(&self, index: usize, normal: Vec3) -> TangentFrame {
+        let t = &self.triangles[index];
+        let corners = [t.v0, t.v1, t.v2];
+        let uvs = match self.uvs.get(index) {
+            Some(Some(uvs)) => *uvs,
+            _ => corners.map(|p| planar_uv(p, t.normal)),
+        };
+        TangentFrame::new(corners, uvs, normal)
     }
 
     /// The acceleration structure.
@@ -462,6 +479,25 @@ pub enum SceneError {
     Empty,
     #[error("loading the scene was cancelled")]
     Cancelled,
+    /// A normal or height map a scene file names could not be read: `what` it is, the file,
+    /// and why.
+    #[error("could not load the {what} '{name}': {reason}")]
+    Map {
+        what: &'static str,
+        name: String,
+        reason: String,
+    },
+}
+
+impl SceneError {
+    /// The error of a map (`decoding` says which kind) that could not be loaded.
+    pub fn map(decoding: crate::texture::Decoding, e: crate::texture::TextureError) -> Self {
+        SceneError::Map {
+            what: decoding.what(),
+            name: e.name,
+            reason: e.reason,
+        }
+    }
 }
 
 /// Whether the segment from a surface point to the light is blocked (lab section 5.1): a shadow

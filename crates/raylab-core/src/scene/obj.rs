@@ -25,7 +25,8 @@ use rayon::prelude::*;
 use super::{Material, Scene, SceneError};
 use crate::geometry::Triangle;
 use crate::inputs::{self, MAX_MTL_BYTES, MAX_OBJ_BYTES};
-use crate::texture::{Texture, TextureError, TextureImage};
+use crate::relief::{NormalMap, Relief};
+use crate::texture::{Decoding, Texture, TextureError, TextureImage};
 
 /// The Stanford bunny (public domain; see assets/models/README.md).
 pub const BUNNY_OBJ: &str = include_str!("../../../../assets/models/bunny.obj");
@@ -388,7 +389,8 @@ pub const OBJ_BYTES_FACTOR: u64 = 8;
 /// * each material library its `mtllib` lines name, once however often it is named
 ///   ([`library_bytes`]);
 /// * the largest texture those libraries name, as its header gives its size:
-///   [`TextureImage::decoding_bytes`] and the file itself (only one texture is decoded).
+///   [`TextureImage::decoding_bytes`] and the file itself (only one texture is decoded), and
+///   likewise the largest normal map (`norm`, `map_Bump`, `bump`; one is decoded beside it).
 ///
 /// 0 for a file that cannot be read or is too large to be: loading it fails anyway. The OBJ
 /// file is read through once, looking only at its `mtllib` lines.
@@ -402,27 +404,38 @@ pub fn memory_estimate(path: &Path) -> u64 {
     let folder = path.parent().unwrap_or(Path::new(""));
     let mut total = OBJ_BYTES_FACTOR * len;
     let mut largest_texture = 0;
+    let mut largest_normal_map = 0;
     let mut textures = std::collections::HashSet::new();
     let libraries = library_names(std::io::BufReader::new(file)).unwrap_or_default();
     for library in libraries {
         let Ok(bytes) = inputs::read_capped(&folder.join(&library), MAX_MTL_BYTES, "") else {
             continue;
         };
-        let (materials, names) = scan_library(&bytes);
+        let (materials, names, normal_names) = scan_library(&bytes);
         total += library_bytes(bytes.len() as u64, materials);
         let beside = Path::new(&library).parent().unwrap_or(Path::new(""));
-        for name in names {
+        for (name, normal) in names
+            .into_iter()
+            .map(|n| (n, false))
+            .chain(normal_names.into_iter().map(|n| (n, true)))
+        {
             let texture = folder.join(beside).join(name);
-            if !textures.insert(texture.clone()) {
+            if !textures.insert((texture.clone(), normal)) {
                 continue;
             }
             if let Some((w, h)) = TextureImage::dimensions(&texture) {
                 let file = std::fs::metadata(&texture).map_or(0, |m| m.len());
-                largest_texture = largest_texture.max(TextureImage::decoding_bytes(w, h) + file);
+                let bytes = TextureImage::decoding_bytes(w, h) + file;
+                let largest = if normal {
+                    &mut largest_normal_map
+                } else {
+                    &mut largest_texture
+                };
+                *largest = (*largest).max(bytes);
             }
         }
     }
-    total + largest_texture
+    total + largest_texture + largest_normal_map
 }
 
 /// The memory a material library of `bytes` bytes and `materials` materials takes loaded: each
@@ -481,24 +494,33 @@ fn library_names(mut obj: impl std::io::BufRead) -> std::io::Result<Vec<String>>
     }
 }
 
-/// A material library's material count (`newmtl` lines) and the texture files its `map_Kd`
-/// lines name, read as tobj reads them.
-fn scan_library(bytes: &[u8]) -> (u64, Vec<String>) {
+/// A material library's material count (`newmtl` lines), the texture files its `map_Kd`
+/// lines name and the normal maps its `norm`, `map_Bump` and `bump` lines name (their
+/// options left out, [`map_options`]), read as tobj reads them.
+fn scan_library(bytes: &[u8]) -> (u64, Vec<String>, Vec<String>) {
     let text = String::from_utf8_lossy(bytes);
     let mut materials = 0;
     let mut textures = Vec::new();
+    let mut normal_maps = Vec::new();
     for line in text.lines().map(str::trim) {
-        match line.split_whitespace().next() {
+        let keyword = line.split_whitespace().next();
+        match keyword {
             Some("newmtl") => materials += 1,
             Some("map_Kd") => {
                 if let Some(name) = line.get(6..).map(str::trim).filter(|n| !n.is_empty()) {
                     textures.push(name.to_owned());
                 }
             }
+            Some(k @ ("norm" | "map_Bump" | "map_bump" | "bump")) => {
+                let (file, _) = map_options(line.get(k.len()..).unwrap_or(""));
+                if !file.is_empty() {
+                    normal_maps.push(file);
+                }
+            }
             _ => {}
         }
     }
-    (materials, textures)
+    (materials, textures, normal_maps)
 }
 
 /// A mesh placed in the box: its triangles and, per triangle, what its three corners carry,
@@ -795,11 +817,11 @@ pub fn obj_scene(path: &Path) -> Result<Scene, SceneError> {
 /// image that cannot be read leaves the model untextured and adds a warning naming the file;
 /// only the OBJ file itself failing is an error.
 pub fn obj_scene_with_warnings(path: &Path) -> Result<(Scene, Vec<String>), SceneError> {
-    let (mesh, texture, warnings) = load_textured(path)?;
+    let (mesh, maps, warnings) = load_textured(path)?;
     let name = path
         .file_stem()
         .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
-    let scene = textured_scene(&mesh, &Placement::FRONT_LEFT, &name, texture);
+    let scene = textured_scene(&mesh, &Placement::FRONT_LEFT, &name, maps);
     Ok((scene, warnings))
 }
 
@@ -812,13 +834,115 @@ pub fn obj_scene_with_warnings(path: &Path) -> Result<(Scene, Vec<String>), Scen
 /// the first [`LISTED_LIBRARY_FAILURES`] of them, then counted: a file naming 100,000 missing
 /// libraries makes four warnings, not 100,000. A texture too large for the memory there is
 /// (its size read from its header) is a warning too, and the model is untextured.
-pub fn load_textured(path: &Path) -> Result<(Mesh, Option<Texture>, Vec<String>), SceneError> {
+pub fn load_textured(path: &Path) -> Result<(Mesh, Maps, Vec<String>), SceneError> {
     let folder = path.parent().unwrap_or(Path::new(""));
     let source = path.display().to_string();
     let (parsed, mut warnings) = parse_file(path)?;
     let texture = texture_name(&parsed, &source, &mut warnings)
         .and_then(|file| image_or_warning(TextureImage::load(&folder.join(file)), &mut warnings));
-    Ok((parsed.mesh, texture, warnings))
+    let relief = normal_map_of(&parsed).and_then(|(file, strength)| {
+        let image = TextureImage::load_as(&folder.join(&file), Decoding::Normal);
+        normal_map_or_warning(image, strength, &mut warnings)
+    });
+    Ok((parsed.mesh, Maps { texture, relief }, warnings))
+}
+
+/// What a model's material library gives its surface beside the mesh: the diffuse texture
+/// (`map_Kd`) and a relief from its normal map (`norm`, or `map_Bump`/`bump` as Blender
+/// writes its normal maps).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Maps {
+    pub texture: Option<Texture>,
+    pub relief: Option<Arc<Relief>>,
+}
+
+/// The normal map named by the first material the model's faces use, with its strength:
+/// `norm FILE` first, else `map_Bump`/`bump` (which tobj reads into `normal_texture`), each
+/// with its options ([`map_options`]; `-bm` is the strength, 1 if absent).
+fn normal_map_of(parsed: &Parsed) -> Option<(String, f32)> {
+    let first = &parsed.materials[*parsed.used.first()?];
+    let spec = first
+        .unknown_param
+        .get("norm")
+        .or(first.normal_texture.as_ref())?;
+    let (file, strength) = map_options(spec);
+    (!file.is_empty()).then_some((file, strength.unwrap_or(1.0)))
+}
+
+/// A material library's map statement after its keyword, `[-option values…] FILE`: the file
+/// (the words after the options, joined by single spaces) and the `-bm` value if there is
+/// one. The MTL options are skipped with their values (`-o`, `-s`, `-t` take up to three
+/// numbers; `-mm` two; `-blendu`, `-blendv`, `-clamp`, `-cc`, `-boost`, `-texres`,
+/// `-imfchan`, `-bm` one); a word that is none of them starts the file name.
+pub fn map_options(spec: &str) -> (String, Option<f32>) {
+    let words: Vec<&str> = spec.split_whitespace().collect();
+    let mut bm = None;
+    let mut i = 0;
+    while i < words.len() {
+        let (at_most, exactly) = match words[i] {
+            "-o" | "-s" | "-t" => (3, false),
+            "-mm" => (2, true),
+            "-bm" | "-blendu" | "-blendv" | "-clamp" | "-cc" | "-boost" | "-texres"
+            | "-imfchan" => (1, true),
+            _ => break,
+        };
+        if words[i] == "-bm" {
+            bm = words.get(i + 1).and_then(|w| w.parse::<f32>().ok());
+        }
+        i += 1;
+        let mut taken = 0;
+        while taken < at_most
+            && i < words.len()
+            && (exactly || words[i].parse::<f32>().is_ok())
+            && i + 1 < words.len()
+        {
+            i += 1;
+            taken += 1;
+        }
+    }
+    (words[i.min(words.len())..].join(" "), bm)
+}
+
+/// The relief of a normal map read from a model's material library, or a warning: the map
+/// could not be read, or it is grey (every texel's three channels equal: a bump map of
+/// heights, which `map_Bump` also names, not a normal map). A strength that is not a finite
+/// number in [0, 10] is a warning too, and 1 is used.
+fn normal_map_or_warning(
+    image: Result<TextureImage, TextureError>,
+    strength: f32,
+    warnings: &mut Vec<String>,
+) -> Option<Arc<Relief>> {
+    let image = match image {
+        Ok(image) => image,
+        Err(e) => {
+            warnings.push(format!("{e}; the model has no normal map"));
+            return None;
+        }
+    };
+    if image.texels.iter().all(|t| t.x == t.y && t.y == t.z) {
+        warnings.push(format!(
+            "'{}' is grey: a bump map of heights, not a normal map; it is not used",
+            image.name
+        ));
+        return None;
+    }
+    let strength = if (0.0..=10.0).contains(&strength) {
+        strength
+    } else {
+        warnings.push(format!(
+            "the normal map '{}' has strength -bm {strength}; 1 is used (0 to 10)",
+            image.name
+        ));
+        1.0
+    };
+    Some(Arc::new(Relief {
+        normal: Some(NormalMap {
+            image: Arc::new(image),
+            strength,
+        }),
+        height: None,
+        uv_scale: 1.0,
+    }))
 }
 
 /// Reads and parses an OBJ file with its material libraries, each read once (see
@@ -909,6 +1033,16 @@ fn read_library(file: &Path, library: &Path) -> Result<Vec<tobj::Material>, Stri
             if let Some(texture) = &mut m.diffuse_texture {
                 *texture = beside.join(&*texture).to_string_lossy().into_owned();
             }
+            // Normal maps keep their options: only the file is made relative.
+            let normal_maps = m.normal_texture.iter_mut();
+            for spec in normal_maps.chain(m.unknown_param.get_mut("norm")) {
+                let (file, bm) = map_options(spec);
+                let file = beside.join(file).to_string_lossy().into_owned();
+                *spec = match bm {
+                    Some(bm) => format!("-bm {bm} {file}"),
+                    None => file,
+                };
+            }
         }
     }
     Ok(materials)
@@ -928,8 +1062,8 @@ pub fn builtin_textured(
     name: &str,
     placement: &Placement,
 ) -> Result<(Scene, Vec<String>), SceneError> {
-    let (mesh, texture, warnings) = builtin_textured_mesh(obj_text, mtl_text, texture_png, name)?;
-    Ok((textured_scene(&mesh, placement, name, texture), warnings))
+    let (mesh, maps, warnings) = builtin_textured_mesh(obj_text, mtl_text, texture_png, name)?;
+    Ok((textured_scene(&mesh, placement, name, maps), warnings))
 }
 
 /// The mesh and texture of [`builtin_textured`], before it is placed.
@@ -938,7 +1072,7 @@ pub fn builtin_textured_mesh(
     mtl_text: &str,
     texture_png: &[u8],
     name: &str,
-) -> Result<(Mesh, Option<Texture>, Vec<String>), SceneError> {
+) -> Result<(Mesh, Maps, Vec<String>), SceneError> {
     let path = builtin_path(name);
     let warnings = RefCell::new(Vec::new());
     let parsed = parse_with_materials(obj_text.as_bytes(), &path, |library| {
@@ -965,7 +1099,11 @@ pub fn builtin_textured_mesh(
             None
         }
     };
-    Ok((parsed.mesh, texture, warnings))
+    let maps = Maps {
+        texture,
+        relief: None,
+    };
+    Ok((parsed.mesh, maps, warnings))
 }
 
 /// The diffuse texture file named by the first material the model's faces use, if any;
@@ -1003,14 +1141,10 @@ fn image_or_warning(
     }
 }
 
-fn textured_scene(
-    mesh: &Mesh,
-    placement: &Placement,
-    name: &str,
-    texture: Option<Texture>,
-) -> Scene {
+fn textured_scene(mesh: &Mesh, placement: &Placement, name: &str, maps: Maps) -> Scene {
     let mut material = Material::diffuse(name, placement.reflectance);
-    material.texture = texture;
+    material.texture = maps.texture;
+    material.relief = maps.relief;
     scene_with_model(mesh, placement, material)
 }
 
@@ -1588,6 +1722,109 @@ mod tests {
         let plain = obj_scene(&path).unwrap();
         assert_eq!(plain.triangles, scene.triangles);
         (scene, warnings)
+    }
+
+    /// A PNG of one colour, 2×2.
+    fn png_of(rgb: [u8; 3]) -> Vec<u8> {
+        let image = image::RgbImage::from_pixel(2, 2, image::Rgb(rgb));
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        image.write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+        bytes.into_inner()
+    }
+
+    /// The MTL's map statements: the options skipped with their values, `-bm` kept.
+    #[test]
+    fn map_options_give_the_file_and_the_bump_multiplier() {
+        assert_eq!(
+            map_options("-bm 0.5 file.png"),
+            ("file.png".into(), Some(0.5))
+        );
+        assert_eq!(map_options("file.png"), ("file.png".into(), None));
+        assert_eq!(
+            map_options("-s 2 2 1 -o 0.5 -bm 0.25 -clamp on maps/n m.png"),
+            ("maps/n m.png".into(), Some(0.25))
+        );
+        // `-s` with one number, then the file (a number is not taken past the last word).
+        assert_eq!(map_options("-s 2 3.png"), ("3.png".into(), None));
+        assert_eq!(map_options(""), (String::new(), None));
+    }
+
+    /// `map_Bump -bm 0.5 file.png` (as Blender writes a normal map) gives the model a normal map
+    /// of strength 0.5, found beside the library; `norm file.png` is read as a normal map too,
+    /// and wins over `map_Bump`. The memory estimate counts the normal map beside the texture.
+    #[test]
+    fn a_material_librarys_normal_map_is_read() {
+        let obj = format!("mtllib model.mtl\n{TRIANGLE}");
+        let tilted = png_of([192, 128, 255]);
+        let flat = png_of([128, 128, 255]);
+        let blender = b"newmtl glaze\nKd 0.9 0.9 0.9\nmap_Bump -bm 0.5 bumps.png\n";
+        let (scene, warnings) = load_from_folder(&[
+            ("model.obj", obj.as_bytes()),
+            ("model.mtl", blender),
+            ("bumps.png", &tilted),
+        ]);
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let relief = scene.material_of(BOX).relief.clone().unwrap();
+        let map = relief.normal.as_ref().unwrap();
+        assert_eq!(map.strength, 0.5);
+        assert!(map.image.name.ends_with("bumps.png"), "{}", map.image.name);
+        assert_eq!(map.image.texels[0], Vec3::new(64.0 / 127.0, 0.0, 1.0));
+        assert!(relief.height.is_none());
+
+        let both = b"newmtl glaze\nmap_Bump bumps.png\nnorm flat.png\n";
+        let (scene, _) = load_from_folder(&[
+            ("model.obj", obj.as_bytes()),
+            ("model.mtl", both),
+            ("bumps.png", &tilted),
+            ("flat.png", &flat),
+        ]);
+        let relief = scene.material_of(BOX).relief.clone().unwrap();
+        let map = relief.normal.as_ref().unwrap();
+        assert_eq!((map.strength, map.image.texels[0]), (1.0, Vec3::Z));
+
+        // A library in a folder: the map's name is relative to it.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("lib")).unwrap();
+        std::fs::write(dir.path().join("lib/model.mtl"), blender).unwrap();
+        std::fs::write(dir.path().join("lib/bumps.png"), &tilted).unwrap();
+        let path = dir.path().join("model.obj");
+        std::fs::write(&path, format!("mtllib lib/model.mtl\n{TRIANGLE}")).unwrap();
+        let (scene, warnings) = obj_scene_with_warnings(&path).unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let relief = scene.material_of(BOX).relief.clone().unwrap();
+        assert_eq!(relief.normal.as_ref().unwrap().strength, 0.5);
+        let (_, _, normal_maps) = scan_library(blender);
+        assert_eq!(normal_maps, ["bumps.png"]);
+        let obj_len = std::fs::metadata(&path).unwrap().len();
+        let png_len = tilted.len() as u64;
+        assert_eq!(
+            memory_estimate(&path),
+            OBJ_BYTES_FACTOR * obj_len
+                + library_bytes(blender.len() as u64, 1)
+                + TextureImage::decoding_bytes(2, 2)
+                + png_len
+        );
+    }
+
+    /// A grey `map_Bump` is a bump map of heights, not a normal map: a warning, no map. A
+    /// missing or broken one is a warning too; the model loads either way.
+    #[test]
+    fn a_grey_or_missing_bump_map_is_a_warning() {
+        let obj = format!("mtllib model.mtl\n{TRIANGLE}");
+        let mtl = b"newmtl glaze\nmap_Bump bumps.png\n";
+        let grey = png_of([90, 90, 90]);
+        for (file, says) in [
+            (Some(grey.as_slice()), "is grey: a bump map of heights"),
+            (None, "bumps.png"),
+            (Some(b"not a PNG".as_slice()), "not a PNG or JPEG"),
+        ] {
+            let mut files = vec![("model.obj", obj.as_bytes()), ("model.mtl", mtl.as_slice())];
+            files.extend(file.map(|f| ("bumps.png", f)));
+            let (scene, warnings) = load_from_folder(&files);
+            assert!(scene.material_of(BOX).relief.is_none());
+            assert_eq!(warnings.len(), 1, "{warnings:?}");
+            assert!(warnings[0].contains(says), "{warnings:?}");
+        }
     }
 
     #[test]

@@ -12,7 +12,9 @@ use super::obj::{self, Mesh, Placement};
 use super::terrain::{self, TerrainSpec};
 use super::{Material, MaterialKind, Scene, SceneError, cornell_box};
 use crate::invalid::SettingsError;
-use crate::texture::Texture;
+use crate::relief::{Decoding, HeightMap, NormalMap, Relief};
+use crate::texture::TextureImage;
+use std::sync::Arc;
 
 /// The lab's room: the first ten triangles of [`cornell_box`] (floor, walls, ceiling).
 pub const ROOM_TRIANGLES: usize = 10;
@@ -32,6 +34,9 @@ pub struct SceneSpec {
     pub models: Vec<ModelSpec>,
     /// A fractal terrain covering the floor.
     pub terrain: Option<TerrainSpec>,
+    /// Normal and height maps for parts of the box.
+    #[serde(default)]
+    pub surfaces: Vec<PartRelief>,
 }
 
 /// A model standing in the box.
@@ -51,6 +56,171 @@ pub struct ModelSpec {
     /// Diffuse (the default, textured if its material library names a texture), mirror or
     /// glass.
     pub kind: MaterialKind,
+    /// Its normal and height maps, if the scene file gives them (they replace a normal map its
+    /// material library names).
+    #[serde(default)]
+    pub relief: ReliefSpec,
+}
+
+/// Normal and height maps a scene file gives a surface ([`crate::relief`]): `normal_map`,
+/// `normal_strength` (1 unless given), `height_map` and `height_scale` (scene units deep per
+/// unit of height, [`DEFAULT_HEIGHT_SCALE`] unless given). Paths are relative to the scene
+/// file, as model paths are.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ReliefSpec {
+    pub normal_map: Option<PathBuf>,
+    pub normal_strength: f32,
+    pub height_map: Option<PathBuf>,
+    pub height_scale: f32,
+}
+
+/// How deep a height map carves unless the scene file says: 0.02 scene units (the box is 2
+/// wide) per unit of height.
+pub const DEFAULT_HEIGHT_SCALE: f32 = 0.02;
+
+impl Default for ReliefSpec {
+    fn default() -> Self {
+        Self {
+            normal_map: None,
+            normal_strength: 1.0,
+            height_map: None,
+            height_scale: DEFAULT_HEIGHT_SCALE,
+        }
+    }
+}
+
+impl ReliefSpec {
+    /// The maps' files.
+    fn files_mut(&mut self) -> impl Iterator<Item = &mut PathBuf> {
+        self.normal_map.iter_mut().chain(self.height_map.iter_mut())
+    }
+
+    /// Reads the maps: `None` if there are none; a map that cannot be read (missing, not a
+    /// PNG or JPEG, 16 bits a channel, too large) is an error naming its file.
+    pub fn load(&self) -> Result<Option<Arc<Relief>>, SceneError> {
+        if self.normal_map.is_none() && self.height_map.is_none() {
+            return Ok(None);
+        }
+        let load = |file: &Path, decoding| {
+            TextureImage::load_as(file, decoding)
+                .map(Arc::new)
+                .map_err(|e| SceneError::map(decoding, e))
+        };
+        let normal = match &self.normal_map {
+            Some(file) => Some(NormalMap {
+                image: load(file, Decoding::Normal)?,
+                strength: self.normal_strength,
+            }),
+            None => None,
+        };
+        let height = match &self.height_map {
+            Some(file) => Some(HeightMap::new(
+                load(file, Decoding::Height)?,
+                self.height_scale,
+            )),
+            None => None,
+        };
+        Ok(Some(Arc::new(Relief {
+            normal,
+            height,
+            uv_scale: 1.0,
+        })))
+    }
+
+    /// Checks the strength (0 to 10), the depth (0 to 0.5) and the files' paths; errors name
+    /// the field as `field` makes it.
+    fn validate(&self, field: impl Fn(&str) -> String) -> Result<(), SettingsError> {
+        for (name, file) in [
+            ("normal_map", &self.normal_map),
+            ("height_map", &self.height_map),
+        ] {
+            if let Some(file) = file {
+                crate::invalid::check_path(field(name), file)?;
+            }
+        }
+        let bad = |name: &str, value: f32, reason| SettingsError {
+            name: field(name).into(),
+            value: value.to_string(),
+            reason,
+        };
+        if !(0.0..=10.0).contains(&self.normal_strength) {
+            return Err(bad(
+                "normal_strength",
+                self.normal_strength,
+                "must be in [0, 10]",
+            ));
+        }
+        if !(0.0..=0.5).contains(&self.height_scale) {
+            return Err(bad(
+                "height_scale",
+                self.height_scale,
+                "must be in [0, 0.5]",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The memory decoding the maps takes, as their headers give their sizes (0 for a file
+    /// that cannot be read: loading it fails anyway).
+    fn memory_estimate(&self) -> u64 {
+        self.normal_map
+            .iter()
+            .chain(&self.height_map)
+            .filter_map(|file| {
+                let (w, h) = TextureImage::dimensions(file)?;
+                let bytes = std::fs::metadata(file).map_or(0, |m| m.len());
+                Some(TextureImage::decoding_bytes(w, h) + bytes)
+            })
+            .sum()
+    }
+}
+
+/// A part of the lab's box, by what it is: the surface a scene file's `[[scene.surfaces]]`
+/// gives maps to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BoxPart {
+    Floor,
+    LeftWall,
+    RightWall,
+    BackWall,
+    Ceiling,
+    ShortBlock,
+    TallBlock,
+}
+
+crate::named::named_enum!(BoxPart as "box part" {
+    Floor => "floor";
+    LeftWall => "left-wall";
+    RightWall => "right-wall";
+    BackWall => "back-wall";
+    Ceiling => "ceiling";
+    ShortBlock => "short-block";
+    TallBlock => "tall-block";
+});
+
+impl BoxPart {
+    /// The name of the part's material in [`cornell_box`].
+    pub fn material(self) -> &'static str {
+        match self {
+            BoxPart::Floor => "green",
+            BoxPart::LeftWall => "purple",
+            BoxPart::RightWall => "yellow",
+            BoxPart::BackWall => "white",
+            BoxPart::Ceiling => "cyan",
+            BoxPart::ShortBlock => "red",
+            BoxPart::TallBlock => "blue",
+        }
+    }
+}
+
+/// Maps for a part of the box. The box has no texture coordinates of its own: the maps are
+/// laid on its planar ones ([`crate::texture::planar_uv`]), one image per scene unit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PartRelief {
+    pub part: BoxPart,
+    pub relief: ReliefSpec,
 }
 
 /// The models compiled into raylab, by the name a [`ModelSpec::file`] gives them.
@@ -66,6 +236,7 @@ impl ModelSpec {
             yaw: placement.yaw,
             reflectance: placement.reflectance,
             kind: MaterialKind::Diffuse,
+            relief: ReliefSpec::default(),
         }
     }
 
@@ -95,11 +266,12 @@ impl ModelSpec {
         }
     }
 
-    /// Reads the mesh and its texture: a warning for each part that could not be used.
-    fn load(&self) -> Result<(Mesh, Option<Texture>, Vec<String>), SceneError> {
+    /// Reads the mesh and its maps: a warning for each part that could not be used.
+    fn load(&self) -> Result<(Mesh, obj::Maps, Vec<String>), SceneError> {
+        let none = obj::Maps::default();
         match self.built_in() {
-            Some("bunny") => Ok((obj::builtin(obj::BUNNY_OBJ, "bunny")?, None, Vec::new())),
-            Some("teapot") => Ok((obj::builtin(obj::TEAPOT_OBJ, "teapot")?, None, Vec::new())),
+            Some("bunny") => Ok((obj::builtin(obj::BUNNY_OBJ, "bunny")?, none, Vec::new())),
+            Some("teapot") => Ok((obj::builtin(obj::TEAPOT_OBJ, "teapot")?, none, Vec::new())),
             Some(_) => obj::builtin_textured_mesh(
                 obj::TEXTURED_TEAPOT_OBJ,
                 obj::TEXTURED_TEAPOT_MTL,
@@ -123,6 +295,7 @@ impl SceneSpec {
             blocks: true,
             models: Vec::new(),
             terrain: None,
+            surfaces: Vec::new(),
         }
     }
 
@@ -205,6 +378,11 @@ impl SceneSpec {
                 }
                 _ => {}
             }
+            m.relief.validate(field)?;
+        }
+        for (i, part) in self.surfaces.iter().enumerate() {
+            part.relief
+                .validate(|f| format!("scene.surfaces[{i}].{f}"))?;
         }
         if let Some(t) = &self.terrain {
             if !(1..=MAX_TERRAIN_GRID).contains(&t.grid) {
@@ -246,13 +424,18 @@ impl SceneSpec {
             .map(|m| match m.built_in() {
                 Some(_) => 16 << 20,
                 None => obj::memory_estimate(&m.file),
-            })
+            } + m.relief.memory_estimate())
+            .sum();
+        let surfaces: u64 = self
+            .surfaces
+            .iter()
+            .map(|s| s.relief.memory_estimate())
             .sum();
         let terrain = self.terrain.as_ref().map_or(0, |t| {
             let default = u64::from(TerrainSpec::default().grid).pow(2);
             (320u64 << 20) * u64::from(t.grid).pow(2) / default
         });
-        models + terrain
+        models + surfaces + terrain
     }
 
     /// Builds the scene and its acceleration structure (on the current rayon pool), with a
@@ -271,13 +454,17 @@ impl SceneSpec {
                 return Err(SceneError::Cancelled);
             }
             progress(&format!("reading {}", model.name()));
-            let (mesh, texture, mut w) = model.load()?;
+            let (mesh, maps, mut w) = model.load()?;
             warnings.append(&mut w);
             let mut material = Material::diffuse(model.name(), model.reflectance);
             material.kind = model.kind;
             if model.kind == MaterialKind::Diffuse {
-                material.texture = texture;
+                material.texture = maps.texture;
             }
+            material.relief = match model.relief.load()? {
+                Some(relief) => Some(relief),
+                None => maps.relief,
+            };
             models.push((mesh, model.placement(), material));
         }
         if cancelled() {
@@ -286,7 +473,11 @@ impl SceneSpec {
         if self.terrain.is_some() {
             progress("making the terrain");
         }
-        let scene = assemble(
+        let mut reliefs = Vec::with_capacity(self.surfaces.len());
+        for part in &self.surfaces {
+            reliefs.push((part.part.material(), part.relief.load()?));
+        }
+        let mut scene = assemble(
             self.room,
             self.blocks,
             &models,
@@ -294,6 +485,16 @@ impl SceneSpec {
             cancelled,
             progress,
         )?;
+        // The box's materials come first, in the order of `cornell_box`.
+        let box_materials = cornell_box().materials.len();
+        for (name, relief) in reliefs {
+            if let Some(m) = scene.materials[..box_materials]
+                .iter_mut()
+                .find(|m| m.name == name)
+            {
+                m.relief = relief;
+            }
+        }
         Ok((scene, warnings))
     }
 }
@@ -371,6 +572,16 @@ pub fn resolve_models(spec: &mut SceneSpec, folder: &Path) {
             m.file = resolve_path(&m.file, folder);
         }
     }
+    for file in map_files(spec) {
+        *file = resolve_path(file, folder);
+    }
+}
+
+/// Every normal and height map's file a scene names, on models and on parts of the box.
+fn map_files(spec: &mut SceneSpec) -> impl Iterator<Item = &mut PathBuf> {
+    let models = spec.models.iter_mut().map(|m| &mut m.relief);
+    let parts = spec.surfaces.iter_mut().map(|p| &mut p.relief);
+    models.chain(parts).flat_map(ReliefSpec::files_mut)
 }
 
 /// The inverse of [`resolve_models`] for writing a scene file into `folder`: each model's path
@@ -381,6 +592,9 @@ pub fn relative_models(spec: &mut SceneSpec, folder: &Path) {
         if m.built_in().is_none() {
             m.file = path_relative_to(&m.file, folder);
         }
+    }
+    for file in map_files(spec) {
+        *file = path_relative_to(file, folder);
     }
 }
 

@@ -1,0 +1,265 @@
+//! Normal maps and parallax occlusion mapping (the lab's section 6 extension) on rendered
+//! images: a flat map and a constant height map are no relief, a normal tilted toward the light
+//! brightens a pixel by the ratio of the cosines (equation 27), scene files name their maps.
+
+mod common;
+
+use std::io::Cursor;
+use std::sync::Arc;
+
+use common::{assert_same_image, settings};
+use glam::Vec3;
+use raylab_core::material::TexturePreset;
+use raylab_core::relief::{Decoding, HeightMap, NormalMap, Relief};
+use raylab_core::render::render;
+use raylab_core::scene::spec::{BoxPart, PartRelief, ReliefSpec};
+use raylab_core::scene::{Scene, SceneChoice, SceneSpec, cornell_box};
+use raylab_core::texture::TextureImage;
+use raylab_core::{Image, RenderSettings, Stage};
+
+/// A PNG of `width × height` pixels, all `rgb`.
+fn png(width: u32, height: u32, rgb: [u8; 3]) -> Vec<u8> {
+    let image = image::RgbImage::from_pixel(width, height, image::Rgb(rgb));
+    let mut bytes = Cursor::new(Vec::new());
+    image.write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+    bytes.into_inner()
+}
+
+/// A normal map of one colour, read from a PNG as a file would be.
+fn normal_map(rgb: [u8; 3]) -> NormalMap {
+    let image = TextureImage::from_encoded_as(&png(4, 4, rgb), "map.png", Decoding::Normal);
+    NormalMap {
+        image: Arc::new(image.unwrap()),
+        strength: 1.0,
+    }
+}
+
+/// The Cornell box with `relief` on the materials named.
+fn box_with(relief: Relief, names: &[&str]) -> Scene {
+    let mut scene = cornell_box();
+    let relief = Arc::new(relief);
+    for m in &mut scene.materials {
+        if names.contains(&m.name.as_str()) {
+            m.relief = Some(relief.clone());
+        }
+    }
+    scene
+}
+
+const EVERY_SURFACE: [&str; 7] = ["red", "yellow", "green", "cyan", "blue", "purple", "white"];
+
+/// The largest difference between two images' channels, relative to the brightest.
+fn max_difference(a: &Image, b: &Image) -> f32 {
+    let top = a.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
+    let worst = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (*p - *q).abs().max_element())
+        .fold(0.0, f32::max);
+    worst / top
+}
+
+/// Every texel (128, 128, 255) decodes to (0, 0, 1): the shading normal is the triangle's
+/// own normal up to the rounding of one normalisation, in every lab stage and in the path
+/// stage (with bounces), so the image is the plain one up to float rounding.
+#[test]
+fn a_flat_normal_map_is_no_normal_map() {
+    let plain = cornell_box();
+    let flat = Relief {
+        normal: Some(normal_map([128, 128, 255])),
+        height: None,
+        uv_scale: 1.0,
+    };
+    let mapped = box_with(flat, &EVERY_SURFACE);
+    for stage in [
+        Stage::Flat,
+        Stage::Incoming,
+        Stage::Direct,
+        Stage::Shadows,
+        Stage::Lab,
+        Stage::Path,
+    ] {
+        let mut s = settings(stage, 48);
+        if stage == Stage::Path {
+            s.shading.bounces = Some(3);
+            s.samples_per_pixel = 4;
+        }
+        let want = render(&plain, &s);
+        let got = render(&mapped, &s);
+        let d = max_difference(&want, &got);
+        assert!(d < 1e-5, "{stage}: images differ by {d} of the brightest");
+    }
+}
+
+/// A height map of one value carves nothing: its top is everywhere. The checkerboard floor
+/// with it is the checkerboard floor, bit for bit (the coordinates are not touched); the
+/// tiles' map does move the squares.
+#[test]
+fn a_constant_height_map_is_no_height_map() {
+    let level =
+        TextureImage::from_encoded_as(&png(8, 8, [150, 150, 150]), "h.png", Decoding::Height);
+    let constant = Relief {
+        normal: None,
+        height: Some(HeightMap::new(Arc::new(level.unwrap()), 0.1)),
+        uv_scale: 4.0,
+    };
+    let plain = cornell_box();
+    let carved = box_with(constant, &["green"]);
+    for stage in [Stage::Flat, Stage::Lab, Stage::Path] {
+        let mut s = settings(stage, 64);
+        s.texture_preset = TexturePreset::CheckerFloor;
+        if stage == Stage::Path {
+            s.shading.bounces = Some(2);
+        }
+        assert_same_image(&render(&carved, &s), &render(&plain, &s), stage);
+    }
+    // The preset's tiles carve: the floor's pixels change.
+    let mut s = settings(Stage::Flat, 64);
+    s.texture_preset = TexturePreset::CheckerFloor;
+    let checker = render(&plain, &s);
+    s.texture_preset = TexturePreset::ParallaxFloor;
+    let tiles = render(&plain, &s);
+    let moved = checker
+        .pixels
+        .iter()
+        .zip(&tiles.pixels)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(moved > 50, "{moved} pixels moved");
+}
+
+/// Equation 27 with the perturbed normal: D = P·max(0, n̂·r̂)/(4πr²). On the back wall
+/// (geometric normal (0, 0, −1), planar coordinates (x, y), so the tangent is +x) the texel
+/// (192, 128, 255) decodes to (64/127, 0, 1) = (0.503937, 0, 1): the normal
+/// n̂' = (0.503937, 0, −1)/1.119800, tilted 26.75° toward +x. Where the light (0, −0.5, −0.7)
+/// lies to the right (x < 0 on the wall), D grows by (n̂'·r̂)/(n̂·r̂) =
+/// (0.503937·r_x − r_z)/(1.119800·(−r_z)), and so does the pixel (ρ·D, the direct stage). At
+/// (−0.9, −0.5, 1), r = (0.9, 0, −1.7): (0.453543 + 1.7)/(1.119800·1.7) = 1.131264; wherever
+/// r_x > 0.8 the ratio exceeds (0.403150 + 1.7)/(1.119800·1.7) = 1.104799.
+#[test]
+fn a_normal_tilted_toward_the_light_brightens_by_the_cosine_ratio() {
+    let plain = cornell_box();
+    assert_eq!(plain.triangles[8].normal, Vec3::new(0.0, 0.0, -1.0));
+    let tilted = Relief {
+        normal: Some(normal_map([192, 128, 255])),
+        height: None,
+        uv_scale: 1.0,
+    };
+    let mapped = box_with(tilted, &["white"]);
+    let s = settings(Stage::Direct, 64);
+    let (want, got) = (render(&plain, &s), render(&mapped, &s));
+    let ratio = |r: Vec3| (0.503_937 * r.x - r.z) / (1.119_800 * -r.z);
+    let r = Vec3::new(0.9, 0.0, -1.7);
+    assert!((ratio(r) - 1.131_264).abs() < 1e-6, "{}", ratio(r));
+    let mut brighter = 0;
+    for y in 0..64 {
+        for x in 0..64 {
+            let ray = s.camera.pixel_ray(x, y);
+            let Some(hit) = plain.closest_intersection(&ray, f32::INFINITY) else {
+                continue;
+            };
+            if plain.material_of(hit.triangle_index).name != "white" {
+                continue;
+            }
+            let r = s.light.position - hit.position;
+            let (p, q) = (want.get(x, y), got.get(x, y));
+            let expected = p * ratio(r);
+            assert!(
+                (q - expected).abs().max_element() <= 1e-5 * expected.max_element(),
+                "pixel ({x}, {y}) at {}: {q} against {expected}",
+                hit.position
+            );
+            if r.x > 0.8 {
+                assert!(q.x > 1.05 * p.x, "({x}, {y}) is brighter");
+                brighter += 1;
+            }
+        }
+    }
+    assert!(brighter > 50, "{brighter}");
+}
+
+/// The presets render in every stage, the same image on one thread as on four
+/// (deterministic), and with relief where the maps lie.
+#[test]
+fn the_presets_render_alike_on_any_thread_count() {
+    let scene = cornell_box();
+    for preset in [TexturePreset::BumpyWalls, TexturePreset::ParallaxFloor] {
+        for stage in [Stage::Lab, Stage::Path] {
+            let mut s = settings(stage, 48);
+            s.texture_preset = preset;
+            s.shading.bounces = Some(2);
+            let one = common::on_threads(1, || render(&scene, &s));
+            let four = common::on_threads(4, || render(&scene, &s));
+            assert_same_image(&one, &four, format!("{preset} {stage}"));
+            s.texture_preset = TexturePreset::None;
+            let plain = render(&scene, &s);
+            assert!(max_difference(&plain, &one) > 0.01, "{preset} {stage}");
+        }
+    }
+}
+
+/// A scene file's `[[scene.surfaces]]` gives the back wall a normal map relative to the file:
+/// it loads, renders with relief, round-trips; a missing map is an error naming the file.
+#[test]
+fn a_scene_file_names_its_normal_map() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("maps")).unwrap();
+    std::fs::write(dir.path().join("maps/tilt.png"), png(4, 4, [192, 128, 255])).unwrap();
+    let mut spec = SceneSpec::cornell("tilted wall");
+    spec.surfaces.push(PartRelief {
+        part: BoxPart::BackWall,
+        relief: ReliefSpec {
+            normal_map: Some(dir.path().join("maps/tilt.png")),
+            ..ReliefSpec::default()
+        },
+    });
+    let mut s = settings(Stage::Direct, 32);
+    s.scene = SceneChoice::Custom(Box::new(spec));
+    let file = dir.path().join("wall.toml");
+    raylab_core::scene_file::save(&s, &file).unwrap();
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.contains("[[scene.surfaces]]"), "{text}");
+    assert!(text.contains("part = \"back-wall\""), "{text}");
+    assert!(text.contains("normal_map = \"maps/tilt.png\""), "{text}");
+    assert!(
+        !text.contains("normal_strength"),
+        "the default is left out: {text}"
+    );
+    let read: RenderSettings = raylab_core::scene_file::load(&file).unwrap();
+    assert_eq!(read, s);
+    let scene = read.scene.load().unwrap();
+    let plain = render(&cornell_box(), &s);
+    assert!(max_difference(&plain, &render(&scene, &s)) > 0.01);
+
+    // The map gone: an error naming it.
+    std::fs::remove_file(dir.path().join("maps/tilt.png")).unwrap();
+    let e = raylab_core::scene_file::load(&file)
+        .unwrap()
+        .scene
+        .load()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("could not load the normal map") && e.contains("maps/tilt.png"),
+        "{e}"
+    );
+
+    // A strength out of range is refused when the file is read, naming the field.
+    let bad = text.replace(
+        "part = \"back-wall\"",
+        "part = \"back-wall\"\nnormal_strength = -1.0",
+    );
+    std::fs::write(&file, bad).unwrap();
+    let e = raylab_core::scene_file::load(&file)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("scene.surfaces[0].normal_strength"), "{e}");
+    // An unknown field too.
+    let bad = text.replace("part = \"back-wall\"", "part = \"back-wall\"\nbump = 1");
+    std::fs::write(&file, bad).unwrap();
+    let e = raylab_core::scene_file::load(&file)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("bump"), "{e}");
+}
