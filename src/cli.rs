@@ -150,7 +150,7 @@ pub struct Pixel(pub u32, pub u32);
 
 /// The options that set what a file given with `--settings` or `--scene-file` holds: either
 /// file takes them all, so none combines with it.
-const SETTINGS_OPTIONS: [&str; 28] = [
+const SETTINGS_OPTIONS: [&str; 30] = [
     "scene",
     "obj",
     "stage",
@@ -179,6 +179,8 @@ const SETTINGS_OPTIONS: [&str; 28] = [
     "focus_distance",
     "display",
     "exposure",
+    "water_waves",
+    "water_time",
 ];
 
 /// What determines an image, shared by `render` and `inspect` (which explains a pixel of the
@@ -204,7 +206,7 @@ pub struct RenderOptions {
         conflicts_with_all = SETTINGS_OPTIONS
     )]
     pub scene_file: Option<PathBuf>,
-    /// Scene: cornell, bunny, teapot, textured-teapot or terrain.
+    /// Scene: cornell, bunny, teapot, textured-teapot, terrain or pool.
     #[arg(
         long,
         default_value = "cornell",
@@ -237,6 +239,13 @@ pub struct RenderOptions {
     /// parallax-floor (checkerboard tiles with grout, carved by parallax occlusion mapping).
     #[arg(long, default_value = "none", value_name = "PRESET")]
     pub texture_preset: TexturePreset,
+    /// The pool's waves: their amplitude in scene units (0: still water) [default: 0.01].
+    /// Needs a scene with water (--scene pool, or a scene file's [scene.water]).
+    #[arg(long, value_parser = parse_non_negative, value_name = "A", allow_hyphen_values = true)]
+    pub water_waves: Option<f32>,
+    /// The pool's waves at time T, in seconds (each octave drifts its own way) [default: 0].
+    #[arg(long, value_parser = parse_non_negative, value_name = "T", allow_hyphen_values = true)]
+    pub water_time: Option<f32>,
     /// Smooth shading of models (interpolated vertex normals); the box stays flat either way.
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
     pub smooth: bool,
@@ -337,6 +346,15 @@ impl RenderOptions {
         if let Some(path) = &self.scene_file {
             return Ok(raylab_core::scene_file::load(path)?);
         }
+        if (self.water_waves.is_some() || self.water_time.is_some())
+            && self.scene_choice().spec().water.is_none()
+        {
+            anyhow::bail!(
+                "--water-waves and --water-time need a scene with water (--scene pool, or a scene \
+                 file with [scene.water]); '{}' has none",
+                self.scene_choice().name()
+            );
+        }
         match &self.settings {
             Some(path) => read_settings_file(path),
             None => Ok(self.settings()),
@@ -357,8 +375,17 @@ impl RenderOptions {
         if let Some(d) = self.focus_distance {
             camera.focus_distance = d;
         }
+        let mut scene = self.scene_choice();
+        if self.water_waves.is_some() || self.water_time.is_some() {
+            let mut spec = scene.spec();
+            if let Some(water) = &mut spec.water {
+                water.waves = self.water_waves.unwrap_or(water.waves);
+                water.time = self.water_time.unwrap_or(water.time);
+                scene = SceneChoice::from_spec(spec);
+            }
+        }
         let mut settings = RenderSettings {
-            scene: self.scene_choice(),
+            scene,
             camera,
             shading: Shading {
                 bounces: self.bounces.0,

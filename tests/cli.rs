@@ -825,3 +825,50 @@ fn the_check_command() {
         assert!(out.stdout.is_empty(), "{args:?}");
     }
 }
+
+/// The pool's waves from the command line: the image is the library's for the same water;
+/// waves asked of a scene with no water are refused by name.
+#[test]
+fn the_pool_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pool.exr");
+    let run = raylab(&[
+        "render",
+        "--scene",
+        "pool",
+        "--water-waves",
+        "0.02",
+        "--water-time",
+        "1.5",
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let mut s = settings(Stage::Lab, 40);
+    s.camera = s.camera.with_resolution(40, 30);
+    let mut spec = raylab_core::scene::SceneChoice::Pool.spec();
+    let water = spec.water.as_mut().unwrap();
+    water.waves = 0.02;
+    water.time = 1.5;
+    s.scene = raylab_core::scene::SceneChoice::from_spec(spec);
+    let written = image::open(&out).unwrap().to_rgb32f().into_raw();
+    assert_eq!(written, library_exr(&s));
+
+    let refused = raylab(&[
+        "render",
+        "--water-waves",
+        "0.02",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("need a scene with water"),
+        "{}",
+        stderr(&refused)
+    );
+}

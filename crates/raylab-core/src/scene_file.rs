@@ -74,6 +74,7 @@ use crate::material::{MaterialKind, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
 use crate::scene::spec::{self, BoxPart, ModelSpec, PartRelief, ReliefSpec, SceneSpec};
 use crate::scene::terrain::TerrainSpec;
+use crate::scene::water::WaterSpec;
 use crate::settings::RenderSettings;
 use crate::view::View;
 
@@ -313,6 +314,9 @@ struct SceneV1 {
     /// tall-block) and the maps' fields as a model has them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     surfaces: Vec<SurfaceV1>,
+    /// Water over the floor, `[scene.water]`: depth, ior, waves (amplitude), time (seconds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    water: Option<WaterV1>,
 }
 
 fn default_roughness() -> f32 {
@@ -517,6 +521,15 @@ struct TerrainV1 {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct WaterV1 {
+    depth: f32,
+    ior: f32,
+    waves: f32,
+    time: f32,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct CameraV1 {
     position: Floats<3>,
     yaw: f32,
@@ -665,6 +678,12 @@ impl FileV1 {
                     height: t.height,
                     octaves: t.octaves,
                 }),
+                water: spec.water.map(|w| WaterV1 {
+                    depth: w.depth,
+                    ior: w.ior,
+                    waves: w.waves,
+                    time: w.time,
+                }),
             },
             camera: CameraV1 {
                 position: c.position.into(),
@@ -741,6 +760,12 @@ impl FileV1 {
                 grid: t.grid,
                 height: t.height,
                 octaves: t.octaves,
+            }),
+            water: scene.water.map(|w| WaterSpec {
+                depth: w.depth,
+                ior: w.ior,
+                waves: w.waves,
+                time: w.time,
             }),
         };
         spec::resolve_models(&mut spec, folder);

@@ -125,7 +125,6 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         }
         let Some(hit) = &hit else { continue };
         let material = tracer.material_of(hit.triangle_index);
-        let normal = scene.triangles[hit.triangle_index].normal;
         if material.is_diffuse() {
             diffuse.push(tracer.surface(hit, material, ray.direction), i);
             continue;
@@ -139,6 +138,13 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             diffuse.push(surface, i);
             continue;
         }
+        // Mirror and glass reflect about the triangle's own normal (a smooth normal could send
+        // a reflection below the surface); a relief (normal map, the water's waves) is the
+        // surface's detail, so its bent normal is used.
+        let normal = match &material.relief {
+            None => scene.triangles[hit.triangle_index].normal,
+            Some(_) => tracer.surface(hit, material, ray.direction).normal,
+        };
         let branch = match wave {
             Wave::Camera => Branch {
                 pixel: i as u16,

@@ -9,6 +9,7 @@ mod cornell;
 pub mod obj;
 pub mod spec;
 pub mod terrain;
+pub mod water;
 
 pub use calibration::{best_isa, calibration, workloads as calibration_workloads};
 pub use cornell::{CORNELL_TRIANGLES, cornell_box, cornell_triangles};
@@ -316,6 +317,9 @@ pub enum SceneChoice {
     TexturedTeapot,
     /// A fractal terrain of about a million triangles covering the box's floor.
     Terrain,
+    /// The lab's box with its floor under clear water 0.3 deep, its surface rippled by
+    /// fractal waves ([`water`]).
+    Pool,
     /// Any OBJ file, standing in the box.
     Obj(PathBuf),
     /// A scene of its own parts, as a scene file describes it ([`crate::scene_file`]).
@@ -324,12 +328,13 @@ pub enum SceneChoice {
 
 impl SceneChoice {
     /// The built-in scenes, by name.
-    pub const BUILT_IN: [SceneChoice; 5] = [
+    pub const BUILT_IN: [SceneChoice; 6] = [
         SceneChoice::Cornell,
         SceneChoice::Bunny,
         SceneChoice::Teapot,
         SceneChoice::TexturedTeapot,
         SceneChoice::Terrain,
+        SceneChoice::Pool,
     ];
 
     /// The name: `cornell`, `bunny`, `teapot`, `terrain`, the OBJ file's name, or a custom
@@ -341,6 +346,7 @@ impl SceneChoice {
             SceneChoice::Teapot => "teapot".into(),
             SceneChoice::TexturedTeapot => "textured-teapot".into(),
             SceneChoice::Terrain => "terrain".into(),
+            SceneChoice::Pool => "pool".into(),
             SceneChoice::Obj(path) => path.file_name().map_or_else(
                 || path.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),
@@ -357,6 +363,7 @@ impl SceneChoice {
             SceneChoice::Teapot => "Utah teapot".to_owned(),
             SceneChoice::TexturedTeapot => "Textured teapot (porcelain)".to_owned(),
             SceneChoice::Terrain => "Fractal terrain (1M triangles)".to_owned(),
+            SceneChoice::Pool => "Pool of water (waves)".to_owned(),
             SceneChoice::Obj(_) => format!("OBJ: {self}"),
             SceneChoice::Custom(_) => format!("Scene: {self}"),
         }
@@ -386,6 +393,10 @@ impl SceneChoice {
                 blocks: false,
                 terrain: Some(terrain::TerrainSpec::default()),
                 ..SceneSpec::cornell("terrain")
+            },
+            SceneChoice::Pool => SceneSpec {
+                water: Some(water::WaterSpec::default()),
+                ..SceneSpec::cornell("pool")
             },
             SceneChoice::Obj(path) => with_model(
                 &self.name(),

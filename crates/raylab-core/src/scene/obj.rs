@@ -800,7 +800,7 @@ pub fn model_in_box(mesh: &Mesh, placement: &Placement, name: &str) -> Scene {
 
 fn scene_with_model(mesh: &Mesh, placement: &Placement, material: Material) -> Scene {
     let models = [(mesh.clone(), *placement, material)];
-    super::spec::assemble(true, true, &models, None, &|| false, &|_| {})
+    super::spec::assemble(true, true, &models, None, None, &|| false, &|_| {})
         .expect("the box is never empty")
 }
 

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::obj::{self, Mesh, Placement};
 use super::terrain::{self, TerrainSpec};
+use super::water::{self, WaterSpec};
 use super::{Material, MaterialKind, Scene, SceneError, cornell_box};
 use crate::invalid::SettingsError;
 use crate::relief::{Decoding, HeightMap, NormalMap, Relief};
@@ -37,6 +38,9 @@ pub struct SceneSpec {
     /// Normal and height maps for parts of the box.
     #[serde(default)]
     pub surfaces: Vec<PartRelief>,
+    /// Water over the floor ([`water`]).
+    #[serde(default)]
+    pub water: Option<WaterSpec>,
 }
 
 /// A model standing in the box.
@@ -295,6 +299,7 @@ impl SceneSpec {
             blocks: true,
             models: Vec::new(),
             terrain: None,
+            water: None,
             surfaces: Vec::new(),
         }
     }
@@ -383,6 +388,9 @@ impl SceneSpec {
         for (i, part) in self.surfaces.iter().enumerate() {
             part.relief
                 .validate(|f| format!("scene.surfaces[{i}].{f}"))?;
+        }
+        if let Some(w) = &self.water {
+            w.validate()?;
         }
         if let Some(t) = &self.terrain {
             if !(1..=MAX_TERRAIN_GRID).contains(&t.grid) {
@@ -482,6 +490,7 @@ impl SceneSpec {
             self.blocks,
             &models,
             self.terrain.as_ref(),
+            self.water.as_ref(),
             cancelled,
             progress,
         )?;
@@ -505,7 +514,7 @@ pub const MAX_TERRAIN_GRID: u32 = 2048;
 pub const MAX_TERRAIN_OCTAVES: u32 = 16;
 
 /// The one place a scene's triangles are put together: the room (triangles 0–9 of
-/// [`cornell_box`]), then the blocks (10–29), each model, and the terrain, with every material
+/// [`cornell_box`]), then the blocks (10–29), each model, the terrain and the water, with every material
 /// of the box kept (so the room's material indices never change). Models and terrain carry
 /// their corners' normals and texture coordinates; the room and blocks stay flat.
 pub fn assemble(
@@ -513,6 +522,7 @@ pub fn assemble(
     blocks: bool,
     models: &[(Mesh, Placement, Material)],
     terrain: Option<&TerrainSpec>,
+    water: Option<&WaterSpec>,
     cancelled: &(dyn Fn() -> bool + Sync),
     progress: Progress<'_>,
 ) -> Result<Scene, SceneError> {
@@ -546,6 +556,13 @@ pub fn assemble(
         materials.push(terrain::terrain_material(spec));
         let material = (materials.len() - 1) as u32;
         terrain::extend_with_terrain(spec, material, &mut triangles, &mut normals);
+        uvs.resize(triangles.len(), None);
+    }
+    if let Some(spec) = water {
+        materials.push(water::water_material(spec));
+        let material = (materials.len() - 1) as u32;
+        triangles.extend(water::water_triangles(spec, material));
+        normals.resize(triangles.len(), None);
         uvs.resize(triangles.len(), None);
     }
     if triangles.is_empty() {

@@ -206,7 +206,7 @@ fn coord(n: usize, i: usize) -> f32 {
 /// (the room's walls stay flat).
 pub fn terrain_scene(spec: &TerrainSpec) -> Scene {
     let no = || false;
-    super::spec::assemble(true, false, &[], Some(spec), &no, &|_| {})
+    super::spec::assemble(true, false, &[], Some(spec), None, &no, &|_| {})
         .expect("the room alone is a scene")
 }
 
