@@ -149,7 +149,7 @@ fn a_normal_tilted_toward_the_light_brightens_by_the_cosine_ratio() {
     let mapped = box_with(tilted, &["white"]);
     let s = settings(Stage::Direct, 64);
     let (want, got) = (render(&plain, &s), render(&mapped, &s));
-    let ratio = |r: Vec3| (0.503_937 * r.x - r.z) / (1.119_800 * -r.z);
+    let ratio = |r: Vec3| (0.503_937 * r.x - r.z) / (1.119_8 * -r.z);
     let r = Vec3::new(0.9, 0.0, -1.7);
     assert!((ratio(r) - 1.131_264).abs() < 1e-6, "{}", ratio(r));
     let mut brighter = 0;
@@ -177,6 +177,30 @@ fn a_normal_tilted_toward_the_light_brightens_by_the_cosine_ratio() {
         }
     }
     assert!(brighter > 50, "{brighter}");
+}
+
+/// The pixel inspector prints the normal the light was computed with: on a bumpy wall the
+/// map's, said to be so; it is the normal of equation 27 in the inspection's terms.
+#[test]
+fn the_inspector_shows_the_perturbed_normal() {
+    let scene = cornell_box();
+    let mut s = settings(Stage::Lab, 64);
+    s.texture_preset = TexturePreset::BumpyWalls;
+    // Column 8 sees the left wall (geometric normal (1, 0, 0)); the brick faces are flat, the
+    // bevels by the mortar tilted.
+    let tilted = (10..54).find_map(|y| {
+        let i = raylab_core::inspect::inspect_pixel(&scene, &s, 8, y).unwrap();
+        assert_eq!(i.surface.as_deref(), Some("purple"), "pixel (8, {y})");
+        assert!(i.normal_mapped);
+        i.shading_normal.is_some().then_some(i)
+    });
+    let i = tilted.expect("a bevel in the column");
+    let n = i.shading_normal.unwrap();
+    assert_ne!(Some(n), i.normal);
+    assert!((n.length() - 1.0).abs() < 1e-6 && n.x > 0.0, "{n}");
+    assert_eq!(i.shaded[0].normal, n);
+    let text = i.to_text();
+    assert!(text.contains("tilted by the normal map"), "{text}");
 }
 
 /// The presets render in every stage, the same image on one thread as on four
