@@ -203,6 +203,43 @@ fn the_inspector_shows_the_perturbed_normal() {
     assert!(text.contains("tilted by the normal map"), "{text}");
 }
 
+/// The normals view shows the normal the integrators shade with: the bricks' on the walls,
+/// the plain normal elsewhere (the floor, the blocks), pixel for pixel.
+#[test]
+fn the_normals_view_shows_the_normal_map() {
+    let scene = cornell_box();
+    let never = || false;
+    let mut s = settings(Stage::Lab, 64);
+    let view = |s: &RenderSettings| {
+        raylab_core::view::render_view(&scene, s, raylab_core::view::View::Normals, &never)
+            .unwrap()
+            .image
+    };
+    let plain = view(&s);
+    s.texture_preset = TexturePreset::BumpyWalls;
+    let bumpy = view(&s);
+    let (mut walls_changed, mut others) = (0, 0);
+    for y in 0..64 {
+        for x in 0..64 {
+            let Some(hit) = scene.closest_intersection(&s.camera.pixel_ray(x, y), f32::INFINITY)
+            else {
+                continue;
+            };
+            let name = &scene.material_of(hit.triangle_index).name;
+            if ["purple", "yellow", "white"].contains(&name.as_str()) {
+                walls_changed += usize::from(plain.get(x, y) != bumpy.get(x, y));
+            } else {
+                assert_eq!(plain.get(x, y), bumpy.get(x, y), "({x}, {y}) on {name}");
+                others += 1;
+            }
+        }
+    }
+    assert!(
+        walls_changed > 300 && others > 300,
+        "{walls_changed} {others}"
+    );
+}
+
 /// The presets render in every stage, the same image on one thread as on four
 /// (deterministic), and with relief where the maps lie.
 #[test]
@@ -252,6 +289,14 @@ fn a_scene_file_names_its_normal_map() {
     );
     let read: RenderSettings = raylab_core::scene_file::load(&file).unwrap();
     assert_eq!(read, s);
+    // The memory estimate counts the map as a texture is counted: its decoding and its file.
+    let file_bytes = std::fs::metadata(dir.path().join("maps/tilt.png"))
+        .unwrap()
+        .len();
+    assert_eq!(
+        read.scene.memory_estimate(),
+        TextureImage::decoding_bytes(4, 4) + file_bytes
+    );
     let scene = read.scene.load().unwrap();
     let plain = render(&cornell_box(), &s);
     assert!(max_difference(&plain, &render(&scene, &s)) > 0.01);
