@@ -90,6 +90,27 @@ fn a_flat_normal_map_is_no_normal_map() {
         let d = max_difference(&want, &got);
         assert!(d < 1e-5, "{stage}: images differ by {d} of the brightest");
     }
+    // On the textured teapot (its own coordinates, smooth normals that are not axis-aligned,
+    // so the tilt's normalisation rounds): within 1e-5 too.
+    let plain = SceneChoice::TexturedTeapot.load().unwrap();
+    let mut mapped = plain.clone();
+    let flat = Arc::new(Relief {
+        normal: Some(normal_map([128, 128, 255])),
+        height: None,
+        uv_scale: 1.0,
+    });
+    for m in &mut mapped.materials {
+        m.relief = Some(flat.clone());
+    }
+    for stage in [Stage::Lab, Stage::Path] {
+        let mut s = settings(stage, 48);
+        s.shading.bounces = Some(2);
+        let d = max_difference(&render(&plain, &s), &render(&mapped, &s));
+        assert!(
+            d < 1e-5,
+            "teapot, {stage}: images differ by {d} of the brightest"
+        );
+    }
 }
 
 /// A height map of one value carves nothing: its top is everywhere. The checkerboard floor
@@ -238,6 +259,42 @@ fn the_normals_view_shows_the_normal_map() {
         walls_changed > 300 && others > 300,
         "{walls_changed} {others}"
     );
+}
+
+/// A map tilting the normal the whole way along the surface ((255, 128, 128) and (0, 128, 128):
+/// ±t, at 90°) is held to the shading frame's rules: at every pixel of the box the normal
+/// shaded with stays on the viewer's side of the surface (cos θ_o ≥ 1e-3, no black patches)
+/// and on the side of the triangle's own normal, unit.
+#[test]
+fn an_extreme_normal_map_keeps_the_normal_toward_the_viewer() {
+    for rgb in [[255, 128, 128], [0, 128, 128], [128, 0, 128]] {
+        let extreme = Relief {
+            normal: Some(normal_map(rgb)),
+            height: None,
+            uv_scale: 1.0,
+        };
+        let scene = box_with(extreme, &EVERY_SURFACE);
+        let s = settings(Stage::Lab, 48);
+        let tracer = raylab_core::integrator::Tracer::new(&scene, &s);
+        let mut tilted = 0;
+        for y in 0..48 {
+            for x in 0..48 {
+                let ray = s.camera.pixel_ray(x, y);
+                let hit = scene.closest_intersection(&ray, f32::INFINITY).unwrap();
+                let material = tracer.material_of(hit.triangle_index);
+                let surface = tracer.surface(&hit, material, ray.direction);
+                let n = surface.normal;
+                assert!((n.length() - 1.0).abs() < 1e-5, "{n}");
+                assert!(
+                    n.dot(-ray.direction) >= 0.999e-3,
+                    "({x}, {y}): {n} faces away"
+                );
+                assert!(n.dot(surface.geometric) >= 0.0, "({x}, {y}): {n} crosses");
+                tilted += usize::from(n != surface.geometric);
+            }
+        }
+        assert!(tilted > 2000, "{rgb:?}: {tilted}");
+    }
 }
 
 /// The presets render in every stage, the same image on one thread as on four
