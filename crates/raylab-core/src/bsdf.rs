@@ -547,8 +547,9 @@ impl ShadingFrame {
     /// The shading normal [`ShadingFrame::new`] would use (rules 1 and 2: on the geometric
     /// side of `wo`, bent so that cos θ_o ≥ [`MIN_SHADING_COS`]), turned back to the side of
     /// `geometric_normal` as given. For a normal map's perturbed normal, which the lab's
-    /// stages light by its cosine (equation 27) without a frame: the same rules, so a tilted
-    /// normal never faces away from the viewer (no black patches) nor crosses the surface.
+    /// stages light by its cosine (equation 27) without a frame: the same rules, so the tilt
+    /// never turns the normal away from the viewer (no black patches) nor across the surface
+    /// it is measured against ([`crate::integrator::Tracer::surface_with`]).
     #[inline]
     pub fn bent_normal(shading_normal: Vec3, geometric_normal: Vec3, wo_world: Vec3) -> Vec3 {
         let (ns, _, front) = Self::normals(shading_normal, geometric_normal, wo_world);

@@ -101,8 +101,12 @@ pub struct Inspection {
     pub back_facing: Option<bool>,
     /// The normal D was computed with at the first hit, where it differs from `normal`: the
     /// interpolated vertex normals (smooth shading) or, in the path stage, the normal turned to
-    /// face the ray (surfaces are two-sided there).
+    /// face the ray (surfaces are two-sided there), or a normal map's tilt of either.
     pub shading_normal: Option<Vec3>,
+    /// Whether the first hit's material has a normal map ([`crate::relief`]): its normal for
+    /// the light is the map's.
+    #[serde(default)]
+    pub normal_mapped: bool,
     /// The light.
     pub light: PointLight,
     /// The lab's terms at the first diffuse hit shaded (see above).
@@ -508,6 +512,7 @@ impl Inspection {
             normal: None,
             back_facing: None,
             shading_normal: None,
+            normal_mapped: false,
             light: tracer.light,
             terms: LightTerms::default(),
             n: shading.indirect_term(),
@@ -555,6 +560,8 @@ impl Inspection {
                         inspection.position = Some(hit.position);
                         inspection.normal = Some(geometric);
                         inspection.back_facing = Some(ray.direction.dot(geometric) > 0.0);
+                        inspection.normal_mapped =
+                            material.relief.as_ref().is_some_and(|r| r.normal.is_some());
                     }
                     if stage == Stage::Path {
                         inspection.bounces.push(PathVertex {
@@ -768,6 +775,8 @@ impl Inspection {
         if let Some(n) = self.shading_normal {
             let why = if stage == Stage::Path && self.normal == Some(-n) {
                 "turned to face the ray (two-sided surfaces)"
+            } else if self.normal_mapped {
+                "tilted by the normal map in the hit's tangent frame (lab §6)"
             } else {
                 "smooth shading, interpolated from the vertex normals"
             };

@@ -561,6 +561,22 @@ mod tests {
         );
         s.material_preset = MaterialPreset::Rough;
         assert!(s.description().contains("GGX highlight"));
+        // The relief presets: a normal changes D, so the incoming-light stage names it; the
+        // flat stage shows ρ alone, which a normal map does not change but parallax moves.
+        let mut s = RenderSettings {
+            texture_preset: TexturePreset::BumpyWalls,
+            ..RenderSettings::default()
+        };
+        assert_eq!(
+            s.description(),
+            "ρ·(D + N) (eq. 30) with shadows (§5.1) · normal-mapped walls"
+        );
+        s.shading = Shading::for_stage(Stage::Incoming);
+        assert!(s.description().ends_with(" · normal-mapped walls"));
+        s.shading = Shading::for_stage(Stage::Flat);
+        assert!(!s.description().contains("normal"), "{}", s.description());
+        s.texture_preset = TexturePreset::ParallaxFloor;
+        assert!(s.description().ends_with(" · parallax-mapped floor"));
     }
 
     #[test]

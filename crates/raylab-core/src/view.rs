@@ -120,8 +120,16 @@ pub fn render_view(
     match view {
         View::Shaded | View::Variance => from_film(scene, settings, view, cancelled),
         View::Normals => {
+            // The normal the integrators shade with: smooth or flat, and tilted where a
+            // material has a normal map (the texture preset's too).
+            let tracer = crate::integrator::Tracer::new(scene, settings);
             let normals = per_pixel(settings, cancelled, |ray| {
-                closest(ray).map(|h| scene.shading_normal(h.triangle_index, h.u, h.v, smooth))
+                closest(ray).map(|h| {
+                    let material = tracer.material_of(h.triangle_index);
+                    tracer
+                        .surface_with(&h, material, ray.direction, None)
+                        .normal
+                })
             })?;
             Ok(normals_view(settings, normals))
         }

@@ -73,7 +73,7 @@ fn assert_terms_are_equation_27(s: &RenderSettings, hit: &ShadedHit) {
     }
 }
 
-/// Every stage, every material preset, textures, a spherical light and a lens: R is the
+/// Every stage, every material preset, textures and relief, a spherical light and a lens: R is the
 /// rendered pixel, bit for bit, at every pixel of a 12 × 12 image, and every diffuse hit's D
 /// is equation 27 there.
 #[test]
@@ -81,7 +81,12 @@ fn r_is_the_rendered_pixel_in_every_configuration() {
     let scene = cornell_box();
     for stage in Stage::ALL {
         for preset in MaterialPreset::ALL {
-            for texture in [TexturePreset::None, TexturePreset::Both] {
+            for texture in [
+                TexturePreset::None,
+                TexturePreset::Both,
+                TexturePreset::BumpyWalls,
+                TexturePreset::ParallaxFloor,
+            ] {
                 for (radius, aperture) in [(0.0, 0.0), (0.15, 0.0), (0.0, 0.08), (0.15, 0.08)] {
                     let mut s = settings(stage, 12);
                     s.material_preset = preset;

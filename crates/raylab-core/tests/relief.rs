@@ -90,6 +90,27 @@ fn a_flat_normal_map_is_no_normal_map() {
         let d = max_difference(&want, &got);
         assert!(d < 1e-5, "{stage}: images differ by {d} of the brightest");
     }
+    // On the textured teapot (its own coordinates, smooth normals that are not axis-aligned,
+    // so the tilt's normalisation rounds): within 1e-5 too.
+    let plain = SceneChoice::TexturedTeapot.load().unwrap();
+    let mut mapped = plain.clone();
+    let flat = Arc::new(Relief {
+        normal: Some(normal_map([128, 128, 255])),
+        height: None,
+        uv_scale: 1.0,
+    });
+    for m in &mut mapped.materials {
+        m.relief = Some(flat.clone());
+    }
+    for stage in [Stage::Lab, Stage::Path] {
+        let mut s = settings(stage, 48);
+        s.shading.bounces = Some(2);
+        let d = max_difference(&render(&plain, &s), &render(&mapped, &s));
+        assert!(
+            d < 1e-5,
+            "teapot, {stage}: images differ by {d} of the brightest"
+        );
+    }
 }
 
 /// A height map of one value carves nothing: its top is everywhere. The checkerboard floor
@@ -149,7 +170,7 @@ fn a_normal_tilted_toward_the_light_brightens_by_the_cosine_ratio() {
     let mapped = box_with(tilted, &["white"]);
     let s = settings(Stage::Direct, 64);
     let (want, got) = (render(&plain, &s), render(&mapped, &s));
-    let ratio = |r: Vec3| (0.503_937 * r.x - r.z) / (1.119_800 * -r.z);
+    let ratio = |r: Vec3| (0.503_937 * r.x - r.z) / (1.119_8 * -r.z);
     let r = Vec3::new(0.9, 0.0, -1.7);
     assert!((ratio(r) - 1.131_264).abs() < 1e-6, "{}", ratio(r));
     let mut brighter = 0;
@@ -177,6 +198,103 @@ fn a_normal_tilted_toward_the_light_brightens_by_the_cosine_ratio() {
         }
     }
     assert!(brighter > 50, "{brighter}");
+}
+
+/// The pixel inspector prints the normal the light was computed with: on a bumpy wall the
+/// map's, said to be so; it is the normal of equation 27 in the inspection's terms.
+#[test]
+fn the_inspector_shows_the_perturbed_normal() {
+    let scene = cornell_box();
+    let mut s = settings(Stage::Lab, 64);
+    s.texture_preset = TexturePreset::BumpyWalls;
+    // Column 8 sees the left wall (geometric normal (1, 0, 0)); the brick faces are flat, the
+    // bevels by the mortar tilted.
+    let tilted = (10..54).find_map(|y| {
+        let i = raylab_core::inspect::inspect_pixel(&scene, &s, 8, y).unwrap();
+        assert_eq!(i.surface.as_deref(), Some("purple"), "pixel (8, {y})");
+        assert!(i.normal_mapped);
+        i.shading_normal.is_some().then_some(i)
+    });
+    let i = tilted.expect("a bevel in the column");
+    let n = i.shading_normal.unwrap();
+    assert_ne!(Some(n), i.normal);
+    assert!((n.length() - 1.0).abs() < 1e-6 && n.x > 0.0, "{n}");
+    assert_eq!(i.shaded[0].normal, n);
+    let text = i.to_text();
+    assert!(text.contains("tilted by the normal map"), "{text}");
+}
+
+/// The normals view shows the normal the integrators shade with: the bricks' on the walls,
+/// the plain normal elsewhere (the floor, the blocks), pixel for pixel.
+#[test]
+fn the_normals_view_shows_the_normal_map() {
+    let scene = cornell_box();
+    let never = || false;
+    let mut s = settings(Stage::Lab, 64);
+    let view = |s: &RenderSettings| {
+        raylab_core::view::render_view(&scene, s, raylab_core::view::View::Normals, &never)
+            .unwrap()
+            .image
+    };
+    let plain = view(&s);
+    s.texture_preset = TexturePreset::BumpyWalls;
+    let bumpy = view(&s);
+    let (mut walls_changed, mut others) = (0, 0);
+    for y in 0..64 {
+        for x in 0..64 {
+            let Some(hit) = scene.closest_intersection(&s.camera.pixel_ray(x, y), f32::INFINITY)
+            else {
+                continue;
+            };
+            let name = &scene.material_of(hit.triangle_index).name;
+            if ["purple", "yellow", "white"].contains(&name.as_str()) {
+                walls_changed += usize::from(plain.get(x, y) != bumpy.get(x, y));
+            } else {
+                assert_eq!(plain.get(x, y), bumpy.get(x, y), "({x}, {y}) on {name}");
+                others += 1;
+            }
+        }
+    }
+    assert!(
+        walls_changed > 300 && others > 300,
+        "{walls_changed} {others}"
+    );
+}
+
+/// A map tilting the normal the whole way along the surface ((255, 128, 128) and (0, 128, 128):
+/// ±t, at 90°) is held to the shading frame's rules: at every pixel of the box the normal
+/// shaded with stays on the viewer's side of the surface (cos θ_o ≥ 1e-3, no black patches)
+/// and on the side of the triangle's own normal, unit.
+#[test]
+fn an_extreme_normal_map_keeps_the_normal_toward_the_viewer() {
+    for rgb in [[255, 128, 128], [0, 128, 128], [128, 0, 128]] {
+        let extreme = Relief {
+            normal: Some(normal_map(rgb)),
+            height: None,
+            uv_scale: 1.0,
+        };
+        let scene = box_with(extreme, &EVERY_SURFACE);
+        let s = settings(Stage::Lab, 48);
+        let tracer = raylab_core::integrator::Tracer::new(&scene, &s);
+        let mut tilted = 0;
+        for y in 0..48 {
+            for x in 0..48 {
+                let ray = s.camera.pixel_ray(x, y);
+                let hit = scene.closest_intersection(&ray, f32::INFINITY).unwrap();
+                let material = tracer.material_of(hit.triangle_index);
+                let surface = tracer.surface(&hit, material, ray.direction);
+                let n = surface.normal;
+                assert!((n.length() - 1.0).abs() < 1e-5, "{n}");
+                assert!(
+                    n.dot(-ray.direction) >= 0.999e-3,
+                    "({x}, {y}): {n} faces away"
+                );
+                assert!(n.dot(surface.geometric) >= 0.0, "({x}, {y}): {n} crosses");
+                tilted += usize::from(n != surface.geometric);
+            }
+        }
+        assert!(tilted > 2000, "{rgb:?}: {tilted}");
+    }
 }
 
 /// The presets render in every stage, the same image on one thread as on four
@@ -228,6 +346,14 @@ fn a_scene_file_names_its_normal_map() {
     );
     let read: RenderSettings = raylab_core::scene_file::load(&file).unwrap();
     assert_eq!(read, s);
+    // The memory estimate counts the map as a texture is counted: its decoding and its file.
+    let file_bytes = std::fs::metadata(dir.path().join("maps/tilt.png"))
+        .unwrap()
+        .len();
+    assert_eq!(
+        read.scene.memory_estimate(),
+        TextureImage::decoding_bytes(4, 4) + file_bytes
+    );
     let scene = read.scene.load().unwrap();
     let plain = render(&cornell_box(), &s);
     assert!(max_difference(&plain, &render(&scene, &s)) > 0.01);

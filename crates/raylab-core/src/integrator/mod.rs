@@ -676,8 +676,13 @@ impl<'a> Tracer<'a> {
     ///
     /// A material with a relief ([`crate::relief`]: a normal map, parallax occlusion mapping)
     /// changes the texture coordinates ρ is looked up at and the shading normal, here for
-    /// every integrator; the perturbed normal is held to the shading frame's rules
-    /// ([`ShadingFrame::bent_normal`]) toward the viewer, `-incoming`.
+    /// every integrator. The map's tilt is held to the shading frame's rules toward the
+    /// viewer, `-incoming` ([`ShadingFrame::bent_normal`]), with the normal it tilts (the
+    /// triangle's own, or smooth shading's) in the geometric normal's place: the map never
+    /// turns the normal further from the viewer than it was (no black patches), and a flat
+    /// map leaves it as it was. The triangle's own normal then rules as it does for any
+    /// smooth normal: [`Lighting::at`] gives no light from behind the surface, and the path
+    /// tracers' [`ShadingFrame::new`] bends it again where needed (no light leaks).
     #[inline(always)]
     pub fn surface_with(
         &self,
@@ -719,7 +724,7 @@ impl<'a> Tracer<'a> {
         let frame = scene.tangent_frame(index, normal);
         let (uv, bumped) = relief.at(&frame, uv(), wo);
         let normal = if relief.normal.is_some() {
-            ShadingFrame::bent_normal(bumped, geometric, wo)
+            ShadingFrame::bent_normal(bumped, normal, wo)
         } else {
             normal
         };

@@ -44,7 +44,9 @@ impl View {
     pub fn description(self) -> &'static str {
         match self {
             View::Shaded => "the rendered image of the chosen stage",
-            View::Normals => "the shading normal n at each pixel's first hit, as (n + 1)/2",
+            View::Normals => {
+                "the shading normal n at each pixel's first hit (a normal map's where there is one), as (n + 1)/2"
+            }
             View::Depth => "the distance t to each pixel's first hit: near white, far black",
             View::Barycentric => "the hit's barycentric coordinates (1 − u − v, u, v) as RGB",
             View::Triangle => "a colour per triangle, to see the mesh",
