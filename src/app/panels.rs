@@ -196,6 +196,31 @@ pub fn controls_ui(
     commands
 }
 
+/// The pool's waves, when the scene has water: their amplitude and the time they are seen at.
+/// A change makes another scene (its water's normal map is made again, off this thread).
+fn water_ui(ui: &mut egui::Ui, scene: &mut SceneChoice) {
+    let mut spec = scene.spec();
+    let Some(water) = &mut spec.water else {
+        return;
+    };
+    let before = *water;
+    ui.add(
+        egui::Slider::new(&mut water.waves, 0.0..=raylab_core::scene::water::MAX_WAVES)
+            .text("Wave amplitude")
+            .logarithmic(true)
+            .smallest_positive(1e-4),
+    )
+    .on_hover_text(
+        "How high the fractal waves are, in scene units: they tilt the water's normal (a normal \
+         map), so reflections and refraction ripple; 0 is still water",
+    );
+    ui.add(egui::Slider::new(&mut water.time, 0.0..=60.0).text("Water time (s)"))
+        .on_hover_text("The waves at this time: each octave of the wave field drifts its own way");
+    if *water != before {
+        *scene = SceneChoice::from_spec(spec);
+    }
+}
+
 /// The scene: the lab's box or a model standing in it, a scene file's or any OBJ file; and the
 /// File row, which opens scene files, screenshots and models and saves scene files.
 pub fn scene_ui(
@@ -234,6 +259,7 @@ pub fn scene_ui(
             }
         }
     });
+    water_ui(ui, scene);
     ui.horizontal(|ui| {
         let label = ui.label("File");
         let field = ui

@@ -24,6 +24,7 @@ use super::*;
 mod check_ui;
 mod files_ui;
 mod panels_ui;
+mod water_ui;
 
 const DEADLINE: Duration = Duration::from_secs(90);
 

@@ -227,6 +227,15 @@ impl RenderSettings {
             text.push_str(" · ");
             text.push_str(&clause);
         };
+        if let Some(water) = self.scene.spec().water
+            && s.stage != Stage::Flat
+        {
+            add(if water.waves > 0.0 {
+                "water: Fresnel reflection and refraction about fractal waves".to_owned()
+            } else {
+                "water: Fresnel reflection and refraction".to_owned()
+            });
+        }
         match self.texture_preset {
             TexturePreset::None => {}
             // A normal changes the light (equation 27), so even the incoming-light stage.
