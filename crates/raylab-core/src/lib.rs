@@ -36,6 +36,7 @@ pub mod light;
 pub mod material;
 pub mod memory;
 pub mod named;
+pub mod photon_map;
 pub mod progressive;
 pub mod render;
 pub mod sampling;
