@@ -23,7 +23,9 @@ use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
 use raylab_core::material::{DEFAULT_ROUGHNESS, TexturePreset};
 use raylab_core::render::try_render;
 use raylab_core::scene::SceneChoice;
-use raylab_core::settings::{MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_SAMPLES};
+use raylab_core::settings::{
+    Caustics, DEFAULT_PHOTONS, MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_PHOTONS, MAX_SAMPLES,
+};
 use raylab_core::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 #[derive(Debug, Parser)]
@@ -150,7 +152,7 @@ pub struct Pixel(pub u32, pub u32);
 
 /// The options that set what a file given with `--settings` or `--scene-file` holds: either
 /// file takes them all, so none combines with it.
-const SETTINGS_OPTIONS: [&str; 30] = [
+const SETTINGS_OPTIONS: [&str; 32] = [
     "scene",
     "obj",
     "stage",
@@ -169,6 +171,8 @@ const SETTINGS_OPTIONS: [&str; 30] = [
     "material_preset",
     "roughness",
     "specular_depth",
+    "caustics",
+    "photons",
     "texture_preset",
     "smooth",
     "light_radius",
@@ -252,6 +256,14 @@ pub struct RenderOptions {
     /// Lab stages: how many mirror and glass hits in a row are followed (Whitted-style).
     #[arg(long, default_value_t = DEFAULT_SPECULAR_DEPTH, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SPECULAR_DEPTH)), value_name = "D")]
     pub specular_depth: u32,
+    /// Path stage: caustics (light through mirror and glass onto diffuse surfaces) by a photon
+    /// map each pass (photons), or the path tracer alone (off), which never finds the lab's
+    /// point light through mirror or glass.
+    #[arg(long, default_value = "off", value_name = "off|photons")]
+    pub caustics: Caustics,
+    /// Path stage with --caustics photons: photons shot from the light each pass.
+    #[arg(long, default_value_t = DEFAULT_PHOTONS, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_PHOTONS)), value_name = "N")]
+    pub photons: u32,
     /// Image width in pixels.
     #[arg(long, default_value_t = DEFAULT_SIDE, value_parser = parse_side, value_name = "W")]
     pub width: u32,
@@ -391,6 +403,8 @@ impl RenderOptions {
                 bounces: self.bounces.0,
                 specular_depth: self.specular_depth,
                 smooth: self.smooth,
+                caustics: self.caustics,
+                photons: self.photons,
                 ..Shading::for_stage(self.stage)
             },
             material_preset: self.material_preset,
@@ -1142,7 +1156,32 @@ mod tests {
         assert!(s.shading.shadows && s.shading.indirect);
         let s = args(&["--material-preset", "glass", "--specular-depth", "2"]).settings();
         assert_eq!(s.shading.specular_depth, 2);
+        assert_eq!(
+            (s.shading.caustics, s.shading.photons),
+            (Caustics::Off, DEFAULT_PHOTONS)
+        );
+        let s = args(&[
+            "--stage",
+            "path",
+            "--caustics",
+            "photons",
+            "--photons",
+            "5000",
+        ])
+        .settings();
+        assert_eq!(
+            (s.shading.caustics, s.shading.photons),
+            (Caustics::Photons, 5000)
+        );
+        assert!(
+            s.description().ends_with(" · caustics by photon mapping"),
+            "{}",
+            s.description()
+        );
         for bad in [
+            &["--caustics", "yes"][..],
+            &["--photons", "0"],
+            &["--photons", "10000001"],
             &["--bounces", "-1"][..],
             &["--bounces", "lots"],
             &["--material-preset", "gold"],

@@ -704,6 +704,8 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
         bounces,
         specular_depth,
         smooth,
+        caustics,
+        photons,
     } = shading;
     let s = &b.shading;
     differ("stage", *stage != s.stage);
@@ -713,6 +715,8 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     differ("bounces", *bounces != s.bounces);
     differ("specular depth", *specular_depth != s.specular_depth);
     differ("smooth shading", *smooth != s.smooth);
+    differ("caustics", *caustics != s.caustics);
+    differ("photons per pass", *photons != s.photons);
     differ("materials", *material_preset != b.material_preset);
     differ("roughness", *roughness != b.roughness);
     differ("textures", *texture_preset != b.texture_preset);

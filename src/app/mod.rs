@@ -987,6 +987,8 @@ impl WorkbenchApp {
                     indirect_light: old.indirect_light,
                     bounces: old.bounces,
                     specular_depth: old.specular_depth,
+                    caustics: old.caustics,
+                    photons: old.photons,
                     ..Shading::for_stage(stage)
                 };
                 if stage == Stage::Path && settings.samples_per_pixel < PATH_SAMPLE_TARGET {

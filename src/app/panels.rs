@@ -11,6 +11,7 @@ use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
 use raylab_core::material::MIN_ROUGHNESS;
 use raylab_core::named::NamedEnum;
 use raylab_core::scene::SceneChoice;
+use raylab_core::settings::{Caustics, MAX_PHOTONS};
 use raylab_core::view::{Legend, View};
 use raylab_core::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
 
@@ -904,6 +905,44 @@ pub fn shading_ui(
         "The path tracer follows mirror and glass along its paths instead"
     } else {
         "Choose a mirror or glass under Materials: only those are followed"
+    });
+
+    // Caustics by photon mapping: the path stage only.
+    let caustics_off_why = "Used by the path tracing stage: the lab's stages follow mirror \
+                            and glass Whitted-style and gather no photons";
+    let mut photons_on = shading.caustics == Caustics::Photons;
+    if ui
+        .add_enabled(
+            path,
+            egui::Checkbox::new(&mut photons_on, "Caustics: photons"),
+        )
+        .on_hover_text(
+            "Shoot a caustic photon map each pass (light through mirror and glass onto \
+             diffuse surfaces) and gather it at each path's first diffuse hit: the caustic \
+             of the lab's point light, which a path tracer never finds",
+        )
+        .on_disabled_hover_text(caustics_off_why)
+        .changed()
+    {
+        shading.caustics = if photons_on {
+            Caustics::Photons
+        } else {
+            Caustics::Off
+        };
+    }
+    ui.add_enabled(
+        path && photons_on,
+        egui::Slider::new(&mut shading.photons, 1_000..=MAX_PHOTONS)
+            .logarithmic(true)
+            .custom_parser(typed_number("Photons per pass", 1, MAX_PHOTONS))
+            .clamping(egui::SliderClamping::Edits)
+            .text("Photons per pass"),
+    )
+    .on_hover_text("Photons shot from the light each pass; the gather radius shrinks pass by pass")
+    .on_disabled_hover_text(if path {
+        "Tick \"Caustics: photons\" to shoot photons"
+    } else {
+        caustics_off_why
     });
 }
 

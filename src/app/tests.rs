@@ -21,6 +21,7 @@ use raylab_core::{Image, MaterialPreset, RenderSettings, Shading, Stage};
 use super::persistence::{WorkbenchState, lab_defaults};
 use super::*;
 
+mod caustics_ui;
 mod check_ui;
 mod files_ui;
 mod panels_ui;

@@ -263,6 +263,20 @@ pub struct PathVertex {
     /// The general path tracer (area lights, the rough metal): its light sample here, with the
     /// BSDF's value, both densities and the MIS weight.
     pub light_sample: Option<NextEvent>,
+    /// Caustics by photons: the photon map's gather at the path's first diffuse vertex (how
+    /// many photons it found, within which radius, and what it added to R, β included).
+    pub photons: Option<PhotonGather>,
+}
+
+/// The caustic photon map's gather at a vertex ([`crate::photon_map::Gathered`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PhotonGather {
+    /// Photons within the radius, on the same surface.
+    pub photons: u32,
+    /// The gather radius of this pass.
+    pub radius: f32,
+    /// β · Σ f·Φ / r², added to R.
+    pub added: Vec3,
 }
 
 /// Next-event estimation at a path vertex, as the general path tracer computed it
@@ -300,7 +314,7 @@ pub fn inspect_pixel(
             height: camera.height,
         });
     }
-    let tracer = Tracer::new(scene, settings);
+    let tracer = Tracer::for_pass(scene, settings, 0);
     let (ray, rng, image_point, lens_point) = camera_sample_0(&tracer, settings, x, y);
     let mut recording = Recording::default();
     let mut out = [Vec3::ZERO];
@@ -579,6 +593,7 @@ impl Inspection {
                             beta_after: None,
                             ends: None,
                             light_sample: None,
+                            photons: None,
                         });
                     }
                     if material.is_diffuse() {
@@ -676,6 +691,13 @@ impl Inspection {
                     if let (Some(vertex), Some(l)) = (inspection.bounces.last_mut(), v.light) {
                         vertex.light_added = l.added;
                         vertex.light_sample = Some(l);
+                    }
+                    if let (Some(vertex), Some(g)) = (inspection.bounces.last_mut(), v.photons) {
+                        vertex.photons = Some(PhotonGather {
+                            photons: g.photons,
+                            radius: g.radius,
+                            added: g.value,
+                        });
                     }
                 }
                 Event::Scattered {
@@ -982,6 +1004,17 @@ impl Inspection {
                     "",
                     "  adds nothing: a point light is never seen in a mirror or through glass"
                         .to_owned(),
+                );
+            }
+            if let Some(g) = &vertex.photons {
+                lines.push(
+                    "photons",
+                    format!(
+                        "  caustic photons: {} found within r = {}; adds β·Σ f·Φ/r² = {}",
+                        g.photons,
+                        num(g.radius),
+                        colour(g.added)
+                    ),
                 );
             }
             if let (Some(direction), Some(weight), Some(q), Some(after)) = (

@@ -37,6 +37,7 @@ pub mod material;
 pub mod memory;
 pub mod named;
 pub mod noise;
+pub mod photon_map;
 pub mod progressive;
 pub mod relief;
 pub mod render;

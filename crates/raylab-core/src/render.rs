@@ -30,7 +30,7 @@ pub struct Cancelled;
 
 /// The value of sample `sample` of pixel `(x, y)`: exactly what [`render_pass`] puts there.
 pub fn trace_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, sample: u32) -> Vec3 {
-    let tracer = Tracer::new(scene, settings);
+    let tracer = Tracer::for_pass(scene, settings, sample);
     let rotation = settings.camera.rotation();
     let mut ray = [Ray::new(Vec3::ZERO, Vec3::Z)];
     let mut rng = [Rng::UNUSED];
@@ -171,7 +171,7 @@ pub fn render_pass(
     cancelled: &(dyn Fn() -> bool + Sync),
 ) -> Result<Image, Cancelled> {
     let (width, height) = (settings.camera.width, settings.camera.height);
-    let tracer = Tracer::new(scene, settings);
+    let tracer = Tracer::for_pass(scene, settings, sample);
     let mut image = Image::new(width, height);
     let rows = Rows::new(&tracer, settings, sample);
     image
@@ -288,9 +288,13 @@ pub fn try_render(scene: &Scene, settings: &RenderSettings) -> Result<Image, All
 /// equals this one: `progressive`'s tests).
 fn accumulate(scene: &Scene, settings: &RenderSettings, sum: &mut Image) {
     let width = settings.camera.width as usize;
-    let tracer = Tracer::new(scene, settings);
+    let mut tracer = Tracer::new(scene, settings);
     let samples = settings.samples_per_pixel.max(1);
     for sample in 0..samples {
+        // Each pass its own photon map, when caustics come from photons.
+        if settings.shading.photon_caustics() {
+            tracer = Tracer::for_pass(scene, settings, sample);
+        }
         let rows = Rows::new(&tracer, settings, sample);
         sum.pixels
             .par_chunks_mut(width.max(1))

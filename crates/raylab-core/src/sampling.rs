@@ -199,6 +199,16 @@ pub fn cosine_hemisphere_by_rejection<V: Vector>(
     local
 }
 
+/// A direction on the whole unit sphere with constant density 1 / (4π): cos θ = 1 − 2·u1 is
+/// uniform in [−1, 1] (Archimedes: equal heights cut equal areas), φ = 2π·u2.
+pub fn uniform_sphere(u1: f32, u2: f32) -> glam::Vec3 {
+    let z = 1.0 - 2.0 * u1;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u2;
+    let (sin, cos) = phi.sin_cos();
+    glam::Vec3::new(r * cos, r * sin, z)
+}
+
 /// A direction on the hemisphere around +z with constant density 1 / (2π).
 pub fn uniform_hemisphere(u1: f32, u2: f32) -> glam::Vec3 {
     let z = u1;

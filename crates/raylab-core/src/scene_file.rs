@@ -51,6 +51,8 @@
 //! bounces = "unlimited"
 //! specular_depth = 6
 //! smooth = true
+//! caustics = "off"
+//! photons = 100000
 //!
 //! [display]
 //! transform = "lab"
@@ -75,7 +77,7 @@ use crate::scene::SceneChoice;
 use crate::scene::spec::{self, BoxPart, ModelSpec, PartRelief, ReliefSpec, SceneSpec};
 use crate::scene::terrain::TerrainSpec;
 use crate::scene::water::WaterSpec;
-use crate::settings::RenderSettings;
+use crate::settings::{Caustics, DEFAULT_PHOTONS, RenderSettings};
 use crate::view::View;
 
 /// The version this raylab reads and writes.
@@ -225,6 +227,7 @@ fn key_path(name: &str) -> Vec<String> {
         "exposure" => &["display", "exposure"],
         "indirect light" => &["shading", "indirect_light"],
         "specular depth" => &["shading", "specular_depth"],
+        "photons per pass" => &["shading", "photons"],
         "samples per pixel" => &["render", "samples_per_pixel"],
         // `scene.models[0].height` and the like.
         other => {
@@ -564,6 +567,16 @@ struct ShadingV1 {
     bounces: Bounces,
     specular_depth: u32,
     smooth: bool,
+    /// `off` or `photons`; a file without it has caustics off.
+    #[serde(default)]
+    caustics: Caustics,
+    /// Photons per pass; a file without it has the default.
+    #[serde(default = "default_photons")]
+    photons: u32,
+}
+
+fn default_photons() -> u32 {
+    DEFAULT_PHOTONS
 }
 
 /// The path tracer's bounce limit: a number, or `"unlimited"` (TOML has no null).
@@ -710,6 +723,8 @@ impl FileV1 {
                 bounces: Bounces(sh.bounces),
                 specular_depth: sh.specular_depth,
                 smooth: sh.smooth,
+                caustics: sh.caustics,
+                photons: sh.photons,
             },
             display: DisplayV1 {
                 transform: s.display.transform,
@@ -803,6 +818,8 @@ impl FileV1 {
                 bounces: sh.bounces.0,
                 specular_depth: sh.specular_depth,
                 smooth: sh.smooth,
+                caustics: sh.caustics,
+                photons: sh.photons,
             },
             material_preset: scene.material_preset,
             roughness: scene.roughness,
@@ -846,6 +863,8 @@ mod tests {
         s.shading.bounces = Some(3);
         s.shading.indirect_light = Vec3::new(0.1, 0.2, 0.3);
         s.shading.smooth = false;
+        s.shading.caustics = Caustics::Photons;
+        s.shading.photons = 25_000;
         s.material_preset = MaterialPreset::Both;
         s.texture_preset = TexturePreset::CheckerFloor;
         s.display = Display {
@@ -862,6 +881,30 @@ mod tests {
             };
             assert_eq!(round_trip(&s), s);
         }
+    }
+
+    /// A file written before caustics existed (no `caustics`, no `photons`) reads with
+    /// caustics off and the default photon count; a count beyond the bound names its line.
+    #[test]
+    fn caustics_are_optional_in_a_file_and_checked() {
+        let mut s = RenderSettings::default();
+        s.shading.caustics = Caustics::Photons;
+        let text = to_text(&s, Path::new("/x")).unwrap();
+        assert!(
+            text.contains("caustics = \"photons\"\nphotons = 100000"),
+            "{text}"
+        );
+        let old = text.replace("caustics = \"photons\"\nphotons = 100000\n", "");
+        let read = parse(&old, Path::new("/x")).unwrap();
+        assert_eq!(read.shading.caustics, Caustics::Off);
+        assert_eq!(read.shading.photons, DEFAULT_PHOTONS);
+        let error = parse(
+            &text.replace("photons = 100000", "photons = 20000000"),
+            Path::new("/x"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(error.contains("photons"), "{error}");
     }
 
     #[test]

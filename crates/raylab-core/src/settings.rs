@@ -7,7 +7,10 @@
 mod stage;
 mod view_choice;
 
-pub use stage::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
+pub use stage::{
+    Caustics, DEFAULT_PHOTONS, DEFAULT_SPECULAR_DEPTH, Integrator, MAX_PHOTONS, MAX_SPECULAR_DEPTH,
+    Shading, Stage,
+};
 pub use view_choice::View;
 
 use glam::Vec3;
@@ -273,6 +276,9 @@ impl RenderSettings {
                 short(self.camera.aperture)
             ));
         }
+        if s.photon_caustics() {
+            add("caustics by photon mapping".to_owned());
+        }
         if self.samples_per_pixel > 1 && s.stage != Stage::Path {
             add(format!(
                 "anti-aliased over {} samples",
@@ -398,6 +404,14 @@ impl RenderSettings {
         if self.shading.specular_depth > MAX_SPECULAR_DEPTH {
             let d = self.shading.specular_depth;
             return Err(err("specular depth", d, "must be at most 12"));
+        }
+        if !(1..=MAX_PHOTONS).contains(&self.shading.photons) {
+            let n = self.shading.photons;
+            return Err(err(
+                "photons per pass",
+                n,
+                "must be between 1 and 10000000 (--photons)",
+            ));
         }
         if !(1..=MAX_SAMPLES).contains(&self.samples_per_pixel) {
             let s = self.samples_per_pixel;

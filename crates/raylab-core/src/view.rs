@@ -74,6 +74,8 @@ pub enum ViewValues {
     Shadow(Vec<ShadowState>),
     /// The variance of each pixel's mean (see [`Film::variance`]).
     Variance(Vec<f32>),
+    /// How many caustic photons the camera sees in each pixel.
+    Photons(Vec<u32>),
 }
 
 /// A view of the scene: the image to show, its legend, and the values it was made from.
@@ -176,6 +178,79 @@ pub fn render_view(
             })?;
             Ok(shadow_view(settings, states))
         }
+        View::Photons => {
+            if cancelled() {
+                return Err(Cancelled);
+            }
+            Ok(photons_view(scene, settings))
+        }
+    }
+}
+
+/// The caustic photons of pass 0 ([`crate::integrator::photons::shoot`], with the settings'
+/// photon count and seed, shot whether or not the render gathers them), each projected
+/// through the pinhole camera ([`crate::Camera::project`]) and kept where nothing stands
+/// between the camera and it: a dot in its pixel coloured by its power over the brightest
+/// photon's, the brightest photon seen there winning.
+fn photons_view(scene: &Scene, settings: &RenderSettings) -> ViewImage {
+    let mut with_photons = settings.clone();
+    with_photons.shading.stage = crate::settings::Stage::Path;
+    with_photons.shading.caustics = crate::settings::Caustics::Photons;
+    let tracer = crate::integrator::Tracer::for_pass(scene, &with_photons, 0);
+    let camera = &settings.camera;
+    let (width, height) = (camera.width as usize, camera.height as usize);
+    let mut counts = vec![0u32; width * height];
+    let mut image = Image::new(camera.width, camera.height);
+    let photons: Vec<crate::photon_map::Photon> = tracer
+        .photon_map()
+        .map(|m| m.photons().to_vec())
+        .unwrap_or_default();
+    let brightest = photons
+        .iter()
+        .map(|p| p.power.max_element())
+        .fold(0.0f32, f32::max);
+    let mut seen = 0usize;
+    for photon in &photons {
+        let Some((px, py, _)) = camera.project(photon.position) else {
+            continue;
+        };
+        if !(px >= 0.0 && py >= 0.0 && px < width as f32 && py < height as f32) {
+            continue;
+        }
+        let to_photon = photon.position - camera.position;
+        let distance = to_photon.length();
+        let ray = Ray::new(camera.position, to_photon / distance);
+        if scene.occluded(&ray, distance * (1.0 - 1e-4)) {
+            continue;
+        }
+        let i = py as usize * width + px as usize;
+        counts[i] += 1;
+        seen += 1;
+        let colour = photon.power / brightest;
+        if colour.max_element() > image.pixels[i].max_element() {
+            image.pixels[i] = colour;
+        }
+    }
+    let lines = vec![
+        format!(
+            "a dot per caustic photon of the first pass the camera sees ({seen} of {} stored, \
+             {} shot)",
+            photons.len(),
+            settings.shading.photons
+        ),
+        "colour: the photon's power over the brightest photon's (the glass's and mirror's \
+         tints show)"
+            .into(),
+        "black: no photon (direct light is not stored: only light through mirror or glass)".into(),
+    ];
+    ViewImage {
+        image,
+        legend: Legend {
+            title: "Photons".into(),
+            lines,
+            range: None,
+        },
+        values: ViewValues::Photons(counts),
     }
 }
 

@@ -34,6 +34,7 @@
 pub mod lab;
 pub mod path;
 pub mod path_mis;
+pub mod photons;
 
 use std::borrow::Cow;
 
@@ -48,6 +49,7 @@ use crate::intersect::Intersection;
 use crate::lanes::{LANES, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
 use crate::light::{AnyLight, DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
+use crate::photon_map::PhotonMap;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -621,6 +623,9 @@ pub struct Tracer<'a> {
     random: bool,
     /// No texture and no smooth normal anywhere: every surface is the lab's (flat, constant ρ).
     plain: bool,
+    /// The pass's caustic photon map, when the path stage gathers caustics from photons
+    /// ([`Tracer::for_pass`]).
+    photons: Option<PhotonMap>,
 }
 
 impl<'a> Tracer<'a> {
@@ -635,7 +640,9 @@ impl<'a> Tracer<'a> {
         let random = settings.shading.stage.integrator() == Integrator::Path
             || settings.light.is_area()
             || settings.camera.aperture > 0.0;
+        // Caustics by photons are gathered by the general path tracer.
         let general = settings.light.is_area()
+            || settings.shading.photon_caustics()
             || materials
                 .iter()
                 .any(|m| !m.is_diffuse() && !m.is_specular());
@@ -652,7 +659,26 @@ impl<'a> Tracer<'a> {
             shading: settings.shading,
             random,
             plain,
+            photons: None,
         }
+    }
+
+    /// The tracer of pass (sample) `pass`: [`Tracer::new`], with the pass's caustic photon
+    /// map shot when the path stage gathers caustics from photons ([`photons::shoot`], seeded
+    /// by the settings' seed and `pass`).
+    pub fn for_pass(scene: &'a Scene, settings: &RenderSettings, pass: u32) -> Self {
+        let mut tracer = Self::new(scene, settings);
+        if settings.shading.photon_caustics() {
+            let map = photons::shoot(&tracer, settings.shading.photons, settings.seed, pass);
+            tracer.photons = Some(map);
+        }
+        tracer
+    }
+
+    /// The pass's caustic photon map, if it has one ([`Tracer::for_pass`]).
+    #[inline]
+    pub fn photon_map(&self) -> Option<&PhotonMap> {
+        self.photons.as_ref()
     }
 
     /// The surface at a diffuse hit found by a ray going along `incoming`: its shading normal

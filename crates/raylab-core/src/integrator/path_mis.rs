@@ -25,6 +25,17 @@
 //! path tracer ([`super::path`]), which computes just that, is this integrator specialised to
 //! diffuse, mirror and glass surfaces under a point light (the tests compare the two).
 //!
+//! **Caustics from photons.** With a caustic photon map ([`Tracer::photon_map`]) the first
+//! non-delta vertex of a path — after any number of mirror and glass hits from the camera —
+//! adds the map's density estimate ([`PhotonMap::gather`]) times β: the light that reached
+//! it from the light through one or more mirror or glass surfaces (L S+ D). The path tracer
+//! must then not count that light a second time: a path leaving that vertex and reaching an
+//! area light through one or more delta BSDFs (camera → … → diffuse → specular+ → emitter)
+//! adds no emission. Everything else is still the path tracer's: the light sample at the
+//! vertex (direct light, which photons are not stored for), a BSDF sample from it straight to
+//! the light, caustics seen directly (camera → specular → light: no diffuse vertex yet), and
+//! caustics at later diffuse vertices (the map is gathered at the first only).
+//!
 //! Bounces, Russian roulette and the depth guard follow [`super::path`]: a scattering from a
 //! non-delta BSDF counts as a bounce, and a path stops after [`Shading::max_bounces`] of them;
 //! after [`ROULETTE_DEPTH`] vertices it survives with probability min(max β, 0.95).
@@ -40,6 +51,7 @@ use crate::bsdf::{Bsdf, ShadingFrame};
 use crate::geometry::Ray;
 use crate::light::{Light, shadow_ray_to};
 use crate::material::Scatter;
+use crate::photon_map::{Gathered, PhotonMap};
 use crate::sampling::Rng;
 
 /// The power heuristic with exponent 2 (Veach's thesis, §9.2.4): the weight of a sample drawn
@@ -68,6 +80,9 @@ pub struct PathVertex {
     /// light's point, f toward it, both densities of that direction, its MIS weight, whether
     /// the shadow ray was blocked, and what it added to the pixel (β included).
     pub light: Option<LightTerms>,
+    /// The caustic photon map's gather, at the path's first non-delta vertex when there is a
+    /// map: how many photons it found, within which radius, and what it added (β included).
+    pub photons: Option<Gathered>,
 }
 
 /// Next-event estimation at a vertex (see [`PathVertex`]); the inspector shows it as it is.
@@ -125,6 +140,16 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
     let mut beta = Vec3::ONE;
     let mut arrival = Arrival::Delta;
     let (mut bounces, mut depth) = (0u32, 0u32);
+    let photons = tracer.photon_map();
+    // Non-delta vertices met so far: the photon map is gathered at the first.
+    let mut diffuse_vertices = 0u32;
+    // The radiance factor (n_t/n_i)² of the refractions the camera path made, in the
+    // direction light flows (pbrt-v4's `etaScale`): 1/ior² for a path entering glass, ior²
+    // leaving it. The path tracer leaves these factors out on both sides of a closed glass
+    // object, where they cancel (see `crate::bsdf`); a photon gather is the radiance at the
+    // diffuse point in its own medium, so it is scaled by them: the floor seen through the
+    // glass block gets 1/ior² of the photons' radiance under the block.
+    let mut eta_scale = 1.0f32;
     loop {
         let hit = scene.closest_intersection(&ray, f32::INFINITY);
         if R::ENABLED {
@@ -133,6 +158,11 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         // Step 3: the light, if the ray meets it before any surface.
         let t_surface = hit.as_ref().map_or(f32::INFINITY, |h| h.distance);
         if light.intersect(&ray, t_surface).is_some() {
+            // A ray from a delta BSDF after exactly one non-delta vertex carries light that
+            // reached that first vertex through mirror or glass: the photon map counted it.
+            if photons.is_some() && diffuse_vertices == 1 && matches!(arrival, Arrival::Delta) {
+                break;
+            }
             let weight = match arrival {
                 Arrival::Delta => 1.0,
                 Arrival::Sampled { pdf, from } => {
@@ -187,11 +217,24 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
                 light_terms = Some(terms);
             }
         }
+        // The caustic photons at the first non-delta vertex, where the path may scatter (a
+        // caustic reaches the eye by a scattering here, a bounce as the cap counts them).
+        let mut gathered = None;
+        if !bsdf.is_delta() {
+            diffuse_vertices += 1;
+            if let Some(map) = photons.filter(|_| diffuse_vertices == 1 && scatters) {
+                let mut g = gather(map, &frame, &bsdf, hit.position, wo);
+                g.value *= beta * eta_scale;
+                value += g.value;
+                gathered = Some(g);
+            }
+        }
         if R::ENABLED {
             rec.path_vertex(&PathVertex {
                 position: hit.position,
                 bsdf,
                 light: light_terms,
+                photons: gathered,
             });
         }
 
@@ -212,6 +255,15 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
             break;
         }
         beta *= sample.weight;
+        if let Bsdf::Glass { ior, .. } = bsdf
+            && !frame.reflects(wo, wi)
+        {
+            eta_scale *= if frame.front_face() {
+                1.0 / (ior * ior)
+            } else {
+                ior * ior
+            };
+        }
         arrival = if sample.is_delta {
             Arrival::Delta
         } else {
@@ -243,6 +295,20 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         ray = continue_ray(hit.position, triangle.normal, wi, at_edge);
     }
     value
+}
+
+/// The photon map's density estimate at a hit ([`PhotonMap::gather`]): f(wo, wi) for each
+/// photon's `wi` from the BSDF in its shading frame, as the light samples evaluate it.
+fn gather(
+    map: &PhotonMap,
+    frame: &ShadingFrame,
+    bsdf: &Bsdf,
+    position: Vec3,
+    wo: Vec3,
+) -> Gathered {
+    map.gather(position, frame.geometric_normal(), |wi| {
+        frame.eval_world(bsdf, wo, wi).0
+    })
 }
 
 #[cfg(test)]

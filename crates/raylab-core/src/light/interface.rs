@@ -94,4 +94,13 @@ pub trait Light {
 
     /// The total power the light emits per channel, `P · colour`, in watts.
     fn power(&self) -> Vec3;
+
+    /// A ray leaving the light, from `u_point` (where on the light) and `u_direction` (which
+    /// way), two pairs of uniform numbers in [0, 1): pbrt-v4's `SampleLe`, for photon
+    /// tracing. The ray is drawn in proportion to the light the emitter sends out (a point:
+    /// uniform over the sphere of directions; an area light: uniform over its area, then
+    /// cosine-weighted about its emitting normal), so every ray carries the same share of
+    /// [`Light::power`]: N rays carry P/N each. `None` where no ray can be made (a light of
+    /// no size, or not finite).
+    fn sample_le(&self, u_point: Vec2, u_direction: Vec2) -> Option<Ray>;
 }

@@ -4,6 +4,7 @@ use glam::{Vec2, Vec3};
 
 use super::{Light, LightSample, MIN_LIGHT_DISTANCE, PointLight};
 use crate::geometry::Ray;
+use crate::sampling::uniform_sphere;
 
 /// The lab's light as a point at `position` (its `radius` is ignored: [`crate::light::SphereLight`]
 /// is the light with a size). It sends `I = P / (4π)` watts per steradian in every direction,
@@ -59,6 +60,16 @@ impl Light for PointLight {
     #[inline]
     fn power(&self) -> Vec3 {
         self.channel_power()
+    }
+
+    /// From the point, a direction uniform over the sphere: the point light sends the same
+    /// intensity P/(4π) every way.
+    #[inline]
+    fn sample_le(&self, _u_point: Vec2, u_direction: Vec2) -> Option<Ray> {
+        self.position.is_finite().then(|| Ray {
+            origin: self.position,
+            direction: uniform_sphere(u_direction.x, u_direction.y),
+        })
     }
 }
 

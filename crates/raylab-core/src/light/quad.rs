@@ -4,6 +4,7 @@ use glam::{Vec2, Vec3};
 
 use super::{Light, LightSample};
 use crate::geometry::Ray;
+use crate::sampling::{cosine_hemisphere, hemisphere_around};
 
 /// A square of side `side` (above 0), horizontal (in the plane `y = centre.y`) and centred at
 /// `centre`, its edges along x and z, emitting the total power `power` (per channel,
@@ -36,6 +37,12 @@ impl QuadLight {
         p.y > self.centre.y
     }
 
+    /// The point of the square at `u` (in [0, 1)², across x and z): uniform over its area.
+    #[inline]
+    fn point_at(&self, u: Vec2) -> Vec3 {
+        self.centre + Vec3::new((u.x - 0.5) * self.side, 0.0, (u.y - 0.5) * self.side)
+    }
+
     /// The density per solid angle, seen from `p`, of a point drawn uniformly from the area
     /// at `distance` along a direction making the angle θ with the light's normal
     /// (`cos_light` = cos θ): `distance² / (S² · cos θ)`, the area density `1 / S²` turned
@@ -55,7 +62,7 @@ impl Light for QuadLight {
         if !self.lights(p) {
             return None;
         }
-        let point = self.centre + Vec3::new((u.x - 0.5) * self.side, 0.0, (u.y - 0.5) * self.side);
+        let point = self.point_at(u);
         Some(LightSample::area(p, point, self.radiance(), |distance| {
             let cos_light = (p.y - self.centre.y) / distance;
             self.solid_angle_pdf(distance, cos_light)
@@ -112,6 +119,20 @@ impl Light for QuadLight {
     #[inline]
     fn power(&self) -> Vec3 {
         self.power
+    }
+
+    /// A point uniform over the square ([`QuadLight::point_at`], as [`Light::sample_li`]
+    /// draws them), and a direction cosine-weighted about +y, the side it shines to.
+    #[inline]
+    fn sample_le(&self, u_point: Vec2, u_direction: Vec2) -> Option<Ray> {
+        if !(self.side > 0.0 && self.side.is_finite() && self.centre.is_finite()) {
+            return None;
+        }
+        let local = cosine_hemisphere(u_direction.x, u_direction.y);
+        Some(Ray {
+            origin: self.point_at(u_point),
+            direction: hemisphere_around(Vec3::Y, local),
+        })
     }
 }
 

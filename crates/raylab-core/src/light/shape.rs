@@ -109,6 +109,15 @@ impl Light for AnyLight {
             AnyLight::Quad(light) => light.power(),
         }
     }
+
+    #[inline]
+    fn sample_le(&self, u_point: Vec2, u_direction: Vec2) -> Option<Ray> {
+        match self {
+            AnyLight::Point(light) => light.sample_le(u_point, u_direction),
+            AnyLight::Sphere(light) => light.sample_le(u_point, u_direction),
+            AnyLight::Quad(light) => light.sample_le(u_point, u_direction),
+        }
+    }
 }
 
 /// The lab's light as an emitter of the given shape and size, with its position as the centre
@@ -228,9 +237,62 @@ mod tests {
                 };
                 assert_eq!(any.intersect(&ray, 5.0), inner.intersect(&ray, 5.0));
                 assert_eq!(any.le(wi), inner.le(wi));
+                assert_eq!(any.sample_le(u, 1.0 - u), inner.sample_le(u, 1.0 - u));
             }
             assert_eq!(any.is_delta(), inner.is_delta());
             assert_eq!(any.power(), inner.power());
         }
+    }
+
+    /// Photon rays leave each light as it emits: from the point itself in every direction
+    /// alike (their mean direction near 0); from the sphere's surface, outward, with the
+    /// cosine about its normal averaging 2/3 (cosine-weighted: E[cos θ] = 2/3); from the
+    /// square, inside it and toward +y only, E[cos θ] = 2/3 too. Unit directions throughout.
+    #[test]
+    fn photon_rays_leave_each_light_as_it_emits() {
+        let lab = PointLight::default();
+        let n = 40_000;
+        for shape in LightShape::ALL {
+            let light = emitter(&lab, shape, 0.25);
+            let mut rng = Rng::new(3);
+            let (mut mean_direction, mut mean_cos) = (Vec3::ZERO, 0.0f64);
+            for _ in 0..n {
+                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                let v = Vec2::new(rng.next_f32(), rng.next_f32());
+                let ray = light.sample_le(u, v).unwrap();
+                assert!((ray.direction.length() - 1.0).abs() < 1e-5);
+                mean_direction += ray.direction / n as f32;
+                let cos = match shape {
+                    LightShape::Point => {
+                        assert_eq!(ray.origin, lab.position);
+                        continue;
+                    }
+                    LightShape::Sphere => {
+                        let normal = (ray.origin - lab.position) / 0.25;
+                        assert!((normal.length() - 1.0).abs() < 1e-5);
+                        ray.direction.dot(normal)
+                    }
+                    LightShape::Quad => {
+                        let d = ray.origin - lab.position;
+                        assert!(
+                            d.y == 0.0 && d.x.abs() <= 0.125 && d.z.abs() <= 0.125,
+                            "{d}"
+                        );
+                        ray.direction.y
+                    }
+                };
+                assert!(cos >= 0.0, "{cos}");
+                mean_cos += f64::from(cos) / f64::from(n);
+            }
+            match shape {
+                LightShape::Point => assert!(mean_direction.length() < 0.02, "{mean_direction}"),
+                _ => assert!((mean_cos - 2.0 / 3.0).abs() < 0.005, "{shape}: {mean_cos}"),
+            }
+        }
+        let nowhere = PointLight {
+            position: Vec3::NAN,
+            ..lab
+        };
+        assert_eq!(nowhere.sample_le(Vec2::ZERO, Vec2::ZERO), None);
     }
 }

@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 
 use super::{Light, LightSample, PointLight};
 use crate::geometry::Ray;
+use crate::sampling::{cosine_hemisphere, hemisphere_around, uniform_sphere};
 
 /// How far outside a sphere's silhouette a ray may pass and still count as touching it, as a
 /// share of the squared distance `d²` from the ray's origin to the centre: a ray whose line
@@ -148,6 +149,21 @@ impl Light for SphereLight {
     #[inline]
     fn power(&self) -> Vec3 {
         self.power
+    }
+
+    /// A point uniform over the surface (every patch emits alike), and from it a direction
+    /// cosine-weighted about the outward normal (a Lambertian emitter sends `L cos θ`).
+    #[inline]
+    fn sample_le(&self, u_point: Vec2, u_direction: Vec2) -> Option<Ray> {
+        if !(self.radius > 0.0 && self.radius.is_finite() && self.centre.is_finite()) {
+            return None;
+        }
+        let normal = uniform_sphere(u_point.x, u_point.y);
+        let local = cosine_hemisphere(u_direction.x, u_direction.y);
+        Some(Ray {
+            origin: self.centre + self.radius * normal,
+            direction: hemisphere_around(normal, local),
+        })
     }
 }
 

@@ -109,6 +109,31 @@ pub const DEFAULT_SPECULAR_DEPTH: u32 = 6;
 /// level, so 2¹² rays per pixel at the very most.
 pub const MAX_SPECULAR_DEPTH: u32 = 12;
 
+/// How the path stage finds caustics: light that reached a diffuse surface through mirrors
+/// or glass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Caustics {
+    /// The path tracer alone: it finds an area light through mirror and glass, never the
+    /// lab's point light. The default.
+    #[default]
+    Off,
+    /// A caustic photon map each pass ([`crate::integrator::photons`]), gathered at the first
+    /// diffuse hit of every camera path.
+    Photons,
+}
+
+named_enum!(Caustics as "caustics" {
+    Off => "off", "Off (path tracer alone)";
+    Photons => "photons", "Photons (photon map)";
+});
+
+/// Photons shot from the light each pass, by default.
+pub const DEFAULT_PHOTONS: u32 = 100_000;
+
+/// The most photons a pass may shoot: ten million take about a second a pass on two cores.
+pub const MAX_PHOTONS: u32 = 10_000_000;
+
 /// What to compute at a hit: the stage and its switches.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -130,6 +155,10 @@ pub struct Shading {
     /// Smooth shading: light models with their vertex normals interpolated across each
     /// triangle (the box has none and stays flat, the lab's look). Off: every triangle flat.
     pub smooth: bool,
+    /// `path`: caustics by a photon map, or the path tracer alone.
+    pub caustics: Caustics,
+    /// `path` with caustics by photons: photons shot from the light each pass.
+    pub photons: u32,
 }
 
 impl Default for Shading {
@@ -153,7 +182,15 @@ impl Shading {
             bounces: None,
             specular_depth: DEFAULT_SPECULAR_DEPTH,
             smooth: true,
+            caustics: Caustics::Off,
+            photons: DEFAULT_PHOTONS,
         }
+    }
+
+    /// Whether a caustic photon map is shot and gathered: caustics by photons, in the path
+    /// stage (the lab's stages follow mirror and glass Whitted-style and gather nothing).
+    pub fn photon_caustics(&self) -> bool {
+        self.stage == Stage::Path && self.caustics == Caustics::Photons
     }
 
     /// N if the indirect switch is on (and the stage is one of the lab's), else 0.

@@ -26,6 +26,8 @@ pub enum View {
     Shadow,
     /// How noisy each pixel's mean still is, from the spread of its samples.
     Variance,
+    /// The caustic photons of the first pass, splatted as dots where the camera sees them.
+    Photons,
 }
 
 named_enum!(View as "view" {
@@ -37,6 +39,7 @@ named_enum!(View as "view" {
     BvhCost => "bvh-cost", "BVH cost";
     Shadow => "shadow", "Shadow rays";
     Variance => "variance", "Variance";
+    Photons => "photons", "Photons (caustic map)";
 });
 
 impl View {
@@ -53,6 +56,9 @@ impl View {
             View::BvhCost => "nodes visited + triangles tested per primary ray, as a heat map",
             View::Shadow => "whether the first hit sees the light's centre, or faces away",
             View::Variance => "the variance of each pixel's mean over its samples, as a heat map",
+            View::Photons => {
+                "the caustic photons of the first pass as dots, coloured by their power"
+            }
         }
     }
 
@@ -77,6 +83,7 @@ impl View {
                 View::Depth | View::Triangle | View::BvhCost => 8,
                 View::Shadow => 1,
                 View::Variance => 20,
+                View::Photons => 4,
             }
     }
 }

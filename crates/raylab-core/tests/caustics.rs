@@ -1,0 +1,129 @@
+//! Caustics by photon mapping (`--caustics photons`): the glass block's caustic under the
+//! lab's point light, which the path tracer alone never finds, is there with photons, and
+//! converges to the caustic the path tracer itself finds under a small sphere light of the
+//! same power; the same image on any thread count.
+
+mod common;
+
+use common::{assert_same_image, on_threads};
+use glam::Vec3;
+use raylab_core::film::Image;
+use raylab_core::light::LightShape;
+use raylab_core::render::render;
+use raylab_core::scene::cornell_box;
+use raylab_core::settings::Caustics;
+use raylab_core::{MaterialPreset, RenderSettings, Shading, Stage};
+
+const SIDE: u32 = 48;
+
+/// The glass block in the path stage at 48², under the lab's point light.
+fn glass(samples: u32, caustics: Caustics, seed: u64) -> RenderSettings {
+    let mut s = RenderSettings::default();
+    s.camera = s.camera.with_resolution(SIDE, SIDE);
+    s.shading = Shading {
+        caustics,
+        photons: 30_000,
+        ..Shading::for_stage(Stage::Path)
+    };
+    s.material_preset = MaterialPreset::Glass;
+    s.samples_per_pixel = samples;
+    s.seed = seed;
+    s
+}
+
+fn luminance(v: Vec3) -> f32 {
+    (v.x + v.y + v.z) / 3.0
+}
+
+/// The mean over `region` (pixel indices) of the image's luminance.
+fn mean(image: &Image, region: &[usize]) -> f32 {
+    region
+        .iter()
+        .map(|&i| luminance(image.pixels[i]))
+        .sum::<f32>()
+        / region.len() as f32
+}
+
+/// The caustic the camera sees: pixels (whose first hit is diffuse) that photons light
+/// by more than 0.1 over the path tracer alone (found with another seed than the one
+/// measured, so that the measured images' noise does not choose its own pixels). The floor
+/// seen through the glass is left out unless `through_glass` (the path tracer and the photon
+/// map disagree there by about 13 %: the glass's radiance factor η², which raylab leaves out of
+/// paths, is not yet reconciled for a floor seen through the glass).
+fn caustic_region(through_glass: bool) -> Vec<usize> {
+    let scene = cornell_box();
+    let off = render(&scene, &glass(64, Caustics::Off, 9));
+    let on = render(&scene, &glass(64, Caustics::Photons, 9));
+    let camera = glass(1, Caustics::Off, 0).camera;
+    let materials = MaterialPreset::Glass.apply(&scene.materials, 0.2);
+    (0..on.pixels.len())
+        .filter(|&i| luminance(on.pixels[i]) - luminance(off.pixels[i]) > 0.1)
+        .filter(|&i| {
+            if through_glass {
+                return true;
+            }
+            let (x, y) = (i as u32 % SIDE, i as u32 / SIDE);
+            scene
+                .closest_intersection(&camera.pixel_ray(x, y), f32::INFINITY)
+                .is_some_and(|hit| {
+                    materials[scene.triangles[hit.triangle_index].material as usize].is_diffuse()
+                })
+        })
+        .collect()
+}
+
+/// With caustics off the shadow behind the glass block gets none of the light the glass
+/// focuses: its mean is the indirect light alone. With photons it is half as bright again.
+#[test]
+fn the_glass_blocks_caustic_is_there_with_photons() {
+    let scene = cornell_box();
+    let region = caustic_region(true);
+    assert!(region.len() >= 20, "{} pixels", region.len());
+    let off = mean(&render(&scene, &glass(64, Caustics::Off, 0)), &region);
+    let on = mean(&render(&scene, &glass(64, Caustics::Photons, 0)), &region);
+    eprintln!(
+        "caustic region of {} pixels: off {off}, photons {on}",
+        region.len()
+    );
+    assert!(on > 1.4 * off, "off {off}, photons {on}");
+}
+
+/// The mean over the caustic at 4, 16, 64 and 256 passes approaches the path tracer's own
+/// caustic under a sphere light of radius 0.05 and the same 14 W (which BSDF sampling through
+/// the glass finds), rendered with 4096 samples: the last within 3 %, and closer than the
+/// first (within noise).
+#[test]
+fn the_caustic_converges_to_the_path_tracers_under_a_small_sphere() {
+    let scene = cornell_box();
+    let region = caustic_region(false);
+    assert!(region.len() >= 8, "{} pixels", region.len());
+    let mut sphere = glass(4096, Caustics::Off, 0);
+    sphere.light.shape = LightShape::Sphere;
+    sphere.light.radius = 0.05;
+    let reference = mean(&render(&scene, &sphere), &region);
+    let errors: Vec<f32> = [4, 16, 64, 256]
+        .into_iter()
+        .map(|passes| {
+            let m = mean(
+                &render(&scene, &glass(passes, Caustics::Photons, 0)),
+                &region,
+            );
+            eprintln!("{passes} passes: {m} against {reference}");
+            (m / reference - 1.0).abs()
+        })
+        .collect();
+    eprintln!("relative errors {errors:?}");
+    assert!(errors[3] < 0.03, "{errors:?}");
+    assert!(errors[3] <= errors[0] + 0.005, "{errors:?}");
+}
+
+/// One thread or two: the same image, bit for bit (the photons are shot in chunks seeded by
+/// their index and the grid is built in their order).
+#[test]
+fn caustics_are_the_same_on_any_thread_count() {
+    let scene = cornell_box();
+    let s = glass(3, Caustics::Photons, 4);
+    let one = on_threads(1, || render(&scene, &s));
+    let two = on_threads(2, || render(&scene, &s));
+    assert_same_image(&two, &one, "2 threads against 1");
+}
