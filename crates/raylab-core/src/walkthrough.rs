@@ -8,6 +8,7 @@
 
 use crate::integrator::{Shading, Stage};
 use crate::material::{MaterialPreset, TexturePreset};
+use crate::settings::Caustics;
 use crate::settings::RenderSettings;
 
 /// One step of the walk.
@@ -29,6 +30,7 @@ struct StepSettings {
     samples: u32,
     materials: MaterialPreset,
     light_radius: f32,
+    caustics: Caustics,
 }
 
 impl Step {
@@ -43,6 +45,7 @@ impl Step {
             bounces: old.bounces,
             specular_depth: old.specular_depth,
             smooth: old.smooth,
+            caustics: s.caustics,
             ..Shading::for_stage(s.stage)
         };
         settings.material_preset = s.materials;
@@ -70,7 +73,7 @@ pub fn restore(before: &RenderSettings, settings: &mut RenderSettings) {
 
 /// The walk: the lab's figures 2, 3, 5, 6 and 7, then anti-aliasing, path tracing, soft shadows,
 /// and mirror and glass.
-pub const STEPS: [Step; 9] = [
+pub const STEPS: [Step; 10] = [
     Step {
         title: "Flat colour (figure 2)",
         equation: "ρ, the reflectance of the first surface hit",
@@ -82,6 +85,7 @@ pub const STEPS: [Step; 9] = [
             samples: 1,
             materials: MaterialPreset::None,
             light_radius: 0.0,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -96,6 +100,7 @@ pub const STEPS: [Step; 9] = [
             samples: 1,
             materials: MaterialPreset::None,
             light_radius: 0.0,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -109,6 +114,7 @@ pub const STEPS: [Step; 9] = [
             samples: 1,
             materials: MaterialPreset::None,
             light_radius: 0.0,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -122,6 +128,7 @@ pub const STEPS: [Step; 9] = [
             samples: 1,
             materials: MaterialPreset::None,
             light_radius: 0.0,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -135,6 +142,7 @@ pub const STEPS: [Step; 9] = [
             samples: 1,
             materials: MaterialPreset::None,
             light_radius: 0.0,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -148,6 +156,7 @@ pub const STEPS: [Step; 9] = [
             samples: 16,
             materials: MaterialPreset::None,
             light_radius: 0.0,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -161,6 +170,7 @@ pub const STEPS: [Step; 9] = [
             samples: 1024,
             materials: MaterialPreset::None,
             light_radius: 0.0,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -174,6 +184,7 @@ pub const STEPS: [Step; 9] = [
             samples: 256,
             materials: MaterialPreset::None,
             light_radius: 0.1,
+            caustics: Caustics::Off,
         },
     },
     Step {
@@ -187,6 +198,25 @@ pub const STEPS: [Step; 9] = [
             samples: 1024,
             materials: MaterialPreset::Both,
             light_radius: 0.0,
+            caustics: Caustics::Off,
+        },
+    },
+    Step {
+        title: "Caustics (photon mapping)",
+        equation: "L ≈ Σ f·Φ / (π r²): photons' power per area around the point, r shrinking",
+        text: "Under the lab's point light the glass block throws a solid shadow in the path \
+               stage: a path tracer never finds a point light through glass. Photon mapping \
+               shoots photons from the light, keeps those that passed through mirror or glass \
+               where they land on the diffuse floor and walls, and estimates the light there \
+               from their density: the caustic appears, focused light in the glass's shadow. \
+               Each pass shoots new photons and shrinks the gathering radius, so the image \
+               converges. A global illumination technique (Jensen 1996).",
+        settings: StepSettings {
+            stage: Stage::Path,
+            samples: 1024,
+            materials: MaterialPreset::Glass,
+            light_radius: 0.0,
+            caustics: Caustics::Photons,
         },
     },
 ];
