@@ -98,10 +98,18 @@ fn leaving_the_walkthrough_puts_back_the_settings_it_found() {
         h.get_by_role_and_label(Role::Button, "Next").click();
         h.run_steps(2);
     }
-    assert!(h.query_by_label_contains("Step 9 of 9").is_some());
+    let of = raylab_core::walkthrough::STEPS.len();
+    assert!(
+        h.query_by_label_contains(&format!("Step {of} of {of}"))
+            .is_some()
+    );
     let walked = settings(&h);
     assert_eq!(walked.shading.stage, Stage::Path);
-    assert_eq!(walked.material_preset, MaterialPreset::Both);
+    assert_eq!(walked.material_preset, MaterialPreset::Glass);
+    assert_eq!(
+        walked.shading.caustics,
+        raylab_core::settings::Caustics::Photons
+    );
     h.get_by_role_and_label(Role::Slider, "Camera x")
         .set_value_accesskit(0.25);
     h.step();
