@@ -256,18 +256,6 @@ impl StudentCheck {
         }
     }
 
-    /// Pointer input for the divider ([`Divider::input`]); none while the difference is shown.
-    pub fn divider_input(
-        &mut self,
-        ui: &egui::Ui,
-        response: &egui::Response,
-        rect: egui::Rect,
-        on_marker: bool,
-    ) -> bool {
-        self.divider
-            .input(ui, response, rect, on_marker, !self.difference)
-    }
-
     /// The inspector's lines for pixel `(x, y)`: the student's value beside the figure's.
     pub fn pixel_line(&self, live: &RenderSettings, x: u32, y: u32) -> Option<String> {
         let image = self.image.as_ref()?;
@@ -308,7 +296,9 @@ impl Overlay for StudentCheck {
         rect: egui::Rect,
         on_marker: bool,
     ) -> bool {
-        StudentCheck::divider_input(self, ui, response, rect, on_marker)
+        // None while the difference picture is shown.
+        self.divider
+            .input(ui, response, rect, on_marker, !self.difference)
     }
 }
 

@@ -9,7 +9,7 @@
 //!
 //! The viewport draws A left of the divider and B right of it, fitted into B's image rect
 //! ([`Compare::paint`]); a drag that starts on the divider moves it instead of turning the
-//! camera ([`Compare::divider_input`]). "Difference |A − B|" shows instead the per-channel
+//! camera ([`Overlay::divider_input`]). "Difference |A − B|" shows instead the per-channel
 //! absolute difference of the two *linear* images, scaled so the largest maps to white. It is
 //! computed on a short-lived thread, at most one at a time, whenever either side has a new
 //! frame: a large image's difference takes longer than a UI frame.
@@ -403,19 +403,6 @@ impl Compare {
         paint_wipe(painter, rect, x, [a, Some(b)], ["A", "B"], with_divider);
     }
 
-    /// Pointer input for the divider ([`Divider::input`]); none in difference mode. Returns
-    /// whether the divider has the drag, in which case the camera must not turn.
-    pub fn divider_input(
-        &mut self,
-        ui: &egui::Ui,
-        response: &egui::Response,
-        rect: egui::Rect,
-        on_marker: bool,
-    ) -> bool {
-        self.divider
-            .input(ui, response, rect, on_marker, !self.difference)
-    }
-
     /// The Stats lines while comparing: each side's pass time and samples (`b`: the app's).
     pub fn stats_ui(&self, ui: &mut egui::Ui, b: &Stats) {
         let a_line = match &self.a {
@@ -458,6 +445,7 @@ impl Overlay for Compare {
         Compare::paint(self, ui, rect, live);
     }
 
+    /// A drag on the divider moves it ([`Divider::input`]); none in difference mode.
     fn divider_input(
         &mut self,
         ui: &egui::Ui,
@@ -465,7 +453,8 @@ impl Overlay for Compare {
         rect: egui::Rect,
         on_marker: bool,
     ) -> bool {
-        Compare::divider_input(self, ui, response, rect, on_marker)
+        self.divider
+            .input(ui, response, rect, on_marker, !self.difference)
     }
 }
 

@@ -64,6 +64,16 @@ pub const BATCH: usize = 64;
 
 pub use crate::settings::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
 
+/// A hit ready to scatter ([`Tracer::scattering`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Scattering {
+    pub surface: Surface,
+    pub bsdf: crate::bsdf::Bsdf,
+    pub frame: ShadingFrame,
+    /// Toward where the ray came from.
+    pub wo: Vec3,
+}
+
 /// A diffuse hit as the light sees it, before any light is computed ([`Tracer::surface`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
@@ -695,6 +705,24 @@ impl<'a> Tracer<'a> {
             None
         };
         self.surface_with(hit, material, incoming, at_edge)
+    }
+
+    /// What a path or a photon scatters with at `hit`, reached along `direction`: the hit's
+    /// surface (its relief applied, `at_edge` found), the material's BSDF for its ρ, and the
+    /// shading frame toward `wo = −direction` ([`ShadingFrame::new`]).
+    #[inline(always)]
+    pub fn scattering(&self, hit: &Intersection, direction: Vec3) -> Scattering {
+        let scene = self.scene;
+        let material = self.material_of(hit.triangle_index);
+        let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, direction);
+        let surface = self.surface_with(hit, material, direction, at_edge);
+        let wo = -direction;
+        Scattering {
+            bsdf: material.bsdf(surface.rho),
+            frame: ShadingFrame::new(surface.normal, surface.geometric, wo),
+            surface,
+            wo,
+        }
     }
 
     /// [`Tracer::surface`] with `at_edge` given: the path tracer asks it of every hit anyway,

@@ -46,7 +46,7 @@ use glam::{Vec2, Vec3};
 use serde::Serialize;
 
 use super::path::{MAX_DEPTH, ROULETTE_DEPTH, ROULETTE_MAX_SURVIVAL};
-use super::{Recorder, Tracer, continue_ray};
+use super::{Recorder, Scattering, Tracer, continue_ray};
 use crate::bsdf::{Bsdf, ShadingFrame};
 use crate::geometry::Ray;
 use crate::light::{Light, shadow_ray_to};
@@ -174,13 +174,13 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         }
         let Some(hit) = hit else { break };
         depth += 1;
-        let triangle = &scene.triangles[hit.triangle_index];
-        let material = tracer.material_of(hit.triangle_index);
-        let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction);
-        let surface = tracer.surface_with(&hit, material, ray.direction, at_edge);
-        let bsdf = material.bsdf(surface.rho);
-        let wo = -ray.direction;
-        let frame = ShadingFrame::new(surface.normal, triangle.normal, wo);
+        let Scattering {
+            surface,
+            bsdf,
+            frame,
+            wo,
+        } = tracer.scattering(&hit, ray.direction);
+        let at_edge = surface.at_edge;
 
         // Step 1: next-event estimation, where the BSDF is not a delta. Where the path ends
         // here (its bounces used up), BSDF sampling will not look for the light, so the light
@@ -207,7 +207,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
                 };
                 if f != Vec3::ZERO && sample.pdf > 0.0 {
                     terms.blocked =
-                        shadow_ray_to(sample.point, hit.position, triangle.normal, at_edge)
+                        shadow_ray_to(sample.point, hit.position, surface.geometric, at_edge)
                             .is_some_and(|(shadow, t_max)| scene.occluded(&shadow, t_max));
                     if !terms.blocked {
                         terms.added = beta * f * sample.li * (cos * terms.mis_weight / sample.pdf);
@@ -292,7 +292,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         if !survives {
             break;
         }
-        ray = continue_ray(hit.position, triangle.normal, wi, at_edge);
+        ray = continue_ray(hit.position, surface.geometric, wi, at_edge);
     }
     value
 }

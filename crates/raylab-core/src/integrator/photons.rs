@@ -21,8 +21,7 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::{Tracer, continue_ray};
-use crate::bsdf::ShadingFrame;
+use super::{Scattering, Tracer, continue_ray};
 use crate::geometry::Ray;
 use crate::light::{AnyLight, Light};
 use crate::photon_map::{Photon, PhotonMap, radius_at_pass};
@@ -136,13 +135,13 @@ pub fn trace_photon(
         if specular_hits > 0 && light.intersect(&ray, hit.distance).is_some() {
             return;
         }
-        let triangle = &scene.triangles[hit.triangle_index];
-        let material = tracer.material_of(hit.triangle_index);
-        let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction);
-        let surface = tracer.surface_with(&hit, material, ray.direction, at_edge);
-        let bsdf = material.bsdf(surface.rho);
-        let wo = -ray.direction;
-        let frame = ShadingFrame::new(surface.normal, triangle.normal, wo);
+        let Scattering {
+            surface,
+            bsdf,
+            frame,
+            wo,
+        } = tracer.scattering(&hit, ray.direction);
+        let at_edge = surface.at_edge;
         if !bsdf.is_delta() {
             if specular_hits > 0 {
                 out.push(Photon {
@@ -163,7 +162,7 @@ pub fn trace_photon(
         if power == Vec3::ZERO {
             return;
         }
-        ray = continue_ray(hit.position, triangle.normal, sample.wi, at_edge);
+        ray = continue_ray(hit.position, surface.geometric, sample.wi, at_edge);
     }
 }
 
