@@ -87,9 +87,15 @@ pub struct BenchArgs {
     #[arg(long)]
     pub json: bool,
     /// lab: the figures above; path: also one pass of the path stage (unlimited bounces), as
-    /// camera paths per second.
-    #[arg(long, default_value = "lab", value_parser = ["lab", "path"], value_name = "STAGE")]
+    /// camera paths per second; denoise: the denoiser on the path-traced Cornell box, its time
+    /// at W×H (16 samples) and its quality at 256² against a converged reference (about a
+    /// minute: see --reference-samples).
+    #[arg(long, default_value = "lab", value_parser = ["lab", "path", "denoise"], value_name = "STAGE")]
     pub stage: String,
+    /// With --stage denoise: samples per pixel of the reference the quality is measured
+    /// against.
+    #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(1..=1_000_000), value_name = "N")]
+    pub reference_samples: u32,
 }
 
 #[derive(Debug, Args)]
@@ -873,6 +879,9 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
 
 fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
     let pool = thread_pool("bench", args.threads)?;
+    if args.stage == "denoise" {
+        return run_denoise_bench(args, &pool);
+    }
     let scenes: Vec<SceneChoice> = match (&args.obj, &args.scene) {
         (Some(path), _) => vec![SceneChoice::Obj(path.clone())],
         (None, Some(choice)) => vec![choice.clone()],
@@ -958,6 +967,114 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
                 || format!("{} (forced)", isa.name()),
                 |c| format!("{}, the fastest measured here", c.summary())
             )
+        )?;
+    }
+    Ok(())
+}
+
+/// `raylab bench --stage denoise`: the denoiser's time (features and filter, medians of
+/// `--passes`) on a 16-sample path-traced Cornell box at W×H, then its quality at 256²:
+/// relative MSE raw and denoised at 4 to 1,024 samples against `--reference-samples`
+/// ([`raylab_core::denoise::quality`]).
+fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
+    use raylab_core::denoise::{Denoiser, Features, quality};
+    use raylab_core::film::Film;
+    let path_settings = |width: u32, height: u32| {
+        let mut s = raylab_core::bench::lab_settings(width, height);
+        s.shading = raylab_core::Shading::for_stage(raylab_core::Stage::Path);
+        s
+    };
+    raylab_core::memory::check(
+        format!("a {}×{} denoise bench", args.width, args.height),
+        // A film (sum, squares), a pass, the features and the filter's planes: under 40
+        // floats a pixel.
+        160 * u64::from(args.width) * u64::from(args.height),
+    )?;
+    let scene = raylab_core::scene::cornell_box();
+    let denoiser = Denoiser::default();
+    let mut out = std::io::stdout().lock();
+    let never = || false;
+    let (timing, rows) = pool.install(|| -> anyhow::Result<_> {
+        let settings = path_settings(args.width, args.height);
+        let mut film = Film::with_noise(args.width, args.height);
+        for sample in 0..16 {
+            let pass = raylab_core::render::render_pass(&scene, &settings, sample, &never)?;
+            film.add_pass(&pass);
+        }
+        let (raw, variance) = (film.resolve(), film.variance());
+        let (mut feature_times, mut filter_times) = (Vec::new(), Vec::new());
+        for _ in 0..=args.passes {
+            let start = std::time::Instant::now();
+            let features = Features::trace(&scene, &settings, &never)?;
+            feature_times.push(start.elapsed());
+            let start = std::time::Instant::now();
+            std::hint::black_box(denoiser.denoise(&raw, variance.as_deref(), &features));
+            filter_times.push(start.elapsed());
+        }
+        // The first of each is the warm-up.
+        let (features_ms, filter_ms) = (
+            raylab_core::bench::median_ms(feature_times.split_off(1)),
+            raylab_core::bench::median_ms(filter_times.split_off(1)),
+        );
+        let rows = quality::measure(
+            &scene,
+            &path_settings(256, 256),
+            &[4, 16, 64, 256, 1024],
+            args.reference_samples,
+            &denoiser,
+        );
+        Ok(((features_ms, filter_ms), rows))
+    })?;
+    let threads = pool.current_num_threads();
+    if args.json {
+        let json = serde_json::json!({
+            "width": args.width,
+            "height": args.height,
+            "threads": threads,
+            "features_ms": timing.0,
+            "filter_ms": timing.1,
+            "quality_side": 256,
+            "reference_samples": args.reference_samples,
+            "quality": rows,
+        });
+        writeln!(out, "{json}")?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "denoiser, Cornell box, path stage at 16 samples, {}×{}, {threads} threads: features \
+         {:.2} ms + filter {:.2} ms = {:.2} ms (medians of {} passes)",
+        args.width,
+        args.height,
+        timing.0,
+        timing.1,
+        timing.0 + timing.1,
+        args.passes
+    )?;
+    writeln!(
+        out,
+        "quality at 256×256 against {} samples (relative MSE; equal raw: the raw samples of \
+         the same error, from raw error ∝ 1/samples at 1,024):",
+        args.reference_samples
+    )?;
+    writeln!(
+        out,
+        "{:>8} {:>12} {:>12} {:>10} {:>12}",
+        "samples", "raw", "denoised", "equal raw", "mean change"
+    )?;
+    let last = rows.last().copied();
+    for r in &rows {
+        let equal = last.map_or(0.0, |l| {
+            f64::from(l.samples) * l.raw_relative_mse / r.denoised_relative_mse.max(1e-300)
+        });
+        writeln!(
+            out,
+            "{:>8} {:>12.3e} {:>12.3e} {:>10.0} {:>11.3}%",
+            r.samples,
+            r.raw_relative_mse,
+            r.denoised_relative_mse,
+            equal,
+            100.0 * r.denoised_mean_change
         )?;
     }
     Ok(())

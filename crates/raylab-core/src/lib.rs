@@ -23,6 +23,7 @@ pub mod bench;
 pub mod bsdf;
 pub mod camera;
 pub mod check;
+pub mod denoise;
 pub mod display;
 pub mod film;
 pub mod geometry;

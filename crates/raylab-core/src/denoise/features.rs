@@ -1,0 +1,172 @@
+//! The feature buffers that steer the denoiser: what the camera sees at each pixel, apart from
+//! the light. Per pixel, the albedo (the reflectance the light is multiplied by), the shading
+//! normal and the distance to the surface, each averaged over [`FEATURE_SAMPLES`] camera rays.
+//!
+//! The rays are the render's own first camera samples ([`crate::render`]'s `camera_sample`:
+//! the pixel centre, then jittered points and, with an aperture, points of the lens), so a
+//! feature blurred by depth of field or shared by two surfaces at an edge is blurred as the
+//! image is. Through a mirror or glass the features are those of the first surface that is not
+//! a perfect specular one (the dominant lobe is followed: reflection, or the refraction where
+//! Fresnel's reflectance is below one half), its albedo times the tints on the way and its
+//! distance the length of the whole path, as Open Image Denoise asks of its auxiliary images:
+//! a mirror then shows the features of what it reflects, and the filter keeps its edges.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::bsdf::Bsdf;
+use crate::geometry::Ray;
+use crate::integrator::Tracer;
+use crate::render::{Cancelled, camera_sample};
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+
+/// Camera rays per pixel the features average: enough to give an edge pixel the mix of the two
+/// surfaces it shows, few enough to cost a fraction of one path-traced pass.
+pub const FEATURE_SAMPLES: u32 = 4;
+
+/// Perfect specular bounces followed before the features settle on what was reached.
+const SPECULAR_BOUNCES: u32 = 4;
+
+/// The per-pixel features of one view, rows top to bottom as in [`crate::film::Image`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Features {
+    pub width: u32,
+    pub height: u32,
+    /// The reflectance ρ of the surface seen (times the tints of mirrors and glass before it),
+    /// averaged; 0 where nothing is hit.
+    pub albedo: Vec<Vec3>,
+    /// The shading normal (smooth, normal-mapped) facing the viewer, averaged over the samples
+    /// that hit (not renormalised: an edge pixel's is shorter); 0 where nothing is hit.
+    pub normal: Vec<Vec3>,
+    /// The distance along the path to the surface seen, averaged over the samples that hit; 0
+    /// where nothing is hit.
+    pub depth: Vec<f32>,
+}
+
+/// What one camera ray sees.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Seen {
+    albedo: Vec3,
+    normal: Vec3,
+    depth: f32,
+}
+
+impl Features {
+    /// The features of `settings`' view of `scene`, traced on the current rayon pool, a row at
+    /// a time; [`Cancelled`] as soon as `cancelled()` says so.
+    pub fn trace(
+        scene: &Scene,
+        settings: &RenderSettings,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Features, Cancelled> {
+        let (width, height) = (settings.camera.width, settings.camera.height);
+        let tracer = Tracer::new(scene, settings);
+        let rotation = settings.camera.rotation();
+        let len = width as usize * height as usize;
+        let mut albedo = vec![Vec3::ZERO; len];
+        let mut normal = vec![Vec3::ZERO; len];
+        let mut depth = vec![0.0f32; len];
+        let row = width.max(1) as usize;
+        albedo
+            .par_chunks_mut(row)
+            .zip(normal.par_chunks_mut(row))
+            .zip(depth.par_chunks_mut(row))
+            .enumerate()
+            .try_for_each(|(y, ((albedo, normal), depth))| {
+                if cancelled() {
+                    return Err(Cancelled);
+                }
+                for x in 0..albedo.len() {
+                    let (mut sum, mut hits) = (Seen::default(), 0u32);
+                    let mut albedo_sum = Vec3::ZERO;
+                    for sample in 0..FEATURE_SAMPLES {
+                        let mut ray = Ray::new(Vec3::ZERO, Vec3::Z);
+                        let mut rng = Rng::UNUSED;
+                        let (x, y) = (x as u32, y as u32);
+                        camera_sample(
+                            &tracer, settings, &rotation, x, y, sample, &mut ray, &mut rng,
+                        );
+                        if let Some(seen) = see(&tracer, scene, ray) {
+                            albedo_sum += seen.albedo;
+                            sum.normal += seen.normal;
+                            sum.depth += seen.depth;
+                            hits += 1;
+                        }
+                    }
+                    albedo[x] = albedo_sum / FEATURE_SAMPLES as f32;
+                    if hits > 0 {
+                        normal[x] = sum.normal / hits as f32;
+                        depth[x] = sum.depth / hits as f32;
+                    }
+                }
+                Ok(())
+            })?;
+        Ok(Features {
+            width,
+            height,
+            albedo,
+            normal,
+            depth,
+        })
+    }
+
+    /// Features of one value everywhere: for tests, and for images with nothing to trace.
+    pub fn uniform(width: u32, height: u32, albedo: Vec3, normal: Vec3, depth: f32) -> Features {
+        let len = width as usize * height as usize;
+        Features {
+            width,
+            height,
+            albedo: vec![albedo; len],
+            normal: vec![normal; len],
+            depth: vec![depth; len],
+        }
+    }
+}
+
+/// What the ray `ray` sees: the first surface that is not a perfect specular one, with the
+/// tints of those before it, or `None` if the path leaves the scene.
+fn see(tracer: &Tracer, scene: &Scene, mut ray: Ray) -> Option<Seen> {
+    let mut tint = Vec3::ONE;
+    let mut travelled = 0.0f32;
+    for bounce in 0..=SPECULAR_BOUNCES {
+        let hit = scene.closest_intersection(&ray, f32::INFINITY)?;
+        travelled += hit.distance;
+        let scattering = tracer.scattering(&hit, ray.direction);
+        let frame = &scattering.frame;
+        let normal = frame.shading_normal();
+        // The side the viewer is on: a wall seen from behind and from the front are one
+        // surface to the filter.
+        let normal = if normal.dot(scattering.wo) < 0.0 {
+            -normal
+        } else {
+            normal
+        };
+        let bsdf = scattering.bsdf;
+        if !bsdf.is_delta() || bounce == SPECULAR_BOUNCES {
+            let albedo = match bsdf {
+                Bsdf::RoughConductor { tint, .. } => tint,
+                _ => scattering.surface.rho,
+            };
+            return Some(Seen {
+                albedo: tint * albedo.min(Vec3::ONE),
+                normal,
+                depth: travelled,
+            });
+        }
+        // Mirror or glass: the dominant lobe (uc = 0.5 picks refraction where Fresnel's
+        // reflectance is below one half).
+        let wo = frame.to_local(scattering.wo);
+        let sample = bsdf.sample(wo, 0.5, Vec2::splat(0.5))?;
+        tint *= sample.weight.min(Vec3::ONE);
+        let direction = frame.to_world(sample.wi).normalize();
+        ray = crate::integrator::continue_ray(
+            scattering.surface.position,
+            scattering.surface.geometric,
+            direction,
+            scattering.surface.at_edge,
+        );
+    }
+    None
+}
