@@ -15,8 +15,9 @@
 # threads (default 2), RUNS times (default 3). Each run starts the window on the path stage
 # with a sample target it will not reach, lets it accumulate for a few seconds, then measures
 # samples per second from the frame log over a steady span (THROUGHPUT_SPAN seconds, default 8),
-# with each thread's CPU use over that span; then runs the benchmark at once, at the same size
-# and threads, and prints both in camera paths per second and their ratio (window / bench).
+# with each thread's CPU use over that span. The benchmark runs at the same size and threads
+# just before and just after the window (their mean is taken: the machine's load drifts); both
+# are printed in camera paths per second, and their ratio (window / bench).
 #
 # Needs what scripts/install-display-tools.sh installs. Honours CARGO_TARGET_DIR.
 set -euo pipefail
@@ -59,11 +60,17 @@ if [ "$mode" = throughput ]; then
   echo "measure-window: path stage, $side², $threads render threads, $runs runs of ${span} s;" \
     "$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores," \
     "load $(cut -d' ' -f1-3 /proc/loadavg)"
+  # `raylab bench --stage path` at the same size and threads: camera paths per second.
+  bench_paths() {
+    "$bin" bench --stage path --scene cornell --width "$side" --height "$side" \
+      --threads "$threads" --passes 20 --json | sed 's/.*"path_samples_per_s":\([0-9.e+]*\).*/\1/'
+  }
   summary="$out/throughput.txt"
   : >"$summary"
   for run in $(seq "$runs"); do
     # The path stage (as `bench --stage path` renders it: the default camera, unlimited
     # bounces) with a sample target far beyond what the span reaches.
+    bench_before=$(bench_paths)
     rm -rf "$out/xdg"
     mkdir -p "$out/xdg/data/raylab" "$out/xdg/runtime"
     chmod 700 "$out/xdg/runtime"
@@ -104,12 +111,11 @@ EOF
         printf "%.3f %.0f %d\n", per_s, per_s * side * side, n
       }')
     read -r samples_per_s window_paths ui_frames <<<"$window"
-    bench=$("$bin" bench --stage path --scene cornell --width "$side" --height "$side" \
-      --threads "$threads" --passes 30 --json | sed 's/.*"path_samples_per_s":\([0-9.e+]*\).*/\1/')
+    bench=$(awk -v a="$bench_before" -v b="$(bench_paths)" 'BEGIN { print (a + b) / 2 }')
     ratio=$(awk -v w="$window_paths" -v b="$bench" 'BEGIN { printf "%.3f", w / b }')
     printf "measure-window: run %d: window %.2f samples/s = %.2f M paths/s (%d UI frames in %d s);" \
       "$run" "$samples_per_s" "$(awk -v w="$window_paths" 'BEGIN { print w / 1e6 }')" "$ui_frames" "$span"
-    printf " bench %.2f M paths/s; ratio %.3f\n" "$(awk -v b="$bench" 'BEGIN { print b / 1e6 }')" "$ratio"
+    printf " bench %.2f M paths/s (mean of before and after); ratio %.3f\n" "$(awk -v b="$bench" 'BEGIN { print b / 1e6 }')" "$ratio"
     # CPU share of each kind of thread over the span (% of one core), busiest first.
     join <(sort <<<"$ticks_before") <(sort <<<"$ticks_after") | awk -v hz="$hz" -v span="$span" '
       { name = $2; sub(/[-:]?[0-9]+$/, "", name); use[name] += ($5 - $3) / hz / span * 100 }
@@ -127,6 +133,7 @@ EOF
       }
       printf "measure-window: ratio window/bench %.3f to %.3f; window %.2f to %.2f M paths/s, bench %.2f to %.2f M paths/s\n", rmin, rmax, wmin / 1e6, wmax / 1e6, bmin / 1e6, bmax / 1e6
     }' "$summary"
+  sort -n "$summary" | awk '{ r[NR] = $1 } END { printf "measure-window: median ratio %.3f of %d runs\n", NR % 2 ? r[(NR + 1) / 2] : (r[NR / 2] + r[NR / 2 + 1]) / 2, NR }'
   exit 0
 fi
 
