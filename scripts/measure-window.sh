@@ -19,7 +19,8 @@
 # just before and just after the window (their mean is taken: the machine's load drifts); both
 # are printed in camera paths per second, and their ratio (window / bench).
 #
-# Needs what scripts/install-display-tools.sh installs. Honours CARGO_TARGET_DIR.
+# Needs what scripts/install-display-tools.sh installs. Honours CARGO_TARGET_DIR; RAYLAB_BIN
+# names a binary to measure instead of building one (to compare two builds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -31,8 +32,12 @@ if [ "${1:-}" = "--throughput" ]; then
   mode=throughput
   shift
 fi
-cargo build --release --quiet
-bin="$target_dir/release/raylab"
+if [ -n "${RAYLAB_BIN:-}" ]; then
+  bin=$RAYLAB_BIN
+else
+  cargo build --release --quiet
+  bin="$target_dir/release/raylab"
+fi
 
 # shellcheck source=scripts/xvfb-common.sh
 source "$root/scripts/xvfb-common.sh"
