@@ -1,26 +1,148 @@
 #!/usr/bin/env bash
-# Measures the workbench's responsiveness in the real window, under Xvfb: starts the release
-# binary on a SIDE × SIDE image (default 1024), waits for its sample target, then drags the
-# "Light x" slider for a few seconds with xdotool (each step re-traces) and reports, from the
-# app's per-frame log (RAYLAB_LOG_FRAMES):
+# Measures the workbench in the real window, under Xvfb.
+#
+# scripts/measure-window.sh [SIDE]: responsiveness. Starts the release binary on a SIDE × SIDE
+# image (default 1024), waits for its sample target, then drags the "Light x" slider for a few
+# seconds with xdotool (each step re-traces) and reports, from the app's per-frame log
+# (RAYLAB_LOG_FRAMES):
 #   - UI frame CPU time (egui + painting) while passes run: mean, max, frames of 20 ms or more,
 #   - the interval between UI frames while dragging,
 #   - the time from a change to its first image on screen (the preview) and in how many frames.
-# Usage: scripts/measure-window.sh [SIDE]. Needs what scripts/install-display-tools.sh installs.
 # The log and a screenshot taken mid-drag go to target/measure/.
+#
+# scripts/measure-window.sh --throughput [SIDE] [THREADS] [RUNS]: the path stage's throughput in
+# the window against `raylab bench --stage path`, at SIDE² (default 512) on THREADS render
+# threads (default 2), RUNS times (default 3). Each run starts the window on the path stage
+# with a sample target it will not reach, lets it accumulate for a few seconds, then measures
+# samples per second from the frame log over a steady span (THROUGHPUT_SPAN seconds, default 8),
+# with each thread's CPU use over that span. The benchmark runs at the same size and threads
+# just before and just after the window (their mean is taken: the machine's load drifts); both
+# are printed in camera paths per second, and their ratio (window / bench).
+#
+# Needs what scripts/install-display-tools.sh installs. Honours CARGO_TARGET_DIR; RAYLAB_BIN
+# names a binary to measure instead of building one (to compare two builds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-side=${1:-1024}
 root=$(pwd)
-out="$root/target/measure"
+target_dir=${CARGO_TARGET_DIR:-$root/target}
+out="$target_dir/measure"
 mkdir -p "$out"
-cargo build --release --quiet
-bin="$root/target/release/raylab"
+mode=drag
+if [ "${1:-}" = "--throughput" ]; then
+  mode=throughput
+  shift
+fi
+if [ -n "${RAYLAB_BIN:-}" ]; then
+  bin=$RAYLAB_BIN
+else
+  cargo build --release --quiet
+  bin="$target_dir/release/raylab"
+fi
 
 # shellcheck source=scripts/xvfb-common.sh
 source "$root/scripts/xvfb-common.sh"
 start_xvfb measure-window 151 199 "$out"
 display=$DISPLAY
+
+# CPU ticks of each thread of process $1, one line each: "tid name ticks" (user + system).
+thread_ticks() {
+  local task stat
+  for task in /proc/"$1"/task/*; do
+    stat=$(cat "$task/stat" 2>/dev/null) || continue
+    # Fields after the name (which is in parentheses): state is 3, utime 14, stime 15.
+    set -- ${stat##*) }
+    echo "${task##*/} $(cat "$task/comm" 2>/dev/null | tr ' ' _) $((${12} + ${13}))"
+  done
+}
+
+if [ "$mode" = throughput ]; then
+  side=${1:-512}
+  threads=${2:-2}
+  runs=${3:-3}
+  span=${THROUGHPUT_SPAN:-8}
+  hz=$(getconf CLK_TCK)
+  export XDG_DATA_HOME="$out/xdg/data" XDG_RUNTIME_DIR="$out/xdg/runtime"
+  echo "measure-window: path stage, $side², $threads render threads, $runs runs of ${span} s;" \
+    "$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores," \
+    "load $(cut -d' ' -f1-3 /proc/loadavg)"
+  # `raylab bench --stage path` at the same size and threads: camera paths per second.
+  bench_paths() {
+    "$bin" bench --stage path --scene cornell --width "$side" --height "$side" \
+      --threads "$threads" --passes 20 --json | sed 's/.*"path_samples_per_s":\([0-9.e+]*\).*/\1/'
+  }
+  summary="$out/throughput.txt"
+  : >"$summary"
+  for run in $(seq "$runs"); do
+    # The path stage (as `bench --stage path` renders it: the default camera, unlimited
+    # bounces) with a sample target far beyond what the span reaches.
+    bench_before=$(bench_paths)
+    rm -rf "$out/xdg"
+    mkdir -p "$out/xdg/data/raylab" "$out/xdg/runtime"
+    chmod 700 "$out/xdg/runtime"
+    cat >"$out/xdg/data/raylab/app.ron" <<EOF
+{"raylab-workbench": "{\"version\": 1, \"render_threads\": $threads, \"settings\": {\"camera\": {\"width\": $side, \"height\": $side, \"focal_length\": $side}, \"shading\": {\"stage\": \"path\", \"shadows\": true, \"indirect\": true}, \"samples_per_pixel\": 4096}}"}
+EOF
+    log="$out/throughput-$run.log"
+    RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
+    app_pid=$!
+    timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' >/dev/null
+    for _ in $(seq 600); do
+      grep -Eq "samples=[1-9][0-9]* target=[0-9]+ preview=false" "$log" && break
+      sleep 0.1
+    done
+    grep -Eq "samples=[1-9]" "$log" || { echo "measure-window: no samples logged" >&2; exit 1; }
+    # Past the start (the preview, the first passes, the window's first frames).
+    sleep 2
+    before=$(wc -l <"$log")
+    ticks_before=$(thread_ticks "$app_pid")
+    sleep "$span"
+    ticks_after=$(thread_ticks "$app_pid")
+    xwd -root -display "$display" | /usr/bin/convert xwd:- "$out/throughput-$run.png"
+    after=$(wc -l <"$log")
+    kill "$app_pid"
+    wait "$app_pid" 2>/dev/null || true
+    app_pid=""
+
+    window=$(tail -n +"$((before + 1))" "$log" | head -n "$((after - before))" | awk -v side="$side" '
+      function field(name,   i, kv) { for (i = 2; i <= NF; i++) { split($i, kv, "="); if (kv[1] == name) return kv[2] } }
+      /^raylab-frame/ {
+        n++; s = field("samples") + 0; t = field("t_ms") + 0
+        if (n == 1) { s0 = s; t0 = t }
+        s1 = s; t1 = t
+      }
+      END {
+        if (t1 <= t0) { print "0 0 0"; exit }
+        per_s = (s1 - s0) / ((t1 - t0) / 1e3)
+        printf "%.3f %.0f %d\n", per_s, per_s * side * side, n
+      }')
+    read -r samples_per_s window_paths ui_frames <<<"$window"
+    bench=$(awk -v a="$bench_before" -v b="$(bench_paths)" 'BEGIN { print (a + b) / 2 }')
+    ratio=$(awk -v w="$window_paths" -v b="$bench" 'BEGIN { printf "%.3f", w / b }')
+    printf "measure-window: run %d: window %.2f samples/s = %.2f M paths/s (%d UI frames in %d s);" \
+      "$run" "$samples_per_s" "$(awk -v w="$window_paths" 'BEGIN { print w / 1e6 }')" "$ui_frames" "$span"
+    printf " bench %.2f M paths/s (mean of before and after); ratio %.3f\n" "$(awk -v b="$bench" 'BEGIN { print b / 1e6 }')" "$ratio"
+    # CPU share of each kind of thread over the span (% of one core), busiest first.
+    join <(sort <<<"$ticks_before") <(sort <<<"$ticks_after") | awk -v hz="$hz" -v span="$span" '
+      { name = $2; sub(/[-:]?[0-9]+$/, "", name); use[name] += ($5 - $3) / hz / span * 100 }
+      END { for (n in use) if (use[n] >= 0.5) printf "%s %.0f%%\n", n, use[n] }' |
+      sort -k2 -t' ' -rn | paste -sd, - | sed 's/,/, /g; s/^/measure-window:   CPU by thread: /'
+    echo "$ratio $window_paths $bench" >>"$summary"
+  done
+  awk '{ r[NR] = $1; w[NR] = $2; b[NR] = $3 }
+    END {
+      rmin = rmax = r[1]; wmin = wmax = w[1]; bmin = bmax = b[1]
+      for (i = 2; i <= NR; i++) {
+        if (r[i] < rmin) rmin = r[i]; if (r[i] > rmax) rmax = r[i]
+        if (w[i] < wmin) wmin = w[i]; if (w[i] > wmax) wmax = w[i]
+        if (b[i] < bmin) bmin = b[i]; if (b[i] > bmax) bmax = b[i]
+      }
+      printf "measure-window: ratio window/bench %.3f to %.3f; window %.2f to %.2f M paths/s, bench %.2f to %.2f M paths/s\n", rmin, rmax, wmin / 1e6, wmax / 1e6, bmin / 1e6, bmax / 1e6
+    }' "$summary"
+  sort -n "$summary" | awk '{ r[NR] = $1 } END { printf "measure-window: median ratio %.3f of %d runs\n", NR % 2 ? r[(NR + 1) / 2] : (r[NR / 2] + r[NR / 2 + 1]) / 2, NR }'
+  exit 0
+fi
+
+side=${1:-1024}
 
 # A settings file for a SIDE² image (eframe keeps its storage as RON: a map of strings).
 rm -rf "$out/xdg"

@@ -159,8 +159,7 @@ impl Compare {
         settings: &RenderSettings,
         threads: usize,
     ) -> Result<Self, ControllerError> {
-        let repaint = ctx.clone();
-        let controller = Controller::new(threads, Box::new(move || repaint.request_repaint()))?;
+        let controller = Controller::new(threads, super::repaint_for_frames(ctx))?;
         // Before the job, so even its first frame is shown through A's display.
         controller.set_display(settings.display);
         controller.submit(scene, settings)?;

@@ -133,6 +133,13 @@ pub struct Shown {
     pub samples: u32,
     pub target: u32,
     pub is_preview: bool,
+    /// The display its pixels on screen were converted with: a display change shows the same
+    /// frame again, converted anew.
+    #[cfg_attr(
+        not(test),
+        expect(dead_code, reason = "tests wait for the display in force")
+    )]
+    pub display: raylab_core::display::Display,
 }
 
 impl Shown {
@@ -237,6 +244,15 @@ const INSPECTOR_MIN_WIDTH: f32 = 200.0;
 /// The central panel's margins either side of the image, and the panels' separator.
 const CENTRAL_MARGINS: f32 = 20.0;
 
+/// The render worker's notify: one repaint for each frame it publishes. egui's
+/// `request_repaint` runs two UI frames for each request (to let layout settle); the second
+/// one redraws the same picture, and under a software renderer each UI frame takes CPU from
+/// the render threads. A request with a delay runs one; a millisecond is not seen.
+fn repaint_for_frames(ctx: &egui::Context) -> raylab_core::progressive::Notify {
+    let ctx = ctx.clone();
+    Box::new(move || ctx.request_repaint_after(std::time::Duration::from_millis(1)))
+}
+
 /// How many scenes besides the one on screen stay loaded for switching back.
 pub const SCENE_CACHE: usize = 4;
 
@@ -313,14 +329,11 @@ impl WorkbenchApp {
         // The saved settings' sample target is the user's: only an effect turned on later
         // raises it.
         let sampled = Sampled::of(&state.settings);
-        let repaint = ctx.clone();
-        let (controller, error) = match Controller::new(
-            state.render_threads,
-            Box::new(move || repaint.request_repaint()),
-        ) {
-            Ok(c) => (Some(c), None),
-            Err(e) => (None, Some(format!("The renderer could not start: {e}"))),
-        };
+        let (controller, error) =
+            match Controller::new(state.render_threads, repaint_for_frames(ctx)) {
+                Ok(c) => (Some(c), None),
+                Err(e) => (None, Some(format!("The renderer could not start: {e}"))),
+            };
         let status = match (error, notice) {
             (Some(text), _) => Some(Status {
                 text,
@@ -954,6 +967,7 @@ impl WorkbenchApp {
             samples: frame.samples,
             target: frame.target,
             is_preview: frame.is_preview,
+            display: frame.display,
         };
         if !shown.is_preview {
             self.last_full = Some(shown.clone());
@@ -1349,17 +1363,18 @@ impl WorkbenchApp {
             });
     }
 
-    /// Whether the newest job has reached its target on screen and nothing else is pending.
+    /// Whether the newest job has reached its target on screen, shown with the display in
+    /// force, and nothing else is pending.
     #[cfg(test)]
     pub fn is_settled(&self) -> bool {
         let generation = self.controller.as_ref().map_or(0, Controller::generation);
+        let display = self.controller.as_ref().map(Controller::display);
         self.submitted
             .as_ref()
             .is_some_and(|s| s.renders_like(&self.state.settings))
-            && self
-                .shown
-                .as_ref()
-                .is_some_and(|s| s.generation == generation && s.is_final())
+            && self.shown.as_ref().is_some_and(|s| {
+                s.generation == generation && s.is_final() && display.is_none_or(|d| d == s.display)
+            })
             && !self.screenshot_wanted
             && self.screenshots_saving.is_empty()
             && self.scene_loading.is_none()

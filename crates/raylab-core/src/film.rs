@@ -399,6 +399,9 @@ pub struct NoiseEstimate {
     pub relative_rms_error: f64,
 }
 
+/// The pixels [`Film::noise`] sums in one block (64 KiB of sums).
+const NOISE_BLOCK: usize = 1 << 12;
+
 /// The relative RMS error at which an image looks clean: grain of 1 % is below what the eye
 /// picks out of a rendered image's own texture.
 pub const CLEAN_RELATIVE_ERROR: f64 = 0.01;
@@ -467,24 +470,85 @@ impl Film {
         self.samples += 1;
     }
 
+    /// Adds one pass traced a row at a time, rows in parallel on the current rayon pool:
+    /// `trace(y, row)` puts row `y`'s values in `row` (one image row long). The same sums as
+    /// [`Film::add_pass`] of the image those rows make, without making that image (no
+    /// full-size allocation a pass, and the adding done by the pool's threads while each row
+    /// is still in cache). An error from `trace` stops the pass and is returned: the film then
+    /// holds part of the pass, and is to be dropped.
+    pub fn add_pass_rows<E: Send>(
+        &mut self,
+        trace: impl Fn(u32, &mut [Vec3]) -> Result<(), E> + Sync + Send,
+    ) -> Result<(), E> {
+        use rayon::prelude::*;
+        let width = (self.sum.width as usize).max(1);
+        let buffer = || vec![Vec3::ZERO; width];
+        match &mut self.sum_sq {
+            Some(sum_sq) => self
+                .sum
+                .pixels
+                .par_chunks_mut(width)
+                .zip(sum_sq.par_chunks_mut(width))
+                .enumerate()
+                .try_for_each_init(buffer, |row, (y, (sum, sum_sq))| {
+                    trace(y as u32, row)?;
+                    for ((s, q), p) in sum.iter_mut().zip(sum_sq.iter_mut()).zip(row.iter()) {
+                        *s += *p;
+                        let y = channel_mean(*p);
+                        *q += y * y;
+                    }
+                    Ok(())
+                })?,
+            None => self
+                .sum
+                .pixels
+                .par_chunks_mut(width)
+                .enumerate()
+                .try_for_each_init(buffer, |row, (y, sum)| {
+                    trace(y as u32, row)?;
+                    for (s, p) in sum.iter_mut().zip(row.iter()) {
+                        *s += *p;
+                    }
+                    Ok(())
+                })?,
+        }
+        self.samples += 1;
+        Ok(())
+    }
+
     /// The estimated remaining noise, from two samples on, if the film tracks it.
     pub fn noise(&self) -> Option<NoiseEstimate> {
         let sum_sq = self.sum_sq.as_ref()?;
         if self.samples < 2 {
             return None;
         }
-        let (mut sum_mean, mut sum_var_of_mean, mut above) = (0.0f64, 0.0f64, 0usize);
-        let mut sum_mean_sq = 0.0f64;
-        for (s, &sq) in self.sum.pixels.iter().zip(sum_sq) {
-            let (mean, variance_of_mean) = mean_and_variance_of_mean(*s, sq, self.samples);
-            sum_mean += mean;
-            sum_mean_sq += mean * mean;
-            sum_var_of_mean += variance_of_mean;
-            let error = variance_of_mean.sqrt();
-            if error > 0.01 * mean.abs() && error > 1e-12 {
-                above += 1;
-            }
-        }
+        use rayon::prelude::*;
+        // Summed in parallel on the current rayon pool, in blocks of a fixed size whose sums
+        // are added in order: the same figures whatever the thread count.
+        let partials: Vec<[f64; 4]> = self
+            .sum
+            .pixels
+            .par_chunks(NOISE_BLOCK)
+            .zip(sum_sq.par_chunks(NOISE_BLOCK))
+            .map(|(sums, sum_sq)| {
+                let mut block = [0.0f64; 4];
+                for (s, &sq) in sums.iter().zip(sum_sq) {
+                    let (mean, variance_of_mean) = mean_and_variance_of_mean(*s, sq, self.samples);
+                    block[0] += mean;
+                    block[1] += mean * mean;
+                    block[2] += variance_of_mean;
+                    let error = variance_of_mean.sqrt();
+                    if error > 0.01 * mean.abs() && error > 1e-12 {
+                        block[3] += 1.0;
+                    }
+                }
+                block
+            })
+            .collect();
+        let [sum_mean, sum_mean_sq, sum_var_of_mean, above] =
+            partials.iter().fold([0.0f64; 4], |total, block| {
+                std::array::from_fn(|i| total[i] + block[i])
+            });
         let pixels = self.sum.pixels.len().max(1) as f64;
         Some(NoiseEstimate {
             relative_error_of_mean: if sum_mean > 0.0 {
@@ -492,7 +556,7 @@ impl Film {
             } else {
                 0.0
             },
-            share_of_pixels_above_1_percent: above as f64 / pixels,
+            share_of_pixels_above_1_percent: above / pixels,
             relative_rms_error: if sum_mean_sq > 0.0 {
                 (sum_var_of_mean / sum_mean_sq).sqrt()
             } else {
@@ -527,10 +591,12 @@ impl Film {
         } else {
             1.0 / self.samples as f32
         };
+        use rayon::prelude::*;
+        // On the current rayon pool: the workbench resolves a frame on its render threads.
         Image {
             width: self.sum.width,
             height: self.sum.height,
-            pixels: self.sum.pixels.iter().map(|p| *p * scale).collect(),
+            pixels: self.sum.pixels.par_iter().map(|p| *p * scale).collect(),
         }
     }
 }

@@ -9,7 +9,8 @@
 //! 3. further jittered passes, averaged in a [`Film`], up to `samples_per_pixel` (the target),
 //!
 //! and publishes a [`Frame`] after each pass, at most one every [`MIN_FRAME_INTERVAL`] after the
-//! first full-resolution one (the last always). Then it sleeps on its channel (no CPU) until the
+//! first full-resolution one, growing to one every [`MAX_FRAME_INTERVAL`] as the job goes on
+//! ([`frame_interval`]; the last always). Then it sleeps on its channel (no CPU) until the
 //! next submission.
 //!
 //! A submission makes the running pass stale: the pass's `cancelled` closure compares its
@@ -43,7 +44,7 @@ use std::time::Instant;
 
 use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
-use crate::render::{Cancelled, camera_sees_nothing, render_pass};
+use crate::render::{Cancelled, accumulate_pass, camera_sees_nothing, render_pass};
 use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsError};
 use crate::view::{Legend, View, render_view, variance_view};
@@ -64,6 +65,20 @@ pub const PREVIEW_DIVISOR: u32 = 8;
 /// The shortest time between two accumulated frames shown (after the first): 25 a second, as
 /// smooth as the eye needs, while passes of a few milliseconds keep accumulating in between.
 pub const MIN_FRAME_INTERVAL: std::time::Duration = std::time::Duration::from_millis(40);
+
+/// The longest time between two accumulated frames shown: 4 a second, once a job has
+/// accumulated for a few seconds.
+pub const MAX_FRAME_INTERVAL: std::time::Duration = std::time::Duration::from_millis(250);
+
+/// The time between two accumulated frames shown, `accumulating` after the first full pass
+/// began: a tenth of that time, from [`MIN_FRAME_INTERVAL`] up to [`MAX_FRAME_INTERVAL`]. The
+/// image on screen is never more than about a tenth of the render's time behind, and a long
+/// render is not slowed by its own progress: each frame shown costs the worker a mean, its
+/// display pixels and a noise estimate, and the UI a repaint, which on a small machine (and
+/// under a software renderer) are taken from the render threads.
+pub fn frame_interval(accumulating: std::time::Duration) -> std::time::Duration {
+    (accumulating / 10).clamp(MIN_FRAME_INTERVAL, MAX_FRAME_INTERVAL)
+}
 
 /// Images narrower and shorter than this skip the preview: their first full pass is as quick.
 pub const PREVIEW_MIN_SIDE: u32 = 64;
@@ -735,20 +750,19 @@ impl Worker {
         }
 
         let mut film = Film::with_noise(width, height);
-        let mut published = Instant::now();
+        let accumulating = Instant::now();
+        let mut published = accumulating;
         for sample in 0..target {
-            let Some((pass, pass_ms)) = self.pass(job, settings, sample) else {
+            let Some(pass_ms) = self.accumulate(job, settings, sample, &mut film) else {
                 return false;
             };
-            film.add_pass(&pass);
-            // Short passes are not all shown: each frame shown costs the UI a repaint (and the
-            // mean, its display pixels and the noise estimate cost the worker), which takes
-            // from the render on a small machine. The first and the last always are, and the
-            // first after a display change, so the change shows within one pass.
+            // Short passes are not all shown, and fewer as the job goes on
+            // ([`frame_interval`]). The first and the last always are, and the first after a
+            // display change, so the change shows within one pass.
             let last = sample + 1 == target;
             if sample > 0
                 && !last
-                && published.elapsed() < MIN_FRAME_INTERVAL
+                && published.elapsed() < frame_interval(accumulating.elapsed())
                 && !self.display_changed()
             {
                 continue;
@@ -760,17 +774,15 @@ impl Worker {
             } else {
                 None
             };
-            // The mean of one pass is the pass itself: skip the copy.
             let (image, legend) = match variance {
                 Some((image, legend)) => (image, Some(legend)),
-                None if sample == 0 => (pass, None),
-                None => (film.resolve(), None),
+                None => (self.pool.install(|| film.resolve()), None),
             };
             if stale() {
                 return false;
             }
             let rays = u64::from(width) * u64::from(height);
-            let noise = film.noise();
+            let noise = self.pool.install(|| film.noise());
             let frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise, legend);
             if !self.publish_and_keep(frame) {
                 return false;
@@ -805,6 +817,37 @@ impl Worker {
             Ok(image) => {
                 self.shared.passes.fetch_add(1, Ordering::SeqCst);
                 Some((image, start.elapsed().as_secs_f64() * 1e3))
+            }
+            Err(Cancelled) => None,
+        }
+    }
+
+    /// One pass added into `film`, or `None` if the job went stale (the film then holds part
+    /// of the pass: the job is over). Returns the pass's time in milliseconds.
+    fn accumulate(
+        &self,
+        job: &Job,
+        settings: &RenderSettings,
+        sample: u32,
+        film: &mut Film,
+    ) -> Option<f64> {
+        let shared = &self.shared;
+        if shared.current() != job.generation {
+            return None;
+        }
+        // Asked by every row, on the pool's threads.
+        let cancelled = || {
+            shared.injected_panic();
+            shared.current() != job.generation
+        };
+        let start = Instant::now();
+        let result = self
+            .pool
+            .install(|| accumulate_pass(&job.scene, settings, sample, film, &cancelled));
+        match result {
+            Ok(()) => {
+                self.shared.passes.fetch_add(1, Ordering::SeqCst);
+                Some(start.elapsed().as_secs_f64() * 1e3)
             }
             Err(Cancelled) => None,
         }
@@ -1298,6 +1341,19 @@ mod tests {
         );
         let other = catch_panic(|| std::panic::panic_any(42));
         assert_eq!(other, Err::<(), _>("a panic with no message".to_owned()));
+    }
+
+    #[test]
+    fn frames_come_less_often_as_a_job_goes_on() {
+        let ms = Duration::from_millis;
+        assert_eq!(frame_interval(ms(0)), MIN_FRAME_INTERVAL);
+        assert_eq!(frame_interval(ms(400)), MIN_FRAME_INTERVAL);
+        assert_eq!(frame_interval(ms(1000)), ms(100));
+        assert_eq!(frame_interval(ms(2500)), MAX_FRAME_INTERVAL);
+        assert_eq!(
+            frame_interval(Duration::from_secs(3600)),
+            MAX_FRAME_INTERVAL
+        );
     }
 
     #[test]

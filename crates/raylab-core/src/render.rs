@@ -13,9 +13,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::ImagePoints;
-#[cfg(doc)]
-use crate::film::Film;
-use crate::film::Image;
+use crate::film::{Film, Image};
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, Tracer};
 use crate::memory::AllocError;
@@ -188,6 +186,30 @@ pub fn render_pass(
     Ok(image)
 }
 
+/// [`render_pass`] added into `film` as its next pass ([`Film::add_pass_rows`]): the same sums
+/// as `film.add_pass(&render_pass(..)?)`, with no image of the pass made. If `cancelled()`
+/// turns true before the last row is done, the film holds part of the pass and is to be
+/// dropped.
+pub fn accumulate_pass(
+    scene: &Scene,
+    settings: &RenderSettings,
+    sample: u32,
+    film: &mut Film,
+    cancelled: &(dyn Fn() -> bool + Sync),
+) -> Result<(), Cancelled> {
+    let (width, height) = (settings.camera.width, settings.camera.height);
+    assert_eq!((film.width(), film.height()), (width, height));
+    let tracer = Tracer::for_pass(scene, settings, sample);
+    let rows = Rows::new(&tracer, settings, sample);
+    film.add_pass_rows(|y, row| {
+        if cancelled() {
+            return Err(Cancelled);
+        }
+        rows.trace(y, row, |pixel, value| *pixel = value);
+        Ok(())
+    })
+}
+
 /// What tracing a row of one pass needs, made once a pass.
 struct Rows<'a> {
     tracer: &'a Tracer<'a>,
@@ -317,6 +339,32 @@ mod tests {
         let mut s = RenderSettings::default();
         s.camera = s.camera.with_resolution(64, 48);
         s
+    }
+
+    /// The workbench adds each pass into its film row by row: the same sums, bit for bit, as
+    /// adding whole passes, and the same noise figures.
+    #[test]
+    fn a_pass_added_row_by_row_sums_as_a_whole_pass() {
+        let scene = cornell_box();
+        let mut settings = small();
+        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let (w, h) = (settings.camera.width, settings.camera.height);
+        let (mut whole, mut rows) = (Film::with_noise(w, h), Film::with_noise(w, h));
+        for sample in 0..3 {
+            whole.add_pass(&render_pass(&scene, &settings, sample, &|| false).unwrap());
+            accumulate_pass(&scene, &settings, sample, &mut rows, &|| false).unwrap();
+        }
+        assert_eq!(rows.samples(), 3);
+        assert_eq!(whole.resolve(), rows.resolve());
+        assert_eq!(whole.variance(), rows.variance());
+        assert_eq!(whole.noise(), rows.noise());
+        // Cancelled before its first row: an error, and no sample counted.
+        let mut film = Film::new(w, h);
+        assert_eq!(
+            accumulate_pass(&scene, &settings, 0, &mut film, &|| true),
+            Err(Cancelled)
+        );
+        assert_eq!(film.samples(), 0);
     }
 
     #[test]
