@@ -114,6 +114,11 @@ pub struct RenderArgs {
     /// render again with --scene-file.
     #[arg(long, value_name = "FILE.toml")]
     pub save_scene: Option<PathBuf>,
+    /// on: write the denoised image, for a noisy render (the path stage, soft shadows, depth
+    /// of field; elsewhere there is no noise, and the image is written as it is). off: the
+    /// unbiased estimate, as an EXR should hold it.
+    #[arg(long, default_value = "off", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
+    pub denoise: bool,
     #[command(flatten)]
     pub options: RenderOptions,
 }
@@ -126,6 +131,10 @@ pub struct InspectArgs {
     /// Print one JSON object (every value the tracer computed) instead of the explanation.
     #[arg(long)]
     pub json: bool,
+    /// on: also the pixel's denoised value (the whole image is rendered and denoised, as
+    /// `render --denoise on` writes it), printed beside the traced one.
+    #[arg(long, default_value = "off", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
+    pub denoise: bool,
     #[command(flatten)]
     pub options: RenderOptions,
 }
@@ -619,9 +628,18 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let view = args.view.unwrap_or(settings.view);
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;
+    // Denoising holds a film with its variance, the features and the filter's planes beside
+    // the image: under 40 floats a pixel more.
+    let denoise_memory = if args.denoise {
+        160 * u64::from(c.width) * u64::from(c.height)
+    } else {
+        0
+    };
     raylab_core::memory::check(
         format!("a {}×{} render", c.width, c.height),
-        settings.memory_estimate(view),
+        settings
+            .memory_estimate(view)
+            .saturating_add(denoise_memory),
     )?;
     if view == raylab_core::view::View::Variance && settings.samples_per_pixel < 2 {
         anyhow::bail!(
@@ -652,7 +670,20 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         print_error_line(&format!("warning: {warning}"));
     }
     let start = Instant::now();
+    let mut denoised_note = None;
     let (image, display, legend) = match view {
+        raylab_core::view::View::Shaded if args.denoise => {
+            let (raw, denoised) =
+                pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
+            denoised_note = Some(if denoised.is_some() {
+                "denoised (the accumulated image filtered by the denoiser; --denoise off writes \
+                 the unbiased estimate)"
+            } else {
+                "not denoised: nothing in this render is noisy (no path tracing, soft shadows \
+                 or depth of field)"
+            });
+            (denoised.unwrap_or(raw), settings.display, None)
+        }
         raylab_core::view::View::Shaded => (
             pool.install(|| try_render(&scene, &settings))?,
             settings.display,
@@ -696,6 +727,9 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         args.out.display()
     );
     let mut text = summary + "\n";
+    if let Some(note) = denoised_note {
+        text += &format!("{note}\n");
+    }
     if let Some((path, asked)) = &saved_scene
         && path != asked
     {
@@ -797,12 +831,51 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
     let scene = pool.install(|| settings.scene.load())?;
     let inspection =
         inspect_pixel(&scene, &settings, x, y).with_context(|| format!("--pixel {x},{y}"))?;
+    // The denoised value needs the whole image, rendered and denoised as `render --denoise
+    // on` writes it (`None` where nothing is noisy).
+    let denoised = if args.denoise {
+        let c = &settings.camera;
+        raylab_core::memory::check(
+            format!("denoising a {}×{} render", c.width, c.height),
+            settings
+                .memory_estimate(raylab_core::view::View::Shaded)
+                .saturating_add(160 * u64::from(c.width) * u64::from(c.height)),
+        )?;
+        let (_, denoised) =
+            pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
+        Some(denoised.map(|d| d.get(x, y)))
+    } else {
+        None
+    };
     // Written with `write!` so that a closed pipe is an error, not a panic.
     let mut out = std::io::stdout().lock();
     if args.json {
-        writeln!(out, "{}", serde_json::to_string(&inspection)?)?;
+        let mut json = serde_json::to_value(&inspection)?;
+        if let (Some(denoised), Some(object)) = (denoised, json.as_object_mut()) {
+            object.insert(
+                "denoised".to_owned(),
+                denoised.map_or(serde_json::Value::Null, |d| {
+                    serde_json::json!([d.x, d.y, d.z])
+                }),
+            );
+        }
+        writeln!(out, "{json}")?;
     } else {
         write!(out, "{}", printable_lines(&inspection.to_text()))?;
+        match denoised {
+            Some(Some(d)) => writeln!(
+                out,
+                "denoised: ({:.6}, {:.6}, {:.6}) (the whole image denoised, as render --denoise \
+                 on writes it; the value above is the traced one)",
+                d.x, d.y, d.z
+            )?,
+            Some(None) => writeln!(
+                out,
+                "denoised: the same (nothing in this render is noisy: no path tracing, soft \
+                 shadows or depth of field)"
+            )?,
+            None => {}
+        }
     }
     Ok(())
 }

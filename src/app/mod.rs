@@ -739,6 +739,9 @@ impl WorkbenchApp {
         if controller.display() != self.state.settings.display {
             controller.set_display(self.state.settings.display);
         }
+        if controller.denoise() != self.state.denoise {
+            controller.set_denoise(self.state.denoise);
+        }
         let settings = &self.state.settings;
         if !self
             .submitted
@@ -954,6 +957,8 @@ impl WorkbenchApp {
         self.stats.target = frame.target;
         self.stats.is_preview = frame.is_preview;
         self.stats.noise = frame.noise;
+        self.stats.denoised = (frame.denoise && frame.denoised.is_some())
+            .then_some((frame.denoised_samples, frame.denoise_ms));
         self.stats.elapsed_ms = frame.since_submit_ms;
         self.stats.legend = frame.legend.clone();
         if !frame.is_preview {

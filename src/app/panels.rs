@@ -175,7 +175,10 @@ pub fn controls_ui(
             });
         egui::CollapsingHeader::new("Display")
             .default_open(true)
-            .show(ui, |ui| display_ui(ui, &mut state.settings.display));
+            .show(ui, |ui| {
+                display_ui(ui, &mut state.settings.display);
+                denoise_ui(ui, &mut state.denoise, &state.settings);
+            });
         egui::CollapsingHeader::new("Compare A/B")
             .default_open(true)
             .show(ui, |ui| {
@@ -692,6 +695,20 @@ pub fn display_ui(ui: &mut egui::Ui, display: &mut Display) {
             .text("Exposure"),
     )
     .on_hover_text("Stops: +1 doubles every value before the display curve");
+}
+
+/// The "Denoise" switch: on, noisy images are shown denoised. Offered for every image, said
+/// to do nothing where nothing is noisy (the lab's stages with a point light and a pinhole).
+fn denoise_ui(ui: &mut egui::Ui, denoise: &mut bool, settings: &RenderSettings) {
+    let response = ui
+        .checkbox(denoise, "Denoise")
+        .on_hover_text(super::stats::DENOISE_HOVER);
+    if !settings.is_stochastic() {
+        response.on_hover_text(
+            "Nothing to denoise here: this image has no noise (no path tracing, soft shadows \
+             or depth of field)",
+        );
+    }
 }
 
 /// The view selector and, for a debug view, its legend: what the colours mean and their range.

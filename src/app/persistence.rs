@@ -50,6 +50,9 @@ pub struct WorkbenchState {
     pub inspect_mode: bool,
     /// The inspected pixel.
     pub pinned: Option<[u32; 2]>,
+    /// "Denoise": noisy images (the path stage, soft shadows, depth of field) are shown
+    /// denoised; the accumulated image itself is never changed.
+    pub denoise: bool,
 }
 
 impl Default for WorkbenchState {
@@ -66,6 +69,7 @@ impl Default for WorkbenchState {
             walk_restore: None,
             inspect_mode: false,
             pinned: None,
+            denoise: true,
         }
     }
 }

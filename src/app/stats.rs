@@ -34,7 +34,15 @@ pub struct Stats {
     pub elapsed_ms: f64,
     /// What the shown debug view's colours mean (none for the shaded image).
     pub legend: Option<raylab_core::view::Legend>,
+    /// When the shown image is denoised: the samples it was denoised from and the time it
+    /// took, in ms.
+    pub denoised: Option<(u32, f64)>,
 }
+
+/// What the denoiser does, for the stats line and the switch.
+pub const DENOISE_HOVER: &str = "An edge-avoiding filter guided by each pixel's albedo, normal, \
+    depth and noise: the light is smoothed, the surfaces' detail is kept. What it shows is an \
+    estimate; the accumulated image (inspector, EXR) is never changed. Off shows the raw image.";
 
 /// A fraction as a percentage with about two significant digits: "0.42 %", "12.5 %".
 pub fn percent(fraction: f64) -> String {
@@ -178,6 +186,10 @@ impl Stats {
             format!("Samples: {} / {}", self.samples, self.target)
         };
         ui.label(&text);
+        if let Some((samples, ms)) = self.denoised {
+            ui.label(format!("Denoised from {samples} samples in {ms:.1} ms"))
+                .on_hover_text(DENOISE_HOVER);
+        }
         if let Some((noise, to_clean)) = self.noise.zip(self.to_clean()) {
             ui.label(format!(
                 "Noise: ±{} (RMS over the image)",

@@ -42,6 +42,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
+use crate::denoise::{Denoiser, Features};
 use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, accumulate_pass, camera_sees_nothing, render_pass};
@@ -90,9 +91,23 @@ pub struct Frame {
     pub generation: u64,
     /// The settings that made it (for a preview, still the full-resolution settings).
     pub settings: RenderSettings,
-    /// The image in linear floats: the preview, or the mean of `samples` full passes.
+    /// The image in linear floats: the preview, or the mean of `samples` full passes. Never
+    /// denoised: the unbiased estimate.
     pub image: Arc<Image>,
-    /// The same image through `display`, as 8-bit RGBA.
+    /// The denoised image ([`crate::denoise`]), when the denoiser is on and the image is noisy
+    /// ([`RenderSettings::is_stochastic`]): made from the mean of `denoised_samples` passes,
+    /// which may be fewer than `samples` (the worker denoises again only when a tenth of its
+    /// time allows).
+    pub denoised: Option<Arc<Image>>,
+    pub denoised_samples: u32,
+    /// How long the last denoising took, in milliseconds (the feature buffers, traced once a
+    /// job, not counted).
+    pub denoise_ms: f64,
+    /// Whether the denoiser was on when the frame was converted (as `display` says which
+    /// display was in force).
+    pub denoise: bool,
+    /// `denoised` if there is one and the denoiser is on, else `image`, through `display`, as
+    /// 8-bit RGBA.
     pub rgba: Vec<u8>,
     /// The display `rgba` was converted with (the one in force when the frame was published).
     pub display: Display,
@@ -228,6 +243,8 @@ struct Shared {
     error: Mutex<Option<WorkerError>>,
     /// The display frames are converted with; read by the worker at every pass boundary.
     display: Mutex<Display>,
+    /// Whether noisy images are shown denoised; read like `display`.
+    denoise: AtomicBool,
     /// Passes traced so far (previews included), for [`Controller::passes_traced`].
     passes: AtomicU64,
     /// Test hook: the next pass panics inside the pool ([`Controller::inject_panic_on_next_pass`]).
@@ -242,6 +259,10 @@ impl Shared {
 
     fn display(&self) -> Display {
         *self.display.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    fn denoise(&self) -> bool {
+        self.denoise.load(Ordering::SeqCst)
     }
 
     fn report(&self, error: WorkerError) {
@@ -288,6 +309,7 @@ impl Controller {
             abandoned_jobs: AtomicU64::new(0),
             error: Mutex::new(None),
             display: Mutex::new(Display::default()),
+            denoise: AtomicBool::new(false),
             passes: AtomicU64::new(0),
             panic_next_pass: AtomicBool::new(false),
             notify,
@@ -361,6 +383,20 @@ impl Controller {
     /// The display in force.
     pub fn display(&self) -> Display {
         self.shared.display()
+    }
+
+    /// Shows noisy images ([`RenderSettings::is_stochastic`]) denoised, or not. Like a display
+    /// change, it never restarts accumulation: a running job shows it at its next pass, an
+    /// idle worker publishes its last frame again (denoising it then if it was not).
+    pub fn set_denoise(&self, on: bool) {
+        if self.shared.denoise.swap(on, Ordering::SeqCst) != on {
+            let _ = self.sender.send(Message::Display);
+        }
+    }
+
+    /// Whether noisy images are shown denoised.
+    pub fn denoise(&self) -> bool {
+        self.shared.denoise()
     }
 
     /// Passes traced since the controller started, previews included: a display change adds
@@ -556,7 +592,25 @@ struct Worker {
     last: Option<Frame>,
     /// The running job's [`Frame::camera_note`].
     camera_note: Option<String>,
+    /// The running (or last) job's denoising.
+    denoising: Denoising,
 }
+
+/// What the worker keeps to denoise a job's frames: the features, traced once a job when first
+/// needed; the variance of the last frame's mean; the last denoised image and what it cost.
+#[derive(Default)]
+struct Denoising {
+    features: Option<Arc<Features>>,
+    variance: Option<Arc<Vec<f32>>>,
+    image: Option<Arc<Image>>,
+    samples: u32,
+    cost: std::time::Duration,
+    at: Option<Instant>,
+}
+
+/// How long after one denoising the next may start, as a multiple of its cost: the denoiser
+/// takes at most a tenth of the worker's time.
+const DENOISE_SPACING: u32 = 9;
 
 impl Worker {
     fn new(shared: Arc<Shared>, receiver: Receiver<Message>, pool: rayon::ThreadPool) -> Self {
@@ -567,6 +621,7 @@ impl Worker {
             job: None,
             last: None,
             camera_note: None,
+            denoising: Denoising::default(),
         }
     }
 
@@ -651,19 +706,54 @@ impl Worker {
     /// submission has come since, `publish` refuses it (that job will show the new display).
     fn redisplay(&mut self) {
         let display = self.shared.display();
-        let Some(last) = &self.last else {
+        let denoise = self.shared.denoise();
+        let Some(last) = self.last.clone() else {
             return;
         };
-        if same_display(&last.display, &display) {
+        if same_display(&last.display, &display) && last.denoise == denoise {
             return;
         }
+        // Turned on after the job: its last frame is denoised now, if it is a noisy one.
+        let denoisable = !last.is_preview && last.legend.is_none() && last.settings.is_stochastic();
+        let mut denoised = last.denoised.clone();
+        if denoise && denoised.is_none() && denoisable && self.denoising.variance.is_some() {
+            let job = Job {
+                generation: last.generation,
+                settings: last.settings.clone(),
+                scene: match &self.job {
+                    Some(job) if job.generation == last.generation => Arc::clone(&job.scene),
+                    _ => return,
+                },
+                submitted: Instant::now(),
+            };
+            if self.denoise(&job, &last.image, last.samples).is_err() {
+                return;
+            }
+            denoised = self.denoising.image.clone();
+        }
         let shown = shown_with(display, last.legend.as_ref());
-        let frame = Frame {
-            rgba: self.pool.install(|| shown.to_rgba8(&last.image.pixels)),
-            display,
-            ..last.clone()
+        let source = match (&denoised, denoise) {
+            (Some(denoised), true) => Arc::clone(denoised),
+            _ => Arc::clone(&last.image),
         };
-        self.publish(frame);
+        let frame = Frame {
+            rgba: self.pool.install(|| shown.to_rgba8(&source.pixels)),
+            display,
+            denoise,
+            denoised_samples: if denoised.is_some() && last.denoised.is_none() {
+                self.denoising.samples
+            } else {
+                last.denoised_samples
+            },
+            denoise_ms: if denoised.is_some() && last.denoised.is_none() {
+                self.denoising.cost.as_secs_f64() * 1e3
+            } else {
+                last.denoise_ms
+            },
+            denoised,
+            ..last
+        };
+        self.publish_and_keep(frame);
     }
 
     fn rebuild_pool(&mut self, threads: usize) {
@@ -715,6 +805,7 @@ impl Worker {
         let target = settings.samples_per_pixel.max(1);
         let (width, height) = (settings.camera.width, settings.camera.height);
         self.camera_note = camera_sees_nothing(&job.scene, settings);
+        self.denoising = Denoising::default();
 
         if settings.view.is_traced() {
             // A debug view: one ray per pixel centre, once.
@@ -783,7 +874,28 @@ impl Worker {
             }
             let rays = u64::from(width) * u64::from(height);
             let noise = self.pool.install(|| film.noise());
-            let frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise, legend);
+            // A noisy shaded image keeps its variance for the denoiser, and is denoised if the
+            // denoiser is on and it is due (always for the last frame).
+            let denoised = if settings.is_stochastic() && legend.is_none() {
+                self.denoising.variance = self.pool.install(|| film.variance()).map(Arc::new);
+                if self.shared.denoise() {
+                    let due = last
+                        || self
+                            .denoising
+                            .at
+                            .is_none_or(|at| at.elapsed() >= self.denoising.cost * DENOISE_SPACING);
+                    if due && self.denoise(job, &image, sample + 1).is_err() {
+                        return false;
+                    }
+                }
+                self.denoising.image.clone()
+            } else {
+                None
+            };
+            let mut frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise, legend);
+            if let Some(denoised) = denoised {
+                frame = self.with_denoised(frame, denoised);
+            }
             if !self.publish_and_keep(frame) {
                 return false;
             }
@@ -791,11 +903,62 @@ impl Worker {
         true
     }
 
+    /// Denoises `image`, the mean of `samples` passes of `job` whose variance
+    /// `self.denoising` holds, tracing the features first if this job has none yet; the result
+    /// goes into `self.denoising`. `Err` if the job went stale meanwhile.
+    fn denoise(&mut self, job: &Job, image: &Image, samples: u32) -> Result<(), Cancelled> {
+        let shared = &self.shared;
+        let cancelled = || shared.current() != job.generation;
+        let denoising = &mut self.denoising;
+        let features = match &denoising.features {
+            Some(features) => Arc::clone(features),
+            None => {
+                let traced = self
+                    .pool
+                    .install(|| Features::trace(&job.scene, &job.settings, &cancelled))?;
+                let traced = Arc::new(traced);
+                denoising.features = Some(Arc::clone(&traced));
+                traced
+            }
+        };
+        let start = Instant::now();
+        let variance = denoising.variance.clone();
+        let denoised = self.pool.install(|| {
+            Denoiser::default().denoise(image, variance.as_deref().map(Vec::as_slice), &features)
+        });
+        denoising.cost = start.elapsed();
+        denoising.at = Some(Instant::now());
+        denoising.image = Some(Arc::new(denoised));
+        denoising.samples = samples;
+        if cancelled() { Err(Cancelled) } else { Ok(()) }
+    }
+
+    /// `frame` with the denoised image `denoised` (of `self.denoising`), shown if the denoiser
+    /// is on.
+    fn with_denoised(&self, frame: Frame, denoised: Arc<Image>) -> Frame {
+        let on = self.shared.denoise();
+        let rgba = if on {
+            let shown = shown_with(frame.display, frame.legend.as_ref());
+            self.pool.install(|| shown.to_rgba8(&denoised.pixels))
+        } else {
+            frame.rgba
+        };
+        Frame {
+            rgba,
+            denoise: on,
+            denoised_samples: self.denoising.samples,
+            denoise_ms: self.denoising.cost.as_secs_f64() * 1e3,
+            denoised: Some(denoised),
+            ..frame
+        }
+    }
+
     /// Whether the display in force differs from the last frame's.
     fn display_changed(&self) -> bool {
-        self.last
-            .as_ref()
-            .is_some_and(|last| !same_display(&last.display, &self.shared.display()))
+        self.last.as_ref().is_some_and(|last| {
+            !same_display(&last.display, &self.shared.display())
+                || last.denoise != self.shared.denoise()
+        })
     }
 
     /// One pass, or `None` if the job went stale.
@@ -872,6 +1035,10 @@ impl Worker {
             generation: job.generation,
             settings: job.settings.clone(),
             image: Arc::new(image),
+            denoised: None,
+            denoised_samples: 0,
+            denoise_ms: 0.0,
+            denoise: self.shared.denoise(),
             rgba,
             display,
             samples,

@@ -126,6 +126,16 @@ impl Default for RenderSettings {
 pub const BASE_MEMORY: u64 = 64 << 20;
 
 impl RenderSettings {
+    /// Whether anything draws random numbers: the path tracer, a spherical or quad light's soft
+    /// shadows, a thin lens's aperture. Each pass is then a noisy estimate, and the denoiser
+    /// ([`crate::denoise`]) has something to remove; otherwise passes differ only in where
+    /// in the pixel they look (anti-aliasing).
+    pub fn is_stochastic(&self) -> bool {
+        self.shading.stage.integrator() == Integrator::Path
+            || self.light.is_area()
+            || self.camera.aperture > 0.0
+    }
+
     /// The memory a render of these settings needs at its peak, in bytes, as the command line
     /// makes it: the shaded image (`view` [`View::Shaded`], whatever the sample count) or a
     /// debug view. A rough upper bound, for refusing early what cannot fit

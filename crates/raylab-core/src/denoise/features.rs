@@ -24,7 +24,7 @@ use crate::settings::RenderSettings;
 
 /// Camera rays per pixel the features average: enough to give an edge pixel the mix of the two
 /// surfaces it shows, few enough to cost a fraction of one path-traced pass.
-pub const FEATURE_SAMPLES: u32 = 4;
+pub const FEATURE_SAMPLES: u32 = 16;
 
 /// Perfect specular bounces followed before the features settle on what was reached.
 const SPECULAR_BOUNCES: u32 = 4;
@@ -61,6 +61,17 @@ impl Features {
         settings: &RenderSettings,
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> Result<Features, Cancelled> {
+        Self::trace_samples(scene, settings, FEATURE_SAMPLES, cancelled)
+    }
+
+    /// [`Features::trace`] averaging `samples` camera rays a pixel (at least 1).
+    pub fn trace_samples(
+        scene: &Scene,
+        settings: &RenderSettings,
+        samples: u32,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Features, Cancelled> {
+        let samples = samples.max(1);
         let (width, height) = (settings.camera.width, settings.camera.height);
         let tracer = Tracer::new(scene, settings);
         let rotation = settings.camera.rotation();
@@ -81,7 +92,7 @@ impl Features {
                 for x in 0..albedo.len() {
                     let (mut sum, mut hits) = (Seen::default(), 0u32);
                     let mut albedo_sum = Vec3::ZERO;
-                    for sample in 0..FEATURE_SAMPLES {
+                    for sample in 0..samples {
                         let mut ray = Ray::new(Vec3::ZERO, Vec3::Z);
                         let mut rng = Rng::UNUSED;
                         let (x, y) = (x as u32, y as u32);
@@ -95,7 +106,7 @@ impl Features {
                             hits += 1;
                         }
                     }
-                    albedo[x] = albedo_sum / FEATURE_SAMPLES as f32;
+                    albedo[x] = albedo_sum / samples as f32;
                     if hits > 0 {
                         normal[x] = sum.normal / hits as f32;
                         depth[x] = sum.depth / hits as f32;

@@ -9,8 +9,9 @@
 //!    ([`Features::albedo`]), the filter smooths what is left (the light arriving), and the
 //!    albedo multiplies it back. A texture's or an edge's detail is in the albedo, so it is
 //!    never blurred.
-//! 2. Five passes of a 5 × 5 B3-spline kernel, its taps 1, 2, 4, 8 and 16 pixels apart (a 125
-//!    pixel wide filter for 25 taps a pass). A tap weighs less the more its pixel differs from
+//! 2. Four passes of a 5 × 5 B3-spline kernel, its taps 1, 2, 4 and 8 pixels apart (a 61
+//!    pixel wide filter for 25 taps a pass; a fifth pass, 16 apart, blurred the light's
+//!    changes near corners more than it removed noise, on the path-traced box). A tap weighs less the more its pixel differs from
 //!    the centre's: in normal (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth
 //!    slope, and in the light's luminance relative to how noisy it still is (σl times its
 //!    standard deviation, from the film's per-pixel variance, itself filtered along).
@@ -29,7 +30,10 @@ use rayon::prelude::*;
 
 pub use features::{FEATURE_SAMPLES, Features};
 
-use crate::film::Image;
+use crate::film::{Film, Image};
+use crate::render::{Cancelled, render, render_pass};
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
 
 /// The B3-spline's weights: the 5 × 5 kernel is their outer product.
 const B3: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
@@ -38,8 +42,8 @@ const B3: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 /// background), and the colour is filtered as it is.
 const ALBEDO_FLOOR: f32 = 1e-3;
 
-/// The filter's settings. The defaults are SVGF's, tuned on the path-traced Cornell box
-/// (PERFORMANCE.md gives the quality they reach).
+/// The filter's settings. The defaults are SVGF's σs, with the passes tuned on the path-traced
+/// Cornell box (PERFORMANCE.md gives the quality they reach).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Denoiser {
     /// À-trous passes; the kernel spans 1 + 4·(2^passes − 1) pixels.
@@ -57,7 +61,7 @@ pub struct Denoiser {
 impl Default for Denoiser {
     fn default() -> Self {
         Self {
-            passes: 5,
+            passes: 4,
             sigma_luminance: 4.0,
             sigma_normal: 128.0,
             sigma_depth: 1.0,
@@ -308,17 +312,44 @@ impl Row<'_> {
         macro_rules! neighbours {
             (|$plane:ident| $read:expr) => {{
                 Neighbours {
-                    lum: { let $plane = self.luminance; $read },
-                    z: { let $plane = &guide.depth[..]; $read },
+                    lum: {
+                        let $plane = self.luminance;
+                        $read
+                    },
+                    z: {
+                        let $plane = &guide.depth[..];
+                        $read
+                    },
                     n: [
-                        { let $plane = &guide.nx[..]; $read },
-                        { let $plane = &guide.ny[..]; $read },
-                        { let $plane = &guide.nz[..]; $read },
+                        {
+                            let $plane = &guide.nx[..];
+                            $read
+                        },
+                        {
+                            let $plane = &guide.ny[..];
+                            $read
+                        },
+                        {
+                            let $plane = &guide.nz[..];
+                            $read
+                        },
                     ],
-                    r: { let $plane = &src.r[..]; $read },
-                    g: { let $plane = &src.g[..]; $read },
-                    b: { let $plane = &src.b[..]; $read },
-                    v: { let $plane = &src.variance[..]; $read },
+                    r: {
+                        let $plane = &src.r[..];
+                        $read
+                    },
+                    g: {
+                        let $plane = &src.g[..];
+                        $read
+                    },
+                    b: {
+                        let $plane = &src.b[..];
+                        $read
+                    },
+                    v: {
+                        let $plane = &src.variance[..];
+                        $read
+                    },
                 }
             }};
         }
@@ -390,7 +421,6 @@ impl Row<'_> {
             x0 += LANES;
         }
     }
-
 }
 
 /// Pixels filtered side by side.
@@ -599,6 +629,27 @@ fn blur3(values: &[f32], width: usize, height: usize) -> Vec<f32> {
         }
     });
     out
+}
+
+/// `settings`' render (exactly [`render`]'s image) and, if it is noisy
+/// ([`RenderSettings::is_stochastic`]), its denoised image: the passes are accumulated in a
+/// film that tracks each pixel's variance, the features traced, and the default [`Denoiser`]
+/// run. Where nothing is noisy there is nothing to denoise: `None`. On the current rayon pool.
+pub fn render_denoised(scene: &Scene, settings: &RenderSettings) -> (Image, Option<Image>) {
+    if !settings.is_stochastic() {
+        return (render(scene, settings), None);
+    }
+    let (width, height) = (settings.camera.width, settings.camera.height);
+    let never = || false;
+    let mut film = Film::with_noise(width, height);
+    for sample in 0..settings.samples_per_pixel.max(1) {
+        let pass: Result<Image, Cancelled> = render_pass(scene, settings, sample, &never);
+        film.add_pass(&pass.expect("never cancelled"));
+    }
+    let raw = film.resolve();
+    let features = Features::trace(scene, settings, &never).expect("never cancelled");
+    let denoised = Denoiser::default().denoise(&raw, film.variance().as_deref(), &features);
+    (raw, Some(denoised))
 }
 
 #[cfg(test)]

@@ -647,9 +647,7 @@ impl<'a> Tracer<'a> {
         if settings.texture_preset != TexturePreset::None {
             materials = Cow::Owned(settings.texture_preset.apply(&materials));
         }
-        let random = settings.shading.stage.integrator() == Integrator::Path
-            || settings.light.is_area()
-            || settings.camera.aperture > 0.0;
+        let random = settings.is_stochastic();
         // Caustics by photons are gathered by the general path tracer.
         let general = settings.light.is_area()
             || settings.shading.photon_caustics()
