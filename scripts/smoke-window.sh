@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Smoke test of the real workbench window, on a machine with no display.
 #
-# Starts the release binary under Xvfb (its own display number, a fresh settings folder), waits
+# Starts the release binary (or the one RAYLAB_BIN names: CI passes the test build's) under
+# Xvfb (its own display number, a fresh settings folder), waits
 # for the render to reach its sample target, takes a screenshot, presses the Up arrow with
 # xdotool (camera forward), waits again, takes another, and checks that
 #   - the render area shows the Cornell box (cyan ceiling, purple and yellow walls, green floor,
@@ -24,9 +25,13 @@ for tool in Xvfb xdotool xwd /usr/bin/convert /usr/bin/compare; do
   fi
 done
 
-echo "smoke-window: cargo build --release"
-cargo build --release --quiet
-bin="$root/target/release/raylab"
+if [ -n "${RAYLAB_BIN:-}" ]; then
+  bin=$RAYLAB_BIN
+else
+  echo "smoke-window: cargo build --release"
+  cargo build --release --quiet
+  bin="${CARGO_TARGET_DIR:-$root/target}/release/raylab"
+fi
 
 # shellcheck source=scripts/xvfb-common.sh
 source "$root/scripts/xvfb-common.sh"

@@ -140,6 +140,12 @@ pub struct Shown {
         expect(dead_code, reason = "tests wait for the display in force")
     )]
     pub display: raylab_core::display::Display,
+    /// Whether the denoiser was on when its pixels were converted.
+    #[cfg_attr(
+        not(test),
+        expect(dead_code, reason = "tests wait for the denoiser's state in force")
+    )]
+    pub denoise: bool,
 }
 
 impl Shown {
@@ -973,6 +979,7 @@ impl WorkbenchApp {
             target: frame.target,
             is_preview: frame.is_preview,
             display: frame.display,
+            denoise: frame.denoise,
         };
         if !shown.is_preview {
             self.last_full = Some(shown.clone());
@@ -1374,11 +1381,15 @@ impl WorkbenchApp {
     pub fn is_settled(&self) -> bool {
         let generation = self.controller.as_ref().map_or(0, Controller::generation);
         let display = self.controller.as_ref().map(Controller::display);
+        let denoise = self.controller.as_ref().map(Controller::denoise);
         self.submitted
             .as_ref()
             .is_some_and(|s| s.renders_like(&self.state.settings))
             && self.shown.as_ref().is_some_and(|s| {
-                s.generation == generation && s.is_final() && display.is_none_or(|d| d == s.display)
+                s.generation == generation
+                    && s.is_final()
+                    && display.is_none_or(|d| d == s.display)
+                    && denoise.is_none_or(|d| d == s.denoise)
             })
             && !self.screenshot_wanted
             && self.screenshots_saving.is_empty()

@@ -23,6 +23,7 @@ use super::*;
 
 mod caustics_ui;
 mod check_ui;
+mod denoise_ui;
 mod files_ui;
 mod panels_ui;
 mod water_ui;

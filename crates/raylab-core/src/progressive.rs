@@ -1329,6 +1329,65 @@ mod tests {
         assert_eq!(controller.passes_traced(), 3);
     }
 
+    /// With the denoiser on, a path-traced job's last frame shows its denoised image: the one
+    /// `render_denoised` makes of the same settings, bit for bit, while the linear image stays
+    /// the render itself. Turned off when idle, the raw image is shown again without tracing;
+    /// a noiseless stage is never denoised.
+    #[test]
+    fn the_denoiser_shows_a_denoised_image_and_never_changes_the_film() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        controller.set_denoise(true);
+        let mut settings = small(40, 30, 4);
+        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let g = controller.submit(&scene, &settings).unwrap();
+        let frame = last_frame(&controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        let (raw, denoised) = crate::denoise::render_denoised(&scene, &settings);
+        let denoised = denoised.unwrap();
+        assert_eq!(*frame.image, raw);
+        assert_eq!(frame.denoised.as_deref(), Some(&denoised));
+        assert_eq!((frame.denoise, frame.denoised_samples), (true, 4));
+        assert_eq!(frame.rgba, denoised.to_rgba8());
+        let passes = controller.passes_traced();
+
+        controller.set_denoise(false);
+        let off = next_frame(&controller);
+        assert!(!off.denoise);
+        assert_eq!(off.rgba, raw.to_rgba8());
+        assert_eq!(controller.passes_traced(), passes);
+
+        // The lab's stage has no noise: nothing is denoised.
+        controller.set_denoise(true);
+        let _ = next_frame(&controller);
+        let g = controller.submit(&scene, &small(40, 30, 2)).unwrap();
+        let lab = last_frame(&controller, g);
+        assert!(lab.denoised.is_none());
+        assert_eq!(lab.rgba, lab.image.to_rgba8());
+    }
+
+    /// Turned on after a noisy job finished with the denoiser off, the denoiser denoises its
+    /// last frame then, without tracing again.
+    #[test]
+    fn turning_the_denoiser_on_when_idle_denoises_the_last_frame() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        let mut settings = small(40, 30, 3);
+        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let g = controller.submit(&scene, &settings).unwrap();
+        let before = last_frame(&controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        assert!(before.denoised.is_none());
+        let passes = controller.passes_traced();
+        controller.set_denoise(true);
+        let after = next_frame(&controller);
+        let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
+        assert_eq!(after.denoised.as_deref(), denoised.as_ref());
+        assert_eq!(after.rgba, denoised.unwrap().to_rgba8());
+        assert!(Arc::ptr_eq(&after.image, &before.image));
+        assert_eq!(controller.passes_traced(), passes);
+    }
+
     /// `RAYON_NUM_THREADS` gives the default thread count up to the cap that `--threads` has;
     /// beyond it, or unreadable, it is not used as it stands, and a note says so.
     #[test]
