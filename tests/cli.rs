@@ -872,3 +872,77 @@ fn the_pool_on_the_command_line() {
         stderr(&refused)
     );
 }
+
+/// `--denoise on` writes the library's denoised image (EXR, bit for bit) and says so; off, the
+/// default, the render; a noiseless stage is written as it is, with a note. `inspect --denoise
+/// on` gives the same pixel's denoised value in its JSON.
+#[test]
+fn denoise_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = settings(Stage::Path, 32);
+    s.samples_per_pixel = 4;
+    let path = [
+        "--stage",
+        "path",
+        "--samples",
+        "4",
+        "--width",
+        "32",
+        "--height",
+        "32",
+    ];
+    let render = |name: &str, denoise: &str| {
+        let out_path = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            "--out",
+            out_path.to_str().unwrap(),
+            "--denoise",
+            denoise,
+        ];
+        args.extend_from_slice(&path);
+        let out = raylab(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        (
+            image::open(&out_path).unwrap().to_rgb32f().into_raw(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        )
+    };
+    let (raw, raw_text) = render("raw.exr", "off");
+    let (denoised, text) = render("denoised.exr", "on");
+    assert_eq!(raw, library_exr(&s));
+    assert!(!raw_text.contains("denoised"), "{raw_text}");
+    let (_, want) = raylab_core::denoise::render_denoised(&cornell_box(), &s);
+    let want = want.unwrap();
+    let want: Vec<f32> = want.pixels.iter().flat_map(|p| p.to_array()).collect();
+    assert_eq!(denoised, want);
+    assert!(text.contains("denoised (the accumulated image"), "{text}");
+
+    let out = raylab(&[
+        "render",
+        "--out",
+        dir.path().join("lab.png").to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--denoise",
+        "on",
+    ]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("not denoised: nothing"));
+
+    let mut args = vec!["inspect", "--pixel", "5,20", "--json", "--denoise", "on"];
+    args.extend_from_slice(&path);
+    let out = raylab(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let i = (20 * 32 + 5) * 3;
+    let value: Vec<f32> = json["denoised"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect();
+    assert_eq!(value, want[i..i + 3]);
+}

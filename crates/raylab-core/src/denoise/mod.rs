@@ -497,6 +497,10 @@ impl Tap {
     /// Adds each neighbour (those `inside` the image), weighted by the kernel weight and the
     /// edge-stopping weights, to its centre's sums.
     #[inline(always)]
+    #[allow(
+        clippy::needless_range_loop,
+        reason = "lane l of a dozen arrays at once: an index reads clearest"
+    )]
     fn add(&self, p: &Centre, q: &Neighbours, inside: [bool; LANES], sums: &mut Sums) {
         for l in 0..LANES {
             let w = tap_weight(

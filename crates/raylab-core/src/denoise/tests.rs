@@ -197,3 +197,36 @@ fn tiny_images() {
     let features = Features::uniform(0, 0, Vec3::ONE, Vec3::Z, 1.0);
     assert_eq!(Denoiser::default().denoise(&empty, None, &features), empty);
 }
+
+/// The row loop compiled for each instruction set this CPU has gives the same bits as the
+/// portable one: Rust never fuses a multiply and an add, whatever the target features.
+#[test]
+fn every_instruction_set_gives_the_same_bits() {
+    let (w, h) = (53u32, 41u32);
+    let colour = image(w, h, |x, y| {
+        Vec3::new(0.4, 0.5, 0.6) + Vec3::splat(noise(5, x, y, 0.2))
+    });
+    let mut features = Features::uniform(w, h, Vec3::new(0.7, 0.5, 0.3), Vec3::Z, 2.0);
+    for (i, (z, n)) in features
+        .depth
+        .iter_mut()
+        .zip(&mut features.normal)
+        .enumerate()
+    {
+        *z = 2.0 + (i % 11) as f32 * 0.02;
+        if i % 13 == 0 {
+            *n = Vec3::X;
+        }
+    }
+    let variance = vec![0.04; (w * h) as usize];
+    let denoiser = Denoiser::default();
+    let portable = denoiser.denoise_with(Isa::Portable, &colour, Some(&variance), &features);
+    let best = Isa::best();
+    let fast = denoiser.denoise_with(best, &colour, Some(&variance), &features);
+    assert_eq!(fast, portable, "{best:?} against the portable loop");
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        let avx2 = denoiser.denoise_with(Isa::Avx2, &colour, Some(&variance), &features);
+        assert_eq!(avx2, portable, "AVX2 against the portable loop");
+    }
+}
