@@ -879,11 +879,13 @@ impl Worker {
             let denoised = if settings.is_stochastic() && legend.is_none() {
                 self.denoising.variance = self.pool.install(|| film.variance()).map(Arc::new);
                 if self.shared.denoise() {
-                    let due = last
-                        || self
-                            .denoising
-                            .at
-                            .is_none_or(|at| at.elapsed() >= self.denoising.cost * DENOISE_SPACING);
+                    // Not the first full pass (unless it is the last): it is shown at once,
+                    // raw, where the features (traced once a job) would hold it back.
+                    let spaced = self
+                        .denoising
+                        .at
+                        .is_none_or(|at| at.elapsed() >= self.denoising.cost * DENOISE_SPACING);
+                    let due = last || (sample > 0 && spaced);
                     if due && self.denoise(job, &image, sample + 1).is_err() {
                         return false;
                     }

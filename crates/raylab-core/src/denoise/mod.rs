@@ -116,15 +116,20 @@ impl Denoiser {
         if width == 0 || height == 0 {
             return colour.clone();
         }
-        let albedo: Vec<Vec3> = features.albedo.iter().map(|a| effective(*a)).collect();
+        let albedo: Vec<Vec3> = features.albedo.par_iter().map(|a| effective(*a)).collect();
         let mut light = demodulate(colour, &albedo);
         match variance {
             Some(variance) => {
                 assert_eq!(variance.len(), width * height);
-                for ((v, s), a) in light.variance.iter_mut().zip(variance).zip(&albedo) {
-                    let a = (a.x + a.y + a.z) / 3.0;
-                    *v = s / (a * a);
-                }
+                light
+                    .variance
+                    .par_iter_mut()
+                    .zip(variance)
+                    .zip(&albedo)
+                    .for_each(|((v, s), a)| {
+                        let a = (a.x + a.y + a.z) / 3.0;
+                        *v = s / (a * a);
+                    });
             }
             None => light.variance = spatial_variance(&light, width, height),
         }
@@ -142,7 +147,7 @@ impl Denoiser {
             width: colour.width,
             height: colour.height,
             pixels: albedo
-                .iter()
+                .par_iter()
                 .enumerate()
                 .map(|(i, a)| *a * Vec3::new(light.r[i], light.g[i], light.b[i]))
                 .collect(),
@@ -154,25 +159,28 @@ impl Denoiser {
         let depth = &features.depth;
         let at = |x: usize, y: usize| depth[y * width + x];
         let mut depth_slope = vec![0.0; width * height];
-        for y in 0..height {
-            for x in 0..width {
-                let z = at(x, y);
-                let one_sided = |a: Option<f32>, b: Option<f32>| {
-                    let d = |n: Option<f32>| n.map_or(f32::INFINITY, |n| (n - z).abs());
-                    let s = d(a).min(d(b));
-                    if s.is_finite() { s } else { 0.0 }
-                };
-                let gx = one_sided(
-                    x.checked_sub(1).map(|x| at(x, y)),
-                    (x + 1 < width).then(|| at(x + 1, y)),
-                );
-                let gy = one_sided(
-                    y.checked_sub(1).map(|y| at(x, y)),
-                    (y + 1 < height).then(|| at(x, y + 1)),
-                );
-                depth_slope[y * width + x] = self.sigma_depth * gx.max(gy);
-            }
-        }
+        depth_slope
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, slope) in row.iter_mut().enumerate() {
+                    let z = at(x, y);
+                    let one_sided = |a: Option<f32>, b: Option<f32>| {
+                        let d = |n: Option<f32>| n.map_or(f32::INFINITY, |n| (n - z).abs());
+                        let s = d(a).min(d(b));
+                        if s.is_finite() { s } else { 0.0 }
+                    };
+                    let gx = one_sided(
+                        x.checked_sub(1).map(|x| at(x, y)),
+                        (x + 1 < width).then(|| at(x + 1, y)),
+                    );
+                    let gy = one_sided(
+                        y.checked_sub(1).map(|y| at(x, y)),
+                        (y + 1 < height).then(|| at(x, y + 1)),
+                    );
+                    *slope = self.sigma_depth * gx.max(gy);
+                }
+            });
         Guide {
             nx: features.normal.iter().map(|n| n.x).collect(),
             ny: features.normal.iter().map(|n| n.y).collect(),
@@ -199,10 +207,11 @@ impl Denoiser {
         // noise, from the variance blurred over 3 × 3 (a pixel's own estimate is noisy).
         let blurred = blur3(&src.variance, width, height);
         let inverse_tolerance: Vec<f32> = blurred
-            .iter()
+            .par_iter()
             .map(|v| 1.0 / (self.sigma_luminance * v.max(0.0).sqrt() + 1e-4))
             .collect();
         let luminance: Vec<f32> = (0..width * height)
+            .into_par_iter()
             .map(|i| (src.r[i] + src.g[i] + src.b[i]) * (1.0 / 3.0))
             .collect();
         let sigma_normal = self.sigma_normal;
@@ -575,7 +584,7 @@ fn effective(albedo: Vec3) -> Vec3 {
 fn demodulate(colour: &Image, albedo: &[Vec3]) -> Light {
     let light: Vec<Vec3> = colour
         .pixels
-        .iter()
+        .par_iter()
         .zip(albedo)
         .map(|(c, a)| *c / *a)
         .collect();
