@@ -965,26 +965,9 @@ impl Worker {
 
     /// One pass, or `None` if the job went stale.
     fn pass(&self, job: &Job, settings: &RenderSettings, sample: u32) -> Option<(Image, f64)> {
-        let shared = &self.shared;
-        if shared.current() != job.generation {
-            return None;
-        }
-        // Asked by every row, on the pool's threads.
-        let cancelled = || {
-            shared.injected_panic();
-            shared.current() != job.generation
-        };
-        let start = Instant::now();
-        let result = self
-            .pool
-            .install(|| render_pass(&job.scene, settings, sample, &cancelled));
-        match result {
-            Ok(image) => {
-                self.shared.passes.fetch_add(1, Ordering::SeqCst);
-                Some((image, start.elapsed().as_secs_f64() * 1e3))
-            }
-            Err(Cancelled) => None,
-        }
+        self.run_pass(job, |cancelled| {
+            render_pass(&job.scene, settings, sample, cancelled)
+        })
     }
 
     /// One pass added into `film`, or `None` if the job went stale (the film then holds part
@@ -996,23 +979,33 @@ impl Worker {
         sample: u32,
         film: &mut Film,
     ) -> Option<f64> {
+        self.run_pass(job, |cancelled| {
+            accumulate_pass(&job.scene, settings, sample, film, cancelled)
+        })
+        .map(|((), ms)| ms)
+    }
+
+    /// Runs a pass, `trace`, on the pool with the job's cancellation (asked by every row, on
+    /// the pool's threads), and counts it; `None` if the job went stale before or during it.
+    /// Returns its result and its time in milliseconds.
+    fn run_pass<T: Send>(
+        &self,
+        job: &Job,
+        trace: impl FnOnce(&(dyn Fn() -> bool + Sync)) -> Result<T, Cancelled> + Send,
+    ) -> Option<(T, f64)> {
         let shared = &self.shared;
         if shared.current() != job.generation {
             return None;
         }
-        // Asked by every row, on the pool's threads.
         let cancelled = || {
             shared.injected_panic();
             shared.current() != job.generation
         };
         let start = Instant::now();
-        let result = self
-            .pool
-            .install(|| accumulate_pass(&job.scene, settings, sample, film, &cancelled));
-        match result {
-            Ok(()) => {
-                self.shared.passes.fetch_add(1, Ordering::SeqCst);
-                Some(start.elapsed().as_secs_f64() * 1e3)
+        match self.pool.install(|| trace(&cancelled)) {
+            Ok(value) => {
+                shared.passes.fetch_add(1, Ordering::SeqCst);
+                Some((value, start.elapsed().as_secs_f64() * 1e3))
             }
             Err(Cancelled) => None,
         }

@@ -315,52 +315,25 @@ impl Row<'_> {
         let (src, guide) = (self.src, self.guide);
         let row = self.y * width;
         let h0 = B3[2] * B3[2];
-        // The sixteen neighbours' values, each plane read by `|plane| …` (a macro, not a
-        // function taking a closure: a closure not inlined is compiled without the caller's
-        // instruction set).
+        // The sixteen neighbours' values, each plane read by `load(plane, …)` or
+        // `gather(plane, …)` (a macro, not a function taking a closure: a closure not inlined
+        // is compiled without the caller's instruction set).
         macro_rules! neighbours {
-            (|$plane:ident| $read:expr) => {{
+            ($read:ident($($arg:expr),*)) => {
                 Neighbours {
-                    lum: {
-                        let $plane = self.luminance;
-                        $read
-                    },
-                    z: {
-                        let $plane = &guide.depth[..];
-                        $read
-                    },
+                    lum: $read(self.luminance, $($arg),*),
+                    z: $read(&guide.depth, $($arg),*),
                     n: [
-                        {
-                            let $plane = &guide.nx[..];
-                            $read
-                        },
-                        {
-                            let $plane = &guide.ny[..];
-                            $read
-                        },
-                        {
-                            let $plane = &guide.nz[..];
-                            $read
-                        },
+                        $read(&guide.nx, $($arg),*),
+                        $read(&guide.ny, $($arg),*),
+                        $read(&guide.nz, $($arg),*),
                     ],
-                    r: {
-                        let $plane = &src.r[..];
-                        $read
-                    },
-                    g: {
-                        let $plane = &src.g[..];
-                        $read
-                    },
-                    b: {
-                        let $plane = &src.b[..];
-                        $read
-                    },
-                    v: {
-                        let $plane = &src.variance[..];
-                        $read
-                    },
+                    r: $read(&src.r, $($arg),*),
+                    g: $read(&src.g, $($arg),*),
+                    b: $read(&src.b, $($arg),*),
+                    v: $read(&src.variance, $($arg),*),
                 }
-            }};
+            };
         }
         let mut x0 = 0;
         while x0 < width {
@@ -407,7 +380,7 @@ impl Row<'_> {
                     if n == LANES && first >= 0 && first as usize + LANES <= width {
                         // All sixteen neighbours in the image: read in place.
                         let q = row_q + first as usize;
-                        let neighbours = neighbours!(|plane| load(plane, q));
+                        let neighbours = neighbours!(load(q));
                         tap.add(&centre, &neighbours, [true; LANES], &mut sums);
                     } else {
                         let mut inside = [false; LANES];
@@ -415,7 +388,7 @@ impl Row<'_> {
                             let xq = first + l as isize;
                             *inside = l < n && xq >= 0 && xq < width as isize;
                         }
-                        let neighbours = neighbours!(|plane| gather(plane, row_q, first, width));
+                        let neighbours = neighbours!(gather(row_q, first, width));
                         tap.add(&centre, &neighbours, inside, &mut sums);
                     }
                 }
