@@ -152,16 +152,19 @@ pub struct Compare {
 
 impl Compare {
     /// Starts rendering A: `settings` on `scene`, on a controller of its own with `threads`
-    /// render threads, shown through `settings.display` for good.
+    /// render threads, shown through `settings.display` and denoised or not (`denoise`, the
+    /// Denoise switch when A is frozen) for good.
     pub fn start(
         ctx: &egui::Context,
         scene: &Arc<Scene>,
         settings: &RenderSettings,
         threads: usize,
+        denoise: bool,
     ) -> Result<Self, ControllerError> {
         let controller = Controller::new(threads, super::repaint_for_frames(ctx))?;
         // Before the job, so even its first frame is shown through A's display.
         controller.set_display(settings.display);
+        controller.set_denoise(denoise);
         controller.submit(scene, settings)?;
         Ok(Self {
             settings: settings.clone(),
@@ -823,7 +826,8 @@ impl WorkbenchApp {
             .controller
             .as_ref()
             .map_or(self.state.render_threads, Controller::threads);
-        match Compare::start(ctx, &self.scene, &self.state.settings, threads) {
+        let denoise = self.state.denoise;
+        match Compare::start(ctx, &self.scene, &self.state.settings, threads, denoise) {
             Ok(mut compare) => {
                 if let Some((divider, difference)) = kept {
                     compare.divider = divider;
