@@ -1050,13 +1050,9 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
 /// relative MSE raw and denoised at 4 to 1,024 samples against `--reference-samples`
 /// ([`raylab_core::denoise::quality`]).
 fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
+    use raylab_core::bench::path_settings;
     use raylab_core::denoise::{Denoiser, Features, quality};
     use raylab_core::film::Film;
-    let path_settings = |width: u32, height: u32| {
-        let mut s = raylab_core::bench::lab_settings(width, height);
-        s.shading = raylab_core::Shading::for_stage(raylab_core::Stage::Path);
-        s
-    };
     raylab_core::memory::check(
         format!("a {}×{} denoise bench", args.width, args.height),
         // A film (sum, squares), a pass, the features and the filter's planes: under 40

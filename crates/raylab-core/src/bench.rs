@@ -105,6 +105,15 @@ pub fn lab_settings(width: u32, height: u32) -> RenderSettings {
     }
 }
 
+/// The path stage at `width × height` from the default camera: what `--stage path` and
+/// `--stage denoise` measure.
+pub fn path_settings(width: u32, height: u32) -> RenderSettings {
+    RenderSettings {
+        shading: Shading::for_stage(Stage::Path),
+        ..lab_settings(width, height)
+    }
+}
+
 /// The memory [`bench_scene`] needs at its peak, in bytes, besides the scene: the camera's rays
 /// (24 bytes a pixel) and the shadow rays cast from their hits (28 bytes each, at most one a
 /// pixel), which are made once and kept through every timed pass, and one pass's image (12
@@ -231,8 +240,7 @@ pub fn bench_scene(
     });
     let mrays = |n: usize, ms: f64| if ms > 0.0 { n as f64 / ms / 1e3 } else { 0.0 };
     let path_ms = config.path.then(|| {
-        let mut path = settings.clone();
-        path.shading = Shading::for_stage(Stage::Path);
+        let path = path_settings(config.width, config.height);
         let pass = |sample: u32| {
             render_pass(scene, &path, sample, &|| false).map_or(0, |image| image.pixels.len())
         };

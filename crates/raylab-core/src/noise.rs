@@ -138,13 +138,20 @@ pub const MAX_OCTAVES: u32 = 16;
 impl Fbm {
     /// The noise at `p`, in [−1, 1].
     pub fn at(&self, p: Vec2) -> f32 {
+        self.sum_octaves(|_, seed, frequency| perlin(seed, p * frequency))
+    }
+
+    /// The octaves' weighted sum over the sum of their weights: `octave(k, seed, frequency)`
+    /// is octave k's noise (its own seed; amplitude gainᵏ, frequency lacunarityᵏ). What every
+    /// fBm here is; only the noise of an octave differs.
+    fn sum_octaves(&self, mut octave: impl FnMut(u32, u64, f32) -> f32) -> f32 {
         let (mut sum, mut norm) = (0.0, 0.0);
         let (mut amplitude, mut frequency) = (1.0f32, 1.0f32);
-        for octave in 0..self.octaves.clamp(1, MAX_OCTAVES) {
+        for k in 0..self.octaves.clamp(1, MAX_OCTAVES) {
             let seed = self
                 .seed
-                .wrapping_add(u64::from(octave).wrapping_mul(0x632b_e59b_d9b4_e019));
-            sum += amplitude * perlin(seed, p * frequency);
+                .wrapping_add(u64::from(k).wrapping_mul(0x632b_e59b_d9b4_e019));
+            sum += amplitude * octave(k, seed, frequency);
             norm += amplitude;
             amplitude *= self.gain;
             frequency *= self.lacunarity;
@@ -157,20 +164,11 @@ impl Fbm {
     /// it moves, as waves do): every octave is [`perlin_periodic`] with `cells · ⌊lacunarityᵏ⌉`
     /// lattice cells across the tile, so the lacunarity is rounded to whole numbers of cells.
     pub fn tile_at(&self, p: Vec2, cells: u32, time: f32, drift: [Vec2; 4]) -> f32 {
-        let (mut sum, mut norm) = (0.0, 0.0);
-        let (mut amplitude, mut frequency) = (1.0f32, 1.0f32);
-        for octave in 0..self.octaves.clamp(1, MAX_OCTAVES) {
-            let seed = self
-                .seed
-                .wrapping_add(u64::from(octave).wrapping_mul(0x632b_e59b_d9b4_e019));
+        self.sum_octaves(|k, seed, frequency| {
             let n = (cells as f32 * frequency).round().max(1.0);
-            let q = (p + drift[octave as usize % 4] * time) * n;
-            sum += amplitude * perlin_periodic(seed, q, n as i64);
-            norm += amplitude;
-            amplitude *= self.gain;
-            frequency *= self.lacunarity;
-        }
-        if norm > 0.0 { sum / norm } else { 0.0 }
+            let q = (p + drift[k as usize % 4] * time) * n;
+            perlin_periodic(seed, q, n as i64)
+        })
     }
 
     /// The gradient (∂/∂x, ∂/∂y) at `p`, by central differences over `h`: what turns a noise

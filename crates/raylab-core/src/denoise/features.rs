@@ -91,7 +91,6 @@ impl Features {
                 }
                 for x in 0..albedo.len() {
                     let (mut sum, mut hits) = (Seen::default(), 0u32);
-                    let mut albedo_sum = Vec3::ZERO;
                     for sample in 0..samples {
                         let mut ray = Ray::new(Vec3::ZERO, Vec3::Z);
                         let mut rng = Rng::UNUSED;
@@ -100,13 +99,15 @@ impl Features {
                             &tracer, settings, &rotation, x, y, sample, &mut ray, &mut rng,
                         );
                         if let Some(seen) = see(&tracer, scene, ray) {
-                            albedo_sum += seen.albedo;
+                            sum.albedo += seen.albedo;
                             sum.normal += seen.normal;
                             sum.depth += seen.depth;
                             hits += 1;
                         }
                     }
-                    albedo[x] = albedo_sum / samples as f32;
+                    // The albedo over every sample (0 where one hits nothing); the normal and
+                    // depth over those that hit.
+                    albedo[x] = sum.albedo / samples as f32;
                     if hits > 0 {
                         normal[x] = sum.normal / hits as f32;
                         depth[x] = sum.depth / hits as f32;
