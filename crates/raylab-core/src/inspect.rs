@@ -263,7 +263,7 @@ pub struct PathVertex {
     /// The general path tracer (area lights, the rough metal): its light sample here, with the
     /// BSDF's value, both densities and the MIS weight.
     pub light_sample: Option<NextEvent>,
-    /// Caustics by photons: the photon map's gather at the path's first diffuse vertex (how
+    /// Caustics by photons: the photon map's gather at this diffuse vertex (how
     /// many photons it found, within which radius, and what it added to R, β included).
     pub photons: Option<PhotonGather>,
 }

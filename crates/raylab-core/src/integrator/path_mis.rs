@@ -25,16 +25,18 @@
 //! path tracer ([`super::path`]), which computes just that, is this integrator specialised to
 //! diffuse, mirror and glass surfaces under a point light (the tests compare the two).
 //!
-//! **Caustics from photons.** With a caustic photon map ([`Tracer::photon_map`]) the first
-//! non-delta vertex of a path — after any number of mirror and glass hits from the camera —
-//! adds the map's density estimate ([`PhotonMap::gather`]) times β: the light that reached
-//! it from the light through one or more mirror or glass surfaces (L S+ D). The path tracer
-//! must then not count that light a second time: a path leaving that vertex and reaching an
-//! area light through one or more delta BSDFs (camera → … → diffuse → specular+ → emitter)
-//! adds no emission. Everything else is still the path tracer's: the light sample at the
-//! vertex (direct light, which photons are not stored for), a BSDF sample from it straight to
-//! the light, caustics seen directly (camera → specular → light: no diffuse vertex yet), and
-//! caustics at later diffuse vertices (the map is gathered at the first only).
+//! **Caustics from photons.** With a caustic photon map ([`Tracer::photon_map`]) every
+//! non-delta vertex of a path where it may scatter adds the map's density estimate
+//! ([`PhotonMap::gather`]) times β: the light that reached that point from the light through
+//! one or more mirror or glass surfaces (L S+ D). The path tracer must then not count that
+//! light a second time: a path leaving a non-delta vertex and reaching an area light through
+//! one or more delta BSDFs (… → diffuse → specular+ → emitter) adds no emission. Everything
+//! else is still the path tracer's: the light sample at each vertex (direct light, which
+//! photons are not stored for), a BSDF sample from it straight to the light, and caustics seen
+//! directly (camera → specular+ → light: no diffuse vertex yet). Gathering at every vertex,
+//! not only the first, matters under the lab's point light: the caustic's light bounced once
+//! more (the walls lit by the floor under the glass block) is otherwise lost, as no path finds
+//! a point light through glass.
 //!
 //! Bounces, Russian roulette and the depth guard follow [`super::path`]: a scattering from a
 //! non-delta BSDF counts as a bounce, and a path stops after [`Shading::max_bounces`] of them;
@@ -80,7 +82,7 @@ pub struct PathVertex {
     /// light's point, f toward it, both densities of that direction, its MIS weight, whether
     /// the shadow ray was blocked, and what it added to the pixel (β included).
     pub light: Option<LightTerms>,
-    /// The caustic photon map's gather, at the path's first non-delta vertex when there is a
+    /// The caustic photon map's gather, at a non-delta vertex where the path scatters, when there is a
     /// map: how many photons it found, within which radius, and what it added (β included).
     pub photons: Option<Gathered>,
 }
@@ -141,8 +143,9 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
     let mut arrival = Arrival::Delta;
     let (mut bounces, mut depth) = (0u32, 0u32);
     let photons = tracer.photon_map();
-    // Non-delta vertices met so far: the photon map is gathered at the first.
-    let mut diffuse_vertices = 0u32;
+    // Whether the path has met a non-delta vertex: emission reached through delta BSDFs after
+    // one is the photon map's.
+    let mut after_diffuse = false;
     // The radiance factor (n_t/n_i)² of the refractions the camera path made, in the
     // direction light flows (pbrt-v4's `etaScale`): 1/ior² for a path entering glass, ior²
     // leaving it. The path tracer leaves these factors out on both sides of a closed glass
@@ -158,9 +161,9 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         // Step 3: the light, if the ray meets it before any surface.
         let t_surface = hit.as_ref().map_or(f32::INFINITY, |h| h.distance);
         if light.intersect(&ray, t_surface).is_some() {
-            // A ray from a delta BSDF after exactly one non-delta vertex carries light that
-            // reached that first vertex through mirror or glass: the photon map counted it.
-            if photons.is_some() && diffuse_vertices == 1 && matches!(arrival, Arrival::Delta) {
+            // A ray from a delta BSDF after a non-delta vertex carries light that reached that
+            // vertex through mirror or glass: the photon map counted it there.
+            if photons.is_some() && after_diffuse && matches!(arrival, Arrival::Delta) {
                 break;
             }
             let weight = match arrival {
@@ -217,12 +220,12 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
                 light_terms = Some(terms);
             }
         }
-        // The caustic photons at the first non-delta vertex, where the path may scatter (a
-        // caustic reaches the eye by a scattering here, a bounce as the cap counts them).
+        // The caustic photons at a non-delta vertex where the path may scatter (a caustic
+        // reaches the eye by a scattering here, a bounce as the cap counts them).
         let mut gathered = None;
         if !bsdf.is_delta() {
-            diffuse_vertices += 1;
-            if let Some(map) = photons.filter(|_| diffuse_vertices == 1 && scatters) {
+            after_diffuse = true;
+            if let Some(map) = photons.filter(|_| scatters) {
                 let mut g = gather(map, &frame, &bsdf, hit.position, wo);
                 g.value *= beta * eta_scale;
                 value += g.value;

@@ -2,7 +2,7 @@
 //! land on a diffuse (non-delta) surface after at least one specular bounce — Heckbert's
 //! L S+ D paths, the light a path tracer never finds through a mirror or glass from a point
 //! light. The map they make ([`PhotonMap`]) is gathered by the path tracer ([`super::path_mis`])
-//! at the first diffuse hit of each camera path.
+//! at every diffuse hit of each camera path.
 //!
 //! **Emission.** Each photon leaves the light along [`Light::sample_le`], which draws rays in
 //! proportion to the light's emission, so each of the N photons of a pass carries P/N per
