@@ -167,7 +167,7 @@ pub struct Pixel(pub u32, pub u32);
 
 /// The options that set what a file given with `--settings` or `--scene-file` holds: either
 /// file takes them all, so none combines with it.
-const SETTINGS_OPTIONS: [&str; 32] = [
+const SETTINGS_OPTIONS: [&str; 33] = [
     "scene",
     "obj",
     "stage",
@@ -190,6 +190,7 @@ const SETTINGS_OPTIONS: [&str; 32] = [
     "photons",
     "texture_preset",
     "smooth",
+    "parallax_shadows",
     "light_radius",
     "light_shape",
     "light_size",
@@ -268,6 +269,11 @@ pub struct RenderOptions {
     /// Smooth shading of models (interpolated vertex normals); the box stays flat either way.
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
     pub smooth: bool,
+    /// Parallax self-shadowing: where a height map carves a surface (--texture-preset
+    /// parallax-floor, a scene file's height_map), its relief hides the light from the points
+    /// behind it. Off: the carved surface is lit as if nothing stood in the way.
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
+    pub parallax_shadows: bool,
     /// Lab stages: how many mirror and glass hits in a row are followed (Whitted-style).
     #[arg(long, default_value_t = DEFAULT_SPECULAR_DEPTH, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_SPECULAR_DEPTH)), value_name = "D")]
     pub specular_depth: u32,
@@ -418,6 +424,7 @@ impl RenderOptions {
                 bounces: self.bounces.0,
                 specular_depth: self.specular_depth,
                 smooth: self.smooth,
+                parallax_shadows: self.parallax_shadows,
                 caustics: self.caustics,
                 photons: self.photons,
                 ..Shading::for_stage(self.stage)

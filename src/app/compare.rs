@@ -695,6 +695,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
         bounces,
         specular_depth,
         smooth,
+        parallax_shadows,
         caustics,
         photons,
     } = shading;
@@ -706,6 +707,10 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     differ("bounces", *bounces != s.bounces);
     differ("specular depth", *specular_depth != s.specular_depth);
     differ("smooth shading", *smooth != s.smooth);
+    differ(
+        "parallax self-shadowing",
+        *parallax_shadows != s.parallax_shadows,
+    );
     differ("caustics", *caustics != s.caustics);
     differ("photons per pass", *photons != s.photons);
     differ("materials", *material_preset != b.material_preset);

@@ -9,6 +9,7 @@ use raylab_core::display::Display;
 use raylab_core::integrator::MAX_SPECULAR_DEPTH;
 use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
 use raylab_core::material::MIN_ROUGHNESS;
+use raylab_core::material::TexturePreset;
 use raylab_core::named::NamedEnum;
 use raylab_core::scene::SceneChoice;
 use raylab_core::settings::{Caustics, MAX_PHOTONS};
@@ -817,6 +818,14 @@ pub fn shading_ui(
             "Light models with their vertex normals interpolated across each triangle; the box is \
          flat either way (the lab's look). Off: every triangle flat (faceted).",
         );
+    if *textures == TexturePreset::ParallaxFloor {
+        ui.checkbox(&mut shading.parallax_shadows, "Parallax self-shadowing")
+            .on_hover_text(
+                "Where the height map carves the floor, its own relief hides the light from the \
+                 points behind it: a tile's edge shadows the grout beside it. Off: the carved \
+                 floor is lit as if nothing stood in the way.",
+            );
+    }
     // What the settings compute, as they are now: the one text the library keeps true.
     ui.horizontal_wrapped(|ui| {
         ui.weak("Computes");

@@ -26,6 +26,7 @@ mod check_ui;
 mod denoise_ui;
 mod files_ui;
 mod panels_ui;
+mod relief_ui;
 mod water_ui;
 
 const DEADLINE: Duration = Duration::from_secs(90);

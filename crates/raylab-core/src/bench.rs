@@ -163,6 +163,7 @@ fn shadow_ray_of(scene: &Scene, light: &PointLight, ray: &Ray) -> Option<(Ray, f
         geometric: triangle.normal,
         rho: scene.material_of(hit.triangle_index).reflectance,
         at_edge: scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction),
+        relief_visibility: 1.0,
     };
     HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
 }

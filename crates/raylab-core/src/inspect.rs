@@ -156,6 +156,10 @@ pub struct LightTerms {
     /// Smooth shading: the smooth normal faces the light but the surface itself does not, so
     /// D is 0 (a smooth normal never lets light through a surface).
     pub light_behind_surface: bool,
+    /// Parallax self-shadowing: the surface's own relief (its height map) hides the light, so
+    /// D is 0.
+    #[serde(default)]
+    pub relief_shadowed: bool,
     /// The shadow ray cast (§5.1), or `None` when none was (shadows off, or no light to block).
     pub shadow_ray: Option<ShadowRay>,
     /// Whether the shadow ray was blocked: D counts as 0.
@@ -466,7 +470,9 @@ impl LightTerms {
         out.power = Some(light.channel_power());
         out.four_pi_r2 = Some(parts.four_pi_r2);
         out.d = Some(terms.d);
-        out.light_behind_surface = terms.d == Vec3::ZERO && parts.d != Vec3::ZERO;
+        out.relief_shadowed = terms.relief_shadowed;
+        out.light_behind_surface =
+            terms.d == Vec3::ZERO && parts.d != Vec3::ZERO && !terms.relief_shadowed;
         if let Some((ray, length)) = terms.shadow_ray {
             out.shadow_ray = Some(ShadowRay {
                 origin: ray.origin,
@@ -1101,6 +1107,12 @@ impl Inspection {
                 colour(p)
             )
         };
+        // Where the relief hides the light, the equation's own value first, then why it is 0.
+        let d = if t.relief_shadowed {
+            p * cos.max(0.0) / area
+        } else {
+            d
+        };
         let cos_text = if cos > 0.0 {
             num(cos)
         } else {
@@ -1121,6 +1133,16 @@ impl Inspection {
                 "eq. 27",
                 format!(
                     "{indent}but the light is behind the surface itself (its own normal): D = 0"
+                ),
+            );
+        }
+        if t.relief_shadowed {
+            lines.push(
+                "§6",
+                format!(
+                    "{indent}but the surface's own relief hides the light (parallax \
+                     self-shadowing: its height field rises between the point and the light): \
+                     D = 0"
                 ),
             );
         }
@@ -1172,7 +1194,7 @@ impl Inspection {
     fn value_line(&self, hit: &ShadedHit, lhs: &str) -> (&'static str, String) {
         let t = &hit.terms;
         let rho = colour(t.rho.unwrap_or(Vec3::NAN));
-        let d = if t.shadow_blocked || t.light_behind_surface {
+        let d = if t.shadow_blocked || t.light_behind_surface || t.relief_shadowed {
             Vec3::ZERO
         } else {
             t.d.unwrap_or(Vec3::ZERO)

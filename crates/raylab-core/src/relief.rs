@@ -16,7 +16,10 @@
 //!   follows the viewing ray into that height field in tangent space, a linear search over
 //!   depth layers and then one secant step between the last two, and shifts the texture
 //!   coordinates that colour and normal lookups use to where the ray meets it. A constant map
-//!   is its own top: nothing is carved, nothing moves.
+//!   is its own top: nothing is carved, nothing moves. With self-shadowing on, the same search
+//!   goes up from that point toward the light ([`HeightMap::lit`]): where the height field
+//!   rises across the way, the carved point is in the shadow of its own relief (a groove's
+//!   wall shadows its floor) and gets no direct light.
 //!
 //! The tangent frame is made in one place, [`TangentFrame::new`], from a triangle's corners and
 //! texture coordinates; [`Relief::at`] is the one place a hit's coordinates and normal are
@@ -216,6 +219,46 @@ impl HeightMap {
         }
         prev.0
     }
+
+    /// Parallax self-shadowing: whether the carved surface at `uv` (where [`HeightMap::march`]
+    /// met it) sees along `wi` (unit, toward the light) out of the height field.
+    ///
+    /// The point lies `z₀` below the plane; going up toward the light the ray moves
+    /// `wi_t/wi_n` along the surface per unit of height climbed. Layers of equal height, as
+    /// many as [`HeightMap::march`] takes at that slope: at each the ray is `z` deep, and the
+    /// field hides the light where it lies above the ray there (its depth less than `z`). Lit
+    /// where the point is on top (nothing above it), the map is flat, the light is below the
+    /// plane (the surface's own rules give no light there) or the frame has no gradients.
+    pub fn lit(&self, frame: &TangentFrame, uv: Vec2, wi: Vec3, to_map: f32) -> bool {
+        let range = self.top - self.bottom;
+        let cos = wi.dot(frame.n);
+        if !(range > 0.0 && cos > 1e-3 && self.scale > 0.0) {
+            return true;
+        }
+        let z0 = self.depth(uv * to_map);
+        if z0 <= 0.0 {
+            return true;
+        }
+        let along = (wi - cos * frame.n) / cos * self.scale;
+        let step_uv = frame.uv_change(along);
+        if step_uv == Vec2::ZERO || !step_uv.is_finite() {
+            return true;
+        }
+        let (fewest, most) = Self::LAYERS;
+        let dz = range / (most + (fewest - most) * cos).ceil();
+        // The field a hair above the ray is not in the way: the bilinear field around the
+        // point itself, met at `z₀` by the secant, is within float rounding of it.
+        let tolerance = 1e-4 * range;
+        let mut climbed = dz;
+        while climbed < z0 {
+            let z = z0 - climbed;
+            if self.depth((uv + climbed * step_uv) * to_map) < z - tolerance {
+                return false;
+            }
+            climbed += dz;
+        }
+        true
+    }
 }
 
 /// A surface's relief: a normal map, a height map, or both, looked up at the surface's
@@ -249,6 +292,17 @@ impl Relief {
             None => frame.n,
         };
         (uv, normal)
+    }
+
+    /// The share of the light along `wi` (unit, toward the light) that reaches the hit with
+    /// texture coordinates `uv` (as [`Relief::at`] returned them): 0 where the height field
+    /// hides it ([`HeightMap::lit`], parallax self-shadowing), else 1; 1 without a height map.
+    #[inline]
+    pub fn visibility(&self, frame: &TangentFrame, uv: Vec2, wi: Vec3) -> f32 {
+        match &self.height {
+            Some(h) if !h.lit(frame, uv, wi, self.uv_scale) => 0.0,
+            _ => 1.0,
+        }
     }
 }
 
@@ -546,6 +600,50 @@ mod tests {
             height.march(&frame, Vec2::new(0.7, 0.5), Vec3::Z, 1.0).x,
             0.7
         );
+    }
+
+    /// Self-shadowing in the step of [`parallax_follows_the_ray_to_the_height_field`]: on the
+    /// low floor 0.05 right of the step (0.1 high), a light low on the left (30° above the
+    /// plane: the ray climbs 0.1 in 0.173 along the surface) is hidden by the step's wall; a
+    /// light 60° up (0.1 in 0.058) clears it, as does a light from the right, and the step's
+    /// top is lit from every side. A constant map hides nothing.
+    #[test]
+    fn a_step_shadows_the_floor_beside_it() {
+        let texels = (0..64)
+            .map(|i| Vec3::splat(if i < 32 { 1.0 } else { 0.5 }))
+            .collect();
+        let image = Arc::new(TextureImage::from_linear("step", 64, 1, texels).unwrap());
+        let height = HeightMap::new(image, 0.2);
+        let frame = TangentFrame::new(
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec2::ZERO, Vec2::X, Vec2::Y],
+            -Vec3::Z,
+        );
+        let toward = |degrees_up: f32, from_left: bool| {
+            let (s, c) = degrees_up.to_radians().sin_cos();
+            Vec3::new(if from_left { -c } else { c }, 0.0, -s)
+        };
+        let floor = Vec2::new(0.55, 0.5);
+        assert!(!height.lit(&frame, floor, toward(30.0, true), 1.0));
+        assert!(height.lit(&frame, floor, toward(60.0, true), 1.0));
+        assert!(height.lit(&frame, floor, toward(30.0, false), 1.0));
+        assert!(height.lit(&frame, floor, toward(20.0, false), 1.0));
+        // The map repeats: 10° from the right climbs 0.1 in 0.567, past u = 1, where the
+        // next period's high half stands.
+        assert!(!height.lit(&frame, floor, toward(10.0, false), 1.0));
+        let top = Vec2::new(0.25, 0.5);
+        for light in [toward(10.0, true), toward(10.0, false), -Vec3::Z] {
+            assert!(height.lit(&frame, top, light, 1.0), "{light}");
+        }
+        // Further from the wall the low light reaches the floor again (0.25 > 0.173).
+        assert!(height.lit(&frame, Vec2::new(0.75, 0.5), toward(30.0, true), 1.0));
+        let level = Arc::new(TextureImage::from_linear("h", 1, 1, vec![Vec3::splat(0.3)]).unwrap());
+        let relief = Relief {
+            normal: None,
+            height: Some(HeightMap::new(level, 0.2)),
+            uv_scale: 1.0,
+        };
+        assert_eq!(relief.visibility(&frame, floor, toward(5.0, true)), 1.0);
     }
 
     /// The presets' patterns: a brick's face is high, the mortar low, the map's normals tilt

@@ -51,6 +51,7 @@
 //! bounces = "unlimited"
 //! specular_depth = 6
 //! smooth = true
+//! parallax_shadows = true
 //! caustics = "off"
 //! photons = 100000
 //!
@@ -567,6 +568,9 @@ struct ShadingV1 {
     bounces: Bounces,
     specular_depth: u32,
     smooth: bool,
+    /// Parallax self-shadowing; a file without it has it on.
+    #[serde(default = "default_true")]
+    parallax_shadows: bool,
     /// `off` or `photons`; a file without it has caustics off.
     #[serde(default)]
     caustics: Caustics,
@@ -577,6 +581,10 @@ struct ShadingV1 {
 
 fn default_photons() -> u32 {
     DEFAULT_PHOTONS
+}
+
+fn default_true() -> bool {
+    true
 }
 
 /// The path tracer's bounce limit: a number, or `"unlimited"` (TOML has no null).
@@ -723,6 +731,7 @@ impl FileV1 {
                 bounces: Bounces(sh.bounces),
                 specular_depth: sh.specular_depth,
                 smooth: sh.smooth,
+                parallax_shadows: sh.parallax_shadows,
                 caustics: sh.caustics,
                 photons: sh.photons,
             },
@@ -818,6 +827,7 @@ impl FileV1 {
                 bounces: sh.bounces.0,
                 specular_depth: sh.specular_depth,
                 smooth: sh.smooth,
+                parallax_shadows: sh.parallax_shadows,
                 caustics: sh.caustics,
                 photons: sh.photons,
             },

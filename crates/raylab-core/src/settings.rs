@@ -254,7 +254,11 @@ impl RenderSettings {
             // A normal changes the light (equation 27), so even the incoming-light stage.
             TexturePreset::BumpyWalls if lit => add("normal-mapped walls".to_owned()),
             // Shifts ρ's coordinates and tilts the normal: something in every stage.
-            TexturePreset::ParallaxFloor => add("parallax-mapped floor".to_owned()),
+            TexturePreset::ParallaxFloor => add(if lit && s.parallax_shadows {
+                "parallax-mapped floor, self-shadowed".to_owned()
+            } else {
+                "parallax-mapped floor".to_owned()
+            }),
             TexturePreset::Clouds if s.stage != Stage::Incoming => {
                 add("ρ of fBm clouds on the ceiling".to_owned())
             }

@@ -45,6 +45,7 @@ impl Step {
             bounces: old.bounces,
             specular_depth: old.specular_depth,
             smooth: old.smooth,
+            parallax_shadows: old.parallax_shadows,
             caustics: s.caustics,
             ..Shading::for_stage(s.stage)
         };

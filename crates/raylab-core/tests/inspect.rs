@@ -47,14 +47,14 @@ fn assert_terms_are_equation_27(s: &RenderSettings, hit: &ShadedHit) {
         );
         return;
     };
-    if !t.light_behind_surface {
+    let parts = t.power.unwrap() * t.cos_theta.unwrap().max(0.0) / t.four_pi_r2.unwrap();
+    if t.relief_shadowed {
+        assert_eq!(d, Vec3::ZERO, "the relief hides the light");
+    } else if !t.light_behind_surface {
         assert_eq!(
             vec3_bits(d),
             vec3_bits(direct_light(&s.light, hit.position, hit.normal))
         );
-    }
-    let parts = t.power.unwrap() * t.cos_theta.unwrap().max(0.0) / t.four_pi_r2.unwrap();
-    if !t.light_behind_surface {
         assert_eq!(vec3_bits(parts), vec3_bits(d), "the parts printed make D");
     }
     assert_eq!(
@@ -105,6 +105,32 @@ fn r_is_the_rendered_pixel_in_every_configuration() {
             }
         }
     }
+}
+
+/// Parallax self-shadowing explained: under a light low over the far right corner, pixel
+/// (31, 96) of the 128² parallax floor is grout in a tile's shadow. Equation 27's value is
+/// printed (P·cos/4πr² > 0), then why D is 0; R is the rendered pixel, ρ·N. With
+/// self-shadowing off the same pixel is lit.
+#[test]
+fn the_inspector_says_when_the_relief_hides_the_light() {
+    let scene = cornell_box();
+    let mut s = settings(Stage::Lab, 128);
+    s.texture_preset = TexturePreset::ParallaxFloor;
+    s.light.position = Vec3::new(0.9, 0.7, 0.9);
+    let i = inspect(&scene, &s, 31, 96);
+    let t = &i.shaded[0].terms;
+    assert!(t.relief_shadowed && !t.light_behind_surface, "{t:?}");
+    assert_eq!(t.d, Some(Vec3::ZERO));
+    assert!(t.cos_theta.unwrap() > 0.5, "{t:?}");
+    let text = i.to_text();
+    assert!(text.contains("parallax self-shadowing"), "{text}");
+    assert!(text.contains("= 0.293 W per unit area"), "{text}");
+    assert_eq!(vec3_bits(i.r), vec3_bits(render(&scene, &s).get(31, 96)));
+    assert_eq!(i.r, i.shaded[0].terms.rho.unwrap() * 0.5);
+    s.shading.parallax_shadows = false;
+    let lit = inspect(&scene, &s, 31, 96);
+    assert!(!lit.shaded[0].terms.relief_shadowed);
+    assert!(lit.r.max_element() > i.r.max_element());
 }
 
 /// Smooth shading on and off, on a model with vertex normals and on the textured teapot (whose

@@ -389,3 +389,45 @@ fn a_scene_file_names_its_normal_map() {
         .to_string();
     assert!(e.contains("bump"), "{e}");
 }
+
+/// Parallax self-shadowing on the parallax-floor preset (lab stage, 128²), under a light low
+/// over the floor's far right corner, so that the tiles' shadows fall toward the camera (with
+/// the lab's light, in front and above, they fall behind the tiles, where the camera cannot
+/// see): only floor pixels change, and the ones that do lose D alone (what is left is ρ·N,
+/// the lab's shadow, equation 30): 45 of them (the grout beside the tiles' edges).
+#[test]
+fn parallax_self_shadowing_darkens_the_grout_by_d() {
+    let scene = cornell_box();
+    let mut s = settings(Stage::Lab, 128);
+    s.texture_preset = TexturePreset::ParallaxFloor;
+    s.light.position = Vec3::new(0.9, 0.7, 0.9);
+    let shadowed = render(&scene, &s);
+    s.shading.parallax_shadows = false;
+    let lit = render(&scene, &s);
+    let mut no_n = s.clone();
+    no_n.shading.indirect = false;
+    let d_only = render(&scene, &no_n);
+    let n = RenderSettings::default().shading.indirect_light;
+    let mut darker = 0;
+    for y in 0..128 {
+        for x in 0..128 {
+            let (a, b) = (shadowed.get(x, y), lit.get(x, y));
+            if a == b {
+                continue;
+            }
+            let ray = s.camera.pixel_ray(x, y);
+            let hit = scene.closest_intersection(&ray, f32::INFINITY).unwrap();
+            assert_eq!(scene.material_of(hit.triangle_index).name, "green");
+            // ρ·N with ρ = (ρ·(D + N) − ρ·D)/N.
+            let rho_n = b - d_only.get(x, y);
+            assert!(
+                (a - rho_n).abs().max_element() <= 1e-5,
+                "({x}, {y}): {a} against ρ·N = {rho_n}"
+            );
+            assert!(rho_n.max_element() < b.max_element(), "N = {n}");
+            darker += 1;
+        }
+    }
+    eprintln!("{darker} floor pixels in the relief's shadow");
+    assert!(darker >= 30, "{darker}");
+}

@@ -46,7 +46,7 @@ use crate::bsdf::ShadingFrame;
 use crate::camera::ImagePoints;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::lanes::{LANES, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
+use crate::lanes::{F32x16, LANES, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
 use crate::light::{AnyLight, DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::photon_map::PhotonMap;
@@ -92,6 +92,10 @@ pub struct Surface {
     /// ([`crate::scene::Scene::approach_at_edge`], [`crate::light::shadow_ray`]); `None`
     /// elsewhere, or when no shadow ray is cast.
     pub at_edge: Option<Vec3>,
+    /// The share of the light's centre the surface's own relief leaves it: 0 where a height
+    /// map's field hides the light (parallax self-shadowing, [`crate::relief::HeightMap::lit`]),
+    /// else 1. D and the path tracers' light samples are multiplied by it.
+    pub relief_visibility: f32,
 }
 
 /// The terms of the lab's equations at one diffuse hit: the one place they are computed.
@@ -106,8 +110,11 @@ pub struct HitTerms {
     pub normal: Vec3,
     /// ρ, the diffuse reflectance.
     pub rho: Vec3,
-    /// D, the light arriving from the point light ignoring anything in between (equation 27).
+    /// D, the light arriving from the point light ignoring anything in between (equation 27),
+    /// 0 where the surface's own relief hides the light ([`Surface::relief_visibility`]).
     pub d: Vec3,
+    /// Whether the surface's own relief hides the light (parallax self-shadowing).
+    pub relief_shadowed: bool,
     /// The shadow ray to cast and its length, or `None` when none is needed (shadows off, no
     /// light arriving, or the flat stage).
     pub shadow_ray: Option<(Ray, f32)>,
@@ -122,6 +129,7 @@ impl HitTerms {
         normal: Vec3::ZERO,
         rho: Vec3::ZERO,
         d: Vec3::ZERO,
+        relief_shadowed: false,
         shadow_ray: None,
         blocked: false,
     };
@@ -147,6 +155,7 @@ impl HitTerms {
             normal: surface.normal,
             rho: surface.rho,
             d: lit.d,
+            relief_shadowed: surface.relief_visibility == 0.0 && stage != Stage::Flat,
             shadow_ray: lit.shadow.cast.then_some((
                 Ray {
                     origin: lit.shadow.origin,
@@ -207,6 +216,7 @@ pub struct Surfaces<V: Vector> {
     pub near_edge: MaskOf<V>,
     /// What `at_edge` holds (0 where it is `None`).
     pub incoming: V,
+    pub relief_visibility: V::Real,
 }
 
 impl From<Surface> for Surfaces<Vec3> {
@@ -219,6 +229,7 @@ impl From<Surface> for Surfaces<Vec3> {
             rho: s.rho,
             near_edge: s.at_edge.is_some(),
             incoming: s.at_edge.unwrap_or(Vec3::ZERO),
+            relief_visibility: s.relief_visibility,
         }
     }
 }
@@ -232,6 +243,7 @@ impl Surfaces<Vec3x16> {
         rho: Vec3x16::ZERO,
         near_edge: M16::NONE,
         incoming: Vec3x16::ZERO,
+        relief_visibility: F32x16::ZERO,
     };
 
     /// Puts `s` in lane `i`.
@@ -243,6 +255,7 @@ impl Surfaces<Vec3x16> {
         self.rho.set_lane(i, s.rho);
         self.near_edge.0[i] = s.at_edge.is_some();
         self.incoming.set_lane(i, s.at_edge.unwrap_or(Vec3::ZERO));
+        self.relief_visibility.0[i] = s.relief_visibility;
     }
 }
 
@@ -287,6 +300,7 @@ impl<V: Vector> Lighting<V> {
             geometric,
             near_edge,
             incoming,
+            relief_visibility,
             ..
         } = *surface;
         if stage == Stage::Flat {
@@ -295,7 +309,8 @@ impl<V: Vector> Lighting<V> {
                 shadow: ShadowRays::NONE,
             };
         }
-        let d = DirectLight::at(light, position, normal).d;
+        // D is 0 where the surface's own relief hides the light (parallax self-shadowing).
+        let d = DirectLight::at(light, position, normal).d * relief_visibility;
         // With a smooth normal, the surface itself still decides which side is lit.
         let unlit_side = normal.simd_ne(geometric)
             & (V::splat(light.position) - position)
@@ -479,6 +494,7 @@ impl DiffuseHits {
             normal: s.normal.lane(lane),
             rho: s.rho.lane(lane),
             d: lit.d.lane(lane),
+            relief_shadowed: s.relief_visibility.0[lane] == 0.0,
             shadow_ray: lit.shadow.lane(lane),
             blocked: blocked & (1 << lane) != 0,
         }
@@ -755,6 +771,7 @@ impl<'a> Tracer<'a> {
                 geometric,
                 rho: material.reflectance,
                 at_edge,
+                relief_visibility: 1.0,
             };
         }
         let normal = scene.shading_normal(index, u, v, self.shading.smooth);
@@ -770,6 +787,7 @@ impl<'a> Tracer<'a> {
                 geometric,
                 rho: material.reflectance_at(uv, hit.position, normal),
                 at_edge,
+                relief_visibility: 1.0,
             };
         };
         let wo = -incoming;
@@ -780,12 +798,20 @@ impl<'a> Tracer<'a> {
         } else {
             normal
         };
+        // Parallax self-shadowing, toward the light's centre as D is (equation 27).
+        let relief_visibility = if self.shading.parallax_shadows {
+            let to_light = (self.light.position - hit.position).normalize_or_zero();
+            relief.visibility(&frame, uv, to_light)
+        } else {
+            1.0
+        };
         Surface {
             position: hit.position,
             normal,
             geometric,
             rho: material.reflectance_at(|| uv, hit.position, normal),
             at_edge,
+            relief_visibility,
         }
     }
 
@@ -1011,6 +1037,7 @@ mod tests {
             geometric: floor,
             rho,
             at_edge: None,
+            relief_visibility: 1.0,
         };
         let t = HitTerms::at(&light, Stage::Lab, true, surface, |_| light.position);
         assert!(
@@ -1067,6 +1094,7 @@ mod tests {
                 geometric,
                 rho: Vec3::new(r(), r(), r()).abs(),
                 at_edge,
+                relief_visibility: 1.0,
             });
         }
         surfaces

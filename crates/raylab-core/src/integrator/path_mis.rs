@@ -112,8 +112,14 @@ pub struct LightTerms {
 enum Arrival {
     /// A camera ray, or a ray from a delta BSDF: the light counts in full.
     Delta,
-    /// A ray drawn from a BSDF with this density, from this point.
-    Sampled { pdf: f32, from: Vec3 },
+    /// A ray drawn from a BSDF with this density, from this point, where the surface's own
+    /// relief let this share of the light through ([`super::Surface::relief_visibility`]: the
+    /// light samples there were weighed by it, so the light found this way is too).
+    Sampled {
+        pdf: f32,
+        from: Vec3,
+        relief_visibility: f32,
+    },
 }
 
 /// The value of every ray (π × radiance), into `out`, each path drawing from its own
@@ -168,9 +174,11 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
             }
             let weight = match arrival {
                 Arrival::Delta => 1.0,
-                Arrival::Sampled { pdf, from } => {
-                    power_heuristic(pdf, light.pdf_li(from, ray.direction))
-                }
+                Arrival::Sampled {
+                    pdf,
+                    from,
+                    relief_visibility,
+                } => power_heuristic(pdf, light.pdf_li(from, ray.direction)) * relief_visibility,
             };
             value += beta * light.le(ray.direction) * weight;
             break;
@@ -213,7 +221,10 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
                         shadow_ray_to(sample.point, hit.position, surface.geometric, at_edge)
                             .is_some_and(|(shadow, t_max)| scene.occluded(&shadow, t_max));
                     if !terms.blocked {
-                        terms.added = beta * f * sample.li * (cos * terms.mis_weight / sample.pdf);
+                        terms.added = beta
+                            * f
+                            * sample.li
+                            * (cos * terms.mis_weight * surface.relief_visibility / sample.pdf);
                         value += terms.added;
                     }
                 }
@@ -273,6 +284,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
             Arrival::Sampled {
                 pdf: sample.pdf,
                 from: hit.position,
+                relief_visibility: surface.relief_visibility,
             }
         };
         // Russian roulette, as the sixteen-lane path tracer plays it: its number drawn at

@@ -155,6 +155,10 @@ pub struct Shading {
     /// Smooth shading: light models with their vertex normals interpolated across each
     /// triangle (the box has none and stays flat, the lab's look). Off: every triangle flat.
     pub smooth: bool,
+    /// Parallax self-shadowing: where a height map carves a surface, its own relief hides
+    /// the light from the points behind it (a groove's wall shadows its floor). Off: the carved
+    /// surface is lit as if nothing stood in the way.
+    pub parallax_shadows: bool,
     /// `path`: caustics by a photon map, or the path tracer alone.
     pub caustics: Caustics,
     /// `path` with caustics by photons: photons shot from the light each pass.
@@ -182,6 +186,7 @@ impl Shading {
             bounces: None,
             specular_depth: DEFAULT_SPECULAR_DEPTH,
             smooth: true,
+            parallax_shadows: true,
             caustics: Caustics::Off,
             photons: DEFAULT_PHOTONS,
         }
