@@ -116,7 +116,8 @@ pub struct RenderArgs {
     pub save_scene: Option<PathBuf>,
     /// on: write the denoised image, for a noisy render (the path stage, soft shadows, depth
     /// of field; elsewhere there is no noise, and the image is written as it is). off: the
-    /// unbiased estimate, as an EXR should hold it.
+    /// unbiased estimate, as an EXR should hold it. Settings given with --settings that were
+    /// a denoised image's (a screenshot of the denoised image) are denoised either way.
     #[arg(long, default_value = "off", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
     pub denoise: bool,
     #[command(flatten)]
@@ -629,15 +630,17 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         );
     }
     raylab_core::film::check_writable(&args.out)?;
-    let settings = args.options.resolve_settings()?;
+    let mut settings = args.options.resolve_settings()?;
     settings.validate()?;
+    // Denoised when asked, or when the settings given were those of a denoised image.
+    settings.denoise |= args.denoise;
     // A screenshot made with a debug view is that view again, unless --view says otherwise.
     let view = args.view.unwrap_or(settings.view);
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;
     // Denoising holds a film with its variance, the features and the filter's planes beside
     // the image: under 40 floats a pixel more.
-    let denoise_memory = if args.denoise {
+    let denoise_memory = if settings.denoise {
         160 * u64::from(c.width) * u64::from(c.height)
     } else {
         0
@@ -679,7 +682,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut denoised_note = None;
     let (image, display, legend) = match view {
-        raylab_core::view::View::Shaded if args.denoise => {
+        raylab_core::view::View::Shaded if settings.denoise => {
             let (raw, denoised) =
                 pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
             denoised_note = Some(if denoised.is_some() {
@@ -840,7 +843,7 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
         inspect_pixel(&scene, &settings, x, y).with_context(|| format!("--pixel {x},{y}"))?;
     // The denoised value needs the whole image, rendered and denoised as `render --denoise
     // on` writes it (`None` where nothing is noisy).
-    let denoised = if args.denoise {
+    let denoised = if args.denoise || settings.denoise {
         let c = &settings.camera;
         raylab_core::memory::check(
             format!("denoising a {}×{} render", c.width, c.height),

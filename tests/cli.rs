@@ -945,4 +945,32 @@ fn denoise_on_the_command_line() {
         .map(|v| v.as_f64().unwrap() as f32)
         .collect();
     assert_eq!(value, want[i..i + 3]);
+
+    // A denoised PNG carries settings that say so: rendered again from them (without
+    // --denoise), the same image; the raw PNG's settings give the raw image.
+    let again = |name: &str| {
+        let shot = dir.path().join(name);
+        let mut args = vec!["render", "--out", shot.to_str().unwrap()];
+        args.extend_from_slice(&path);
+        if name.starts_with("denoised") {
+            args.extend_from_slice(&["--denoise", "on"]);
+        }
+        assert!(raylab(&args).status.success());
+        let copy = dir.path().join(format!("again-{name}"));
+        let out = raylab(&[
+            "render",
+            "--settings",
+            shot.to_str().unwrap(),
+            "--out",
+            copy.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let bytes = |p: &std::path::Path| image::open(p).unwrap().to_rgb8().into_raw();
+        (bytes(&shot), bytes(&copy))
+    };
+    let (shot, copy) = again("denoised.png");
+    assert_eq!(copy, shot, "the denoised image again");
+    let (raw_shot, raw_copy) = again("raw.png");
+    assert_eq!(raw_copy, raw_shot);
+    assert_ne!(raw_shot, shot);
 }

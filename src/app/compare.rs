@@ -673,6 +673,8 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
         view,
         samples_per_pixel,
         seed,
+        // The window's Denoise switch is its own (not among the settings it traces with).
+        denoise: _,
     } = a;
     let mut out = Vec::new();
     let mut differ = |name, differs: bool| {

@@ -146,6 +146,9 @@ pub struct Shown {
         expect(dead_code, reason = "tests wait for the denoiser's state in force")
     )]
     pub denoise: bool,
+    /// The denoised image on screen, when the denoiser was on and had one, and the samples it
+    /// was made from (what a screenshot then saves).
+    pub denoised: Option<(Arc<Image>, u32)>,
 }
 
 impl Shown {
@@ -641,7 +644,12 @@ impl WorkbenchApp {
             Ok(files::Opened::Model(model)) => {
                 self.state.settings.scene = SceneChoice::Obj(model);
             }
-            Ok(files::Opened::Settings(loaded)) => {
+            Ok(files::Opened::Settings(mut loaded)) => {
+                // A denoised image's settings turn the Denoise switch on (the switch is the
+                // window's own, not among the settings it traces with).
+                if std::mem::take(&mut loaded.settings.denoise) {
+                    self.state.denoise = true;
+                }
                 let old = std::mem::replace(&mut self.state.settings, loaded.settings);
                 if self.state.settings.scene != self.scene_choice {
                     self.restore_on_failure = Some(old);
@@ -980,6 +988,10 @@ impl WorkbenchApp {
             is_preview: frame.is_preview,
             display: frame.display,
             denoise: frame.denoise,
+            denoised: frame
+                .denoised
+                .filter(|_| frame.denoise)
+                .map(|d| (d, frame.denoised_samples)),
         };
         if !shown.is_preview {
             self.last_full = Some(shown.clone());
@@ -1240,12 +1252,24 @@ impl WorkbenchApp {
             return;
         };
         let mut settings = full.settings.clone();
-        settings.samples_per_pixel = full.samples;
+        // What is on screen: the denoised image when there is one, and settings that say so
+        // (with the samples it was made from), so that they reproduce it.
+        let image = match &full.denoised {
+            Some((denoised, samples)) => {
+                settings.samples_per_pixel = *samples;
+                settings.denoise = true;
+                Arc::clone(denoised)
+            }
+            None => {
+                settings.samples_per_pixel = full.samples;
+                Arc::clone(&full.image)
+            }
+        };
         // The display in force now, which the screenshot's PNG is shown through.
         settings.display = self.state.settings.display;
         let request = screenshot::Request {
             folder: self.state.screenshot_folder.clone(),
-            image: Arc::clone(&full.image),
+            image,
             settings,
             sample_target: full.target,
             time: chrono::Local::now(),

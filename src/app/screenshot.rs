@@ -1,7 +1,8 @@
 //! Screenshots: the render buffer (not a grab of the window) encoded as PNG, with the settings
 //! that made it inside the PNG (an `iTXt` chunk) and in a `.json` file beside it, so the image
 //! alone reproduces the render: open it (or drop it on the window) and the workbench restores
-//! its settings; `raylab render --settings SHOT.png` renders it again.
+//! its settings; `raylab render --settings SHOT.png` renders it again. With the denoised image
+//! on screen the screenshot is that image and its settings say `denoise`, which both honour.
 //!
 //! Files are named `raylab-YYYYMMDD-HHMMSS.png`; if that name (or its `.json`) is taken, `-1`,
 //! `-2`, … is added. Files are created with `create_new`, so nothing is ever overwritten, even

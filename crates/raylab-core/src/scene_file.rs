@@ -642,6 +642,9 @@ struct DisplayV1 {
 struct RenderV1 {
     samples_per_pixel: u32,
     seed: u64,
+    /// Write the denoised image (`render --denoise on`); written only when true.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    denoise: bool,
 }
 
 impl FileV1 {
@@ -742,6 +745,7 @@ impl FileV1 {
             render: RenderV1 {
                 samples_per_pixel: s.samples_per_pixel,
                 seed: s.seed,
+                denoise: s.denoise,
             },
         })
     }
@@ -841,6 +845,7 @@ impl FileV1 {
             view: View::Shaded,
             samples_per_pixel: self.render.samples_per_pixel,
             seed: self.render.seed,
+            denoise: self.render.denoise,
         }
     }
 }

@@ -99,6 +99,12 @@ pub struct RenderSettings {
     pub samples_per_pixel: u32,
     /// Seed of every random choice; the same seed gives the same image.
     pub seed: u64,
+    /// Whether the image is the denoiser's ([`crate::denoise`]) rather than the accumulated
+    /// mean: [`crate::render::render`] ignores it; the command line's `render` writes the
+    /// denoised image when it is set (`--denoise on`), and a workbench screenshot of a denoised
+    /// image carries it, so that its settings reproduce what was saved. Written only when set.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub denoise: bool,
 }
 
 impl Default for RenderSettings {
@@ -116,6 +122,7 @@ impl Default for RenderSettings {
             view: View::Shaded,
             samples_per_pixel: 1,
             seed: 0,
+            denoise: false,
         }
     }
 }
