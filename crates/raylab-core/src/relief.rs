@@ -494,9 +494,10 @@ mod tests {
         assert!(close(n, Vec3::new(0.447_214, 0.0, -0.894_427), 1e-6), "{n}");
     }
 
-    /// Maps are checked as colour textures are: a non-image, a 16-bit PNG (not reduced to 8
-    /// bits as a colour is: refused, saying so) and a header too large are errors naming the
-    /// file, never a panic.
+    /// Maps are checked as colour textures are: a non-image and a header too large are errors
+    /// naming the file, never a panic. A 16-bit map is read at 16 bits: the flat normal
+    /// (32768, 32768, 65535) is exactly (0, 0, 1), and a height of 32896 is 32896/65535
+    /// (between two 8-bit heights).
     #[test]
     fn bad_maps_are_errors_naming_the_file() {
         let message = |bytes: &[u8], decoding| {
@@ -510,35 +511,26 @@ mod tests {
                 m.contains("bumps.png") && m.contains("not a PNG or JPEG"),
                 "{m}"
             );
-            let deep = image::ImageBuffer::<image::Rgb<u16>, _>::from_pixel(
-                2,
-                2,
-                image::Rgb([32768, 32768, 65535]),
-            );
-            let mut png = std::io::Cursor::new(Vec::new());
-            image::DynamicImage::from(deep)
-                .write_to(&mut png, image::ImageFormat::Png)
-                .unwrap();
-            let m = message(png.get_ref(), decoding);
-            assert!(
-                m.contains("bumps.png")
-                    && m.contains(&format!("a 16-bit {} is not read", decoding.what())),
-                "{m}"
-            );
             let wide = image::GrayImage::new(TextureImage::MAX_SIDE + 1, 1);
             let mut png = std::io::Cursor::new(Vec::new());
             wide.write_to(&mut png, image::ImageFormat::Png).unwrap();
             let m = message(png.get_ref(), decoding);
             assert!(m.contains("too large"), "{m}");
         }
-        // A colour texture of 16 bits is still read, reduced to 8.
-        let grey16 =
-            image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(1, 1, image::Luma([65535]));
-        let mut png = std::io::Cursor::new(Vec::new());
-        image::DynamicImage::from(grey16)
-            .write_to(&mut png, image::ImageFormat::Png)
-            .unwrap();
-        assert!(TextureImage::from_encoded(png.get_ref(), "c.png").is_ok());
+        let deep = |rgb: [u16; 3]| {
+            let image = image::ImageBuffer::<image::Rgb<u16>, _>::from_pixel(2, 2, image::Rgb(rgb));
+            let mut png = std::io::Cursor::new(Vec::new());
+            image::DynamicImage::from(image)
+                .write_to(&mut png, image::ImageFormat::Png)
+                .unwrap();
+            png.into_inner()
+        };
+        let flat =
+            TextureImage::from_encoded_as(&deep([32768, 32768, 65535]), "n.png", Decoding::Normal);
+        assert_eq!(flat.unwrap().texels, vec![Vec3::Z; 4]);
+        let height =
+            TextureImage::from_encoded_as(&deep([32896, 0, 0]), "h.png", Decoding::Height).unwrap();
+        assert_eq!(height.texels[0].x, 32896.0 / 65535.0);
     }
 
     /// A flat map and a constant height map change nothing.

@@ -193,6 +193,16 @@ impl Decoding {
             Decoding::Height => std::array::from_fn(|c| c as f32 / 255.0),
         }
     }
+
+    /// The value of a 16-bit channel value: the same readings with 65535 for 255 (the sRGB
+    /// curve at c/65535; (c − 32768)/32767, so that 32768 is exactly 0; c/65535).
+    fn value16(self, c: u16) -> f32 {
+        match self {
+            Decoding::Colour => srgb_to_linear(f64::from(c) / 65535.0),
+            Decoding::Normal => ((f32::from(c) - 32768.0) / 32767.0).max(-1.0),
+            Decoding::Height => f32::from(c) / 65535.0,
+        }
+    }
 }
 
 impl TextureImage {
@@ -202,9 +212,10 @@ impl TextureImage {
     pub const MAX_SIDE: u32 = 16384;
 
     /// The most memory decoding a texture takes, per texel: the linear texels (12 bytes)
-    /// beside the 8-bit RGB copy they are made from (3); before that, the decoded image (at
-    /// most 8 bytes: 16-bit RGBA) beside that copy. At most 15 at any moment, so 16.
-    pub const DECODING_BYTES_PER_TEXEL: u64 = 16;
+    /// beside the RGB copy they are made from (3 bytes, or 6 at 16 bits a channel); before
+    /// that, the decoded image (at most 8 bytes: 16-bit RGBA) beside that copy. At most 18 at
+    /// any moment, so 20.
+    pub const DECODING_BYTES_PER_TEXEL: u64 = 20;
 
     /// The memory decoding a `width × height` texture takes at most, not counting its file.
     pub fn decoding_bytes(width: u32, height: u32) -> u64 {
@@ -248,8 +259,8 @@ impl TextureImage {
 
     /// Decodes a PNG or JPEG held in memory; `name` names it in errors.
     ///
-    /// The file's values are taken as 8-bit sRGB (16-bit PNGs are first reduced to 8 bits)
-    /// and turned into linear RGB with the exact sRGB decoding curve, since ρ multiplies light
+    /// The file's values are taken as sRGB (8 or 16 bits a channel, each read at its own
+    /// precision) and turned into linear RGB with the exact sRGB decoding curve, since ρ multiplies light
     /// and light adds linearly. Alpha is ignored: a texture here is a reflectance, not a cut-out.
     /// The size is read from the header and checked (1 to [`Self::MAX_SIDE`] a side) before
     /// the pixels are decoded, and so is the memory decoding takes
@@ -312,28 +323,40 @@ impl TextureImage {
         decoder.limits(limits);
         let decoded = decoder.decode().map_err(|e| error(e.to_string()))?;
         let colour = decoded.color();
-        if decoding != Decoding::Colour && colour.bytes_per_pixel() > colour.channel_count() {
-            // Reduced to 8 bits as a colour is, a 16-bit map would lose the precision it was
-            // saved for without a word: refused, saying what to do.
-            return Err(error(format!(
-                "a 16-bit {} is not read (save it with 8 bits per channel)",
-                decoding.what()
-            )));
-        }
-        let rgb = decoded.into_rgb8();
-        let table = decoding.table();
-        let mut texels = crate::memory::try_with_capacity(rgb.pixels().len(), || {
-            format!("the {width}×{height} texture's texels")
-        })
-        .map_err(|e| error(e.to_string()))?;
-        texels.extend(rgb.pixels().map(|p| {
-            Vec3::new(
-                table[p[0] as usize],
-                table[p[1] as usize],
-                table[p[2] as usize],
-            )
-        }));
-        Self::from_linear(name, rgb.width(), rgb.height(), texels)
+        let texel_count = width as usize * height as usize;
+        let allocate = || {
+            crate::memory::try_with_capacity(texel_count, || {
+                format!("the {width}×{height} texture's texels")
+            })
+            .map_err(|e| error(e.to_string()))
+        };
+        // 16 bits a channel are read at 16 bits (the precision a map is saved with them for),
+        // 8 bits through a table. The decoded image is gone before the texels are made.
+        let texels = if colour.bytes_per_pixel() > colour.channel_count() {
+            let rgb = decoded.into_rgb16();
+            let mut texels: Vec<Vec3> = allocate()?;
+            texels.extend(rgb.pixels().map(|p| {
+                Vec3::new(
+                    decoding.value16(p[0]),
+                    decoding.value16(p[1]),
+                    decoding.value16(p[2]),
+                )
+            }));
+            texels
+        } else {
+            let rgb = decoded.into_rgb8();
+            let table = decoding.table();
+            let mut texels: Vec<Vec3> = allocate()?;
+            texels.extend(rgb.pixels().map(|p| {
+                Vec3::new(
+                    table[p[0] as usize],
+                    table[p[1] as usize],
+                    table[p[2] as usize],
+                )
+            }));
+            texels
+        };
+        Self::from_linear(name, width, height, texels)
     }
 
     /// An image from linear RGB texels, rows top to bottom; refused unless there are exactly
@@ -418,15 +441,17 @@ fn check_size(width: u32, height: u32) -> Result<(), String> {
 /// The sRGB decoding curve for each 8-bit value: c = value/255, then c/12.92 for
 /// c ≤ 0.04045 and ((c + 0.055)/1.055)^2.4 above (computed in f64, rounded once to f32).
 fn srgb8_to_linear_table() -> [f32; 256] {
-    std::array::from_fn(|i| {
-        let c = i as f64 / 255.0;
-        let linear = if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        };
-        linear as f32
-    })
+    std::array::from_fn(|i| srgb_to_linear(i as f64 / 255.0))
+}
+
+/// The exact sRGB decoding curve at `c` in [0, 1].
+fn srgb_to_linear(c: f64) -> f32 {
+    let linear = if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    };
+    linear as f32
 }
 
 /// Texture coordinates for a surface without its own: the hit position projected on the plane
@@ -554,9 +579,9 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "could not load texture 'huge.png': decoding the 16384×16384 texture needs about \
-             4.0 GiB but only 3.0 GiB is available (address-space limit: ulimit -v)"
+             5.0 GiB but only 3.0 GiB is available (address-space limit: ulimit -v)"
         );
-        assert_eq!(TextureImage::decoding_bytes(side, side), 4 << 30);
+        assert_eq!(TextureImage::decoding_bytes(side, side), 5 << 30);
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("huge.png");
         std::fs::write(&file, &png).unwrap();
@@ -759,12 +784,24 @@ mod tests {
         assert_eq!(image.bilinear(Vec2::new(0.25, 0.75)), Vec3::X);
         assert_eq!(image.bilinear(Vec2::new(0.25, 0.25)), BLACK);
 
-        // A grey 16-bit PNG: reduced to 8 bits, then decoded (65535 → 255 → 1).
-        let grey16 =
+        // A grey 16-bit PNG, read at 16 bits: 65535 is 1, and 32896 (128.5 of 255, between
+        // two 8-bit values) is the curve at 32896/65535 = 0.501961 — 0.215861, not 8 bits'
+        // 0.215861 at 128 or 0.219526 at 129.
+        let mut grey16 =
             image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(3, 1, image::Luma([65535]));
+        grey16.put_pixel(1, 0, image::Luma([32896]));
         let png = encode(grey16.into(), image::ImageFormat::Png);
         let image = TextureImage::from_encoded(&png, "grey16.png").unwrap();
-        assert_eq!(image.texels, vec![WHITE; 3]);
+        assert_eq!(image.texels[0], WHITE);
+        assert_eq!(
+            image.texels[1],
+            Vec3::splat(srgb_to_linear(32896.0 / 65535.0))
+        );
+        assert!(
+            (image.texels[1].x - 0.215_861).abs() < 1e-6,
+            "{}",
+            image.texels[1]
+        );
     }
 
     fn table_value(v: u8) -> f32 {

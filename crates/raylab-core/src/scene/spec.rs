@@ -101,7 +101,7 @@ impl ReliefSpec {
     }
 
     /// Reads the maps: `None` if there are none; a map that cannot be read (missing, not a
-    /// PNG or JPEG, 16 bits a channel, too large) is an error naming its file.
+    /// PNG or JPEG, too large) is an error naming its file.
     pub fn load(&self) -> Result<Option<Arc<Relief>>, SceneError> {
         if self.normal_map.is_none() && self.height_map.is_none() {
             return Ok(None);
