@@ -123,8 +123,10 @@ impl Stats {
             ToClean::In(s) => format!("1 % in {}", duration(s)),
             ToClean::Needs(n) => format!("1 % at ~{n:.0} spp"),
         };
+        // The noise is the accumulated image's: with the denoised one on screen, says so.
+        let raw = if self.denoised.is_some() { "raw " } else { "" };
         format!(
-            "{pass} · UI {frame:.1} ms · {samples} · noise ±{}, {to_clean}",
+            "{pass} · UI {frame:.1} ms · {samples} · {raw}noise ±{}, {to_clean}",
             percent(noise.relative_rms_error)
         )
     }
@@ -191,8 +193,13 @@ impl Stats {
                 .on_hover_text(DENOISE_HOVER);
         }
         if let Some((noise, to_clean)) = self.noise.zip(self.to_clean()) {
+            let of = if self.denoised.is_some() {
+                "Noise of the raw image"
+            } else {
+                "Noise"
+            };
             ui.label(format!(
-                "Noise: ±{} (RMS over the image)",
+                "{of}: ±{} (RMS over the image)",
                 percent(noise.relative_rms_error)
             ))
             .on_hover_text(NOISE_HOVER);
@@ -281,5 +288,12 @@ mod tests {
             ..n
         });
         assert!(stats.summary().ends_with("noise ±0.90 %, clean"));
+        // With the denoised image on screen the figure is the raw image's, and says so.
+        stats.denoised = Some((2, 5.0));
+        assert!(
+            stats.summary().ends_with("2/64 spp · raw noise ±0.90 %, clean"),
+            "{}",
+            stats.summary()
+        );
     }
 }
