@@ -109,6 +109,9 @@ pub struct Status {
 pub enum Cause {
     /// Compare A/B is on (what to do while comparing): taken down when comparing stops.
     Comparing,
+    /// Check my image is on (reading the image, what to set while checking): taken down when
+    /// the check stops.
+    Checking,
     /// The text typed into the number field of this name could not be used as it stood:
     /// taken down when a good number is typed there ([`panels::Typed`]).
     TypedNumber(String),
@@ -439,6 +442,7 @@ impl WorkbenchApp {
         let fixed = match self.status.as_ref().and_then(|s| s.cause.as_ref()) {
             Some(Cause::InvalidSettings) => self.state.settings.validate().is_ok(),
             Some(Cause::Comparing) => self.compare.is_none(),
+            Some(Cause::Checking) => self.check.is_none(),
             Some(Cause::TypedNumber(_)) => false,
             Some(Cause::MissingFolder(_)) => self.state.screenshot_folder.is_dir(),
             Some(Cause::CameraSeesNothing | Cause::RenderFailed { .. }) => false,
@@ -1179,7 +1183,11 @@ impl WorkbenchApp {
     fn start_check(&mut self, ctx: &egui::Context, path: std::path::PathBuf) {
         self.compare = None;
         let check = check::StudentCheck::start(ctx, path);
-        self.set_status(StatusKind::Info, format!("Reading {}…", check.name()));
+        self.set_status_while(
+            StatusKind::Info,
+            Cause::Checking,
+            format!("Reading {}…", check.name()),
+        );
         self.check = Some(check);
     }
 
@@ -1201,8 +1209,9 @@ impl WorkbenchApp {
                     camera.width = width;
                     camera.height = height;
                 }
-                self.set_status(
+                self.set_status_while(
                     StatusKind::Info,
+                    Cause::Checking,
                     format!(
                         "Checking {name} ({width} × {height}) against the exact figure: set the \
                          stage, camera and light it was made with"

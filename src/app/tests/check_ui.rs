@@ -116,10 +116,12 @@ fn a_dropped_image_is_diagnosed_and_the_diagnosis_follows_the_settings() {
     );
     assert!(h.query_by_label_contains(&line).is_some(), "{line}");
 
-    // Stop checking: back to the live image.
+    // Stop checking: back to the live image, and the check's status line goes with it.
+    assert!(status(&h).0.starts_with("Checking "), "{}", status(&h).0);
     click(&mut h, "Stop checking");
     assert!(h.state().check.is_none());
     settle(&mut h);
+    assert!(h.state().status.is_none(), "{:?}", status(&h));
 }
 
 /// The exact figure at the window's own size, typed into the File field and checked: `none`.
