@@ -732,7 +732,7 @@ fn control_characters_from_files_are_escaped_in_what_is_printed() {
     assert!(!out.stdout.contains(&0x1b) && !out.stderr.contains(&0x1b));
 }
 
-/// A texture whose header says 16384² (782 KB of PNG that decodes to 4 GiB) is counted in
+/// A texture whose header says 16384² (782 KB of PNG whose decoding takes about 5 GiB) is counted in
 /// the memory estimate from its header: refused before the render under a 3 GB limit, rather
 /// than aborting while it decodes.
 #[test]
@@ -770,7 +770,7 @@ fn a_texture_too_large_for_the_memory_is_refused_before_the_render() {
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
-        err.starts_with("error: a 8×8 render needs about 4.1 GiB but only "),
+        err.starts_with("error: a 8×8 render needs about 5.1 GiB but only "),
         "{err}"
     );
     assert!(!dir.path().join("x.png").exists());
@@ -782,7 +782,7 @@ fn a_texture_too_large_for_the_memory_is_refused_before_the_render() {
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
-        err.starts_with("error: inspecting a pixel of m.obj needs about 4.1 GiB but only "),
+        err.starts_with("error: inspecting a pixel of m.obj needs about 5.1 GiB but only "),
         "{err}"
     );
 }
