@@ -109,9 +109,10 @@ impl Layout {
         &mut plane[self.pad * self.stride..(self.pad + self.height) * self.stride]
     }
 
-    /// `values` (`width × height`) with the border: `outside` there.
+    /// `values` (`width × height`) with the border: `outside` there (a plane from
+    /// [`SPARE_PLANES`] where one is kept).
     fn padded(&self, values: impl Fn(usize) -> f32 + Sync, outside: f32) -> Vec<f32> {
-        let mut plane = vec![outside; self.len()];
+        let mut plane = take_plane(self.len(), outside);
         self.rows_mut(&mut plane)
             .par_chunks_mut(self.stride)
             .enumerate()
@@ -122,6 +123,43 @@ impl Layout {
                 }
             });
         plane
+    }
+}
+
+/// Planes kept from one call of the filter to the next, up to [`SPARE_BYTES`]: a fresh
+/// megabyte-sized allocation comes from the system as untouched pages, and the page faults of
+/// the filter's sixteen planes took about as long as its passes (at 512², some 7,000 faults a
+/// call, 15 ms). What a plane held never matters: each is filled before it is read.
+static SPARE_PLANES: std::sync::Mutex<Vec<Vec<f32>>> = std::sync::Mutex::new(Vec::new());
+
+/// At most this many bytes of planes are kept (a 1,024² image's planes fit).
+const SPARE_BYTES: usize = 96 << 20;
+
+/// A plane of `len` values, each `fill`.
+fn take_plane(len: usize, fill: f32) -> Vec<f32> {
+    let spare = SPARE_PLANES
+        .lock()
+        .ok()
+        .and_then(|mut spare| spare.pop())
+        .unwrap_or_default();
+    let mut plane = spare;
+    plane.clear();
+    plane.resize(len, fill);
+    plane
+}
+
+/// Keeps `planes` for later calls, as many as fit in [`SPARE_BYTES`].
+fn give_back(planes: impl IntoIterator<Item = Vec<f32>>) {
+    let Ok(mut spare) = SPARE_PLANES.lock() else {
+        return;
+    };
+    let mut bytes: usize = spare.iter().map(|p| p.capacity() * 4).sum();
+    for plane in planes {
+        if bytes + plane.capacity() * 4 > SPARE_BYTES {
+            break;
+        }
+        bytes += plane.capacity() * 4;
+        spare.push(plane);
     }
 }
 
@@ -146,8 +184,6 @@ struct Guide {
     /// σz times the depth's change per pixel at the pixel (the smaller one-sided difference
     /// of each axis, the larger axis).
     depth_slope: Vec<f32>,
-    /// A floor under the depth tolerance: a thousandth of the depth.
-    depth_floor: Vec<f32>,
     /// Per column (padded as a row is), 1 over the 3 × 3 blur's weight inside the image
     /// along x: the variance's blur is renormalised at the image's edges.
     blur_x: Vec<f32>,
@@ -183,52 +219,72 @@ impl Denoiser {
             .take_while(|step| *step < width.max(height))
             .collect();
         let layout = Layout::new(width, height, &steps);
-        let albedo: Vec<Vec3> = features.albedo.par_iter().map(|a| effective(*a)).collect();
-        let light: Vec<Vec3> = colour
-            .pixels
-            .par_iter()
-            .zip(&albedo)
-            .map(|(c, a)| *c / *a)
-            .collect();
-        let variance: Vec<f32> = match variance {
+        let albedo = |i: usize| effective(features.albedo[i]);
+        let light = |i: usize| colour.pixels[i] / albedo(i);
+        // For a single sample, the variance estimated from the neighbourhood.
+        let spatial = match variance {
             Some(variance) => {
                 assert_eq!(variance.len(), width * height);
-                variance
-                    .par_iter()
-                    .zip(&albedo)
-                    .map(|(s, a)| {
-                        let a = (a.x + a.y + a.z) / 3.0;
-                        s / (a * a)
-                    })
-                    .collect()
+                Vec::new()
             }
-            None => spatial_variance(&light, width, height),
+            None => {
+                let light: Vec<Vec3> = (0..width * height).into_par_iter().map(light).collect();
+                spatial_variance(&light, width, height)
+            }
+        };
+        // The light's variance: the colour's over the albedo's mean squared.
+        let variance = |i: usize| match variance {
+            Some(variance) => {
+                let a = albedo(i);
+                let a = (a.x + a.y + a.z) / 3.0;
+                variance[i] / (a * a)
+            }
+            None => spatial[i],
         };
         let mut light = Light {
-            r: layout.padded(|i| light[i].x, 0.0),
-            g: layout.padded(|i| light[i].y, 0.0),
-            b: layout.padded(|i| light[i].z, 0.0),
-            lum: layout.padded(|i| luminance(light[i].x, light[i].y, light[i].z), 0.0),
-            variance: layout.padded(|i| variance[i], 0.0),
+            r: layout.padded(|i| light(i).x, 0.0),
+            g: layout.padded(|i| light(i).y, 0.0),
+            b: layout.padded(|i| light(i).z, 0.0),
+            lum: layout.padded(
+                |i| {
+                    let l = light(i);
+                    luminance(l.x, l.y, l.z)
+                },
+                0.0,
+            ),
+            variance: layout.padded(variance, 0.0),
         };
         let guide = self.guide(features, &layout);
-        let mut next = light.clone();
+        // The border of what the passes write stays 0.
+        let mut next = Light {
+            r: take_plane(layout.len(), 0.0),
+            g: take_plane(layout.len(), 0.0),
+            b: take_plane(layout.len(), 0.0),
+            lum: take_plane(layout.len(), 0.0),
+            variance: take_plane(layout.len(), 0.0),
+        };
         for &step in &steps {
             self.pass(isa, step, &layout, &light, &guide, &mut next);
             std::mem::swap(&mut light, &mut next);
         }
-        Image {
+        let image = Image {
             width: colour.width,
             height: colour.height,
-            pixels: albedo
-                .par_iter()
-                .enumerate()
-                .map(|(i, a)| {
+            pixels: (0..width * height)
+                .into_par_iter()
+                .map(|i| {
                     let p = layout.row(i / width) + i % width;
-                    *a * Vec3::new(light.r[p], light.g[p], light.b[p])
+                    albedo(i) * Vec3::new(light.r[p], light.g[p], light.b[p])
                 })
                 .collect(),
-        }
+        };
+        give_back(
+            [light, next]
+                .into_iter()
+                .flat_map(|l| [l.r, l.g, l.b, l.lum, l.variance])
+                .chain([guide.nx, guide.ny, guide.nz, guide.depth, guide.depth_slope]),
+        );
+        image
     }
 
     fn guide(&self, features: &Features, layout: &Layout) -> Guide {
@@ -267,7 +323,6 @@ impl Denoiser {
             nz: layout.padded(|i| normal[i].z, 0.0),
             depth: layout.padded(|i| depth[i], f32::INFINITY),
             depth_slope: layout.padded(depth_slope, 0.0),
-            depth_floor: layout.padded(|i| 1e-3 * depth[i] + 1e-6, 0.0),
             blur_x,
         }
     }
@@ -477,17 +532,19 @@ impl Row<'_> {
                 tolerance[l] = 1.0 / (self.sigma_luminance * v.max(0.0).sqrt() + 1e-4);
             }
             // 1 over the depth's tolerance one and two steps away.
-            let (slope, floor) = (load(&guide.depth_slope, c), load(&guide.depth_floor, c));
+            let (slope, z) = (load(&guide.depth_slope, c), load(planes.z, c));
             let mut depth_near = [0.0; LANES];
             let mut depth_far = [0.0; LANES];
             for l in 0..LANES {
-                depth_near[l] = 1.0 / (slope[l] * near + floor[l]);
-                depth_far[l] = 1.0 / (slope[l] * far + floor[l]);
+                // A floor under the tolerance: a thousandth of the depth.
+                let floor = 1e-3 * z[l] + 1e-6;
+                depth_near[l] = 1.0 / (slope[l] * near + floor);
+                depth_far[l] = 1.0 / (slope[l] * far + floor);
             }
             let centre = Centre {
                 lum: load(planes.lum, c),
                 tolerance,
-                z: load(planes.z, c),
+                z,
                 n: [
                     load(planes.n[0], c),
                     load(planes.n[1], c),
