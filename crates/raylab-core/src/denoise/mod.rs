@@ -9,10 +9,10 @@
 //!    ([`Features::albedo`]), the filter smooths what is left (the light arriving), and the
 //!    albedo multiplies it back. A texture's or an edge's detail is in the albedo, so it is
 //!    never blurred.
-//! 2. Four passes of a 5 × 5 B3-spline kernel, its taps 1, 2, 4 and 8 pixels apart (a 61
-//!    pixel wide filter for 25 taps a pass; a fifth pass, 16 apart, blurred the light's
-//!    changes near corners more than it removed noise, on the path-traced box). A tap weighs less the more its pixel differs from
-//!    the centre's: in normal (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth
+//! 2. Three passes of a 5 × 5 B3-spline kernel, its taps 1, 2 and 4 pixels apart (a 29 pixel
+//!    wide filter for 25 taps a pass; on the path-traced box a fourth pass, 8 apart, blurred
+//!    the light's changes near corners and silhouettes more than it removed noise, from 16
+//!    samples on). A tap weighs less the more its pixel differs from the centre's: in normal (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth
 //!    slope, and in the light's luminance relative to how noisy it still is (σl times its
 //!    standard deviation, from the film's per-pixel variance, itself filtered along).
 //!    Noise is what differs by about a standard deviation; an edge of a shadow differs by
@@ -42,8 +42,10 @@ const B3: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 /// background), and the colour is filtered as it is.
 const ALBEDO_FLOOR: f32 = 1e-3;
 
-/// The filter's settings. The defaults are SVGF's σs, with the passes tuned on the path-traced
-/// Cornell box (PERFORMANCE.md gives the quality they reach).
+/// The filter's settings. The defaults started from SVGF's (σl 4, σn 128, σz 1, five passes)
+/// and were swept on the path-traced Cornell box at 4 to 256 samples (PERFORMANCE.md gives
+/// the sweep and the quality they reach): fewer passes and a looser normal weight lowered the
+/// error at every sample count.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Denoiser {
     /// À-trous passes; the kernel spans 1 + 4·(2^passes − 1) pixels.
@@ -61,9 +63,9 @@ pub struct Denoiser {
 impl Default for Denoiser {
     fn default() -> Self {
         Self {
-            passes: 4,
-            sigma_luminance: 4.0,
-            sigma_normal: 128.0,
+            passes: 3,
+            sigma_luminance: 5.0,
+            sigma_normal: 16.0,
             sigma_depth: 1.0,
         }
     }
