@@ -165,7 +165,7 @@ fn give_back(planes: impl IntoIterator<Item = Vec<f32>>) {
     }
 }
 
-/// Paded planes ([`Layout`]) of per-pixel values: the light (colour over albedo), its
+/// Padded planes ([`Layout`]) of per-pixel values: the light (colour over albedo), its
 /// luminance and its variance.
 #[derive(Clone)]
 struct Light {
