@@ -12,11 +12,19 @@
 //! 2. Three passes of a 5 × 5 B3-spline kernel, its taps 1, 2 and 4 pixels apart (a 29 pixel
 //!    wide filter for 25 taps a pass; on the path-traced box a fourth pass, 8 apart, blurred
 //!    the light's changes near corners and silhouettes more than it removed noise, from 16
-//!    samples on). A tap weighs less the more its pixel differs from the centre's: in normal (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth
-//!    slope, and in the light's luminance relative to how noisy it still is (σl times its
-//!    standard deviation, from the film's per-pixel variance, itself filtered along).
+//!    samples on). A tap weighs less the more its pixel differs from the centre's: in normal
+//!    (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth slope, and in the
+//!    light's luminance relative to how noisy it still is (σl times its standard deviation,
+//!    from the film's per-pixel variance, itself filtered along).
 //!    Noise is what differs by about a standard deviation; an edge of a shadow differs by
 //!    many, and as samples accumulate the standard deviation falls and the filter lets go.
+//! 3. A pixel whose feature samples saw two surfaces (on a silhouette or a crease) has a
+//!    shorter averaged normal n̄, and every neighbour, on either surface, rejects it and is
+//!    rejected by it: it would keep its noise. In the first pass its normal weight is
+//!    exp(−σn·(|n̄|² − n̄·n')) instead, which is 1 for a neighbour on either surface (n̄ =
+//!    (n₁ + n₂)/2 gives n̄·n₁ = n̄·n₂ = |n̄|²), so it is averaged with its nearest neighbours
+//!    on both sides. Only the first: in wider passes it pulled the pixel's mix toward light
+//!    from farther on each surface once the noise was low.
 //!
 //! The result depends only on the inputs (no random numbers, each pixel computed on its own),
 //! so it is the same on any thread count. The film's linear mean is never changed: the
@@ -353,6 +361,7 @@ impl Denoiser {
                 let row = Row {
                     y,
                     step,
+                    first: step == 1,
                     layout,
                     src,
                     guide,
@@ -394,6 +403,8 @@ fn luminance(r: f32, g: f32, b: f32) -> f32 {
 struct Row<'a> {
     y: usize,
     step: usize,
+    /// The first pass: its normal weight reaches as far as the centre's own normals spread.
+    first: bool,
     layout: &'a Layout,
     src: &'a Light,
     guide: &'a Guide,
@@ -543,15 +554,26 @@ impl Row<'_> {
                 depth_near[l] = 1.0 / (slope[l] * near + floor);
                 depth_far[l] = 1.0 / (slope[l] * far + floor);
             }
+            let n = [
+                load(planes.n[0], c),
+                load(planes.n[1], c),
+                load(planes.n[2], c),
+            ];
+            // The normal a neighbour's is held against: in the first pass, the length squared
+            // of the centre's averaged normal, below 1 where its feature samples saw several
+            // surfaces (a silhouette's or a crease's pixel); 1 after.
+            let mut reach = [1.0; LANES];
+            if self.first {
+                for l in 0..LANES {
+                    reach[l] = n[0][l] * n[0][l] + n[1][l] * n[1][l] + n[2][l] * n[2][l];
+                }
+            }
             let centre = Centre {
                 lum: load(planes.lum, c),
                 tolerance,
                 z,
-                n: [
-                    load(planes.n[0], c),
-                    load(planes.n[1], c),
-                    load(planes.n[2], c),
-                ],
+                n,
+                reach,
             };
             let mut sums = Sums {
                 w: [h0; LANES],
@@ -652,6 +674,8 @@ struct Centre {
     tolerance: [f32; LANES],
     z: [f32; LANES],
     n: [[f32; LANES]; 3],
+    /// What n·n' is held against ([`tap_weight`]).
+    reach: [f32; LANES],
 }
 
 /// Their sixteen neighbours' at one tap.
@@ -697,7 +721,7 @@ impl Tap {
                 self.sigma_normal,
                 [p.lum[l], q.lum[l], p.tolerance[l]],
                 [p.z[l], q.z[l], inverse_depth[l]],
-                [p.n[0][l], p.n[1][l], p.n[2][l]],
+                [p.n[0][l], p.n[1][l], p.n[2][l], p.reach[l]],
                 [q.n[0][l], q.n[1][l], q.n[2][l]],
             );
             sums.w[l] += w;
@@ -711,21 +735,21 @@ impl Tap {
 
 /// A tap's weight: the kernel's `h` times the edge-stopping weights, from the centre's and the
 /// neighbour's luminance (`[centre, neighbour, 1/(σl·standard deviation)]`), depth (`[centre,
-/// neighbour, 1/tolerance]`) and normals. A neighbour of infinite depth (outside the image)
-/// weighs 0.
+/// neighbour, 1/tolerance]`) and normals (the centre's with its reach, then the neighbour's:
+/// exp(−σn·max(0, reach − n·n'))). A neighbour of infinite depth (outside the image) weighs 0.
 #[inline(always)]
 fn tap_weight(
     h: f32,
     sigma_normal: f32,
     [lum_p, lum_q, tolerance]: [f32; 3],
     [z_p, z_q, inverse_depth]: [f32; 3],
-    n_p: [f32; 3],
+    [n_px, n_py, n_pz, reach]: [f32; 4],
     n_q: [f32; 3],
 ) -> f32 {
     let luminance = (lum_p - lum_q).abs() * tolerance;
     let depth = (z_p - z_q).abs() * inverse_depth;
-    let cos = n_p[0] * n_q[0] + n_p[1] * n_q[1] + n_p[2] * n_q[2];
-    let normal = sigma_normal * (1.0 - cos).max(0.0);
+    let cos = n_px * n_q[0] + n_py * n_q[1] + n_pz * n_q[2];
+    let normal = sigma_normal * (reach - cos).max(0.0);
     h * exp_neg(luminance + depth + normal)
 }
 
