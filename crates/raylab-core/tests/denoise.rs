@@ -14,7 +14,7 @@ use raylab_core::{RenderSettings, Stage};
 use common::{assert_same_image, on_threads, settings};
 
 /// The path-traced box at 64², 16 samples denoised: closer to a 2,048-sample reference than 32
-/// raw samples, a third of the 16 raw samples' error (measured: 7.4·10⁻³ against 2.3·10⁻²
+/// raw samples, a third of the 16 raw samples' error (measured: 5.4·10⁻³ against 2.3·10⁻²
 /// raw, 3.0·10⁻³ for 128 raw), its mean the raw image's within 0.5 %. A 64² box is mostly
 /// edges; at 256², `raylab bench --stage denoise` measures the gain that matters
 /// (PERFORMANCE.md).
@@ -74,7 +74,7 @@ fn noiseless_renders_are_left_alone() {
 /// absolute difference of neighbouring pixels in the bottom third, where only the floor is) is
 /// within 15 % of the reference's, where a blur would lower it. The noise here is only in the
 /// penumbrae, so there is little to gain: the error against the reference stays within a
-/// quarter of the raw image's (measured: 4.4·10⁻³ against 4.0·10⁻³).
+/// quarter of the raw image's (measured: 4.3·10⁻³ against 4.0·10⁻³).
 #[test]
 fn texture_detail_is_kept_under_soft_shadows() {
     let scene_settings = |samples: u32, seed: u64| {

@@ -9,14 +9,22 @@
 //!    ([`Features::albedo`]), the filter smooths what is left (the light arriving), and the
 //!    albedo multiplies it back. A texture's or an edge's detail is in the albedo, so it is
 //!    never blurred.
-//! 2. Four passes of a 5 × 5 B3-spline kernel, its taps 1, 2, 4 and 8 pixels apart (a 61
-//!    pixel wide filter for 25 taps a pass; a fifth pass, 16 apart, blurred the light's
-//!    changes near corners more than it removed noise, on the path-traced box). A tap weighs less the more its pixel differs from
-//!    the centre's: in normal (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth
-//!    slope, and in the light's luminance relative to how noisy it still is (σl times its
-//!    standard deviation, from the film's per-pixel variance, itself filtered along).
+//! 2. Three passes of a 5 × 5 B3-spline kernel, its taps 1, 2 and 4 pixels apart (a 29 pixel
+//!    wide filter for 25 taps a pass; on the path-traced box a fourth pass, 8 apart, blurred
+//!    the light's changes near corners and silhouettes more than it removed noise, from 16
+//!    samples on). A tap weighs less the more its pixel differs from the centre's: in normal
+//!    (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth slope, and in the
+//!    light's luminance relative to how noisy it still is (σl times its standard deviation,
+//!    from the film's per-pixel variance, itself filtered along).
 //!    Noise is what differs by about a standard deviation; an edge of a shadow differs by
 //!    many, and as samples accumulate the standard deviation falls and the filter lets go.
+//! 3. A pixel whose feature samples saw two surfaces (on a silhouette or a crease) has a
+//!    shorter averaged normal n̄, and every neighbour, on either surface, rejects it and is
+//!    rejected by it: it would keep its noise. In the first pass its normal weight is
+//!    exp(−σn·(|n̄|² − n̄·n')) instead, which is 1 for a neighbour on either surface (n̄ =
+//!    (n₁ + n₂)/2 gives n̄·n₁ = n̄·n₂ = |n̄|²), so it is averaged with its nearest neighbours
+//!    on both sides. Only the first: in wider passes it pulled the pixel's mix toward light
+//!    from farther on each surface once the noise was low.
 //!
 //! The result depends only on the inputs (no random numbers, each pixel computed on its own),
 //! so it is the same on any thread count. The film's linear mean is never changed: the
@@ -42,8 +50,10 @@ const B3: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 /// background), and the colour is filtered as it is.
 const ALBEDO_FLOOR: f32 = 1e-3;
 
-/// The filter's settings. The defaults are SVGF's σs, with the passes tuned on the path-traced
-/// Cornell box (PERFORMANCE.md gives the quality they reach).
+/// The filter's settings. The defaults started from SVGF's (σl 4, σn 128, σz 1, five passes)
+/// and were swept on the path-traced Cornell box at 4 to 256 samples (PERFORMANCE.md gives
+/// the sweep and the quality they reach): fewer passes and a looser normal weight lowered the
+/// error at every sample count.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Denoiser {
     /// À-trous passes; the kernel spans 1 + 4·(2^passes − 1) pixels.
@@ -61,34 +71,132 @@ pub struct Denoiser {
 impl Default for Denoiser {
     fn default() -> Self {
         Self {
-            passes: 4,
-            sigma_luminance: 4.0,
-            sigma_normal: 128.0,
+            passes: 3,
+            sigma_luminance: 5.0,
+            sigma_normal: 16.0,
             sigma_depth: 1.0,
         }
     }
 }
 
-/// Planes of per-pixel values: the light (colour over albedo) and its variance.
+/// Where the planes' values are: each plane is the image with a border of `pad` pixels on each
+/// side (wider on the right, to a whole number of sixteen-pixel blocks), so every tap of every
+/// pass reads sixteen neighbours in place, without a test. The border is outside the image: its
+/// depth is infinite, so a tap there weighs exactly 0, and its other values are 0.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    width: usize,
+    height: usize,
+    pad: usize,
+    /// Values from one row to the next: `pad`, the image's width rounded up to whole blocks,
+    /// `pad`.
+    stride: usize,
+}
+
+impl Layout {
+    /// The layout for the passes that run on `width × height` (taps up to two steps away).
+    fn new(width: usize, height: usize, steps: &[usize]) -> Layout {
+        let pad = 2 * steps.iter().copied().max().unwrap_or(1);
+        Layout {
+            width,
+            height,
+            pad,
+            stride: pad + width.div_ceil(LANES) * LANES + pad,
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.stride * (self.height + 2 * self.pad)
+    }
+
+    /// Where pixel `(0, y)` is.
+    fn row(&self, y: usize) -> usize {
+        (y + self.pad) * self.stride + self.pad
+    }
+
+    /// The image's rows of a padded plane, for writing.
+    fn rows_mut<'a>(&self, plane: &'a mut [f32]) -> &'a mut [f32] {
+        &mut plane[self.pad * self.stride..(self.pad + self.height) * self.stride]
+    }
+
+    /// `values` (`width × height`) with the border: `outside` there (a plane from
+    /// [`SPARE_PLANES`] where one is kept).
+    fn padded(&self, values: impl Fn(usize) -> f32 + Sync, outside: f32) -> Vec<f32> {
+        let mut plane = take_plane(self.len(), outside);
+        self.rows_mut(&mut plane)
+            .par_chunks_mut(self.stride)
+            .enumerate()
+            .for_each(|(y, row)| {
+                let row = &mut row[self.pad..self.pad + self.width];
+                for (x, out) in row.iter_mut().enumerate() {
+                    *out = values(y * self.width + x);
+                }
+            });
+        plane
+    }
+}
+
+/// Planes kept from one call of the filter to the next, up to [`SPARE_BYTES`]: a fresh
+/// megabyte-sized allocation comes from the system as untouched pages, and the page faults of
+/// the filter's sixteen planes took about as long as its passes (at 512², some 7,000 faults a
+/// call, 15 ms). What a plane held never matters: each is filled before it is read.
+static SPARE_PLANES: std::sync::Mutex<Vec<Vec<f32>>> = std::sync::Mutex::new(Vec::new());
+
+/// At most this many bytes of planes are kept (a 1,024² image's planes fit).
+const SPARE_BYTES: usize = 96 << 20;
+
+/// A plane of `len` values, each `fill`.
+fn take_plane(len: usize, fill: f32) -> Vec<f32> {
+    let spare = SPARE_PLANES
+        .lock()
+        .ok()
+        .and_then(|mut spare| spare.pop())
+        .unwrap_or_default();
+    let mut plane = spare;
+    plane.clear();
+    plane.resize(len, fill);
+    plane
+}
+
+/// Keeps `planes` for later calls, as many as fit in [`SPARE_BYTES`].
+fn give_back(planes: impl IntoIterator<Item = Vec<f32>>) {
+    let Ok(mut spare) = SPARE_PLANES.lock() else {
+        return;
+    };
+    let mut bytes: usize = spare.iter().map(|p| p.capacity() * 4).sum();
+    for plane in planes {
+        if bytes + plane.capacity() * 4 > SPARE_BYTES {
+            break;
+        }
+        bytes += plane.capacity() * 4;
+        spare.push(plane);
+    }
+}
+
+/// Padded planes ([`Layout`]) of per-pixel values: the light (colour over albedo), its
+/// luminance and its variance.
 #[derive(Clone)]
 struct Light {
     r: Vec<f32>,
     g: Vec<f32>,
     b: Vec<f32>,
+    lum: Vec<f32>,
     variance: Vec<f32>,
 }
 
-/// The features as the filter reads them, a plane each.
+/// The features as the filter reads them, a padded plane each ([`Layout`]).
 struct Guide {
     nx: Vec<f32>,
     ny: Vec<f32>,
     nz: Vec<f32>,
+    /// Infinite outside the image: a tap there weighs 0.
     depth: Vec<f32>,
     /// σz times the depth's change per pixel at the pixel (the smaller one-sided difference
     /// of each axis, the larger axis).
     depth_slope: Vec<f32>,
-    /// A floor under the depth tolerance: a thousandth of the depth.
-    depth_floor: Vec<f32>,
+    /// Per column (padded as a row is), 1 over the 3 × 3 blur's weight inside the image
+    /// along x: the variance's blur is renormalised at the image's edges.
+    blur_x: Vec<f32>,
 }
 
 impl Denoiser {
@@ -116,139 +224,201 @@ impl Denoiser {
         if width == 0 || height == 0 {
             return colour.clone();
         }
-        let albedo: Vec<Vec3> = features.albedo.par_iter().map(|a| effective(*a)).collect();
-        let mut light = demodulate(colour, &albedo);
-        match variance {
+        let steps: Vec<usize> = (0..self.passes)
+            .map(|pass| 1usize << pass)
+            .take_while(|step| *step < width.max(height))
+            .collect();
+        let layout = Layout::new(width, height, &steps);
+        let albedo = |i: usize| effective(features.albedo[i]);
+        let light = |i: usize| colour.pixels[i] / albedo(i);
+        // For a single sample, the variance estimated from the neighbourhood.
+        let spatial = match variance {
             Some(variance) => {
                 assert_eq!(variance.len(), width * height);
-                light
-                    .variance
-                    .par_iter_mut()
-                    .zip(variance)
-                    .zip(&albedo)
-                    .for_each(|((v, s), a)| {
-                        let a = (a.x + a.y + a.z) / 3.0;
-                        *v = s / (a * a);
-                    });
+                Vec::new()
             }
-            None => light.variance = spatial_variance(&light, width, height),
-        }
-        let guide = self.guide(features);
-        let mut next = light.clone();
-        for pass in 0..self.passes {
-            let step = 1usize << pass;
-            if step >= width.max(height) {
-                break;
+            None => {
+                let light: Vec<Vec3> = (0..width * height).into_par_iter().map(light).collect();
+                spatial_variance(&light, width, height)
             }
-            self.pass(isa, step, width, height, &light, &guide, &mut next);
+        };
+        // The light's variance: the colour's over the albedo's mean squared.
+        let variance = |i: usize| match variance {
+            Some(variance) => {
+                let a = albedo(i);
+                let a = (a.x + a.y + a.z) / 3.0;
+                variance[i] / (a * a)
+            }
+            None => spatial[i],
+        };
+        let mut light = Light {
+            r: layout.padded(|i| light(i).x, 0.0),
+            g: layout.padded(|i| light(i).y, 0.0),
+            b: layout.padded(|i| light(i).z, 0.0),
+            lum: layout.padded(
+                |i| {
+                    let l = light(i);
+                    luminance(l.x, l.y, l.z)
+                },
+                0.0,
+            ),
+            variance: layout.padded(variance, 0.0),
+        };
+        let guide = self.guide(features, &layout);
+        // The border of what the passes write stays 0.
+        let mut next = Light {
+            r: take_plane(layout.len(), 0.0),
+            g: take_plane(layout.len(), 0.0),
+            b: take_plane(layout.len(), 0.0),
+            lum: take_plane(layout.len(), 0.0),
+            variance: take_plane(layout.len(), 0.0),
+        };
+        for &step in &steps {
+            self.pass(isa, step, &layout, &light, &guide, &mut next);
             std::mem::swap(&mut light, &mut next);
         }
-        Image {
+        let image = Image {
             width: colour.width,
             height: colour.height,
-            pixels: albedo
-                .par_iter()
-                .enumerate()
-                .map(|(i, a)| *a * Vec3::new(light.r[i], light.g[i], light.b[i]))
+            pixels: (0..width * height)
+                .into_par_iter()
+                .map(|i| {
+                    let p = layout.row(i / width) + i % width;
+                    albedo(i) * Vec3::new(light.r[p], light.g[p], light.b[p])
+                })
                 .collect(),
-        }
+        };
+        give_back(
+            [light, next]
+                .into_iter()
+                .flat_map(|l| [l.r, l.g, l.b, l.lum, l.variance])
+                .chain([guide.nx, guide.ny, guide.nz, guide.depth, guide.depth_slope]),
+        );
+        image
     }
 
-    fn guide(&self, features: &Features) -> Guide {
+    fn guide(&self, features: &Features, layout: &Layout) -> Guide {
         let (width, height) = (features.width as usize, features.height as usize);
         let depth = &features.depth;
         let at = |x: usize, y: usize| depth[y * width + x];
-        let mut depth_slope = vec![0.0; width * height];
-        depth_slope
-            .par_chunks_mut(width)
+        let depth_slope = |i: usize| {
+            let (x, y) = (i % width, i / width);
+            let z = at(x, y);
+            let one_sided = |a: Option<f32>, b: Option<f32>| {
+                let d = |n: Option<f32>| n.map_or(f32::INFINITY, |n| (n - z).abs());
+                let s = d(a).min(d(b));
+                if s.is_finite() { s } else { 0.0 }
+            };
+            let gx = one_sided(
+                x.checked_sub(1).map(|x| at(x, y)),
+                (x + 1 < width).then(|| at(x + 1, y)),
+            );
+            let gy = one_sided(
+                y.checked_sub(1).map(|y| at(x, y)),
+                (y + 1 < height).then(|| at(x, y + 1)),
+            );
+            self.sigma_depth * gx.max(gy)
+        };
+        let normal = &features.normal;
+        let mut blur_x = vec![0.0; layout.stride];
+        for (x, b) in blur_x[layout.pad..layout.pad + width]
+            .iter_mut()
             .enumerate()
-            .for_each(|(y, row)| {
-                for (x, slope) in row.iter_mut().enumerate() {
-                    let z = at(x, y);
-                    let one_sided = |a: Option<f32>, b: Option<f32>| {
-                        let d = |n: Option<f32>| n.map_or(f32::INFINITY, |n| (n - z).abs());
-                        let s = d(a).min(d(b));
-                        if s.is_finite() { s } else { 0.0 }
-                    };
-                    let gx = one_sided(
-                        x.checked_sub(1).map(|x| at(x, y)),
-                        (x + 1 < width).then(|| at(x + 1, y)),
-                    );
-                    let gy = one_sided(
-                        y.checked_sub(1).map(|y| at(x, y)),
-                        (y + 1 < height).then(|| at(x, y + 1)),
-                    );
-                    *slope = self.sigma_depth * gx.max(gy);
-                }
-            });
+        {
+            *b = 1.0 / blur_weight(x, width);
+        }
         Guide {
-            nx: features.normal.iter().map(|n| n.x).collect(),
-            ny: features.normal.iter().map(|n| n.y).collect(),
-            nz: features.normal.iter().map(|n| n.z).collect(),
-            depth_floor: depth.iter().map(|z| 1e-3 * z + 1e-6).collect(),
-            depth: depth.clone(),
-            depth_slope,
+            nx: layout.padded(|i| normal[i].x, 0.0),
+            ny: layout.padded(|i| normal[i].y, 0.0),
+            nz: layout.padded(|i| normal[i].z, 0.0),
+            depth: layout.padded(|i| depth[i], f32::INFINITY),
+            depth_slope: layout.padded(depth_slope, 0.0),
+            blur_x,
         }
     }
 
-    /// One à-trous pass with taps `step` pixels apart, from `src` into `dst`.
-    #[allow(clippy::too_many_arguments)]
+    /// One à-trous pass with taps `step` pixels apart, from `src` into `dst` (the image's
+    /// pixels; the border stays as it is).
     fn pass(
         &self,
         isa: Isa,
         step: usize,
-        width: usize,
-        height: usize,
+        layout: &Layout,
         src: &Light,
         guide: &Guide,
         dst: &mut Light,
     ) {
-        // The luminance's tolerance at each pixel: σl times the standard deviation of its
-        // noise, from the variance blurred over 3 × 3 (a pixel's own estimate is noisy).
-        let blurred = blur3(&src.variance, width, height);
-        let inverse_tolerance: Vec<f32> = blurred
-            .par_iter()
-            .map(|v| 1.0 / (self.sigma_luminance * v.max(0.0).sqrt() + 1e-4))
-            .collect();
-        let luminance: Vec<f32> = (0..width * height)
-            .into_par_iter()
-            .map(|i| (src.r[i] + src.g[i] + src.b[i]) * (1.0 / 3.0))
-            .collect();
-        let sigma_normal = self.sigma_normal;
-        dst.r
-            .par_chunks_mut(width)
-            .zip(dst.g.par_chunks_mut(width))
-            .zip(dst.b.par_chunks_mut(width))
-            .zip(dst.variance.par_chunks_mut(width))
+        let stride = layout.stride;
+        layout
+            .rows_mut(&mut dst.r)
+            .par_chunks_mut(stride)
+            .zip(layout.rows_mut(&mut dst.g).par_chunks_mut(stride))
+            .zip(layout.rows_mut(&mut dst.b).par_chunks_mut(stride))
+            .zip(layout.rows_mut(&mut dst.lum).par_chunks_mut(stride))
+            .zip(layout.rows_mut(&mut dst.variance).par_chunks_mut(stride))
             .enumerate()
-            .for_each(|(y, (((r, g), b), v))| {
+            .for_each(|(y, ((((r, g), b), lum), v))| {
                 let row = Row {
                     y,
                     step,
-                    width,
-                    height,
+                    first: step == 1,
+                    layout,
                     src,
                     guide,
-                    luminance: &luminance,
-                    inverse_tolerance: &inverse_tolerance,
-                    sigma_normal,
+                    sigma_luminance: self.sigma_luminance,
+                    sigma_normal: self.sigma_normal,
                 };
-                row.filter(isa, r, g, b, v);
+                let at = layout.pad..layout.pad + layout.width;
+                let out = Out {
+                    r: &mut r[at.clone()],
+                    g: &mut g[at.clone()],
+                    b: &mut b[at.clone()],
+                    lum: &mut lum[at.clone()],
+                    v: &mut v[at],
+                };
+                row.filter(isa, out);
             });
     }
+}
+
+/// The 3 × 3 binomial kernel's weight (¼, ½, ¼) inside `0..n` around `x`.
+fn blur_weight(x: usize, n: usize) -> f32 {
+    let mut w = 0.5;
+    if x > 0 {
+        w += 0.25;
+    }
+    if x + 1 < n {
+        w += 0.25;
+    }
+    w
+}
+
+/// A pixel's luminance, the mean of its channels.
+#[inline(always)]
+fn luminance(r: f32, g: f32, b: f32) -> f32 {
+    (r + g + b) * (1.0 / 3.0)
 }
 
 /// One output row of an à-trous pass.
 struct Row<'a> {
     y: usize,
     step: usize,
-    width: usize,
-    height: usize,
+    /// The first pass: its normal weight reaches as far as the centre's own normals spread.
+    first: bool,
+    layout: &'a Layout,
     src: &'a Light,
     guide: &'a Guide,
-    luminance: &'a [f32],
-    inverse_tolerance: &'a [f32],
+    sigma_luminance: f32,
     sigma_normal: f32,
+}
+
+/// The image's pixels of one row of the planes a pass writes.
+struct Out<'a> {
+    r: &'a mut [f32],
+    g: &'a mut [f32],
+    b: &'a mut [f32],
+    lum: &'a mut [f32],
+    v: &'a mut [f32],
 }
 
 /// The instruction sets the filter's row loop is compiled for, the widest the CPU has chosen
@@ -280,126 +450,173 @@ impl Isa {
 
 impl Row<'_> {
     /// The row, with the row loop compiled for `isa` (which the CPU must have: [`Isa::best`]).
-    fn filter(&self, isa: Isa, r: &mut [f32], g: &mut [f32], b: &mut [f32], v: &mut [f32]) {
+    fn filter(&self, isa: Isa, out: Out) {
         match isa {
-            Isa::Portable => self.filter_portable(r, g, b, v),
+            Isa::Portable => self.filter_portable(out),
             // SAFETY: `isa` is Avx2 or Avx512 only where `Isa::best` found the CPU to have it.
-            // Measured: 512² on one thread of a Zen 4, the filter takes 190 ms as SSE2 code
-            // and NN ms as AVX-512 code.
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { self.filter_avx2(r, g, b, v) },
+            Isa::Avx2 => unsafe { self.filter_avx2(out) },
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { self.filter_avx512(r, g, b, v) },
+            Isa::Avx512 => unsafe { self.filter_avx512(out) },
         }
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn filter_avx2(&self, r: &mut [f32], g: &mut [f32], b: &mut [f32], v: &mut [f32]) {
-        self.filter_portable(r, g, b, v)
+    fn filter_avx2(&self, out: Out) {
+        self.filter_portable(out)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn filter_avx512(&self, r: &mut [f32], g: &mut [f32], b: &mut [f32], v: &mut [f32]) {
-        self.filter_portable(r, g, b, v)
+    fn filter_avx512(&self, out: Out) {
+        self.filter_portable(out)
     }
 
     /// Sixteen pixels at a time: their own values and running sums stay in registers (fixed
     /// arrays the compiler keeps in vector registers) through all 25 taps, each tap reading
-    /// its sixteen neighbours straight from the row they are on, or, near the image's left
-    /// and right edges, one by one with those outside the image weighing 0.
+    /// its sixteen neighbours straight from the padded planes (those outside the image weigh
+    /// 0 by their infinite depth).
     #[inline(always)]
-    fn filter_portable(&self, r: &mut [f32], g: &mut [f32], b: &mut [f32], v: &mut [f32]) {
-        let (width, step) = (self.width, self.step);
+    fn filter_portable(&self, out: Out) {
+        let layout = self.layout;
+        let (width, stride, step) = (layout.width, layout.stride as isize, self.step);
         let (src, guide) = (self.src, self.guide);
-        let row = self.y * width;
+        // Every plane cut to one length, so one bounds test covers all nine reads of a tap.
+        let len = src.r.len();
+        let planes = Planes {
+            lum: &src.lum[..len],
+            z: &guide.depth[..len],
+            n: [&guide.nx[..len], &guide.ny[..len], &guide.nz[..len]],
+            r: &src.r[..len],
+            g: &src.g[..len],
+            b: &src.b[..len],
+            v: &src.variance[..len],
+        };
+        let row = layout.row(self.y);
         let h0 = B3[2] * B3[2];
-        // The sixteen neighbours' values, each plane read by `load(plane, …)` or
-        // `gather(plane, …)` (a macro, not a function taking a closure: a closure not inlined
-        // is compiled without the caller's instruction set).
-        macro_rules! neighbours {
-            ($read:ident($($arg:expr),*)) => {
-                Neighbours {
-                    lum: $read(self.luminance, $($arg),*),
-                    z: $read(&guide.depth, $($arg),*),
-                    n: [
-                        $read(&guide.nx, $($arg),*),
-                        $read(&guide.ny, $($arg),*),
-                        $read(&guide.nz, $($arg),*),
-                    ],
-                    r: $read(&src.r, $($arg),*),
-                    g: $read(&src.g, $($arg),*),
-                    b: $read(&src.b, $($arg),*),
-                    v: $read(&src.variance, $($arg),*),
+        // The variance's 3 × 3 blur, renormalised at the top and bottom rows.
+        let blur_y = 1.0 / blur_weight(self.y, layout.height);
+        let (near, far) = (step as f32, (2 * step) as f32);
+        // The 24 taps (offset in the planes, kernel weight), those one step away (their depth
+        // tolerance is the centre's at one step) apart from those two steps away.
+        let mut near_taps = [(0isize, 0.0f32); 8];
+        let mut far_taps = [(0isize, 0.0f32); 16];
+        let (mut n_near, mut n_far) = (0, 0);
+        for (j, ky) in B3.iter().enumerate() {
+            for (i, kx) in B3.iter().enumerate() {
+                let tap = (
+                    (j as isize - 2) * step as isize * stride + (i as isize - 2) * step as isize,
+                    kx * ky,
+                );
+                match i.abs_diff(2).max(j.abs_diff(2)) {
+                    0 => {}
+                    1 => {
+                        near_taps[n_near] = tap;
+                        n_near += 1;
+                    }
+                    _ => {
+                        far_taps[n_far] = tap;
+                        n_far += 1;
+                    }
                 }
-            };
+            }
         }
         let mut x0 = 0;
         while x0 < width {
-            let n = (width - x0).min(LANES);
-            // Lanes past the row's end repeat its last pixel; they are never written.
-            macro_rules! lanes {
-                ($plane:expr) => {
-                    gather($plane, row, x0 as isize, width)
-                };
+            let c = row + x0;
+            // The luminance's tolerance at each pixel: σl times the standard deviation of its
+            // noise, from the variance blurred over 3 × 3 (a pixel's own estimate is noisy).
+            let mut blurred = [0.0; LANES];
+            for (j, ky) in [0.25f32, 0.5, 0.25].iter().enumerate() {
+                for (i, kx) in [0.25f32, 0.5, 0.25].iter().enumerate() {
+                    let q = (c as isize + (j as isize - 1) * stride + i as isize - 1) as usize;
+                    let k = kx * ky;
+                    let v = load(planes.v, q);
+                    for l in 0..LANES {
+                        blurred[l] += k * v[l];
+                    }
+                }
+            }
+            let blur_x = load(&guide.blur_x, layout.pad + x0);
+            let mut tolerance = [0.0; LANES];
+            for l in 0..LANES {
+                let v = blurred[l] * (blur_x[l] * blur_y);
+                tolerance[l] = 1.0 / (self.sigma_luminance * v.max(0.0).sqrt() + 1e-4);
+            }
+            // 1 over the depth's tolerance one and two steps away.
+            let (slope, z) = (load(&guide.depth_slope, c), load(planes.z, c));
+            let mut depth_near = [0.0; LANES];
+            let mut depth_far = [0.0; LANES];
+            for l in 0..LANES {
+                // A floor under the tolerance: a thousandth of the depth.
+                let floor = 1e-3 * z[l] + 1e-6;
+                depth_near[l] = 1.0 / (slope[l] * near + floor);
+                depth_far[l] = 1.0 / (slope[l] * far + floor);
+            }
+            let n = [
+                load(planes.n[0], c),
+                load(planes.n[1], c),
+                load(planes.n[2], c),
+            ];
+            // The normal a neighbour's is held against: in the first pass, the length squared
+            // of the centre's averaged normal, below 1 where its feature samples saw several
+            // surfaces (a silhouette's or a crease's pixel); 1 after.
+            let mut reach = [1.0; LANES];
+            if self.first {
+                for l in 0..LANES {
+                    reach[l] = n[0][l] * n[0][l] + n[1][l] * n[1][l] + n[2][l] * n[2][l];
+                }
             }
             let centre = Centre {
-                lum: lanes!(self.luminance),
-                tolerance: lanes!(self.inverse_tolerance),
-                z: lanes!(&guide.depth),
-                slope: lanes!(&guide.depth_slope),
-                floor: lanes!(&guide.depth_floor),
-                n: [lanes!(&guide.nx), lanes!(&guide.ny), lanes!(&guide.nz)],
+                lum: load(planes.lum, c),
+                tolerance,
+                z,
+                n,
+                reach,
             };
             let mut sums = Sums {
                 w: [h0; LANES],
-                r: scaled(h0, lanes!(&src.r)),
-                g: scaled(h0, lanes!(&src.g)),
-                b: scaled(h0, lanes!(&src.b)),
-                v: scaled(h0 * h0, lanes!(&src.variance)),
+                r: scaled(h0, load(planes.r, c)),
+                g: scaled(h0, load(planes.g, c)),
+                b: scaled(h0, load(planes.b, c)),
+                v: scaled(h0 * h0, load(planes.v, c)),
             };
-            for (j, ky) in B3.iter().enumerate() {
-                let dy = (j as isize - 2) * step as isize;
-                let yq = self.y as isize + dy;
-                if yq < 0 || yq >= self.height as isize {
-                    continue;
-                }
-                let row_q = yq as usize * width;
-                for (i, kx) in B3.iter().enumerate() {
-                    let dx = (i as isize - 2) * step as isize;
-                    if dx == 0 && dy == 0 {
-                        continue;
-                    }
+            for (taps, inverse_depth) in
+                [(&near_taps[..], &depth_near), (&far_taps[..], &depth_far)]
+            {
+                for &(offset, h) in taps.iter() {
                     let tap = Tap {
-                        h: kx * ky,
-                        distance: (i.abs_diff(2).max(j.abs_diff(2)) * step) as f32,
+                        h,
                         sigma_normal: self.sigma_normal,
                     };
-                    let first = x0 as isize + dx;
-                    if n == LANES && first >= 0 && first as usize + LANES <= width {
-                        // All sixteen neighbours in the image: read in place.
-                        let q = row_q + first as usize;
-                        let neighbours = neighbours!(load(q));
-                        tap.add(&centre, &neighbours, [true; LANES], &mut sums);
-                    } else {
-                        let mut inside = [false; LANES];
-                        for (l, inside) in inside.iter_mut().enumerate() {
-                            let xq = first + l as isize;
-                            *inside = l < n && xq >= 0 && xq < width as isize;
-                        }
-                        let neighbours = neighbours!(gather(row_q, first, width));
-                        tap.add(&centre, &neighbours, inside, &mut sums);
-                    }
+                    let q = (c as isize + offset) as usize;
+                    tap.add(&centre, inverse_depth, &planes.at(q), &mut sums);
                 }
             }
-            for l in 0..n {
+            let mut result = Sums {
+                w: [0.0; LANES],
+                r: [0.0; LANES],
+                g: [0.0; LANES],
+                b: [0.0; LANES],
+                v: [0.0; LANES],
+            };
+            for l in 0..LANES {
                 let inverse = 1.0 / sums.w[l];
-                r[x0 + l] = sums.r[l] * inverse;
-                g[x0 + l] = sums.g[l] * inverse;
-                b[x0 + l] = sums.b[l] * inverse;
-                v[x0 + l] = sums.v[l] * inverse * inverse;
+                result.r[l] = sums.r[l] * inverse;
+                result.g[l] = sums.g[l] * inverse;
+                result.b[l] = sums.b[l] * inverse;
+                // The luminance of the pixel's result, for the next pass.
+                result.w[l] = luminance(result.r[l], result.g[l], result.b[l]);
+                result.v[l] = sums.v[l] * inverse * inverse;
             }
+            let n = (width - x0).min(LANES);
+            let at = x0..x0 + n;
+            out.r[at.clone()].copy_from_slice(&result.r[..n]);
+            out.g[at.clone()].copy_from_slice(&result.g[..n]);
+            out.b[at.clone()].copy_from_slice(&result.b[..n]);
+            out.lum[at.clone()].copy_from_slice(&result.w[..n]);
+            out.v[at].copy_from_slice(&result.v[..n]);
             x0 += LANES;
         }
     }
@@ -414,16 +631,31 @@ fn load(plane: &[f32], start: usize) -> [f32; LANES] {
     *<&[f32; LANES]>::try_from(&plane[start..start + LANES]).expect("16 values")
 }
 
-/// The sixteen values of the row starting at `row` in `plane` at columns `first..first + 16`,
-/// each column clamped into the row `0..width`.
-#[inline(always)]
-fn gather(plane: &[f32], row: usize, first: isize, width: usize) -> [f32; LANES] {
-    let mut out = [0.0; LANES];
-    for (l, out) in out.iter_mut().enumerate() {
-        let x = (first + l as isize).clamp(0, width as isize - 1);
-        *out = plane[row + x as usize];
+/// The planes a tap reads, all of one length.
+struct Planes<'a> {
+    lum: &'a [f32],
+    z: &'a [f32],
+    n: [&'a [f32]; 3],
+    r: &'a [f32],
+    g: &'a [f32],
+    b: &'a [f32],
+    v: &'a [f32],
+}
+
+impl Planes<'_> {
+    /// The sixteen pixels from `q` on.
+    #[inline(always)]
+    fn at(&self, q: usize) -> Neighbours {
+        Neighbours {
+            lum: load(self.lum, q),
+            z: load(self.z, q),
+            n: [load(self.n[0], q), load(self.n[1], q), load(self.n[2], q)],
+            r: load(self.r, q),
+            g: load(self.g, q),
+            b: load(self.b, q),
+            v: load(self.v, q),
+        }
     }
-    out
 }
 
 /// Each of `values` times `k`.
@@ -438,11 +670,12 @@ fn scaled(k: f32, mut values: [f32; LANES]) -> [f32; LANES] {
 /// Sixteen centre pixels' values.
 struct Centre {
     lum: [f32; LANES],
+    /// 1/(σl·standard deviation).
     tolerance: [f32; LANES],
     z: [f32; LANES],
-    slope: [f32; LANES],
-    floor: [f32; LANES],
     n: [[f32; LANES]; 3],
+    /// What n·n' is held against ([`tap_weight`]).
+    reach: [f32; LANES],
 }
 
 /// Their sixteen neighbours' at one tap.
@@ -469,32 +702,28 @@ struct Sums {
 struct Tap {
     /// The kernel's weight.
     h: f32,
-    /// How far the neighbour is, in pixels along the farther axis (the depth's tolerance grows
-    /// with it).
-    distance: f32,
     sigma_normal: f32,
 }
 
 impl Tap {
-    /// Adds each neighbour (those `inside` the image), weighted by the kernel weight and the
-    /// edge-stopping weights, to its centre's sums.
+    /// Adds each neighbour, weighted by the kernel weight and the edge-stopping weights, to
+    /// its centre's sums; `inverse_depth` is 1 over each centre's depth tolerance at the tap's
+    /// distance.
     #[inline(always)]
     #[allow(
         clippy::needless_range_loop,
         reason = "lane l of a dozen arrays at once: an index reads clearest"
     )]
-    fn add(&self, p: &Centre, q: &Neighbours, inside: [bool; LANES], sums: &mut Sums) {
+    fn add(&self, p: &Centre, inverse_depth: &[f32; LANES], q: &Neighbours, sums: &mut Sums) {
         for l in 0..LANES {
             let w = tap_weight(
                 self.h,
                 self.sigma_normal,
-                self.distance,
                 [p.lum[l], q.lum[l], p.tolerance[l]],
-                [p.z[l], q.z[l], p.slope[l], p.floor[l]],
-                [p.n[0][l], p.n[1][l], p.n[2][l]],
+                [p.z[l], q.z[l], inverse_depth[l]],
+                [p.n[0][l], p.n[1][l], p.n[2][l], p.reach[l]],
                 [q.n[0][l], q.n[1][l], q.n[2][l]],
             );
-            let w = if inside[l] { w } else { 0.0 };
             sums.w[l] += w;
             sums.r[l] += w * q.r[l];
             sums.g[l] += w * q.g[l];
@@ -506,21 +735,21 @@ impl Tap {
 
 /// A tap's weight: the kernel's `h` times the edge-stopping weights, from the centre's and the
 /// neighbour's luminance (`[centre, neighbour, 1/(σl·standard deviation)]`), depth (`[centre,
-/// neighbour, σz·slope, floor]`; the tolerance grows with the tap's `distance`) and normals.
+/// neighbour, 1/tolerance]`) and normals (the centre's with its reach, then the neighbour's:
+/// exp(−σn·max(0, reach − n·n'))). A neighbour of infinite depth (outside the image) weighs 0.
 #[inline(always)]
 fn tap_weight(
     h: f32,
     sigma_normal: f32,
-    distance: f32,
     [lum_p, lum_q, tolerance]: [f32; 3],
-    [z_p, z_q, slope, floor]: [f32; 4],
-    n_p: [f32; 3],
+    [z_p, z_q, inverse_depth]: [f32; 3],
+    [n_px, n_py, n_pz, reach]: [f32; 4],
     n_q: [f32; 3],
 ) -> f32 {
     let luminance = (lum_p - lum_q).abs() * tolerance;
-    let depth = (z_p - z_q).abs() / (slope * distance + floor);
-    let cos = n_p[0] * n_q[0] + n_p[1] * n_q[1] + n_p[2] * n_q[2];
-    let normal = sigma_normal * (1.0 - cos).max(0.0);
+    let depth = (z_p - z_q).abs() * inverse_depth;
+    let cos = n_px * n_q[0] + n_py * n_q[1] + n_pz * n_q[2];
+    let normal = sigma_normal * (reach - cos).max(0.0);
     h * exp_neg(luminance + depth + normal)
 }
 
@@ -553,26 +782,10 @@ fn effective(albedo: Vec3) -> Vec3 {
     Vec3::new(pick(albedo.x), pick(albedo.y), pick(albedo.z))
 }
 
-/// The light at each pixel: its colour over its albedo (variance left 0).
-fn demodulate(colour: &Image, albedo: &[Vec3]) -> Light {
-    let light: Vec<Vec3> = colour
-        .pixels
-        .par_iter()
-        .zip(albedo)
-        .map(|(c, a)| *c / *a)
-        .collect();
-    Light {
-        r: light.iter().map(|l| l.x).collect(),
-        g: light.iter().map(|l| l.y).collect(),
-        b: light.iter().map(|l| l.z).collect(),
-        variance: vec![0.0; light.len()],
-    }
-}
-
 /// For a single sample, whose spread is unknown: the variance of the light's luminance over
 /// each pixel's 5 × 5 neighbourhood (within the image).
-fn spatial_variance(light: &Light, width: usize, height: usize) -> Vec<f32> {
-    let lum = |i: usize| (light.r[i] + light.g[i] + light.b[i]) * (1.0 / 3.0);
+fn spatial_variance(light: &[Vec3], width: usize, height: usize) -> Vec<f32> {
+    let lum = |i: usize| luminance(light[i].x, light[i].y, light[i].z);
     let mut out = vec![0.0; width * height];
     out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         for (x, v) in row.iter_mut().enumerate() {
@@ -587,31 +800,6 @@ fn spatial_variance(light: &Light, width: usize, height: usize) -> Vec<f32> {
             }
             let mean = sum / n;
             *v = (sum_sq / n - mean * mean).max(0.0);
-        }
-    });
-    out
-}
-
-/// `values` blurred by the 3 × 3 binomial kernel (¼, ½, ¼)², renormalised at the image's edges.
-fn blur3(values: &[f32], width: usize, height: usize) -> Vec<f32> {
-    const K: [f32; 3] = [0.25, 0.5, 0.25];
-    let mut out = vec![0.0; width * height];
-    out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        for (x, o) in row.iter_mut().enumerate() {
-            let (mut sum, mut weight) = (0.0, 0.0);
-            for (j, ky) in K.iter().enumerate() {
-                let Some(yq) = (y + j).checked_sub(1).filter(|yq| *yq < height) else {
-                    continue;
-                };
-                for (i, kx) in K.iter().enumerate() {
-                    let Some(xq) = (x + i).checked_sub(1).filter(|xq| *xq < width) else {
-                        continue;
-                    };
-                    sum += kx * ky * values[yq * width + xq];
-                    weight += kx * ky;
-                }
-            }
-            *o = sum / weight;
         }
     });
     out
