@@ -291,7 +291,9 @@ mod tests {
         // With the denoised image on screen the figure is the raw image's, and says so.
         stats.denoised = Some((2, 5.0));
         assert!(
-            stats.summary().ends_with("2/64 spp · raw noise ±0.90 %, clean"),
+            stats
+                .summary()
+                .ends_with("2/64 spp · raw noise ±0.90 %, clean"),
             "{}",
             stats.summary()
         );
