@@ -557,24 +557,29 @@ mod tests {
         assert_eq!(relief.at(&frame, uv, wo), (uv, -Vec3::Z));
     }
 
+    /// The step of the two tests below: a height map of 64 texels across one unit of u (one
+    /// row), the left half 1 and the right half 0.5, 0.2 units deep per unit; and the frame of
+    /// the plane z = 0 with u = x, v = y and n = −z (toward the viewer).
+    fn step() -> (HeightMap, TangentFrame) {
+        let texels = (0..64)
+            .map(|i| Vec3::splat(if i < 32 { 1.0 } else { 0.5 }))
+            .collect();
+        let image = Arc::new(TextureImage::from_linear("step", 64, 1, texels).unwrap());
+        let frame = TangentFrame::new(
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec2::ZERO, Vec2::X, Vec2::Y],
+            -Vec3::Z,
+        );
+        (HeightMap::new(image, 0.2), frame)
+    }
+
     /// A step down: the left half of the map high (1), the right half 0.5 lower, 0.2 units
     /// deep per unit (so the step is 0.1 deep). A ray arriving at 45° in the x–z plane where
     /// the map is low sinks to the floor 0.1 below: it meets it 0.1 further along (the
     /// secant of a straight drop is exact up to the filtering at the step's edge).
     #[test]
     fn parallax_follows_the_ray_to_the_height_field() {
-        // 64 texels across one unit of u; one row.
-        let texels = (0..64)
-            .map(|i| Vec3::splat(if i < 32 { 1.0 } else { 0.5 }))
-            .collect();
-        let image = Arc::new(TextureImage::from_linear("step", 64, 1, texels).unwrap());
-        let height = HeightMap::new(image, 0.2);
-        // The frame of the plane z = 0 with u = x, v = y and n = −z (toward the viewer).
-        let frame = TangentFrame::new(
-            [Vec3::ZERO, Vec3::X, Vec3::Y],
-            [Vec2::ZERO, Vec2::X, Vec2::Y],
-            -Vec3::Z,
-        );
+        let (height, frame) = step();
         // The viewer up and to the left: the ray goes down and to the right (+x).
         let wo = Vec3::new(-1.0, 0.0, -1.0).normalize();
         let uv = Vec2::new(0.7, 0.5);
@@ -601,16 +606,7 @@ mod tests {
     /// top is lit from every side. A constant map hides nothing.
     #[test]
     fn a_step_shadows_the_floor_beside_it() {
-        let texels = (0..64)
-            .map(|i| Vec3::splat(if i < 32 { 1.0 } else { 0.5 }))
-            .collect();
-        let image = Arc::new(TextureImage::from_linear("step", 64, 1, texels).unwrap());
-        let height = HeightMap::new(image, 0.2);
-        let frame = TangentFrame::new(
-            [Vec3::ZERO, Vec3::X, Vec3::Y],
-            [Vec2::ZERO, Vec2::X, Vec2::Y],
-            -Vec3::Z,
-        );
+        let (height, frame) = step();
         let toward = |degrees_up: f32, from_left: bool| {
             let (s, c) = degrees_up.to_radians().sin_cos();
             Vec3::new(if from_left { -c } else { c }, 0.0, -s)

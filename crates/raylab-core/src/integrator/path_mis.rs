@@ -82,8 +82,9 @@ pub struct PathVertex {
     /// light's point, f toward it, both densities of that direction, its MIS weight, whether
     /// the shadow ray was blocked, and what it added to the pixel (β included).
     pub light: Option<LightTerms>,
-    /// The caustic photon map's gather, at a non-delta vertex where the path scatters, when there is a
-    /// map: how many photons it found, within which radius, and what it added (β included).
+    /// The caustic photon map's gather, at a non-delta vertex where the path scatters, when
+    /// there is a map: how many photons it found, within which radius, and what it added (β
+    /// included).
     pub photons: Option<Gathered>,
 }
 
