@@ -944,7 +944,7 @@ pub fn shading_ui(
         )
         .on_hover_text(
             "Shoot a caustic photon map each pass (light through mirror and glass onto \
-             diffuse surfaces) and gather it at each path's first diffuse hit: the caustic \
+             diffuse surfaces) and gather it at each diffuse hit of a path: the caustic \
              of the lab's point light, which a path tracer never finds",
         )
         .on_disabled_hover_text(caustics_off_why)
