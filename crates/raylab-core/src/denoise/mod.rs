@@ -25,6 +25,16 @@
 //!    (n₁ + n₂)/2 gives n̄·n₁ = n̄·n₂ = |n̄|²), so it is averaged with its nearest neighbours
 //!    on both sides. Only the first: in wider passes it pulled the pixel's mix toward light
 //!    from farther on each surface once the noise was low.
+//! 4. Each pass takes, instead of its taps' weighted mean, the value at the pixel of a plane
+//!    fitted to them (the light as a linear function of the tap's offset, by weighted least
+//!    squares). Where the edge-stopping weights cut the kernel on one side (beside a corner, a
+//!    silhouette, a shadow's edge) the weighted mean is the light at the weights' centroid, off
+//!    the pixel, biased by the light's slope between the two; the plane's value at the pixel
+//!    is not. Where the kernel is whole the centroid is the pixel and the two agree. A ridge
+//!    added to the offsets' spread keeps the fit from extrapolating far from a few taps on a
+//!    line, and grows with the light's relative noise ([`SLOPE_RIDGE_NOISE`]): a slope fitted
+//!    to noisy taps is mostly noise, and the taps' weights favour those near the centre's own
+//!    noisy value, so with little ridge the fit extrapolated noise and moved the mean.
 //!
 //! The result depends only on the inputs (no random numbers, each pixel computed on its own),
 //! so it is the same on any thread count. The film's linear mean is never changed: the
@@ -49,6 +59,15 @@ const B3: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 /// Below this, an albedo channel is taken as 1: nothing to divide out (a black surface, the
 /// background), and the colour is filtered as it is.
 const ALBEDO_FLOOR: f32 = 1e-3;
+
+/// The ridge of each pass's plane fit (module docs, point 4), added to the variance of the
+/// weighted taps' offsets along x and y (in steps: the whole kernel's is 1 along each), plus
+/// [`SLOPE_RIDGE_NOISE`] times the centre's relative variance (the light's blurred variance
+/// over the taps' mean luminance squared). Swept on the path-traced box (PERFORMANCE.md): a
+/// smaller ridge removed more of the bias at 64 and 256 samples, but moved the mean of the
+/// 64² box at 16 samples by more than 0.5 %.
+const SLOPE_RIDGE: f32 = 0.2;
+const SLOPE_RIDGE_NOISE: f32 = 300.0;
 
 /// The filter's settings. The defaults started from SVGF's (σl 4, σn 128, σz 1, five passes)
 /// and were swept on the path-traced Cornell box at 4 to 256 samples (PERFORMANCE.md gives
@@ -498,16 +517,18 @@ impl Row<'_> {
         // The variance's 3 × 3 blur, renormalised at the top and bottom rows.
         let blur_y = 1.0 / blur_weight(self.y, layout.height);
         let (near, far) = (step as f32, (2 * step) as f32);
-        // The 24 taps (offset in the planes, kernel weight), those one step away (their depth
+        // The 24 taps (offset in the planes, kernel weight, offset in steps), those one step away (their depth
         // tolerance is the centre's at one step) apart from those two steps away.
-        let mut near_taps = [(0isize, 0.0f32); 8];
-        let mut far_taps = [(0isize, 0.0f32); 16];
+        let mut near_taps = [(0isize, 0.0f32, [0.0f32; 2]); 8];
+        let mut far_taps = [(0isize, 0.0f32, [0.0f32; 2]); 16];
         let (mut n_near, mut n_far) = (0, 0);
         for (j, ky) in B3.iter().enumerate() {
             for (i, kx) in B3.iter().enumerate() {
                 let tap = (
                     (j as isize - 2) * step as isize * stride + (i as isize - 2) * step as isize,
                     kx * ky,
+                    // The offset in steps, for the plane fit.
+                    [i as f32 - 2.0, j as f32 - 2.0],
                 );
                 match i.abs_diff(2).max(j.abs_diff(2)) {
                     0 => {}
@@ -540,8 +561,11 @@ impl Row<'_> {
             }
             let blur_x = load(&guide.blur_x, layout.pad + x0);
             let mut tolerance = [0.0; LANES];
+            // The same variance, for the plane fit's ridge.
+            let mut noise = [0.0; LANES];
             for l in 0..LANES {
                 let v = blurred[l] * (blur_x[l] * blur_y);
+                noise[l] = v.max(0.0);
                 tolerance[l] = 1.0 / (self.sigma_luminance * v.max(0.0).sqrt() + 1e-4);
             }
             // 1 over the depth's tolerance one and two steps away.
@@ -581,13 +605,17 @@ impl Row<'_> {
                 g: scaled(h0, load(planes.g, c)),
                 b: scaled(h0, load(planes.b, c)),
                 v: scaled(h0 * h0, load(planes.v, c)),
+                // The centre's offset is 0: it adds nothing to the moments.
+                moments: [[0.0; LANES]; 11],
             };
             for (taps, inverse_depth) in
                 [(&near_taps[..], &depth_near), (&far_taps[..], &depth_far)]
             {
-                for &(offset, h) in taps.iter() {
+                for &(offset, h, [dx, dy]) in taps.iter() {
                     let tap = Tap {
                         h,
+                        dx,
+                        dy,
                         sigma_normal: self.sigma_normal,
                     };
                     let q = (c as isize + offset) as usize;
@@ -600,14 +628,38 @@ impl Row<'_> {
                 g: [0.0; LANES],
                 b: [0.0; LANES],
                 v: [0.0; LANES],
+                moments: [[0.0; LANES]; 11],
             };
             for l in 0..LANES {
                 let inverse = 1.0 / sums.w[l];
-                result.r[l] = sums.r[l] * inverse;
-                result.g[l] = sums.g[l] * inverse;
-                result.b[l] = sums.b[l] * inverse;
+                let m = &sums.moments;
+                // The plane fit (module docs, point 4): the weights' centroid (cx, cy), the
+                // offsets' covariance with the ridge on its diagonal, and per channel the
+                // offsets' covariance with the light, which give the slope (gx, gy); the value
+                // at the pixel is the mean less the slope times the centroid.
+                let (cx, cy) = (m[0][l] * inverse, m[1][l] * inverse);
+                let mean_lum = luminance(sums.r[l], sums.g[l], sums.b[l]) * inverse;
+                let ridge =
+                    SLOPE_RIDGE + SLOPE_RIDGE_NOISE * noise[l] / (mean_lum * mean_lum + 1e-12);
+                let cxx = m[2][l] * inverse - cx * cx + ridge;
+                let cyy = m[3][l] * inverse - cy * cy + ridge;
+                let cxy = m[4][l] * inverse - cx * cy;
+                let inverse_det = 1.0 / (cxx * cyy - cxy * cxy);
+                let at_pixel = |sum: f32, x_sum: f32, y_sum: f32| {
+                    let mean = sum * inverse;
+                    let xc = x_sum * inverse - cx * mean;
+                    let yc = y_sum * inverse - cy * mean;
+                    let gx = (cyy * xc - cxy * yc) * inverse_det;
+                    let gy = (cxx * yc - cxy * xc) * inverse_det;
+                    mean - gx * cx - gy * cy
+                };
+                result.r[l] = at_pixel(sums.r[l], m[5][l], m[8][l]);
+                result.g[l] = at_pixel(sums.g[l], m[6][l], m[9][l]);
+                result.b[l] = at_pixel(sums.b[l], m[7][l], m[10][l]);
                 // The luminance of the pixel's result, for the next pass.
                 result.w[l] = luminance(result.r[l], result.g[l], result.b[l]);
+                // The weighted mean's variance (the fit's is a little larger where it moves
+                // the value, beside an edge).
                 result.v[l] = sums.v[l] * inverse * inverse;
             }
             let n = (width - x0).min(LANES);
@@ -696,12 +748,18 @@ struct Sums {
     g: [f32; LANES],
     b: [f32; LANES],
     v: [f32; LANES],
+    /// For the plane fit, the weighted sums of the offset in steps (x, y), of x², y², x·y,
+    /// and of x and then y times the light (r, g, b).
+    moments: [[f32; LANES]; 11],
 }
 
 /// One tap of the kernel.
 struct Tap {
     /// The kernel's weight.
     h: f32,
+    /// The offset in steps.
+    dx: f32,
+    dy: f32,
     sigma_normal: f32,
 }
 
@@ -729,6 +787,19 @@ impl Tap {
             sums.g[l] += w * q.g[l];
             sums.b[l] += w * q.b[l];
             sums.v[l] += w * w * q.v[l];
+            let (wx, wy) = (w * self.dx, w * self.dy);
+            let m = &mut sums.moments;
+            m[0][l] += wx;
+            m[1][l] += wy;
+            m[2][l] += wx * self.dx;
+            m[3][l] += wy * self.dy;
+            m[4][l] += wx * self.dy;
+            m[5][l] += wx * q.r[l];
+            m[6][l] += wx * q.g[l];
+            m[7][l] += wx * q.b[l];
+            m[8][l] += wy * q.r[l];
+            m[9][l] += wy * q.g[l];
+            m[10][l] += wy * q.b[l];
         }
     }
 }
