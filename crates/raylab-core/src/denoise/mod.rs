@@ -517,8 +517,9 @@ impl Row<'_> {
         // The variance's 3 × 3 blur, renormalised at the top and bottom rows.
         let blur_y = 1.0 / blur_weight(self.y, layout.height);
         let (near, far) = (step as f32, (2 * step) as f32);
-        // The 24 taps (offset in the planes, kernel weight, offset in steps), those one step away (their depth
-        // tolerance is the centre's at one step) apart from those two steps away.
+        // The 24 taps (offset in the planes, kernel weight, offset in steps), those one step
+        // away (their depth tolerance is the centre's at one step) apart from those two steps
+        // away.
         let mut near_taps = [(0isize, 0.0f32, [0.0f32; 2]); 8];
         let mut far_taps = [(0isize, 0.0f32, [0.0f32; 2]); 16];
         let (mut n_near, mut n_far) = (0, 0);
