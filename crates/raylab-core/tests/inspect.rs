@@ -114,9 +114,7 @@ fn r_is_the_rendered_pixel_in_every_configuration() {
 #[test]
 fn the_inspector_says_when_the_relief_hides_the_light() {
     let scene = cornell_box();
-    let mut s = settings(Stage::Lab, 128);
-    s.texture_preset = TexturePreset::ParallaxFloor;
-    s.light.position = Vec3::new(0.9, 0.7, 0.9);
+    let mut s = common::parallax_floor_under_a_low_light();
     let i = inspect(&scene, &s, 31, 96);
     let t = &i.shaded[0].terms;
     assert!(t.relief_shadowed && !t.light_behind_surface, "{t:?}");

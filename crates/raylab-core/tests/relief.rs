@@ -398,9 +398,7 @@ fn a_scene_file_names_its_normal_map() {
 #[test]
 fn parallax_self_shadowing_darkens_the_grout_by_d() {
     let scene = cornell_box();
-    let mut s = settings(Stage::Lab, 128);
-    s.texture_preset = TexturePreset::ParallaxFloor;
-    s.light.position = Vec3::new(0.9, 0.7, 0.9);
+    let mut s = common::parallax_floor_under_a_low_light();
     let shadowed = render(&scene, &s);
     s.shading.parallax_shadows = false;
     let lit = render(&scene, &s);

@@ -21,6 +21,16 @@ pub fn settings(stage: raylab_core::Stage, side: u32) -> RenderSettings {
     s
 }
 
+/// The lab stage at 128² with the parallax floor under a light low over the floor's far right
+/// corner, so that the tiles' self-shadows fall toward the camera (under the lab's light, in
+/// front and above, they fall behind the tiles, out of the camera's sight).
+pub fn parallax_floor_under_a_low_light() -> RenderSettings {
+    let mut s = settings(raylab_core::Stage::Lab, 128);
+    s.texture_preset = raylab_core::material::TexturePreset::ParallaxFloor;
+    s.light.position = Vec3::new(0.9, 0.7, 0.9);
+    s
+}
+
 /// A pixel (or any `Vec3`) as bits, to compare exactly.
 pub fn vec3_bits(v: Vec3) -> [u32; 3] {
     v.to_array().map(f32::to_bits)
