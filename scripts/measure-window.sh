@@ -19,6 +19,13 @@
 # just before and just after the window (their mean is taken: the machine's load drifts); both
 # are printed in camera paths per second, and their ratio (window / bench).
 #
+# scripts/measure-window.sh --clean [SIDE] [THREADS] [RUNS]: how long the path-traced box takes
+# to look clean after a change. Starts the window on the path stage at SIDE² (default 512) with
+# the denoiser on (the window's default), waits until it shows a denoised image, then clicks the
+# "Light x" slider (one change, a new job) and reports from the frame log the time from the
+# click to the first frame showing a denoised image of at least CLEAN_SAMPLES samples (default
+# 16: PERFORMANCE.md's denoiser table gives their quality), RUNS times (default 3).
+#
 # Needs what scripts/install-display-tools.sh installs. Honours CARGO_TARGET_DIR; RAYLAB_BIN
 # names a binary to measure instead of building one (to compare two builds).
 set -euo pipefail
@@ -30,6 +37,9 @@ mkdir -p "$out"
 mode=drag
 if [ "${1:-}" = "--throughput" ]; then
   mode=throughput
+  shift
+elif [ "${1:-}" = "--clean" ]; then
+  mode=clean
   shift
 fi
 if [ -n "${RAYLAB_BIN:-}" ]; then
@@ -139,6 +149,75 @@ EOF
       printf "measure-window: ratio window/bench %.3f to %.3f; window %.2f to %.2f M paths/s, bench %.2f to %.2f M paths/s\n", rmin, rmax, wmin / 1e6, wmax / 1e6, bmin / 1e6, bmax / 1e6
     }' "$summary"
   sort -n "$summary" | awk '{ r[NR] = $1 } END { printf "measure-window: median ratio %.3f of %d runs\n", NR % 2 ? r[(NR + 1) / 2] : (r[NR / 2] + r[NR / 2 + 1]) / 2, NR }'
+  exit 0
+fi
+
+if [ "$mode" = clean ]; then
+  side=${1:-512}
+  threads=${2:-2}
+  runs=${3:-3}
+  wanted=${CLEAN_SAMPLES:-16}
+  export XDG_DATA_HOME="$out/xdg/data" XDG_RUNTIME_DIR="$out/xdg/runtime"
+  echo "measure-window: path stage, $side², $threads render threads, denoised at $wanted samples;" \
+    "$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores," \
+    "load $(cut -d' ' -f1-3 /proc/loadavg)"
+  for run in $(seq "$runs"); do
+    rm -rf "$out/xdg"
+    mkdir -p "$out/xdg/data/raylab" "$out/xdg/runtime"
+    chmod 700 "$out/xdg/runtime"
+    cat >"$out/xdg/data/raylab/app.ron" <<EOF
+{"raylab-workbench": "{\"version\": 1, \"render_threads\": $threads, \"denoise\": true, \"settings\": {\"camera\": {\"width\": $side, \"height\": $side, \"focal_length\": $side}, \"shading\": {\"stage\": \"path\", \"shadows\": true, \"indirect\": true}, \"samples_per_pixel\": 4096}}"}
+EOF
+    log="$out/clean-$run.log"
+    RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
+    app_pid=$!
+    window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' | head -n 1)
+    for _ in $(seq 600); do
+      grep -Eq "denoised=[1-9]" "$log" && break
+      sleep 0.1
+    done
+    grep -Eq "denoised=[1-9]" "$log" || { echo "measure-window: no denoised frame logged" >&2; exit 1; }
+    sleep 1
+    before=$(wc -l <"$log")
+    # The Light x slider's handle (its place with the Camera and Light sections open, as they
+    # are on the path stage) dragged a little to the right: new jobs as it goes.
+    xdotool mousemove --window "$window" 75 572
+    sleep 0.3
+    xdotool mousedown 1
+    sleep 0.1
+    for _ in 1 2 3 4; do
+      xdotool mousemove_relative -- 5 0
+      sleep 0.05
+    done
+    xdotool mouseup 1
+    for _ in $(seq 200); do
+      tail -n +"$((before + 1))" "$log" | awk -v w="$wanted" '
+        /preview=true/ { changed = 1 }
+        changed && match($0, /denoised=[0-9]+/) && substr($0, RSTART + 9, RLENGTH - 9) + 0 >= w { found = 1 }
+        END { exit !found }' && break
+      sleep 0.1
+    done
+    xwd -root -display "$display" | /usr/bin/convert xwd:- "$out/clean-$run.png"
+    kill "$app_pid"
+    wait "$app_pid" 2>/dev/null || true
+    app_pid=""
+    # The change: the frame before the drag's last preview; clean: the first frame after it
+    # showing a denoised image of at least $wanted samples.
+    tail -n +"$((before + 1))" "$log" | awk -v w="$wanted" -v run="$run" '
+      function field(name,   i, kv) { for (i = 2; i <= NF; i++) { split($i, kv, "="); if (kv[1] == name) return kv[2] } }
+      /^raylab-frame/ {
+        t = field("t_ms") + 0
+        # Each preview starts a job: the last one, the last step of the drag, is timed.
+        if (field("preview") == "true" && !done) { changed = 1; t0 = last_t; n = 0 }
+        last_t = t
+        if (changed) n++
+        if (changed && !done && field("denoised") + 0 >= w) {
+          done = 1
+          printf "measure-window: run %d: change to a denoised image of %d samples: %.0f ms (%d frames)\n", run, field("denoised"), t - t0, n
+        }
+      }
+      END { if (!done) printf "measure-window: run %d: no denoised image of %d samples within 20 s\n", run, w }'
+  done
   exit 0
 fi
 

@@ -1561,7 +1561,8 @@ impl eframe::App for WorkbenchApp {
             let _ = writeln!(
                 std::io::stderr(),
                 "raylab-frame ui_ms={:.2} frame_cpu_ms={:.2} samples={} target={} preview={} \
-                 t_ms={:.1} change_to_image_ms={:.1} change_frames={} full_pass_ms={:.1}",
+                 t_ms={:.1} change_to_image_ms={:.1} change_frames={} full_pass_ms={:.1} \
+                 denoised={}",
                 self.stats.ui_frame_ms,
                 self.stats.frame_cpu_ms.unwrap_or(f64::NAN),
                 self.stats.samples,
@@ -1571,6 +1572,7 @@ impl eframe::App for WorkbenchApp {
                 change_ms,
                 change_frames,
                 self.stats.full_pass.map_or(f64::NAN, |(ms, _, _)| ms),
+                self.stats.denoised.map_or(0, |(samples, _)| samples),
             );
         }
     }

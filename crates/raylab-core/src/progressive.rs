@@ -247,6 +247,8 @@ struct Shared {
     denoise: AtomicBool,
     /// Passes traced so far (previews included), for [`Controller::passes_traced`].
     passes: AtomicU64,
+    /// The denoiser's feature buffers traced so far, for [`Controller::features_traced`].
+    features_traced: AtomicU64,
     /// Test hook: the next pass panics inside the pool ([`Controller::inject_panic_on_next_pass`]).
     panic_next_pass: AtomicBool,
     notify: Notify,
@@ -311,6 +313,7 @@ impl Controller {
             display: Mutex::new(Display::default()),
             denoise: AtomicBool::new(false),
             passes: AtomicU64::new(0),
+            features_traced: AtomicU64::new(0),
             panic_next_pass: AtomicBool::new(false),
             notify,
         });
@@ -403,6 +406,12 @@ impl Controller {
     /// none.
     pub fn passes_traced(&self) -> u64 {
         self.shared.passes.load(Ordering::SeqCst)
+    }
+
+    /// The denoiser's feature buffers traced since the controller started: once for each view
+    /// denoised (a job that only moves the light keeps its predecessor's).
+    pub fn features_traced(&self) -> u64 {
+        self.shared.features_traced.load(Ordering::SeqCst)
     }
 
     /// The number of render threads asked for.
@@ -596,11 +605,14 @@ struct Worker {
     denoising: Denoising,
 }
 
-/// What the worker keeps to denoise a job's frames: the features, traced once a job when first
-/// needed; the variance of the last frame's mean; the last denoised image and what it cost.
+/// What the worker keeps to denoise a job's frames: the features, traced when first needed and
+/// kept by the next job if they serve its view too ([`Features::serve`]: moving the light
+/// keeps them); the variance of the last frame's mean; the last denoised image and what it
+/// cost.
 #[derive(Default)]
 struct Denoising {
-    features: Option<Arc<Features>>,
+    /// The features, and the scene and settings they were traced for.
+    features: Option<(Arc<Features>, Arc<Scene>, RenderSettings)>,
     variance: Option<Arc<Vec<f32>>>,
     image: Option<Arc<Image>>,
     samples: u32,
@@ -805,7 +817,18 @@ impl Worker {
         let target = settings.samples_per_pixel.max(1);
         let (width, height) = (settings.camera.width, settings.camera.height);
         self.camera_note = camera_sees_nothing(&job.scene, settings);
-        self.denoising = Denoising::default();
+        // A new job starts its denoising afresh, keeping the features if its view is theirs.
+        let features = self
+            .denoising
+            .features
+            .take()
+            .filter(|(_, scene, traced_for)| {
+                Arc::ptr_eq(scene, &job.scene) && Features::serve(traced_for, settings)
+            });
+        self.denoising = Denoising {
+            features,
+            ..Denoising::default()
+        };
 
         if settings.view.is_traced() {
             // A debug view: one ray per pixel centre, once.
@@ -913,13 +936,15 @@ impl Worker {
         let cancelled = || shared.current() != job.generation;
         let denoising = &mut self.denoising;
         let features = match &denoising.features {
-            Some(features) => Arc::clone(features),
+            Some((features, _, _)) => Arc::clone(features),
             None => {
                 let traced = self
                     .pool
                     .install(|| Features::trace(&job.scene, &job.settings, &cancelled))?;
+                shared.features_traced.fetch_add(1, Ordering::SeqCst);
                 let traced = Arc::new(traced);
-                denoising.features = Some(Arc::clone(&traced));
+                let of = (Arc::clone(&job.scene), job.settings.clone());
+                denoising.features = Some((Arc::clone(&traced), of.0, of.1));
                 traced
             }
         };
@@ -1359,6 +1384,38 @@ mod tests {
         let lab = last_frame(&controller, g);
         assert!(lab.denoised.is_none());
         assert_eq!(lab.rgba, lab.image.to_rgba8());
+    }
+
+    /// A job that only moves the light keeps the denoiser's features (traced once, the denoised
+    /// image still bit for bit `render_denoised`'s of the new settings); moving the camera
+    /// traces them again.
+    #[test]
+    fn moving_the_light_keeps_the_denoisers_features() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        controller.set_denoise(true);
+        let mut settings = small(40, 30, 3);
+        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let g = controller.submit(&scene, &settings).unwrap();
+        let _ = last_frame(&controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        assert_eq!(controller.features_traced(), 1);
+
+        settings.light.position.x += 0.3;
+        let g = controller.submit(&scene, &settings).unwrap();
+        let relit = last_frame(&controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        assert_eq!(controller.features_traced(), 1);
+        let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
+        assert_eq!(relit.denoised.as_deref(), denoised.as_ref());
+
+        settings.camera.position.x += 0.1;
+        let g = controller.submit(&scene, &settings).unwrap();
+        let moved = last_frame(&controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        assert_eq!(controller.features_traced(), 2);
+        let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
+        assert_eq!(moved.denoised.as_deref(), denoised.as_ref());
     }
 
     /// Turned on after a noisy job finished with the denoiser off, the denoiser denoises its

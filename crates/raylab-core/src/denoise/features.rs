@@ -16,7 +16,8 @@ use rayon::prelude::*;
 
 use crate::bsdf::Bsdf;
 use crate::geometry::Ray;
-use crate::integrator::Tracer;
+use crate::integrator::{BATCH, Tracer};
+use crate::intersect::Intersection;
 use crate::render::{Cancelled, camera_sample};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -89,28 +90,41 @@ impl Features {
                 if cancelled() {
                     return Err(Cancelled);
                 }
-                for x in 0..albedo.len() {
-                    let (mut sum, mut hits) = (Seen::default(), 0u32);
+                let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); BATCH];
+                let mut first: [Option<Intersection>; BATCH] = [None; BATCH];
+                // A stretch of the row at a time, sample by sample: its camera rays are traced
+                // together (neighbouring rays from one point, which the flat list culls for);
+                // each pixel still sums its samples in their order.
+                for x0 in (0..albedo.len()).step_by(BATCH) {
+                    let n = (albedo.len() - x0).min(BATCH);
+                    let (mut sums, mut hits) = ([Seen::default(); BATCH], [0u32; BATCH]);
                     for sample in 0..samples {
-                        let mut ray = Ray::new(Vec3::ZERO, Vec3::Z);
-                        let mut rng = Rng::UNUSED;
-                        let (x, y) = (x as u32, y as u32);
-                        camera_sample(
-                            &tracer, settings, &rotation, x, y, sample, &mut ray, &mut rng,
-                        );
-                        if let Some(seen) = see(&tracer, scene, ray) {
-                            sum.albedo += seen.albedo;
-                            sum.normal += seen.normal;
-                            sum.depth += seen.depth;
-                            hits += 1;
+                        for (k, ray) in rays[..n].iter_mut().enumerate() {
+                            let mut rng = Rng::UNUSED;
+                            let (x, y) = ((x0 + k) as u32, y as u32);
+                            camera_sample(
+                                &tracer, settings, &rotation, x, y, sample, ray, &mut rng,
+                            );
+                        }
+                        scene.closest_intersections(&rays[..n], f32::INFINITY, &mut first[..n]);
+                        for k in 0..n {
+                            if let Some(seen) = see(&tracer, scene, rays[k], first[k]) {
+                                sums[k].albedo += seen.albedo;
+                                sums[k].normal += seen.normal;
+                                sums[k].depth += seen.depth;
+                                hits[k] += 1;
+                            }
                         }
                     }
                     // The albedo over every sample (0 where one hits nothing); the normal and
                     // depth over those that hit.
-                    albedo[x] = sum.albedo / samples as f32;
-                    if hits > 0 {
-                        normal[x] = sum.normal / hits as f32;
-                        depth[x] = sum.depth / hits as f32;
+                    for k in 0..n {
+                        let (sum, hits, x) = (sums[k], hits[k], x0 + k);
+                        albedo[x] = sum.albedo / samples as f32;
+                        if hits > 0 {
+                            normal[x] = sum.normal / hits as f32;
+                            depth[x] = sum.depth / hits as f32;
+                        }
                     }
                 }
                 Ok(())
@@ -122,6 +136,24 @@ impl Features {
             normal,
             depth,
         })
+    }
+
+    /// Whether features traced for `traced_for` are those of `wanted` too, so a job can keep
+    /// them: the two settings may differ only in what the features never look at — the
+    /// light's position, power and colour (the features are what the camera sees, not how it
+    /// is lit), the samples to take, the display and the denoise switch. Anything else (the
+    /// camera, the seed, the materials, the light's shape, which decides whether the camera's
+    /// samples draw from the path's generator) counts as a new view. Of the same scene: the
+    /// caller compares the scenes.
+    pub fn serve(traced_for: &RenderSettings, wanted: &RenderSettings) -> bool {
+        let mut lit_alike = wanted.clone();
+        lit_alike.light.position = traced_for.light.position;
+        lit_alike.light.power = traced_for.light.power;
+        lit_alike.light.colour = traced_for.light.colour;
+        lit_alike.samples_per_pixel = traced_for.samples_per_pixel;
+        lit_alike.display = traced_for.display;
+        lit_alike.denoise = traced_for.denoise;
+        lit_alike == *traced_for
     }
 
     /// Features of one value everywhere: for tests, and for images with nothing to trace.
@@ -138,12 +170,17 @@ impl Features {
 }
 
 /// What the ray `ray` sees: the first surface that is not a perfect specular one, with the
-/// tints of those before it, or `None` if the path leaves the scene.
-fn see(tracer: &Tracer, scene: &Scene, mut ray: Ray) -> Option<Seen> {
+/// tints of those before it, or `None` if the path leaves the scene. `first` is the ray's own
+/// closest hit, found with its batch.
+fn see(tracer: &Tracer, scene: &Scene, mut ray: Ray, first: Option<Intersection>) -> Option<Seen> {
     let mut tint = Vec3::ONE;
     let mut travelled = 0.0f32;
     for bounce in 0..=SPECULAR_BOUNCES {
-        let hit = scene.closest_intersection(&ray, f32::INFINITY)?;
+        let hit = if bounce == 0 {
+            first?
+        } else {
+            scene.closest_intersection(&ray, f32::INFINITY)?
+        };
         travelled += hit.distance;
         let scattering = tracer.scattering(&hit, ray.direction);
         let frame = &scattering.frame;

@@ -230,3 +230,36 @@ fn every_instruction_set_gives_the_same_bits() {
         assert_eq!(avx2, portable, "AVX2 against the portable loop");
     }
 }
+
+/// Features traced for one light serve the same view under a moved, brighter, tinted light
+/// (they are what the camera sees, and the traced buffers are indeed the same), and not a moved
+/// camera, another seed or a spherical light (whose soft shadows make the camera's samples
+/// draw their jitter differently).
+#[test]
+fn features_serve_a_moved_light_but_not_a_moved_camera() {
+    let scene = crate::scene::cornell_box();
+    let never = || false;
+    let mut settings = crate::bench::path_settings(24, 18);
+    settings.texture_preset = crate::material::TexturePreset::CheckerFloor;
+    let features = Features::trace(&scene, &settings, &never).unwrap();
+
+    let mut relit = settings.clone();
+    relit.light.position = Vec3::new(0.4, -0.2, 0.3);
+    relit.light.power = 30.0;
+    relit.light.colour = Vec3::new(1.0, 0.5, 0.25);
+    relit.samples_per_pixel = 4096;
+    assert!(Features::serve(&settings, &relit));
+    assert_eq!(Features::trace(&scene, &relit, &never).unwrap(), features);
+
+    let mut moved = settings.clone();
+    moved.camera.position.x += 0.1;
+    assert!(!Features::serve(&settings, &moved));
+    assert_ne!(Features::trace(&scene, &moved, &never).unwrap(), features);
+    let mut reseeded = settings.clone();
+    reseeded.seed += 1;
+    assert!(!Features::serve(&settings, &reseeded));
+    let mut sphere = settings.clone();
+    sphere.light.shape = crate::light::LightShape::Sphere;
+    sphere.light.radius = 0.1;
+    assert!(!Features::serve(&settings, &sphere));
+}
