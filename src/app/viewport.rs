@@ -50,8 +50,19 @@ pub struct Viewport {
 }
 
 impl Viewport {
-    /// Replaces the shown image.
+    /// Replaces the shown image. The same pixels again (a frame that only brings new figures,
+    /// such as the passes between two denoised images) are not uploaded again: the texture
+    /// upload and its drawing are a software renderer's largest cost of a frame.
     pub fn set_image(&mut self, ctx: &egui::Context, width: u32, height: u32, rgba: &[u8]) {
+        let size = [width as usize, height as usize];
+        if self.texture.is_some()
+            && self
+                .pixels
+                .as_ref()
+                .is_some_and(|p| p.size == size && p.as_raw() == rgba)
+        {
+            return;
+        }
         let image = Arc::new(egui::ColorImage::from_rgba_unmultiplied(
             [width as usize, height as usize],
             rgba,

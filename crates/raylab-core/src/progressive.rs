@@ -846,7 +846,8 @@ impl Worker {
             let ms = start.elapsed().as_secs_f64() * 1e3;
             let rays = u64::from(width) * u64::from(height);
             let legend = Some(view.legend);
-            let frame = self.frame(job, view.image, target, false, ms, rays, None, legend);
+            let mut frame = self.frame(job, view.image, target, false, ms, rays, None, legend);
+            self.convert(&mut frame);
             return self.publish_and_keep(frame);
         }
 
@@ -857,7 +858,8 @@ impl Worker {
                 return false;
             };
             let rays = u64::from(w) * u64::from(h);
-            let frame = self.frame(job, image, 0, true, pass_ms, rays, None, None);
+            let mut frame = self.frame(job, image, 0, true, pass_ms, rays, None, None);
+            self.convert(&mut frame);
             if !self.publish_and_keep(frame) {
                 return false;
             }
@@ -920,6 +922,8 @@ impl Worker {
             let mut frame = self.frame(job, image, sample + 1, false, pass_ms, rays, noise, legend);
             if let Some(denoised) = denoised {
                 frame = self.with_denoised(frame, denoised);
+            } else {
+                self.convert(&mut frame);
             }
             if !self.publish_and_keep(frame) {
                 return false;
@@ -960,16 +964,13 @@ impl Worker {
         if cancelled() { Err(Cancelled) } else { Ok(()) }
     }
 
-    /// `frame` with the denoised image `denoised` (of `self.denoising`), shown if the denoiser
-    /// is on.
+    /// `frame` with the denoised image `denoised` (of `self.denoising`), converted for the
+    /// screen if the denoiser is on (else `frame`'s own image is): one conversion a frame.
     fn with_denoised(&self, frame: Frame, denoised: Arc<Image>) -> Frame {
         let on = self.shared.denoise();
-        let rgba = if on {
-            let shown = shown_with(frame.display, frame.legend.as_ref());
-            self.pool.install(|| shown.to_rgba8(&denoised.pixels))
-        } else {
-            frame.rgba
-        };
+        let shown = shown_with(frame.display, frame.legend.as_ref());
+        let source = if on { &denoised } else { &frame.image };
+        let rgba = self.pool.install(|| shown.to_rgba8(&source.pixels));
         Frame {
             rgba,
             denoise: on,
@@ -1036,6 +1037,8 @@ impl Worker {
         }
     }
 
+    /// A frame of `job` showing `image`, its pixels not yet converted for the screen
+    /// ([`Worker::convert`], or [`Worker::with_denoised`]).
     #[allow(clippy::too_many_arguments)]
     fn frame(
         &self,
@@ -1049,8 +1052,6 @@ impl Worker {
         legend: Option<Legend>,
     ) -> Frame {
         let display = self.shared.display();
-        let shown = shown_with(display, legend.as_ref());
-        let rgba = self.pool.install(|| shown.to_rgba8(&image.pixels));
         Frame {
             generation: job.generation,
             settings: job.settings.clone(),
@@ -1059,7 +1060,7 @@ impl Worker {
             denoised_samples: 0,
             denoise_ms: 0.0,
             denoise: self.shared.denoise(),
-            rgba,
+            rgba: Vec::new(),
             display,
             samples,
             target: job.settings.samples_per_pixel.max(1),
@@ -1075,6 +1076,12 @@ impl Worker {
             legend,
             camera_note: self.camera_note.clone(),
         }
+    }
+
+    /// `frame`'s linear image converted for the screen through its display ([`Frame::rgba`]).
+    fn convert(&self, frame: &mut Frame) {
+        let shown = shown_with(frame.display, frame.legend.as_ref());
+        frame.rgba = self.pool.install(|| shown.to_rgba8(&frame.image.pixels));
     }
 
     /// [`Worker::publish`], remembering the frame (without its pixels) for a display change.
