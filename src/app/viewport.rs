@@ -274,4 +274,29 @@ mod tests {
         assert_eq!(r.size(), egui::vec2(800.0, 200.0));
         assert_eq!(fit_rect(area, egui::Vec2::ZERO).size(), egui::Vec2::ZERO);
     }
+
+    /// The same pixels again are not uploaded (the texture holds them already: egui is given
+    /// no texture change); other pixels, or another size, are.
+    #[test]
+    fn the_same_pixels_are_not_uploaded_again() {
+        let ctx = egui::Context::default();
+        // Whatever the context made for itself (its fonts' atlas) out of the way first.
+        let _ = ctx.tex_manager().write().take_delta();
+        let mut viewport = Viewport::default();
+        // Opaque, as every converted frame is (the comparison is with egui's premultiplied
+        // pixels, which are the same bytes only where alpha is 255).
+        let grey = [128u8, 128, 128, 255].repeat(4 * 4);
+        let uploads = |viewport: &mut Viewport, w: u32, h: u32, rgba: &[u8]| {
+            viewport.set_image(&ctx, w, h, rgba);
+            ctx.tex_manager().write().take_delta().set.len()
+        };
+        assert_eq!(uploads(&mut viewport, 4, 4, &grey), 1);
+        assert_eq!(uploads(&mut viewport, 4, 4, &grey), 0);
+        let mut lighter = grey.clone();
+        lighter[0] = 129;
+        assert_eq!(uploads(&mut viewport, 4, 4, &lighter), 1);
+        assert_eq!(viewport.rgba(), Some(lighter.clone()));
+        assert_eq!(uploads(&mut viewport, 8, 2, &lighter), 1);
+        assert_eq!(viewport.image_size(), Some([8, 2]));
+    }
 }

@@ -947,8 +947,8 @@ impl Worker {
                     .install(|| Features::trace(&job.scene, &job.settings, &cancelled))?;
                 shared.features_traced.fetch_add(1, Ordering::SeqCst);
                 let traced = Arc::new(traced);
-                let of = (Arc::clone(&job.scene), job.settings.clone());
-                denoising.features = Some((Arc::clone(&traced), of.0, of.1));
+                let scene = Arc::clone(&job.scene);
+                denoising.features = Some((Arc::clone(&traced), scene, job.settings.clone()));
                 traced
             }
         };
