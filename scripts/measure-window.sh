@@ -65,13 +65,39 @@ thread_ticks() {
   done
 }
 
+# Starts the binary on settings of its own: WORKBENCH is the workbench's saved state as JSON (what
+# eframe keeps in app.ron), LOG receives its frame log (RAYLAB_LOG_FRAMES). Waits for the window,
+# then until a line of LOG matches PATTERN (at most a minute). Sets app_pid and window.
+export XDG_DATA_HOME="$out/xdg/data" XDG_RUNTIME_DIR="$out/xdg/runtime"
+start_app() {
+  local workbench=$1 pattern=$3
+  log=$2
+  rm -rf "$out/xdg"
+  mkdir -p "$out/xdg/data/raylab" "$out/xdg/runtime"
+  chmod 700 "$out/xdg/runtime"
+  printf '{"raylab-workbench": "%s"}\n' "${workbench//\"/\\\"}" >"$out/xdg/data/raylab/app.ron"
+  RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
+  app_pid=$!
+  window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' | head -n 1)
+  for _ in $(seq 600); do
+    grep -Eq "$pattern" "$log" && break
+    sleep 0.1
+  done
+}
+
+# The path stage at SIDE² on THREADS render threads (as `bench --stage path` renders it: the
+# default camera, unlimited bounces) with a sample target no run reaches; then any further
+# fields of the workbench's state.
+path_stage() {
+  echo "{\"version\": 1, \"render_threads\": $2${3:-}, \"settings\": {\"camera\": {\"width\": $1, \"height\": $1, \"focal_length\": $1}, \"shading\": {\"stage\": \"path\", \"shadows\": true, \"indirect\": true}, \"samples_per_pixel\": 4096}}"
+}
+
 if [ "$mode" = throughput ]; then
   side=${1:-512}
   threads=${2:-2}
   runs=${3:-3}
   span=${THROUGHPUT_SPAN:-8}
   hz=$(getconf CLK_TCK)
-  export XDG_DATA_HOME="$out/xdg/data" XDG_RUNTIME_DIR="$out/xdg/runtime"
   echo "measure-window: path stage, $side², $threads render threads, $runs runs of ${span} s;" \
     "$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores," \
     "load $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -83,23 +109,9 @@ if [ "$mode" = throughput ]; then
   summary="$out/throughput.txt"
   : >"$summary"
   for run in $(seq "$runs"); do
-    # The path stage (as `bench --stage path` renders it: the default camera, unlimited
-    # bounces) with a sample target far beyond what the span reaches.
     bench_before=$(bench_paths)
-    rm -rf "$out/xdg"
-    mkdir -p "$out/xdg/data/raylab" "$out/xdg/runtime"
-    chmod 700 "$out/xdg/runtime"
-    cat >"$out/xdg/data/raylab/app.ron" <<EOF
-{"raylab-workbench": "{\"version\": 1, \"render_threads\": $threads, \"settings\": {\"camera\": {\"width\": $side, \"height\": $side, \"focal_length\": $side}, \"shading\": {\"stage\": \"path\", \"shadows\": true, \"indirect\": true}, \"samples_per_pixel\": 4096}}"}
-EOF
-    log="$out/throughput-$run.log"
-    RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
-    app_pid=$!
-    timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' >/dev/null
-    for _ in $(seq 600); do
-      grep -Eq "samples=[1-9][0-9]* target=[0-9]+ preview=false" "$log" && break
-      sleep 0.1
-    done
+    start_app "$(path_stage "$side" "$threads")" "$out/throughput-$run.log" \
+      "samples=[1-9][0-9]* target=[0-9]+ preview=false"
     grep -Eq "samples=[1-9]" "$log" || { echo "measure-window: no samples logged" >&2; exit 1; }
     # Past the start (the preview, the first passes, the window's first frames).
     sleep 2
@@ -157,25 +169,12 @@ if [ "$mode" = clean ]; then
   threads=${2:-2}
   runs=${3:-3}
   wanted=${CLEAN_SAMPLES:-16}
-  export XDG_DATA_HOME="$out/xdg/data" XDG_RUNTIME_DIR="$out/xdg/runtime"
   echo "measure-window: path stage, $side², $threads render threads, denoised at $wanted samples;" \
     "$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores," \
     "load $(cut -d' ' -f1-3 /proc/loadavg)"
   for run in $(seq "$runs"); do
-    rm -rf "$out/xdg"
-    mkdir -p "$out/xdg/data/raylab" "$out/xdg/runtime"
-    chmod 700 "$out/xdg/runtime"
-    cat >"$out/xdg/data/raylab/app.ron" <<EOF
-{"raylab-workbench": "{\"version\": 1, \"render_threads\": $threads, \"denoise\": true, \"settings\": {\"camera\": {\"width\": $side, \"height\": $side, \"focal_length\": $side}, \"shading\": {\"stage\": \"path\", \"shadows\": true, \"indirect\": true}, \"samples_per_pixel\": 4096}}"}
-EOF
-    log="$out/clean-$run.log"
-    RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
-    app_pid=$!
-    window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' | head -n 1)
-    for _ in $(seq 600); do
-      grep -Eq "denoised=[1-9]" "$log" && break
-      sleep 0.1
-    done
+    start_app "$(path_stage "$side" "$threads" ', "denoise": true')" "$out/clean-$run.log" \
+      "denoised=[1-9]"
     grep -Eq "denoised=[1-9]" "$log" || { echo "measure-window: no denoised frame logged" >&2; exit 1; }
     sleep 1
     before=$(wc -l <"$log")
@@ -223,23 +222,9 @@ fi
 
 side=${1:-1024}
 
-# A settings file for a SIDE² image (eframe keeps its storage as RON: a map of strings).
-rm -rf "$out/xdg"
-mkdir -p "$out/xdg/data/raylab" "$out/xdg/runtime"
-chmod 700 "$out/xdg/runtime"
-cat >"$out/xdg/data/raylab/app.ron" <<EOF
-{"raylab-workbench": "{\"version\": 1, \"settings\": {\"camera\": {\"width\": $side, \"height\": $side, \"focal_length\": $side}, \"samples_per_pixel\": 16}}"}
-EOF
-export XDG_DATA_HOME="$out/xdg/data" XDG_RUNTIME_DIR="$out/xdg/runtime"
-
-log="$out/app.log"
-RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
-app_pid=$!
-window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' | head -n 1)
-for _ in $(seq 600); do
-  grep -Eq "samples=16 target=16 preview=false" "$log" && break
-  sleep 0.1
-done
+# The lab's stage on a SIDE² image, 16 samples.
+start_app "{\"version\": 1, \"settings\": {\"camera\": {\"width\": $side, \"height\": $side, \"focal_length\": $side}, \"samples_per_pixel\": 16}}" \
+  "$out/app.log" "samples=16 target=16 preview=false"
 grep -q "full_pass_ms" "$log" || { echo "measure-window: no frames logged" >&2; exit 1; }
 echo "measure-window: $side² reached 16 samples; dragging the Light x slider"
 
