@@ -101,7 +101,7 @@ pub struct Frame {
     pub denoised: Option<Arc<Image>>,
     pub denoised_samples: u32,
     /// How long the last denoising took, in milliseconds (the feature buffers, traced once a
-    /// job, not counted).
+    /// view, not counted).
     pub denoise_ms: f64,
     /// Whether the denoiser was on when the frame was converted (as `display` says which
     /// display was in force).
@@ -905,7 +905,7 @@ impl Worker {
                 self.denoising.variance = self.pool.install(|| film.variance()).map(Arc::new);
                 if self.shared.denoise() {
                     // Not the first full pass (unless it is the last): it is shown at once,
-                    // raw, where the features (traced once a job) would hold it back.
+                    // raw, where tracing the features (once a view) would hold it back.
                     let spaced = self
                         .denoising
                         .at
@@ -1142,6 +1142,14 @@ mod tests {
     }
 
     /// Takes frames until one is final for `generation`, checking the order on the way.
+    /// Submits `settings` and waits for the job's last frame and for the worker to go idle.
+    fn finished(controller: &Controller, scene: &Arc<Scene>, settings: &RenderSettings) -> Frame {
+        let g = controller.submit(scene, settings).unwrap();
+        let frame = last_frame(controller, g);
+        assert!(controller.wait_idle(TIMEOUT));
+        frame
+    }
+
     fn last_frame(controller: &Controller, generation: u64) -> Frame {
         let deadline = Instant::now() + TIMEOUT;
         let mut newest_seen = 0;
@@ -1367,9 +1375,7 @@ mod tests {
         controller.set_denoise(true);
         let mut settings = small(40, 30, 4);
         settings.shading = crate::Shading::for_stage(crate::Stage::Path);
-        let g = controller.submit(&scene, &settings).unwrap();
-        let frame = last_frame(&controller, g);
-        assert!(controller.wait_idle(TIMEOUT));
+        let frame = finished(&controller, &scene, &settings);
         let (raw, denoised) = crate::denoise::render_denoised(&scene, &settings);
         let denoised = denoised.unwrap();
         assert_eq!(*frame.image, raw);
@@ -1403,23 +1409,17 @@ mod tests {
         controller.set_denoise(true);
         let mut settings = small(40, 30, 3);
         settings.shading = crate::Shading::for_stage(crate::Stage::Path);
-        let g = controller.submit(&scene, &settings).unwrap();
-        let _ = last_frame(&controller, g);
-        assert!(controller.wait_idle(TIMEOUT));
+        let _ = finished(&controller, &scene, &settings);
         assert_eq!(controller.features_traced(), 1);
 
         settings.light.position.x += 0.3;
-        let g = controller.submit(&scene, &settings).unwrap();
-        let relit = last_frame(&controller, g);
-        assert!(controller.wait_idle(TIMEOUT));
+        let relit = finished(&controller, &scene, &settings);
         assert_eq!(controller.features_traced(), 1);
         let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
         assert_eq!(relit.denoised.as_deref(), denoised.as_ref());
 
         settings.camera.position.x += 0.1;
-        let g = controller.submit(&scene, &settings).unwrap();
-        let moved = last_frame(&controller, g);
-        assert!(controller.wait_idle(TIMEOUT));
+        let moved = finished(&controller, &scene, &settings);
         assert_eq!(controller.features_traced(), 2);
         let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
         assert_eq!(moved.denoised.as_deref(), denoised.as_ref());
@@ -1433,9 +1433,7 @@ mod tests {
         let controller = Controller::new(2, quiet()).unwrap();
         let mut settings = small(40, 30, 3);
         settings.shading = crate::Shading::for_stage(crate::Stage::Path);
-        let g = controller.submit(&scene, &settings).unwrap();
-        let before = last_frame(&controller, g);
-        assert!(controller.wait_idle(TIMEOUT));
+        let before = finished(&controller, &scene, &settings);
         assert!(before.denoised.is_none());
         let passes = controller.passes_traced();
         controller.set_denoise(true);
