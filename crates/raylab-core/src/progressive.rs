@@ -40,7 +40,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use crate::denoise::{Denoiser, Features};
 use crate::display::Display;
@@ -65,11 +65,11 @@ pub const PREVIEW_DIVISOR: u32 = 8;
 
 /// The shortest time between two accumulated frames shown (after the first): 25 a second, as
 /// smooth as the eye needs, while passes of a few milliseconds keep accumulating in between.
-pub const MIN_FRAME_INTERVAL: std::time::Duration = std::time::Duration::from_millis(40);
+pub const MIN_FRAME_INTERVAL: Duration = Duration::from_millis(40);
 
 /// The longest time between two accumulated frames shown: 4 a second, once a job has
 /// accumulated for a few seconds.
-pub const MAX_FRAME_INTERVAL: std::time::Duration = std::time::Duration::from_millis(250);
+pub const MAX_FRAME_INTERVAL: Duration = Duration::from_millis(250);
 
 /// The time between two accumulated frames shown, `accumulating` after the first full pass
 /// began: a tenth of that time, from [`MIN_FRAME_INTERVAL`] up to [`MAX_FRAME_INTERVAL`]. The
@@ -77,7 +77,7 @@ pub const MAX_FRAME_INTERVAL: std::time::Duration = std::time::Duration::from_mi
 /// render is not slowed by its own progress: each frame shown costs the worker a mean, its
 /// display pixels and a noise estimate, and the UI a repaint, which on a small machine (and
 /// under a software renderer) are taken from the render threads.
-pub fn frame_interval(accumulating: std::time::Duration) -> std::time::Duration {
+pub fn frame_interval(accumulating: Duration) -> Duration {
     (accumulating / 10).clamp(MIN_FRAME_INTERVAL, MAX_FRAME_INTERVAL)
 }
 
@@ -460,7 +460,7 @@ impl Controller {
     /// Blocks until the newest job has reached its sample target (or panicked: see
     /// [`Controller::take_error`]), or `timeout` passes. Returns whether it finished. For tests
     /// and scripts: **never call this on the UI thread**.
-    pub fn wait_idle(&self, timeout: std::time::Duration) -> bool {
+    pub fn wait_idle(&self, timeout: Duration) -> bool {
         let deadline = Instant::now() + timeout;
         let mut done = self
             .shared
@@ -616,13 +616,35 @@ struct Denoising {
     variance: Option<Arc<Vec<f32>>>,
     image: Option<Arc<Image>>,
     samples: u32,
-    cost: std::time::Duration,
+    cost: Duration,
     at: Option<Instant>,
 }
 
 /// How long after one denoising the next may start, as a multiple of its cost: the denoiser
 /// takes at most a tenth of the worker's time.
 const DENOISE_SPACING: u32 = 9;
+
+/// Whether a job's image is denoised after its pass `samples` (counted from 1), the last pass
+/// aside (always denoised): at every doubling of the samples from 2 on (2, 4, 8, 16, …), and
+/// between doublings when the last denoising is [`DENOISE_SPACING`] times its `cost` ago
+/// (`since`, `None` if none yet) and the next doubling is farther off than that at `pass` a
+/// pass. Never after the first pass, which is shown raw at once.
+///
+/// Each doubling halves the raw image's variance, and the denoised image keeps up with it
+/// without delay: 16 samples denoised are about as clean as 256 raw ones (PERFORMANCE.md), and
+/// they are shown as soon as the sixteenth pass is in. Between doublings the denoiser takes at
+/// most a tenth of the time, and none where a doubling is about to come.
+pub fn denoise_due(samples: u32, since: Option<Duration>, cost: Duration, pass: Duration) -> bool {
+    if samples < 2 {
+        return false;
+    }
+    if samples.is_power_of_two() {
+        return true;
+    }
+    let spacing = cost * DENOISE_SPACING;
+    let to_doubling = pass * (samples.next_power_of_two() - samples);
+    since.is_none_or(|since| since >= spacing) && to_doubling >= spacing
+}
 
 impl Worker {
     fn new(shared: Arc<Shared>, receiver: Receiver<Message>, pool: rayon::ThreadPool) -> Self {
@@ -873,12 +895,29 @@ impl Worker {
                 return false;
             };
             // Short passes are not all shown, and fewer as the job goes on
-            // ([`frame_interval`]). The first and the last always are, and the first after a
-            // display change, so the change shows within one pass.
+            // ([`frame_interval`]). The first and the last always are, the first after a
+            // display change, so the change shows within one pass, and those denoised (every
+            // doubling of the samples among them: [`denoise_due`]). While a denoised image
+            // stays on screen unchanged, only its figures (samples, noise) would change: those
+            // frames come at most every MAX_FRAME_INTERVAL, and the time a repaint takes goes
+            // to the passes.
             let last = sample + 1 == target;
+            let denoising = settings.is_stochastic()
+                && settings.view != View::Variance
+                && self.shared.denoise();
+            let pass = Duration::from_secs_f64(pass_ms / 1e3);
+            let since = self.denoising.at.map(|at| at.elapsed());
+            let due =
+                denoising && (last || denoise_due(sample + 1, since, self.denoising.cost, pass));
+            let interval = if denoising && self.denoising.image.is_some() {
+                MAX_FRAME_INTERVAL
+            } else {
+                frame_interval(accumulating.elapsed())
+            };
             if sample > 0
                 && !last
-                && published.elapsed() < frame_interval(accumulating.elapsed())
+                && !due
+                && published.elapsed() < interval
                 && !self.display_changed()
             {
                 continue;
@@ -903,17 +942,11 @@ impl Worker {
             // denoiser is on and it is due (always for the last frame).
             let denoised = if settings.is_stochastic() && legend.is_none() {
                 self.denoising.variance = self.pool.install(|| film.variance()).map(Arc::new);
-                if self.shared.denoise() {
-                    // Not the first full pass (unless it is the last): it is shown at once,
-                    // raw, where tracing the features (once a view) would hold it back.
-                    let spaced = self
-                        .denoising
-                        .at
-                        .is_none_or(|at| at.elapsed() >= self.denoising.cost * DENOISE_SPACING);
-                    let due = last || (sample > 0 && spaced);
-                    if due && self.denoise(job, &image, sample + 1).is_err() {
-                        return false;
-                    }
+                // Not the first full pass (unless it is the last): it is shown at once, raw,
+                // where tracing the features (once a view) would hold it back; then at every
+                // doubling of the samples, and spaced between them.
+                if due && self.denoise(job, &image, sample + 1).is_err() {
+                    return false;
                 }
                 self.denoising.image.clone()
             } else {
@@ -1121,7 +1154,6 @@ impl Worker {
 #[cfg(test)]
 mod tests {
     use std::sync::atomic::AtomicUsize;
-    use std::time::Duration;
 
     use super::*;
     use crate::display::DisplayTransform;
@@ -1167,6 +1199,27 @@ mod tests {
             );
             std::thread::sleep(Duration::from_millis(2));
         }
+    }
+
+    /// The denoiser's schedule, worked out by hand: a denoising of 30 ms may come again 9 × 30
+    /// = 270 ms later, at passes of 60 ms.
+    #[test]
+    fn denoising_comes_at_every_doubling_and_spaced_between() {
+        let ms = Duration::from_millis;
+        let (cost, pass) = (ms(30), ms(60));
+        // The first pass is shown raw; each doubling is denoised whatever the time.
+        assert!(!denoise_due(1, None, cost, pass));
+        for samples in [2, 4, 8, 16, 64, 1024] {
+            assert!(denoise_due(samples, Some(ms(1)), cost, pass), "{samples}");
+        }
+        // Pass 9: 300 ms after the last (≥ 270) and 16 is 7 passes, 420 ms, off: due.
+        assert!(denoise_due(9, Some(ms(300)), cost, pass));
+        // Only 100 ms after the last: not yet.
+        assert!(!denoise_due(9, Some(ms(100)), cost, pass));
+        // Pass 13: 16 is 3 passes, 180 ms, off (< 270): left to the doubling.
+        assert!(!denoise_due(13, Some(ms(400)), cost, pass));
+        // Pass 33 with none yet: 64 is 31 passes off.
+        assert!(denoise_due(33, None, cost, pass));
     }
 
     #[test]
@@ -1423,6 +1476,47 @@ mod tests {
         assert_eq!(controller.features_traced(), 2);
         let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
         assert_eq!(moved.denoised.as_deref(), denoised.as_ref());
+    }
+
+    /// With the denoiser on, a frame that doubles the samples (2, 4, 8, 16) shows the image
+    /// denoised from exactly those samples: the sixteenth pass's frame is `render_denoised`'s
+    /// image of 16 samples, bit for bit.
+    #[test]
+    fn each_doubling_of_the_samples_is_shown_denoised() {
+        let scene = Arc::new(cornell_box());
+        let controller = Controller::new(2, quiet()).unwrap();
+        controller.set_denoise(true);
+        let mut settings = small(96, 64, 20);
+        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let generation = controller.submit(&scene, &settings).unwrap();
+        // Every frame as it comes (the UI would see only the newest of a burst).
+        let mut frames: Vec<Frame> = Vec::new();
+        let deadline = Instant::now() + TIMEOUT;
+        while frames.last().is_none_or(|f| !f.is_final()) {
+            if let Some(f) = controller
+                .take_frame()
+                .filter(|f| f.generation == generation)
+            {
+                frames.push(f);
+            }
+            assert!(Instant::now() < deadline);
+            std::thread::yield_now();
+        }
+        assert!(controller.wait_idle(TIMEOUT));
+        let doublings: Vec<&Frame> = frames
+            .iter()
+            .filter(|f| !f.is_preview && [2, 4, 8, 16].contains(&f.samples))
+            .collect();
+        // Taken as they come, a frame may be missed; most are not.
+        assert!(!doublings.is_empty(), "{} frames", frames.len());
+        for frame in doublings {
+            assert_eq!(frame.denoised_samples, frame.samples);
+            if frame.samples == 16 {
+                settings.samples_per_pixel = 16;
+                let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
+                assert_eq!(frame.denoised.as_deref(), denoised.as_ref());
+            }
+        }
     }
 
     /// Turned on after a noisy job finished with the denoiser off, the denoiser denoises its
