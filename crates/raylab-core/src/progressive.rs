@@ -625,16 +625,24 @@ struct Denoising {
 const DENOISE_SPACING: u32 = 9;
 
 /// Whether a job's image is denoised after its pass `samples` (counted from 1), the last pass
-/// aside (always denoised): at every doubling of the samples from 2 on (2, 4, 8, 16, …), and
-/// between doublings when the last denoising is [`DENOISE_SPACING`] times its `cost` ago
-/// (`since`, `None` if none yet) and the next doubling is farther off than that at `pass` a
-/// pass. Never after the first pass, which is shown raw at once.
+/// aside (always denoised), given `last`, the samples of the job's last denoised image and the
+/// time since it (`None` if none yet), the denoising's `cost` and the time a `pass` takes:
 ///
-/// Each doubling halves the raw image's variance, and the denoised image keeps up with it
-/// without delay: 16 samples denoised are about as clean as 256 raw ones (PERFORMANCE.md), and
-/// they are shown as soon as the sixteenth pass is in. Between doublings the denoiser takes at
-/// most a tenth of the time, and none where a doubling is about to come.
-pub fn denoise_due(samples: u32, since: Option<Duration>, cost: Duration, pass: Duration) -> bool {
+/// * never after the first pass, which is shown raw at once;
+/// * at every doubling of the samples (2, 4, 8, 16, …): each halves the raw image's variance,
+///   and the denoised image keeps up with it without delay (16 samples denoised are about as
+///   clean as 256 raw ones: PERFORMANCE.md, shown as soon as the sixteenth pass is in);
+/// * between doublings, once the last denoising is [`DENOISE_SPACING`] times its cost ago,
+///   the samples have grown by a quarter since it, and the next doubling is farther off than
+///   the spacing at `pass` a pass. So the denoiser takes at most a tenth of the time, and less
+///   and less as the image converges (a quarter more samples lower its noise by about a
+///   tenth).
+pub fn denoise_due(
+    samples: u32,
+    last: Option<(u32, Duration)>,
+    cost: Duration,
+    pass: Duration,
+) -> bool {
     if samples < 2 {
         return false;
     }
@@ -643,7 +651,10 @@ pub fn denoise_due(samples: u32, since: Option<Duration>, cost: Duration, pass: 
     }
     let spacing = cost * DENOISE_SPACING;
     let to_doubling = pass * (samples.next_power_of_two() - samples);
-    since.is_none_or(|since| since >= spacing) && to_doubling >= spacing
+    let since_last = last.is_none_or(|(denoised, since)| {
+        since >= spacing && u64::from(samples) * 4 >= u64::from(denoised) * 5
+    });
+    since_last && to_doubling >= spacing
 }
 
 impl Worker {
@@ -906,9 +917,9 @@ impl Worker {
                 && settings.view != View::Variance
                 && self.shared.denoise();
             let pass = Duration::from_secs_f64(pass_ms / 1e3);
-            let since = self.denoising.at.map(|at| at.elapsed());
+            let before = (self.denoising.at).map(|at| (self.denoising.samples, at.elapsed()));
             let due =
-                denoising && (last || denoise_due(sample + 1, since, self.denoising.cost, pass));
+                denoising && (last || denoise_due(sample + 1, before, self.denoising.cost, pass));
             let interval = if denoising && self.denoising.image.is_some() {
                 MAX_FRAME_INTERVAL
             } else {
@@ -1207,18 +1218,25 @@ mod tests {
     fn denoising_comes_at_every_doubling_and_spaced_between() {
         let ms = Duration::from_millis;
         let (cost, pass) = (ms(30), ms(60));
-        // The first pass is shown raw; each doubling is denoised whatever the time.
+        // The first pass is shown raw; each doubling is denoised whatever came before.
         assert!(!denoise_due(1, None, cost, pass));
         for samples in [2, 4, 8, 16, 64, 1024] {
-            assert!(denoise_due(samples, Some(ms(1)), cost, pass), "{samples}");
+            assert!(denoise_due(samples, Some((samples - 1, ms(1))), cost, pass));
         }
-        // Pass 9: 300 ms after the last (≥ 270) and 16 is 7 passes, 420 ms, off: due.
-        assert!(denoise_due(9, Some(ms(300)), cost, pass));
+        // Pass 21, the last denoising at 16 samples 300 ms ago (≥ 270; 21 ≥ 1.25 · 16) and
+        // 32 eleven passes, 660 ms, off: due.
+        assert!(denoise_due(21, Some((16, ms(300))), cost, pass));
         // Only 100 ms after the last: not yet.
-        assert!(!denoise_due(9, Some(ms(100)), cost, pass));
+        assert!(!denoise_due(21, Some((16, ms(100))), cost, pass));
+        // Pass 19: less than a quarter more samples than 16 (19 < 20).
+        assert!(!denoise_due(19, Some((16, ms(300))), cost, pass));
+        assert!(denoise_due(20, Some((16, ms(300))), cost, pass));
         // Pass 13: 16 is 3 passes, 180 ms, off (< 270): left to the doubling.
-        assert!(!denoise_due(13, Some(ms(400)), cost, pass));
-        // Pass 33 with none yet: 64 is 31 passes off.
+        assert!(!denoise_due(13, Some((8, ms(400))), cost, pass));
+        // Pass 300 after 256: a quarter more is 320.
+        assert!(!denoise_due(300, Some((256, ms(5_000))), cost, pass));
+        assert!(denoise_due(320, Some((256, ms(5_000))), cost, pass));
+        // Pass 33 with none yet this job: 64 is 31 passes off.
         assert!(denoise_due(33, None, cost, pass));
     }
 
