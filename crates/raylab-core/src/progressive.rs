@@ -1184,7 +1184,6 @@ mod tests {
         Box::new(|| {})
     }
 
-    /// Takes frames until one is final for `generation`, checking the order on the way.
     /// Submits `settings` and waits for the job's last frame and for the worker to go idle.
     fn finished(controller: &Controller, scene: &Arc<Scene>, settings: &RenderSettings) -> Frame {
         let g = controller.submit(scene, settings).unwrap();
@@ -1193,6 +1192,30 @@ mod tests {
         frame
     }
 
+    /// The frames of job `generation` taken as they come, up to its final one, and the worker
+    /// idle after it (the UI would see only the newest of a burst; polled this often, few are
+    /// missed).
+    fn every_frame(controller: &Controller, generation: u64) -> Vec<Frame> {
+        let mut frames: Vec<Frame> = Vec::new();
+        let deadline = Instant::now() + TIMEOUT;
+        while frames.last().is_none_or(|f| !f.is_final()) {
+            if let Some(f) = controller
+                .take_frame()
+                .filter(|f| f.generation == generation)
+            {
+                frames.push(f);
+            }
+            assert!(
+                Instant::now() < deadline,
+                "no final frame within {TIMEOUT:?}"
+            );
+            std::thread::yield_now();
+        }
+        assert!(controller.wait_idle(TIMEOUT));
+        frames
+    }
+
+    /// Takes frames until one is final for `generation`, checking the order on the way.
     fn last_frame(controller: &Controller, generation: u64) -> Frame {
         let deadline = Instant::now() + TIMEOUT;
         let mut newest_seen = 0;
@@ -1243,29 +1266,13 @@ mod tests {
     #[test]
     fn previews_then_accumulates_to_the_target() {
         let scene = Arc::new(cornell_box());
-        let frames = Arc::new(Mutex::new(Vec::new()));
         let notified = Arc::new(AtomicUsize::new(0));
         let n = Arc::clone(&notified);
         let controller =
             Controller::new(2, Box::new(move || _ = n.fetch_add(1, Ordering::SeqCst))).unwrap();
         let settings = small(96, 64, 4);
         let generation = controller.submit(&scene, &settings).unwrap();
-        // Collect every frame as it comes (the UI would see only the newest of a burst).
-        let deadline = Instant::now() + TIMEOUT;
-        while frames
-            .lock()
-            .unwrap()
-            .last()
-            .is_none_or(|f: &Frame| !f.is_final())
-        {
-            if let Some(f) = controller.take_frame() {
-                frames.lock().unwrap().push(f);
-            }
-            assert!(Instant::now() < deadline);
-            std::thread::yield_now();
-        }
-        assert!(controller.wait_idle(TIMEOUT));
-        let frames = frames.lock().unwrap();
+        let frames = every_frame(&controller, generation);
         let last = frames.last().unwrap();
         assert_eq!(last.generation, generation);
         assert_eq!((last.samples, last.target), (4, 4));
@@ -1507,20 +1514,7 @@ mod tests {
         let mut settings = small(96, 64, 20);
         settings.shading = crate::Shading::for_stage(crate::Stage::Path);
         let generation = controller.submit(&scene, &settings).unwrap();
-        // Every frame as it comes (the UI would see only the newest of a burst).
-        let mut frames: Vec<Frame> = Vec::new();
-        let deadline = Instant::now() + TIMEOUT;
-        while frames.last().is_none_or(|f| !f.is_final()) {
-            if let Some(f) = controller
-                .take_frame()
-                .filter(|f| f.generation == generation)
-            {
-                frames.push(f);
-            }
-            assert!(Instant::now() < deadline);
-            std::thread::yield_now();
-        }
-        assert!(controller.wait_idle(TIMEOUT));
+        let frames = every_frame(&controller, generation);
         let doublings: Vec<&Frame> = frames
             .iter()
             .filter(|f| !f.is_preview && [2, 4, 8, 16].contains(&f.samples))
