@@ -1180,6 +1180,13 @@ mod tests {
         s
     }
 
+    /// [`small`] on the path stage, the noisy image the denoiser is for.
+    fn small_path(width: u32, height: u32, samples: u32) -> RenderSettings {
+        let mut s = small(width, height, samples);
+        s.shading = crate::Shading::for_stage(crate::Stage::Path);
+        s
+    }
+
     fn quiet() -> Notify {
         Box::new(|| {})
     }
@@ -1451,8 +1458,7 @@ mod tests {
         let scene = Arc::new(cornell_box());
         let controller = Controller::new(2, quiet()).unwrap();
         controller.set_denoise(true);
-        let mut settings = small(40, 30, 4);
-        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let settings = small_path(40, 30, 4);
         let frame = finished(&controller, &scene, &settings);
         let (raw, denoised) = crate::denoise::render_denoised(&scene, &settings);
         let denoised = denoised.unwrap();
@@ -1485,8 +1491,7 @@ mod tests {
         let scene = Arc::new(cornell_box());
         let controller = Controller::new(2, quiet()).unwrap();
         controller.set_denoise(true);
-        let mut settings = small(40, 30, 3);
-        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let mut settings = small_path(40, 30, 3);
         let _ = finished(&controller, &scene, &settings);
         assert_eq!(controller.features_traced(), 1);
 
@@ -1511,8 +1516,7 @@ mod tests {
         let scene = Arc::new(cornell_box());
         let controller = Controller::new(2, quiet()).unwrap();
         controller.set_denoise(true);
-        let mut settings = small(96, 64, 20);
-        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let mut settings = small_path(96, 64, 20);
         let generation = controller.submit(&scene, &settings).unwrap();
         let frames = every_frame(&controller, generation);
         let doublings: Vec<&Frame> = frames
@@ -1537,8 +1541,7 @@ mod tests {
     fn turning_the_denoiser_on_when_idle_denoises_the_last_frame() {
         let scene = Arc::new(cornell_box());
         let controller = Controller::new(2, quiet()).unwrap();
-        let mut settings = small(40, 30, 3);
-        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        let settings = small_path(40, 30, 3);
         let before = finished(&controller, &scene, &settings);
         assert!(before.denoised.is_none());
         let passes = controller.passes_traced();
