@@ -620,8 +620,9 @@ struct Denoising {
     at: Option<Instant>,
 }
 
-/// How long after one denoising the next may start, as a multiple of its cost: the denoiser
-/// takes at most a tenth of the worker's time.
+/// How long after one denoising the next may start between doublings of the samples, as a
+/// multiple of its cost ([`denoise_due`]): there the denoiser takes at most a tenth of the
+/// worker's time. (Early in a job the doublings come faster and may take more.)
 const DENOISE_SPACING: u32 = 9;
 
 /// Whether a job's image is denoised after its pass `samples` (counted from 1), the last pass
