@@ -638,10 +638,10 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let view = args.view.unwrap_or(settings.view);
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;
-    // Denoising holds a film with its variance, the features and the filter's planes beside
-    // the image: under 40 floats a pixel more.
+    // Denoising holds a film with its variance and its samples' features' sums, the features
+    // and the filter's planes beside the image: under 48 floats a pixel more.
     let denoise_memory = if settings.denoise {
-        160 * u64::from(c.width) * u64::from(c.height)
+        192 * u64::from(c.width) * u64::from(c.height)
     } else {
         0
     };
@@ -849,7 +849,7 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
             format!("denoising a {}×{} render", c.width, c.height),
             settings
                 .memory_estimate(raylab_core::view::View::Shaded)
-                .saturating_add(160 * u64::from(c.width) * u64::from(c.height)),
+                .saturating_add(192 * u64::from(c.width) * u64::from(c.height)),
         )?;
         let (_, denoised) =
             pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
@@ -1061,13 +1061,12 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
 /// ([`raylab_core::denoise::quality`]).
 fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     use raylab_core::bench::path_settings;
-    use raylab_core::denoise::{Denoiser, Features, quality};
-    use raylab_core::film::Film;
+    use raylab_core::denoise::{Denoiser, denoising_film, features_of, quality};
     raylab_core::memory::check(
         format!("a {}×{} denoise bench", args.width, args.height),
-        // A film (sum, squares), a pass, the features and the filter's planes: under 40
-        // floats a pixel.
-        160 * u64::from(args.width) * u64::from(args.height),
+        // A film (sum, squares, the features' sums), the features and the filter's planes:
+        // under 48 floats a pixel.
+        192 * u64::from(args.width) * u64::from(args.height),
     )?;
     let scene = raylab_core::scene::cornell_box();
     let denoiser = Denoiser::default();
@@ -1075,16 +1074,17 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
     let never = || false;
     let (timing, rows) = pool.install(|| -> anyhow::Result<_> {
         let settings = path_settings(args.width, args.height);
-        let mut film = Film::with_noise(args.width, args.height);
+        // The path tracer records the features as it traces (`denoising_film`): their time
+        // here is averaging the film's sums.
+        let mut film = denoising_film(&scene, &settings);
         for sample in 0..16 {
-            let pass = raylab_core::render::render_pass(&scene, &settings, sample, &never)?;
-            film.add_pass(&pass);
+            raylab_core::render::accumulate_pass(&scene, &settings, sample, &mut film, &never)?;
         }
         let (raw, variance) = (film.resolve(), film.variance());
         let (mut feature_times, mut filter_times) = (Vec::new(), Vec::new());
         for _ in 0..=args.passes {
             let start = std::time::Instant::now();
-            let features = Features::trace(&scene, &settings, &never)?;
+            let features = features_of(&film, &scene, &settings, &never)?;
             feature_times.push(start.elapsed());
             let start = std::time::Instant::now();
             std::hint::black_box(denoiser.denoise(&raw, variance.as_deref(), &features));

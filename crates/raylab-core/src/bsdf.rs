@@ -556,6 +556,14 @@ impl ShadingFrame {
         if front { ns } else { -ns }
     }
 
+    /// The shading normal [`ShadingFrame::new`] would use (rules 1 and 2), on the side of
+    /// `wo`: the normal a viewer from `wo` sees the surface with, as the denoiser's features
+    /// record it ([`crate::film::Seen`]).
+    #[inline]
+    pub fn seen_normal(shading_normal: Vec3, geometric_normal: Vec3, wo_world: Vec3) -> Vec3 {
+        Self::normals(shading_normal, geometric_normal, wo_world).0
+    }
+
     /// Rules 1 and 2 of [`ShadingFrame::new`]: the shading normal and the geometric normal on
     /// the side of `wo`, the first bent, and whether `wo` is on the geometric normal's side.
     #[inline(always)]

@@ -366,14 +366,76 @@ pub fn write_to_free_name(path: &Path, bytes: &[u8]) -> Result<PathBuf, SaveErro
     ))
 }
 
+/// What one camera sample sees, apart from the light: the denoiser's features
+/// ([`crate::denoise::Features`] averages them per pixel). The first surface that is not a
+/// perfect specular one, or the one reached after
+/// [`crate::integrator::FEATURE_SPECULAR_BOUNCES`] mirror and glass bounces, with the tints of
+/// those before it, as Open Image Denoise asks of its auxiliary images: a mirror shows the
+/// features of what it reflects.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Seen {
+    /// The reflectance seen (each channel at most 1), times the tints on the way.
+    pub albedo: Vec3,
+    /// The shading normal, turned to the side the viewer is on: a wall seen from behind and
+    /// from the front are one surface to the filter.
+    pub normal: Vec3,
+    /// The distance along the path to the surface.
+    pub depth: f32,
+}
+
+impl Seen {
+    /// A surface of reflectance `albedo` and shading normal `normal`, reached along the
+    /// direction `-wo` after `depth` of path whose mirrors and glass tinted it by `tint`.
+    #[inline]
+    pub fn at(tint: Vec3, albedo: Vec3, normal: Vec3, wo: Vec3, depth: f32) -> Seen {
+        Seen {
+            albedo: tint * albedo.min(Vec3::ONE),
+            normal: if normal.dot(wo) < 0.0 {
+                -normal
+            } else {
+                normal
+            },
+            depth,
+        }
+    }
+}
+
+/// A pixel's sums of what its samples saw ([`Seen`]), added in the order of the samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SeenSum {
+    /// Over every sample (one that left the scene adds 0).
+    pub albedo: Vec3,
+    /// Over the samples that hit something, as `depth`.
+    pub normal: Vec3,
+    pub depth: f32,
+    /// The samples that hit something.
+    pub hits: u32,
+}
+
+impl SeenSum {
+    /// Adds what one sample saw (`None`: nothing).
+    #[inline]
+    pub fn add(&mut self, seen: Option<Seen>) {
+        if let Some(seen) = seen {
+            self.albedo += seen.albedo;
+            self.normal += seen.normal;
+            self.depth += seen.depth;
+            self.hits += 1;
+        }
+    }
+}
+
 /// Accumulates passes of one view into a running mean (progressive refinement), and, if asked,
-/// the sum of squares that estimates how noisy that mean still is ([`Film::noise`]).
+/// the sum of squares that estimates how noisy that mean still is ([`Film::noise`]) and the
+/// sums of what the samples saw, the denoiser's features ([`Film::with_features`]).
 #[derive(Clone, Debug)]
 pub struct Film {
     sum: Image,
     /// Per pixel, the sum of the squared sample values (the mean of the three channels), when
     /// the noise is tracked.
     sum_sq: Option<Vec<f32>>,
+    /// Per pixel, what its samples saw, when the features are recorded.
+    seen: Option<Vec<SeenSum>>,
     samples: u32,
 }
 
@@ -429,8 +491,25 @@ impl Film {
         Self {
             sum: Image::new(width, height),
             sum_sq: None,
+            seen: None,
             samples: 0,
         }
+    }
+
+    /// This film, also summing what each sample saw ([`Seen`]: 32 more bytes per pixel) as
+    /// the passes added with [`Film::add_pass_rows`] tell it; [`Film::seen`] gives the sums.
+    pub fn with_features(self) -> Self {
+        let len = self.sum.pixels.len();
+        Self {
+            seen: Some(vec![SeenSum::default(); len]),
+            ..self
+        }
+    }
+
+    /// Per pixel, the sums of what its samples saw, if the film records them
+    /// ([`Film::with_features`]).
+    pub fn seen(&self) -> Option<&[SeenSum]> {
+        self.seen.as_deref()
     }
 
     /// A film that also tracks the spread of each pixel's samples, for [`Film::noise`] (four
@@ -471,47 +550,44 @@ impl Film {
     }
 
     /// Adds one pass traced a row at a time, rows in parallel on the current rayon pool:
-    /// `trace(y, row)` puts row `y`'s values in `row` (one image row long). The same sums as
-    /// [`Film::add_pass`] of the image those rows make, without making that image (no
-    /// full-size allocation a pass, and the adding done by the pool's threads while each row
-    /// is still in cache). An error from `trace` stops the pass and is returned: the film then
-    /// holds part of the pass, and is to be dropped.
+    /// `trace(y, row, seen)` puts row `y`'s values in `row` (one image row long) and, if the
+    /// film records features, what each pixel's sample saw in `seen` (as long as `row`; empty
+    /// if it does not). The same sums as [`Film::add_pass`] of the image those rows make,
+    /// without making that image (no full-size allocation a pass, and the adding done by the
+    /// pool's threads while each row is still in cache). An error from `trace` stops the pass
+    /// and is returned: the film then holds part of the pass, and is to be dropped.
     pub fn add_pass_rows<E: Send>(
         &mut self,
-        trace: impl Fn(u32, &mut [Vec3]) -> Result<(), E> + Sync + Send,
+        trace: impl Fn(u32, &mut [Vec3], &mut [Option<Seen>]) -> Result<(), E> + Sync + Send,
     ) -> Result<(), E> {
         use rayon::prelude::*;
         let width = (self.sum.width as usize).max(1);
-        let buffer = || vec![Vec3::ZERO; width];
-        match &mut self.sum_sq {
-            Some(sum_sq) => self
-                .sum
-                .pixels
-                .par_chunks_mut(width)
-                .zip(sum_sq.par_chunks_mut(width))
-                .enumerate()
-                .try_for_each_init(buffer, |row, (y, (sum, sum_sq))| {
-                    trace(y as u32, row)?;
-                    for ((s, q), p) in sum.iter_mut().zip(sum_sq.iter_mut()).zip(row.iter()) {
-                        *s += *p;
-                        let y = channel_mean(*p);
-                        *q += y * y;
-                    }
-                    Ok(())
-                })?,
-            None => self
-                .sum
-                .pixels
-                .par_chunks_mut(width)
-                .enumerate()
-                .try_for_each_init(buffer, |row, (y, sum)| {
-                    trace(y as u32, row)?;
-                    for (s, p) in sum.iter_mut().zip(row.iter()) {
-                        *s += *p;
-                    }
-                    Ok(())
-                })?,
-        }
+        let rows = self.sum.pixels.len().div_ceil(width);
+        let seen_width = if self.seen.is_some() { width } else { 0 };
+        let buffers = || (vec![Vec3::ZERO; width], vec![None; seen_width]);
+        // A sum the film does not track zips in as empty rows.
+        let sum_sq = self.sum_sq.as_deref_mut().unwrap_or_default();
+        let seen_sums = self.seen.as_deref_mut().unwrap_or_default();
+        self.sum
+            .pixels
+            .par_chunks_mut(width)
+            .zip(par_rows(sum_sq, width, rows))
+            .zip(par_rows(seen_sums, width, rows))
+            .enumerate()
+            .try_for_each_init(buffers, |(row, seen), (y, ((sum, sum_sq), seen_sums))| {
+                trace(y as u32, row, seen)?;
+                for (s, p) in sum.iter_mut().zip(row.iter()) {
+                    *s += *p;
+                }
+                for (q, p) in sum_sq.iter_mut().zip(row.iter()) {
+                    let y = channel_mean(*p);
+                    *q += y * y;
+                }
+                for (sums, seen) in seen_sums.iter_mut().zip(seen.iter()) {
+                    sums.add(*seen);
+                }
+                Ok(())
+            })?;
         self.samples += 1;
         Ok(())
     }
@@ -598,6 +674,21 @@ impl Film {
             height: self.sum.height,
             pixels: self.sum.pixels.par_iter().map(|p| *p * scale).collect(),
         }
+    }
+}
+
+/// `buffer`'s rows of `width` values in parallel, or `rows` empty rows if it is empty.
+fn par_rows<T: Send>(
+    buffer: &mut [T],
+    width: usize,
+    rows: usize,
+) -> impl rayon::iter::IndexedParallelIterator<Item = &mut [T]> {
+    use rayon::iter::{Either, IntoParallelIterator, ParallelIterator};
+    use rayon::slice::ParallelSliceMut;
+    if buffer.is_empty() {
+        Either::Right((0..rows).into_par_iter().map(|_| <&mut [T]>::default()))
+    } else {
+        Either::Left(buffer.par_chunks_mut(width))
     }
 }
 

@@ -42,7 +42,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use crate::denoise::{Denoiser, Features};
+use crate::denoise::{Denoiser, Features, denoising_film};
 use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, accumulate_pass, camera_sees_nothing, render_pass};
@@ -614,6 +614,8 @@ struct Denoising {
     /// The features, and the scene and settings they were traced for.
     features: Option<(Arc<Features>, Arc<Scene>, RenderSettings)>,
     variance: Option<Arc<Vec<f32>>>,
+    /// The film of the last job that ran to its end.
+    film: Option<Film>,
     image: Option<Arc<Image>>,
     samples: u32,
     cost: Duration,
@@ -772,7 +774,10 @@ impl Worker {
                 },
                 submitted: Instant::now(),
             };
-            if self.denoise(&job, &last.image, last.samples).is_err() {
+            let film = self.denoising.film.take();
+            let result = self.denoise(&job, film.as_ref(), &last.image, last.samples);
+            self.denoising.film = film;
+            if result.is_err() {
                 return;
             }
             denoised = self.denoising.image.clone();
@@ -899,7 +904,8 @@ impl Worker {
             }
         }
 
-        let mut film = Film::with_noise(width, height);
+        // The path tracer's samples also tell the film what they saw: the denoiser's features.
+        let mut film = denoising_film(&job.scene, settings);
         let accumulating = Instant::now();
         let mut published = accumulating;
         for sample in 0..target {
@@ -957,7 +963,7 @@ impl Worker {
                 // Not the first full pass (unless it is the last): it is shown at once, raw,
                 // where tracing the features (once a view) would hold it back; then at every
                 // doubling of the samples, and spaced between them.
-                if due && self.denoise(job, &image, sample + 1).is_err() {
+                if due && self.denoise(job, Some(&film), &image, sample + 1).is_err() {
                     return false;
                 }
                 self.denoising.image.clone()
@@ -974,19 +980,31 @@ impl Worker {
                 return false;
             }
         }
+        // Kept for the last frame's features, should the denoiser be turned on after the job.
+        self.denoising.film = Some(film);
         true
     }
 
-    /// Denoises `image`, the mean of `samples` passes of `job` whose variance
-    /// `self.denoising` holds, tracing the features first if this job has none yet; the result
-    /// goes into `self.denoising`. `Err` if the job went stale meanwhile.
-    fn denoise(&mut self, job: &Job, image: &Image, samples: u32) -> Result<(), Cancelled> {
+    /// Denoises `image`, the mean of `samples` passes of `job` (those of `film`, if it is
+    /// there), whose variance `self.denoising` holds, with the features `film` recorded, or
+    /// else traced (if this job has none yet); the result goes into `self.denoising`. `Err` if
+    /// the job went stale meanwhile.
+    fn denoise(
+        &mut self,
+        job: &Job,
+        film: Option<&Film>,
+        image: &Image,
+        samples: u32,
+    ) -> Result<(), Cancelled> {
         let shared = &self.shared;
         let cancelled = || shared.current() != job.generation;
         let denoising = &mut self.denoising;
-        let features = match &denoising.features {
-            Some((features, _, _)) => Arc::clone(features),
-            None => {
+        let recorded = film.and_then(|film| self.pool.install(|| Features::recorded(film)));
+        let recorded = recorded.map(Arc::new);
+        let features = match (recorded, &denoising.features) {
+            (Some(recorded), _) => recorded,
+            (None, Some((features, _, _))) => Arc::clone(features),
+            (None, None) => {
                 let traced = self
                     .pool
                     .install(|| Features::trace(&job.scene, &job.settings, &cancelled))?;
@@ -1484,15 +1502,18 @@ mod tests {
         assert_eq!(lab.rgba, lab.image.to_rgba8());
     }
 
-    /// A job that only moves the light keeps the denoiser's features (traced once, the denoised
-    /// image still bit for bit `render_denoised`'s of the new settings); moving the camera
-    /// traces them again.
+    /// Where the features are traced apart (here the lab's stage through a lens), a job that
+    /// only moves the light keeps them (traced once, the denoised image still bit for bit
+    /// `render_denoised`'s of the new settings); moving the camera traces them again. The
+    /// path tracer records them as it traces: it never traces them apart.
     #[test]
     fn moving_the_light_keeps_the_denoisers_features() {
         let scene = Arc::new(cornell_box());
         let controller = Controller::new(2, quiet()).unwrap();
         controller.set_denoise(true);
-        let mut settings = small_path(40, 30, 3);
+        let mut settings = small(40, 30, 3);
+        settings.shading = crate::Shading::for_stage(crate::Stage::Shadows);
+        settings.camera.aperture = 0.05;
         let _ = finished(&controller, &scene, &settings);
         assert_eq!(controller.features_traced(), 1);
 
@@ -1507,6 +1528,19 @@ mod tests {
         assert_eq!(controller.features_traced(), 2);
         let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
         assert_eq!(moved.denoised.as_deref(), denoised.as_ref());
+
+        let mut path = small_path(40, 30, 3);
+        for _ in 0..2 {
+            let frame = finished(&controller, &scene, &path);
+            let (_, denoised) = crate::denoise::render_denoised(&scene, &path);
+            assert_eq!(frame.denoised.as_deref(), denoised.as_ref());
+            path.camera.position.x += 0.1;
+        }
+        assert_eq!(
+            controller.features_traced(),
+            2,
+            "none traced for the path tracer"
+        );
     }
 
     /// With the denoiser on, a frame that doubles the samples (2, 4, 8, 16) shows the image

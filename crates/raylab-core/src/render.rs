@@ -16,7 +16,7 @@ use crate::accel::Isa;
 #[cfg(target_arch = "x86_64")]
 use crate::accel::simd::Avx512;
 use crate::camera::ImagePoints;
-use crate::film::{Film, Image};
+use crate::film::{Film, Image, Seen};
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, Tracer};
 use crate::memory::AllocError;
@@ -183,16 +183,17 @@ pub fn render_pass(
             if cancelled() {
                 return Err(Cancelled);
             }
-            rows.trace(y as u32, row, |pixel, value| *pixel = value);
+            rows.trace(y as u32, row, &mut [], |pixel, value| *pixel = value);
             Ok(())
         })?;
     Ok(image)
 }
 
 /// [`render_pass`] added into `film` as its next pass ([`Film::add_pass_rows`]): the same sums
-/// as `film.add_pass(&render_pass(..)?)`, with no image of the pass made. If `cancelled()`
-/// turns true before the last row is done, the film holds part of the pass and is to be
-/// dropped.
+/// as `film.add_pass(&render_pass(..)?)`, with no image of the pass made, and what each sample
+/// saw if the film records features ([`Film::with_features`]) and the integrator tells it
+/// ([`Tracer::records_features`]). If `cancelled()` turns true before the last row is done,
+/// the film holds part of the pass and is to be dropped.
 pub fn accumulate_pass(
     scene: &Scene,
     settings: &RenderSettings,
@@ -204,11 +205,13 @@ pub fn accumulate_pass(
     assert_eq!((film.width(), film.height()), (width, height));
     let tracer = Tracer::for_pass(scene, settings, sample);
     let rows = Rows::new(&tracer, settings, sample);
-    film.add_pass_rows(|y, row| {
+    let recorded = tracer.records_features();
+    film.add_pass_rows(|y, row, seen| {
         if cancelled() {
             return Err(Cancelled);
         }
-        rows.trace(y, row, |pixel, value| *pixel = value);
+        let seen = if recorded { seen } else { &mut [] };
+        rows.trace(y, row, seen, |pixel, value| *pixel = value);
         Ok(())
     })
 }
@@ -232,9 +235,16 @@ impl<'a> Rows<'a> {
     }
 
     /// Traces row `y` in batches ([`Tracer::trace_camera`]: the image points are found here,
-    /// the rays made by the tracer) and hands each pixel of `row` its value.
+    /// the rays made by the tracer), hands each pixel of `row` its value, and puts what each
+    /// sample saw into `seen` if it is not empty.
     #[inline(always)]
-    fn trace(&self, y: u32, row: &mut [Vec3], mut put: impl FnMut(&mut Vec3, Vec3)) {
+    fn trace(
+        &self,
+        y: u32,
+        row: &mut [Vec3],
+        seen: &mut [Option<Seen>],
+        mut put: impl FnMut(&mut Vec3, Vec3),
+    ) {
         let (mut px, mut py) = ([0.0; BATCH], [0.0; BATCH]);
         let (mut lens_x, mut lens_y) = ([0.0; BATCH], [0.0; BATCH]);
         let mut rngs = [Rng::UNUSED; BATCH];
@@ -284,8 +294,12 @@ impl<'a> Rows<'a> {
                 lens_x: &lens_x[..lens],
                 lens_y: &lens_y[..lens],
             };
+            let seen = match seen.is_empty() {
+                true => &mut [],
+                false => &mut seen[first as usize..first as usize + n],
+            };
             self.tracer
-                .trace_camera(&points, &mut rngs[..n], &mut values[..n]);
+                .trace_camera(&points, &mut rngs[..n], &mut values[..n], seen);
             for (pixel, value) in chunk.iter_mut().zip(&values[..n]) {
                 put(pixel, *value);
             }
@@ -384,7 +398,7 @@ fn accumulate(scene: &Scene, settings: &RenderSettings, sum: &mut Image) {
         sum.pixels
             .par_chunks_mut(width.max(1))
             .enumerate()
-            .for_each(|(y, row)| rows.trace(y as u32, row, |s, value| *s += value));
+            .for_each(|(y, row)| rows.trace(y as u32, row, &mut [], |s, value| *s += value));
     }
     // `Film::resolve`'s scale.
     let scale = 1.0 / samples as f32;

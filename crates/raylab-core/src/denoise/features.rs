@@ -2,21 +2,28 @@
 //! the light. Per pixel, the albedo (the reflectance the light is multiplied by), the shading
 //! normal and the distance to the surface, each averaged over [`FEATURE_SAMPLES`] camera rays.
 //!
-//! The rays are the render's own first camera samples ([`crate::render`]'s `camera_sample`:
-//! the pixel centre, then jittered points and, with an aperture, points of the lens), so a
+//! The path tracer records them as it traces, from every sample of the image at no extra ray
+//! ([`Features::recorded`], from a [`Film::with_features`]): at 64 samples those features
+//! gave the denoised image the error of 955 raw samples, where 16 traced ones gave 856
+//! (PERFORMANCE.md). For the other integrators they are traced apart ([`Features::trace`]),
+//! from the render's own first camera samples ([`crate::render`]'s `camera_sample`: the pixel
+//! centre, then jittered points and, with an aperture, points of the lens). Either way a
 //! feature blurred by depth of field or shared by two surfaces at an edge is blurred as the
 //! image is. Through a mirror or glass the features are those of the first surface that is not
-//! a perfect specular one (the dominant lobe is followed: reflection, or the refraction where
-//! Fresnel's reflectance is below one half), its albedo times the tints on the way and its
-//! distance the length of the whole path, as Open Image Denoise asks of its auxiliary images:
-//! a mirror then shows the features of what it reflects, and the filter keeps its edges.
+//! a perfect specular one ([`Seen`]), its albedo times the tints on the way and its distance
+//! the length of the whole path, as Open Image Denoise asks of its auxiliary images: a mirror
+//! then shows the features of what it reflects, and the filter keeps its edges. Traced apart,
+//! the dominant lobe is followed (reflection, or the refraction where Fresnel's reflectance is
+//! below one half); recorded, the lobe the path took, so a glass pixel's features mix both as
+//! its samples do.
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::bsdf::Bsdf;
+use crate::film::{Film, Seen, SeenSum};
 use crate::geometry::Ray;
-use crate::integrator::{BATCH, Tracer};
+use crate::integrator::{BATCH, FEATURE_SPECULAR_BOUNCES, Tracer};
 use crate::intersect::Intersection;
 use crate::render::{Cancelled, camera_sample};
 use crate::sampling::Rng;
@@ -26,9 +33,6 @@ use crate::settings::RenderSettings;
 /// Camera rays per pixel the features average: enough to give an edge pixel the mix of the two
 /// surfaces it shows, few enough to cost a fraction of one path-traced pass.
 pub const FEATURE_SAMPLES: u32 = 16;
-
-/// Perfect specular bounces followed before the features settle on what was reached.
-const SPECULAR_BOUNCES: u32 = 4;
 
 /// The per-pixel features of one view, rows top to bottom as in [`crate::film::Image`].
 #[derive(Clone, Debug, PartialEq)]
@@ -44,14 +48,6 @@ pub struct Features {
     /// The distance along the path to the surface seen, averaged over the samples that hit; 0
     /// where nothing is hit.
     pub depth: Vec<f32>,
-}
-
-/// What one camera ray sees.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct Seen {
-    albedo: Vec3,
-    normal: Vec3,
-    depth: f32,
 }
 
 impl Features {
@@ -97,7 +93,7 @@ impl Features {
                 // each pixel still sums its samples in their order.
                 for x0 in (0..albedo.len()).step_by(BATCH) {
                     let n = (albedo.len() - x0).min(BATCH);
-                    let (mut sums, mut hits) = ([Seen::default(); BATCH], [0u32; BATCH]);
+                    let mut sums = [SeenSum::default(); BATCH];
                     for sample in 0..samples {
                         for (k, ray) in rays[..n].iter_mut().enumerate() {
                             let mut rng = Rng::UNUSED;
@@ -108,23 +104,12 @@ impl Features {
                         }
                         scene.closest_intersections(&rays[..n], f32::INFINITY, &mut first[..n]);
                         for k in 0..n {
-                            if let Some(seen) = see(&tracer, scene, rays[k], first[k]) {
-                                sums[k].albedo += seen.albedo;
-                                sums[k].normal += seen.normal;
-                                sums[k].depth += seen.depth;
-                                hits[k] += 1;
-                            }
+                            sums[k].add(see(&tracer, scene, rays[k], first[k]));
                         }
                     }
-                    // The albedo over every sample (0 where one hits nothing); the normal and
-                    // depth over those that hit.
-                    for k in 0..n {
-                        let (sum, hits, x) = (sums[k], hits[k], x0 + k);
-                        albedo[x] = sum.albedo / samples as f32;
-                        if hits > 0 {
-                            normal[x] = sum.normal / hits as f32;
-                            depth[x] = sum.depth / hits as f32;
-                        }
+                    for (k, sum) in sums[..n].iter().enumerate() {
+                        let x = x0 + k;
+                        (albedo[x], normal[x], depth[x]) = average(sum, samples);
                     }
                 }
                 Ok(())
@@ -132,6 +117,30 @@ impl Features {
         Ok(Features {
             width,
             height,
+            albedo,
+            normal,
+            depth,
+        })
+    }
+
+    /// The features the samples added to `film` saw ([`Film::with_features`]), or `None` if
+    /// it records none. The same averages as [`Features::trace_samples`] of as many samples,
+    /// bit for bit, where the two see alike (no glass: its lobe is chosen differently).
+    pub fn recorded(film: &Film) -> Option<Features> {
+        let sums = film.seen()?;
+        let samples = film.samples();
+        let mut albedo = vec![Vec3::ZERO; sums.len()];
+        let mut normal = vec![Vec3::ZERO; sums.len()];
+        let mut depth = vec![0.0f32; sums.len()];
+        albedo
+            .par_iter_mut()
+            .zip(&mut normal)
+            .zip(&mut depth)
+            .zip(sums)
+            .for_each(|(((a, n), d), sum)| (*a, *n, *d) = average(sum, samples));
+        Some(Features {
+            width: film.width(),
+            height: film.height(),
             albedo,
             normal,
             depth,
@@ -169,13 +178,25 @@ impl Features {
     }
 }
 
+/// A pixel's features from the sums of `samples` samples: the albedo over every sample (0
+/// where one hits nothing); the normal and depth over those that hit (0 if none did).
+#[inline]
+fn average(sum: &SeenSum, samples: u32) -> (Vec3, Vec3, f32) {
+    let albedo = sum.albedo / samples.max(1) as f32;
+    if sum.hits == 0 {
+        return (albedo, Vec3::ZERO, 0.0);
+    }
+    let hits = sum.hits as f32;
+    (albedo, sum.normal / hits, sum.depth / hits)
+}
+
 /// What the ray `ray` sees: the first surface that is not a perfect specular one, with the
 /// tints of those before it, or `None` if the path leaves the scene. `first` is the ray's own
 /// closest hit, found with its batch.
 fn see(tracer: &Tracer, scene: &Scene, mut ray: Ray, first: Option<Intersection>) -> Option<Seen> {
     let mut tint = Vec3::ONE;
     let mut travelled = 0.0f32;
-    for bounce in 0..=SPECULAR_BOUNCES {
+    for bounce in 0..=FEATURE_SPECULAR_BOUNCES {
         let hit = if bounce == 0 {
             first?
         } else {
@@ -184,25 +205,14 @@ fn see(tracer: &Tracer, scene: &Scene, mut ray: Ray, first: Option<Intersection>
         travelled += hit.distance;
         let scattering = tracer.scattering(&hit, ray.direction);
         let frame = &scattering.frame;
-        let normal = frame.shading_normal();
-        // The side the viewer is on: a wall seen from behind and from the front are one
-        // surface to the filter.
-        let normal = if normal.dot(scattering.wo) < 0.0 {
-            -normal
-        } else {
-            normal
-        };
         let bsdf = scattering.bsdf;
-        if !bsdf.is_delta() || bounce == SPECULAR_BOUNCES {
+        if !bsdf.is_delta() || bounce == FEATURE_SPECULAR_BOUNCES {
             let albedo = match bsdf {
                 Bsdf::RoughConductor { tint, .. } => tint,
                 _ => scattering.surface.rho,
             };
-            return Some(Seen {
-                albedo: tint * albedo.min(Vec3::ONE),
-                normal,
-                depth: travelled,
-            });
+            let normal = frame.shading_normal();
+            return Some(Seen::at(tint, albedo, normal, scattering.wo, travelled));
         }
         // Mirror or glass: the dominant lobe (uc = 0.5 picks refraction where Fresnel's
         // reflectance is below one half).

@@ -49,7 +49,8 @@ use rayon::prelude::*;
 pub use features::{FEATURE_SAMPLES, Features};
 
 use crate::film::{Film, Image};
-use crate::render::{Cancelled, render, render_pass};
+use crate::integrator::Tracer;
+use crate::render::{Cancelled, accumulate_pass, render};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 
@@ -877,23 +878,48 @@ fn spatial_variance(light: &[Vec3], width: usize, height: usize) -> Vec<f32> {
     out
 }
 
+/// A film for the passes of `settings`' view of `scene` that is to be denoised: it tracks each
+/// pixel's variance and, where the integrator records them ([`Tracer::records_features`]),
+/// what the samples saw.
+pub fn denoising_film(scene: &Scene, settings: &RenderSettings) -> Film {
+    let film = Film::with_noise(settings.camera.width, settings.camera.height);
+    if Tracer::new(scene, settings).records_features() {
+        film.with_features()
+    } else {
+        film
+    }
+}
+
+/// The features to denoise `film`, the passes of `settings`' view of `scene`: those its samples
+/// recorded ([`Features::recorded`]), or else traced ([`Features::trace`]).
+pub fn features_of(
+    film: &Film,
+    scene: &Scene,
+    settings: &RenderSettings,
+    cancelled: &(dyn Fn() -> bool + Sync),
+) -> Result<Features, Cancelled> {
+    match Features::recorded(film) {
+        Some(features) => Ok(features),
+        None => Features::trace(scene, settings, cancelled),
+    }
+}
+
 /// `settings`' render (exactly [`render`]'s image) and, if it is noisy
 /// ([`RenderSettings::is_stochastic`]), its denoised image: the passes are accumulated in a
-/// film that tracks each pixel's variance, the features traced, and the default [`Denoiser`]
-/// run. Where nothing is noisy there is nothing to denoise: `None`. On the current rayon pool.
+/// [`denoising_film`], and the default [`Denoiser`] run with [`features_of`] it. Where nothing
+/// is noisy there is nothing to denoise: `None`. On the current rayon pool.
 pub fn render_denoised(scene: &Scene, settings: &RenderSettings) -> (Image, Option<Image>) {
     if !settings.is_stochastic() {
         return (render(scene, settings), None);
     }
-    let (width, height) = (settings.camera.width, settings.camera.height);
     let never = || false;
-    let mut film = Film::with_noise(width, height);
+    let mut film = denoising_film(scene, settings);
     for sample in 0..settings.samples_per_pixel.max(1) {
-        let pass: Result<Image, Cancelled> = render_pass(scene, settings, sample, &never);
-        film.add_pass(&pass.expect("never cancelled"));
+        let pass = accumulate_pass(scene, settings, sample, &mut film, &never);
+        pass.expect("never cancelled");
     }
     let raw = film.resolve();
-    let features = Features::trace(scene, settings, &never).expect("never cancelled");
+    let features = features_of(&film, scene, settings, &never).expect("never cancelled");
     let denoised = Denoiser::default().denoise(&raw, film.variance().as_deref(), &features);
     (raw, Some(denoised))
 }

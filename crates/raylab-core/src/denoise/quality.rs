@@ -9,9 +9,9 @@
 
 use glam::Vec3;
 
-use super::{Denoiser, Features};
+use super::{Denoiser, denoising_film, features_of};
 use crate::film::{Film, Image};
-use crate::render::{Cancelled, render_pass};
+use crate::render::accumulate_pass;
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 
@@ -65,8 +65,7 @@ pub fn measure(
 ) -> Vec<QualityRow> {
     let never = || false;
     let trace = |settings: &RenderSettings, film: &mut Film, sample: u32| {
-        let pass: Result<Image, Cancelled> = render_pass(scene, settings, sample, &never);
-        film.add_pass(&pass.expect("never cancelled"));
+        accumulate_pass(scene, settings, sample, film, &never).expect("never cancelled");
     };
     let (width, height) = (settings.camera.width, settings.camera.height);
     let mut reference_settings = settings.clone();
@@ -76,8 +75,7 @@ pub fn measure(
         trace(&reference_settings, &mut reference, sample);
     }
     let reference = reference.resolve();
-    let features = Features::trace(scene, settings, &never).expect("never cancelled");
-    let mut film = Film::with_noise(width, height);
+    let mut film = denoising_film(scene, settings);
     let mut rows = Vec::new();
     for &count in counts {
         while film.samples() < count {
@@ -86,6 +84,7 @@ pub fn measure(
         }
         let raw = film.resolve();
         let variance = film.variance();
+        let features = features_of(&film, scene, settings, &never).expect("never cancelled");
         let denoised = denoiser.denoise(&raw, variance.as_deref(), &features);
         let (before, after) = (mean(&raw), mean(&denoised));
         let change = ((after - before) / before.max(Vec3::splat(1e-12))).abs();

@@ -44,6 +44,7 @@ use crate::accel::simd::{Avx2, Avx512};
 use crate::accel::{Isa, SegmentLanes};
 use crate::bsdf::ShadingFrame;
 use crate::camera::ImagePoints;
+use crate::film::Seen;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{F32x16, LANES, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
@@ -63,6 +64,10 @@ use crate::texture::planar_uv;
 pub const BATCH: usize = 64;
 
 pub use crate::settings::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
+
+/// The mirror and glass bounces a camera sample's features follow before they settle on what
+/// was reached ([`Seen`]).
+pub const FEATURE_SPECULAR_BOUNCES: u32 = 4;
 
 /// A hit ready to scatter ([`Tracer::scattering`]).
 #[derive(Clone, Copy, Debug)]
@@ -849,6 +854,13 @@ impl<'a> Tracer<'a> {
         self.random
     }
 
+    /// Whether the integrator tells what each camera sample sees ([`Seen`]) as it traces it:
+    /// the sixteen-lane path tracer does, at no extra ray. For the others the denoiser's
+    /// features are traced apart ([`crate::denoise::Features::trace`]).
+    pub fn records_features(&self) -> bool {
+        self.shading.stage.integrator() == Integrator::Path && !self.general
+    }
+
     /// The value of each ray, into `out`. `rngs` holds each ray's random stream (from
     /// [`crate::sampling::pixel_sample`]); where nothing is random
     /// ([`Tracer::uses_random_numbers`] is false) it may be empty.
@@ -859,33 +871,50 @@ impl<'a> Tracer<'a> {
     /// the path tracer runs faster (PERFORMANCE.md).
     pub fn trace(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         debug_assert_eq!(rays.len(), out.len());
-        self.trace_for_cpu(Primary::Rays(rays), rngs, out);
+        self.trace_for_cpu(Primary::Rays(rays), rngs, out, &mut []);
     }
 
     /// [`Tracer::trace`] for the camera rays through `points`, made here
     /// ([`ImagePoints::rays`]) so that they too are made with the CPU's instruction set,
     /// sixteen at a time. The same rays as [`crate::Camera::primary_ray_rotated`] (or
     /// [`crate::Camera::lens_ray_rotated`]) makes one at a time, bit for bit.
-    pub fn trace_camera(&self, points: &ImagePoints, rngs: &mut [Rng], out: &mut [Vec3]) {
+    ///
+    /// If `seen` is not empty (one per ray) and the integrator [records
+    /// features](Tracer::records_features), each ray's [`Seen`] goes there (`None`: it left
+    /// the scene); otherwise `seen` is left as it is.
+    pub fn trace_camera(
+        &self,
+        points: &ImagePoints,
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        seen: &mut [Option<Seen>],
+    ) {
         debug_assert_eq!(points.len(), out.len());
-        self.trace_for_cpu(Primary::Camera(points), rngs, out);
+        debug_assert!(seen.is_empty() || seen.len() == out.len());
+        self.trace_for_cpu(Primary::Camera(points), rngs, out, seen);
     }
 
     /// [`Tracer::trace_primary`] in the code compiled for the CPU.
     #[inline(always)]
-    fn trace_for_cpu(&self, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+    fn trace_for_cpu(
+        &self,
+        primary: Primary,
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        seen: &mut [Option<Seen>],
+    ) {
         match self.scene.accel().isa() {
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2(k) => {
                 // SAFETY: `k` proves the CPU has AVX2 and FMA.
-                unsafe { self.trace_avx2(k, primary, rngs, out) }
+                unsafe { self.trace_avx2(k, primary, rngs, out, seen) }
             }
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512(k) => {
                 // SAFETY: `k` proves the CPU has AVX-512 F, DQ and VL, AVX2 and FMA.
-                unsafe { self.trace_avx512(k, primary, rngs, out) }
+                unsafe { self.trace_avx512(k, primary, rngs, out, seen) }
             }
-            _ => self.trace_primary(primary, rngs, out),
+            _ => self.trace_primary(primary, rngs, out, seen),
         }
     }
 
@@ -893,8 +922,15 @@ impl<'a> Tracer<'a> {
     /// 16, which the long body of a path vertex spills less with.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
-    fn trace_avx512(&self, _proof: Avx512, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_primary(primary, rngs, out);
+    fn trace_avx512(
+        &self,
+        _proof: Avx512,
+        primary: Primary,
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        seen: &mut [Option<Seen>],
+    ) {
+        self.trace_primary(primary, rngs, out, seen);
     }
 
     /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (Passing a closure to one such
@@ -902,16 +938,29 @@ impl<'a> Tracer<'a> {
     /// camera rays come as data, [`Primary::Camera`].)
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn trace_avx2(&self, _proof: Avx2, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_primary(primary, rngs, out);
+    fn trace_avx2(
+        &self,
+        _proof: Avx2,
+        primary: Primary,
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        seen: &mut [Option<Seen>],
+    ) {
+        self.trace_primary(primary, rngs, out, seen);
     }
 
     /// The rays of `primary`, made in batches of [`BATCH`] if they come as image points, traced
-    /// by [`Tracer::trace_portable`].
+    /// by [`Tracer::trace_seen`].
     #[inline(always)]
-    fn trace_primary(&self, primary: Primary, rngs: &mut [Rng], out: &mut [Vec3]) {
+    fn trace_primary(
+        &self,
+        primary: Primary,
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        seen: &mut [Option<Seen>],
+    ) {
         match primary {
-            Primary::Rays(rays) => self.trace_portable(rays, rngs, out),
+            Primary::Rays(rays) => self.trace_seen(rays, rngs, out, seen, &mut ()),
             Primary::Camera(points) => {
                 let mut rays = [Ray {
                     origin: Vec3::ZERO,
@@ -920,10 +969,14 @@ impl<'a> Tracer<'a> {
                 for (c, out) in out.chunks_mut(BATCH).enumerate() {
                     let rays = &mut rays[..out.len()];
                     points.rays(c * BATCH, rays);
-                    // Each ray's generator; none if nothing is random.
-                    let start = (c * BATCH).min(rngs.len());
-                    let end = (start + BATCH).min(rngs.len());
-                    self.trace_portable(rays, &mut rngs[start..end], out);
+                    // Each ray's generator (none if nothing is random) and features (none if
+                    // not asked for).
+                    let part = |len: usize| {
+                        let start = (c * BATCH).min(len);
+                        start..(start + BATCH).min(len)
+                    };
+                    let (r, s) = (part(rngs.len()), part(seen.len()));
+                    self.trace_seen(rays, &mut rngs[r], out, &mut seen[s], &mut ());
                 }
             }
         }
@@ -932,7 +985,7 @@ impl<'a> Tracer<'a> {
     /// [`Tracer::trace`] for any CPU; inlined into the AVX2 version.
     #[inline(always)]
     pub fn trace_portable(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_recorded(rays, rngs, out, &mut ());
+        self.trace_seen(rays, rngs, out, &mut [], &mut ());
     }
 
     /// [`Tracer::trace_portable`], telling `recorder` every step (see [`Recorder`]): what the
@@ -943,6 +996,20 @@ impl<'a> Tracer<'a> {
         rays: &[Ray],
         rngs: &mut [Rng],
         out: &mut [Vec3],
+        recorder: &mut R,
+    ) {
+        self.trace_seen(rays, rngs, out, &mut [], recorder);
+    }
+
+    /// [`Tracer::trace_recorded`], and what each ray sees into `seen` as
+    /// [`Tracer::trace_camera`] says.
+    #[inline(always)]
+    fn trace_seen<R: Recorder>(
+        &self,
+        rays: &[Ray],
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        seen: &mut [Option<Seen>],
         recorder: &mut R,
     ) {
         match self.shading.stage.integrator() {
@@ -962,7 +1029,7 @@ impl<'a> Tracer<'a> {
                 if self.general {
                     path_mis::trace(self, rays, rngs, out, recorder);
                 } else {
-                    path::trace(self, rays, rngs, out, recorder);
+                    path::trace(self, rays, rngs, out, seen, recorder);
                 }
             }
         }

@@ -30,7 +30,11 @@
 
 use glam::Vec3;
 
-use super::{BATCH, DiffuseHits, GROUPS, Recorder, Stage, Tracer, departure_points, shaded_value};
+use super::{
+    BATCH, DiffuseHits, FEATURE_SPECULAR_BOUNCES, GROUPS, Recorder, Seen, Stage, Tracer,
+    departure_points, shaded_value,
+};
+use crate::bsdf::ShadingFrame;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
@@ -60,21 +64,80 @@ struct PathState {
     depth: u32,
 }
 
-/// The value of every ray (π × radiance), into `out`; each step told to `rec` ([`Recorder`]).
+/// The value of every ray (π × radiance), into `out`; what each ray sees into `seen` if it is
+/// not empty ([`Seen`], one per ray); each step told to `rec` ([`Recorder`]).
 #[inline(always)]
 pub(super) fn trace<R: Recorder>(
     tracer: &Tracer,
     rays: &[Ray],
     rngs: &mut [Rng],
     out: &mut [Vec3],
+    seen: &mut [Option<Seen>],
     rec: &mut R,
 ) {
-    for ((rays, rngs), out) in rays
+    for (c, ((rays, rngs), out)) in rays
         .chunks(BATCH)
         .zip(rngs.chunks_mut(BATCH))
         .zip(out.chunks_mut(BATCH))
+        .enumerate()
     {
-        batch(tracer, rays, rngs, out, rec);
+        let seen = match seen.is_empty() {
+            true => &mut [],
+            false => &mut seen[c * BATCH..c * BATCH + out.len()],
+        };
+        batch(tracer, rays, rngs, out, seen, rec);
+    }
+}
+
+/// A path's search for what its camera sample sees ([`Seen`]): the tints of the mirrors and
+/// glass it followed, their number and the distance travelled, until it settles.
+#[derive(Clone, Copy)]
+struct Looking {
+    tint: Vec3,
+    travelled: f32,
+    bounces: u32,
+    settled: bool,
+}
+
+impl Looking {
+    const START: Self = Self {
+        tint: Vec3::ONE,
+        travelled: 0.0,
+        bounces: 0,
+        settled: false,
+    };
+
+    /// The path reached `hit` along `incoming`, a surface of reflectance `rho` and shading
+    /// normal `normal`: if it is not a perfect specular one (`delta`), or the specular
+    /// bounces are all followed, what the sample sees goes into `seen`.
+    #[inline(always)]
+    fn reach(
+        &mut self,
+        hit: &Intersection,
+        incoming: Vec3,
+        delta: bool,
+        surface: impl FnOnce() -> (Vec3, Vec3),
+        seen: &mut Option<Seen>,
+    ) {
+        if self.settled {
+            return;
+        }
+        self.travelled += hit.distance;
+        if !delta || self.bounces == FEATURE_SPECULAR_BOUNCES {
+            let (rho, normal) = surface();
+            *seen = Some(Seen::at(self.tint, rho, normal, -incoming, self.travelled));
+            self.settled = true;
+        }
+    }
+
+    /// The path goes on from a mirror or glass it reached (unsettled), its light tinted by
+    /// `weight`.
+    #[inline(always)]
+    fn follow(&mut self, weight: Vec3) {
+        if !self.settled {
+            self.tint *= weight.min(Vec3::ONE);
+            self.bounces += 1;
+        }
     }
 }
 
@@ -214,6 +277,7 @@ fn batch<R: Recorder>(
     rays: &[Ray],
     rngs: &mut [Rng],
     out: &mut [Vec3],
+    seen: &mut [Option<Seen>],
     rec: &mut R,
 ) {
     let scene = tracer.scene;
@@ -221,6 +285,12 @@ fn batch<R: Recorder>(
     let sphere_light = tracer.light.is_area();
     let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
     out.fill(Vec3::ZERO);
+    // What each camera sample sees, if asked: settled at the path's first vertex that is not
+    // a perfect mirror or glass; `None` if it leaves the scene (or ends at a mirror or glass)
+    // before one.
+    let looking_for_features = !seen.is_empty();
+    seen.fill(None);
+    let mut looking = [Looking::START; BATCH];
     let mut paths = [PathState {
         beta: Vec3::ONE,
         bounces: 0,
@@ -267,14 +337,31 @@ fn batch<R: Recorder>(
                     surface.geometric = turned;
                     surface.normal = -surface.normal;
                 }
+                if looking_for_features {
+                    let normal = ShadingFrame::seen_normal(surface.normal, turned, -incoming);
+                    let found = || (surface.rho, normal);
+                    looking[i].reach(&hit, incoming, false, found, &mut seen[i]);
+                }
                 arriving[diffuse.len / LANES].set_lane(diffuse.len % LANES, path.beta);
                 diffuse.push(surface, i);
             } else {
                 // A direction the BSDF refuses (none for mirror and glass, whose shading
                 // frame is the geometric one) ends the path.
+                if looking_for_features {
+                    let found = || {
+                        let surface = tracer.surface_with(&hit, material, incoming, at_edge);
+                        let wo = -incoming;
+                        let normal = ShadingFrame::seen_normal(surface.normal, geometric, wo);
+                        (surface.rho, normal)
+                    };
+                    looking[i].reach(&hit, incoming, true, found, &mut seen[i]);
+                }
                 let Some(scatter) = material.sample(incoming, geometric, &mut rngs[i]) else {
                     continue;
                 };
+                if looking_for_features {
+                    looking[i].follow(scatter.weight);
+                }
                 let (g, lane) = (n_specular / LANES, n_specular % LANES);
                 if lane == 0 {
                     specular[g].active = M16::NONE;

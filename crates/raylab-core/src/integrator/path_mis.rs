@@ -386,6 +386,7 @@ mod tests {
             &rays,
             &mut generators(rays.len(), 1),
             &mut lanes,
+            &mut [],
             &mut (),
         );
         trace(
@@ -420,7 +421,14 @@ mod tests {
                 let mut rngs = generators(camera_rays.len(), 1 + pass * 2 + which as u64);
                 let mut out = vec![Vec3::ZERO; camera_rays.len()];
                 if which == 0 {
-                    super::super::path::trace(&tracer, &camera_rays, &mut rngs, &mut out, &mut ());
+                    super::super::path::trace(
+                        &tracer,
+                        &camera_rays,
+                        &mut rngs,
+                        &mut out,
+                        &mut [],
+                        &mut (),
+                    );
                 } else {
                     trace(&tracer, &camera_rays, &mut rngs, &mut out, &mut ());
                 }
