@@ -15,9 +15,13 @@
 //!    samples on). A tap weighs less the more its pixel differs from the centre's: in normal
 //!    (`exp(−σn·(1 − n·n'))`), in depth relative to the centre's depth slope, and in the
 //!    light's luminance relative to how noisy it still is (σl times its standard deviation,
-//!    from the film's per-pixel variance, itself filtered along).
+//!    from the film's per-pixel variance blurred 5 × 5, itself filtered along).
 //!    Noise is what differs by about a standard deviation; an edge of a shadow differs by
 //!    many, and as samples accumulate the standard deviation falls and the filter lets go.
+//!    In the first pass, whose input is the raw light, a neighbour is held against mostly the
+//!    3 × 3 mean around the centre ([`CENTRE_MEAN`]) rather than the centre's own noisy value:
+//!    against its own value, the neighbours that happen to share its noise weigh most, and
+//!    the filter keeps part of the noise it should remove.
 //! 3. A pixel whose feature samples saw two surfaces (on a silhouette or a crease) has a
 //!    shorter averaged normal n̄, and every neighbour, on either surface, rejects it and is
 //!    rejected by it: it would keep its noise. In the first pass its normal weight is
@@ -61,13 +65,18 @@ const B3: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 /// background), and the colour is filtered as it is.
 const ALBEDO_FLOOR: f32 = 1e-3;
 
+/// In the first pass, the share of the 3 × 3 mean in the luminance a neighbour's is held
+/// against (module docs, point 2); the rest is the centre's own. A little of its own keeps a
+/// centre that truly differs from its neighbours (a pixel-sized highlight) a little apart.
+const CENTRE_MEAN: f32 = 0.7;
+
 /// The ridge of each pass's plane fit (module docs, point 4), added to the variance of the
 /// weighted taps' offsets along x and y (in steps: the whole kernel's is 1 along each), plus
 /// [`SLOPE_RIDGE_NOISE`] times the centre's relative variance (the light's blurred variance
 /// over the taps' mean luminance squared). Swept on the path-traced box (PERFORMANCE.md): a
 /// smaller ridge removed more of the bias at 64 and 256 samples, but moved the mean of the
 /// 64² box at 16 samples by more than 0.5 %.
-const SLOPE_RIDGE: f32 = 0.2;
+const SLOPE_RIDGE: f32 = 0.1;
 const SLOPE_RIDGE_NOISE: f32 = 300.0;
 
 /// The filter's settings. The defaults started from SVGF's (σl 4, σn 128, σz 1, five passes)
@@ -92,9 +101,9 @@ impl Default for Denoiser {
     fn default() -> Self {
         Self {
             passes: 3,
-            sigma_luminance: 5.0,
+            sigma_luminance: 4.0,
             sigma_normal: 16.0,
-            sigma_depth: 1.0,
+            sigma_depth: 1.5,
         }
     }
 }
@@ -214,8 +223,10 @@ struct Guide {
     /// σz times the depth's change per pixel at the pixel (the smaller one-sided difference
     /// of each axis, the larger axis).
     depth_slope: Vec<f32>,
-    /// Per column (padded as a row is), 1 over the 3 × 3 blur's weight inside the image
-    /// along x: the variance's blur is renormalised at the image's edges.
+    /// Per column (padded as a row is), 1 over the 3 × 3 binomial's weight inside the image
+    /// along x, and the same for the 5 × 5 B3-spline: the first pass's 3 × 3 mean of the
+    /// luminance and the variance's 5 × 5 blur are renormalised at the image's edges.
+    mean_x: Vec<f32>,
     blur_x: Vec<f32>,
 }
 
@@ -340,20 +351,21 @@ impl Denoiser {
             self.sigma_depth * gx.max(gy)
         };
         let normal = &features.normal;
-        let mut blur_x = vec![0.0; layout.stride];
-        for (x, b) in blur_x[layout.pad..layout.pad + width]
-            .iter_mut()
-            .enumerate()
-        {
-            *b = 1.0 / blur_weight(x, width);
-        }
+        let inverse_weights = |kernel: &[f32]| {
+            let mut plane = vec![0.0; layout.stride];
+            for (x, b) in plane[layout.pad..layout.pad + width].iter_mut().enumerate() {
+                *b = 1.0 / weight_inside(kernel, x, width);
+            }
+            plane
+        };
         Guide {
             nx: layout.padded(|i| normal[i].x, 0.0),
             ny: layout.padded(|i| normal[i].y, 0.0),
             nz: layout.padded(|i| normal[i].z, 0.0),
             depth: layout.padded(|i| depth[i], f32::INFINITY),
             depth_slope: layout.padded(depth_slope, 0.0),
-            blur_x,
+            mean_x: inverse_weights(&BINOMIAL),
+            blur_x: inverse_weights(&B3),
         }
     }
 
@@ -401,16 +413,18 @@ impl Denoiser {
     }
 }
 
-/// The 3 × 3 binomial kernel's weight (¼, ½, ¼) inside `0..n` around `x`.
-fn blur_weight(x: usize, n: usize) -> f32 {
-    let mut w = 0.5;
-    if x > 0 {
-        w += 0.25;
-    }
-    if x + 1 < n {
-        w += 0.25;
-    }
-    w
+/// The 3-tap binomial kernel (¼, ½, ¼): the 3 × 3 mean is its outer product.
+const BINOMIAL: [f32; 3] = [0.25, 0.5, 0.25];
+
+/// The weight of `kernel` (an odd number of taps, centred on `x`) inside `0..n`.
+fn weight_inside(kernel: &[f32], x: usize, n: usize) -> f32 {
+    let r = kernel.len() / 2;
+    kernel
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| (x + i).checked_sub(r).is_some_and(|q| q < n))
+        .map(|(_, k)| k)
+        .sum()
 }
 
 /// A pixel's luminance, the mean of its channels.
@@ -515,8 +529,10 @@ impl Row<'_> {
         };
         let row = layout.row(self.y);
         let h0 = B3[2] * B3[2];
-        // The variance's 3 × 3 blur, renormalised at the top and bottom rows.
-        let blur_y = 1.0 / blur_weight(self.y, layout.height);
+        // The luminance's 3 × 3 mean and the variance's 5 × 5 blur, renormalised at the top
+        // and bottom rows.
+        let mean_y = 1.0 / weight_inside(&BINOMIAL, self.y, layout.height);
+        let blur_y = 1.0 / weight_inside(&B3, self.y, layout.height);
         let (near, far) = (step as f32, (2 * step) as f32);
         // The 24 taps (offset in the planes, kernel weight, offset in steps), those one step
         // away (their depth tolerance is the centre's at one step) apart from those two steps
@@ -549,11 +565,11 @@ impl Row<'_> {
         while x0 < width {
             let c = row + x0;
             // The luminance's tolerance at each pixel: σl times the standard deviation of its
-            // noise, from the variance blurred over 3 × 3 (a pixel's own estimate is noisy).
+            // noise, from the variance blurred over 5 × 5 (a pixel's own estimate is noisy).
             let mut blurred = [0.0; LANES];
-            for (j, ky) in [0.25f32, 0.5, 0.25].iter().enumerate() {
-                for (i, kx) in [0.25f32, 0.5, 0.25].iter().enumerate() {
-                    let q = (c as isize + (j as isize - 1) * stride + i as isize - 1) as usize;
+            for (j, ky) in B3.iter().enumerate() {
+                for (i, kx) in B3.iter().enumerate() {
+                    let q = (c as isize + (j as isize - 2) * stride + i as isize - 2) as usize;
                     let k = kx * ky;
                     let v = load(planes.v, q);
                     for l in 0..LANES {
@@ -594,8 +610,30 @@ impl Row<'_> {
                     reach[l] = n[0][l] * n[0][l] + n[1][l] * n[1][l] + n[2][l] * n[2][l];
                 }
             }
+            // What a neighbour's luminance is held against: in the first pass mostly the 3 × 3
+            // mean around the centre (module docs, point 2), after it the centre's own value
+            // (already filtered).
+            let mut lum = load(planes.lum, c);
+            if self.first {
+                let mut mean = [0.0; LANES];
+                for (j, ky) in BINOMIAL.iter().enumerate() {
+                    for (i, kx) in BINOMIAL.iter().enumerate() {
+                        let q = (c as isize + (j as isize - 1) * stride + i as isize - 1) as usize;
+                        let k = kx * ky;
+                        let v = load(planes.lum, q);
+                        for l in 0..LANES {
+                            mean[l] += k * v[l];
+                        }
+                    }
+                }
+                let mean_x = load(&guide.mean_x, layout.pad + x0);
+                for l in 0..LANES {
+                    let mean = mean[l] * (mean_x[l] * mean_y);
+                    lum[l] = CENTRE_MEAN * mean + (1.0 - CENTRE_MEAN) * lum[l];
+                }
+            }
             let centre = Centre {
-                lum: load(planes.lum, c),
+                lum,
                 tolerance,
                 z,
                 n,
