@@ -1062,6 +1062,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
 fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     use raylab_core::bench::path_settings;
     use raylab_core::denoise::{Denoiser, denoising_film, features_of, quality};
+    use raylab_core::film::Film;
     raylab_core::memory::check(
         format!("a {}×{} denoise bench", args.width, args.height),
         // A film (sum, squares, the features' sums), the features and the filter's planes:
@@ -1075,11 +1076,25 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
     let (timing, rows) = pool.install(|| -> anyhow::Result<_> {
         let settings = path_settings(args.width, args.height);
         // The path tracer records the features as it traces (`denoising_film`): their time
-        // here is averaging the film's sums.
+        // here is averaging the film's sums. What recording costs the passes: the same 16
+        // passes into a film that records none, alternating with them.
         let mut film = denoising_film(&scene, &settings);
+        let mut plain = Film::with_noise(args.width, args.height);
+        let (mut recording, mut not_recording) = (Vec::new(), Vec::new());
         for sample in 0..16 {
-            raylab_core::render::accumulate_pass(&scene, &settings, sample, &mut film, &never)?;
+            for (film, times) in [
+                (&mut film, &mut recording),
+                (&mut plain, &mut not_recording),
+            ] {
+                let start = std::time::Instant::now();
+                raylab_core::render::accumulate_pass(&scene, &settings, sample, film, &never)?;
+                times.push(start.elapsed());
+            }
         }
+        let pass_ms = (
+            raylab_core::bench::median_ms(recording),
+            raylab_core::bench::median_ms(not_recording),
+        );
         let (raw, variance) = (film.resolve(), film.variance());
         let (mut feature_times, mut filter_times) = (Vec::new(), Vec::new());
         for _ in 0..=args.passes {
@@ -1102,7 +1117,7 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
             args.reference_samples,
             &denoiser,
         );
-        Ok(((features_ms, filter_ms), rows))
+        Ok(((features_ms, filter_ms, pass_ms), rows))
     })?;
     let threads = pool.current_num_threads();
     if args.json {
@@ -1112,6 +1127,8 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
             "threads": threads,
             "features_ms": timing.0,
             "filter_ms": timing.1,
+            "path_pass_ms_recording_features": timing.2.0,
+            "path_pass_ms": timing.2.1,
             "quality_side": 256,
             "reference_samples": args.reference_samples,
             "quality": rows,
@@ -1129,6 +1146,12 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
         timing.1,
         timing.0 + timing.1,
         args.passes
+    )?;
+    writeln!(
+        out,
+        "a path pass recording the features {:.2} ms, recording none {:.2} ms (medians of 16, \
+         alternating)",
+        timing.2.0, timing.2.1
     )?;
     writeln!(
         out,

@@ -434,10 +434,18 @@ pub struct Film {
     /// Per pixel, the sum of the squared sample values (the mean of the three channels), when
     /// the noise is tracked.
     sum_sq: Option<Vec<f32>>,
-    /// Per pixel, what its samples saw, when the features are recorded.
+    /// Per pixel, what its first samples saw, when the features are recorded.
     seen: Option<Vec<SeenSum>>,
+    /// The samples `seen` sums, up to [`FEATURE_SAMPLES_RECORDED`].
+    seen_samples: u32,
     samples: u32,
 }
+
+/// The samples whose features a film records ([`Film::with_features`]), the first of its
+/// passes. Recording costs a path pass about 7 % of its time (a second look at each camera
+/// ray's first surface: PERFORMANCE.md); the features of 64 samples are enough for the
+/// denoiser to match 1,024 raw samples at 64, and later samples would add little.
+pub const FEATURE_SAMPLES_RECORDED: u32 = 64;
 
 /// How far the accumulated image may still be from the converged one, estimated from the
 /// spread of each pixel's samples (the sample variance s², over n samples).
@@ -492,12 +500,14 @@ impl Film {
             sum: Image::new(width, height),
             sum_sq: None,
             seen: None,
+            seen_samples: 0,
             samples: 0,
         }
     }
 
-    /// This film, also summing what each sample saw ([`Seen`]: 32 more bytes per pixel) as
-    /// the passes added with [`Film::add_pass_rows`] tell it; [`Film::seen`] gives the sums.
+    /// This film, also summing what each of its first [`FEATURE_SAMPLES_RECORDED`] samples saw
+    /// ([`Seen`]: 32 more bytes per pixel) as the passes added with [`Film::add_pass_rows`]
+    /// tell it; [`Film::seen`] gives the sums.
     pub fn with_features(self) -> Self {
         let len = self.sum.pixels.len();
         Self {
@@ -506,10 +516,15 @@ impl Film {
         }
     }
 
-    /// Per pixel, the sums of what its samples saw, if the film records them
-    /// ([`Film::with_features`]).
-    pub fn seen(&self) -> Option<&[SeenSum]> {
-        self.seen.as_deref()
+    /// Per pixel, the sums of what its samples saw, and how many samples they sum, if the film
+    /// records them ([`Film::with_features`]).
+    pub fn seen(&self) -> Option<(&[SeenSum], u32)> {
+        Some((self.seen.as_deref()?, self.seen_samples))
+    }
+
+    /// Whether the next pass's samples are to tell what they saw ([`Film::add_pass_rows`]).
+    pub fn records_seen(&self) -> bool {
+        self.seen.is_some() && self.seen_samples < FEATURE_SAMPLES_RECORDED
     }
 
     /// A film that also tracks the spread of each pixel's samples, for [`Film::noise`] (four
@@ -551,8 +566,8 @@ impl Film {
 
     /// Adds one pass traced a row at a time, rows in parallel on the current rayon pool:
     /// `trace(y, row, seen)` puts row `y`'s values in `row` (one image row long) and, if the
-    /// film records features, what each pixel's sample saw in `seen` (as long as `row`; empty
-    /// if it does not). The same sums as [`Film::add_pass`] of the image those rows make,
+    /// film records this pass's features ([`Film::records_seen`]), what each pixel's sample
+    /// saw in `seen` (as long as `row`; empty if it does not). The same sums as [`Film::add_pass`] of the image those rows make,
     /// without making that image (no full-size allocation a pass, and the adding done by the
     /// pool's threads while each row is still in cache). An error from `trace` stops the pass
     /// and is returned: the film then holds part of the pass, and is to be dropped.
@@ -563,11 +578,15 @@ impl Film {
         use rayon::prelude::*;
         let width = (self.sum.width as usize).max(1);
         let rows = self.sum.pixels.len().div_ceil(width);
-        let seen_width = if self.seen.is_some() { width } else { 0 };
+        let recording = self.records_seen();
+        let seen_width = if recording { width } else { 0 };
         let buffers = || (vec![Vec3::ZERO; width], vec![None; seen_width]);
         // A sum the film does not track zips in as empty rows.
         let sum_sq = self.sum_sq.as_deref_mut().unwrap_or_default();
-        let seen_sums = self.seen.as_deref_mut().unwrap_or_default();
+        let seen_sums = match recording {
+            true => self.seen.as_deref_mut().unwrap_or_default(),
+            false => Default::default(),
+        };
         self.sum
             .pixels
             .par_chunks_mut(width)
@@ -589,6 +608,7 @@ impl Film {
                 Ok(())
             })?;
         self.samples += 1;
+        self.seen_samples += u32::from(recording);
         Ok(())
     }
 
@@ -710,6 +730,50 @@ fn channel_mean(p: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A film with features sums what its first [`FEATURE_SAMPLES_RECORDED`] samples saw (a
+    /// sample that saw nothing adds to the albedo's count only), and asks the later passes for
+    /// nothing.
+    #[test]
+    fn a_film_sums_what_its_first_samples_saw() {
+        let mut film = Film::new(2, 1).with_features();
+        let asked = std::sync::atomic::AtomicU32::new(0);
+        for pass in 0..FEATURE_SAMPLES_RECORDED + 6 {
+            let result: Result<(), ()> = film.add_pass_rows(|_, row, seen| {
+                row.fill(Vec3::ONE);
+                if !seen.is_empty() {
+                    asked.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    seen[0] = Some(Seen::at(
+                        Vec3::ONE,
+                        Vec3::splat(0.5),
+                        -Vec3::Z,
+                        Vec3::Z,
+                        2.0,
+                    ));
+                    seen[1] = (pass % 2 == 0).then_some(seen[0].unwrap());
+                }
+                Ok(())
+            });
+            result.unwrap();
+        }
+        assert_eq!(asked.into_inner(), FEATURE_SAMPLES_RECORDED);
+        let (sums, samples) = film.seen().unwrap();
+        assert_eq!(samples, FEATURE_SAMPLES_RECORDED);
+        let n = FEATURE_SAMPLES_RECORDED as f32;
+        // The normal turned toward the viewer (+z); the second pixel saw something every
+        // other sample.
+        let all = SeenSum {
+            albedo: Vec3::splat(0.5 * n),
+            normal: Vec3::Z * n,
+            depth: 2.0 * n,
+            hits: FEATURE_SAMPLES_RECORDED,
+        };
+        assert_eq!(sums[0], all);
+        assert_eq!(sums[1].hits, FEATURE_SAMPLES_RECORDED / 2);
+        assert_eq!(sums[1].albedo, Vec3::splat(0.25 * n));
+        assert_eq!(film.samples(), FEATURE_SAMPLES_RECORDED + 6);
+        assert!(Film::new(2, 1).seen().is_none());
+    }
 
     /// Two pixels over four passes, by hand. Pixel 0 is constant 1: no spread. Pixel 1 takes
     /// 1, 3, 1, 3 (grey): mean 2, s² = (1+1+1+1)/3 = 4/3, its mean's variance s²/n = 1/3, so

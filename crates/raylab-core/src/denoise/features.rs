@@ -123,12 +123,12 @@ impl Features {
         })
     }
 
-    /// The features the samples added to `film` saw ([`Film::with_features`]), or `None` if
-    /// it records none. The same averages as [`Features::trace_samples`] of as many samples,
+    /// The features the samples added to `film` saw (its first
+    /// [`crate::film::FEATURE_SAMPLES_RECORDED`]: [`Film::with_features`]), or `None` if it
+    /// records none. The same averages as [`Features::trace_samples`] of as many samples,
     /// bit for bit, where the two see alike (no glass: its lobe is chosen differently).
     pub fn recorded(film: &Film) -> Option<Features> {
-        let sums = film.seen()?;
-        let samples = film.samples();
+        let (sums, samples) = film.seen()?;
         let mut albedo = vec![Vec3::ZERO; sums.len()];
         let mut normal = vec![Vec3::ZERO; sums.len()];
         let mut depth = vec![0.0f32; sums.len()];
