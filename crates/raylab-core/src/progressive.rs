@@ -616,6 +616,8 @@ struct Denoising {
     variance: Option<Arc<Vec<f32>>>,
     /// The film of the last job that ran to its end.
     film: Option<Film>,
+    /// The features this job's film recorded, and of how many samples.
+    recorded: Option<(u32, Arc<Features>)>,
     image: Option<Arc<Image>>,
     samples: u32,
     cost: Duration,
@@ -999,8 +1001,22 @@ impl Worker {
         let shared = &self.shared;
         let cancelled = || shared.current() != job.generation;
         let denoising = &mut self.denoising;
-        let recorded = film.and_then(|film| self.pool.install(|| Features::recorded(film)));
-        let recorded = recorded.map(Arc::new);
+        // The denoising's cost: the filter and the averaging of recorded features, not the
+        // tracing of features once a view.
+        let mut start = Instant::now();
+        // The features the film recorded, averaged again only if it recorded more since: from
+        // its 64th sample on they stay.
+        let recorded = film.and_then(|film| {
+            let (_, count) = film.seen()?;
+            match &denoising.recorded {
+                Some((done, features)) if *done == count => Some(Arc::clone(features)),
+                _ => {
+                    let features = Arc::new(self.pool.install(|| Features::recorded(film))?);
+                    denoising.recorded = Some((count, Arc::clone(&features)));
+                    Some(features)
+                }
+            }
+        });
         let features = match (recorded, &denoising.features) {
             (Some(recorded), _) => recorded,
             (None, Some((features, _, _))) => Arc::clone(features),
@@ -1012,10 +1028,10 @@ impl Worker {
                 let traced = Arc::new(traced);
                 let scene = Arc::clone(&job.scene);
                 denoising.features = Some((Arc::clone(&traced), scene, job.settings.clone()));
+                start = Instant::now();
                 traced
             }
         };
-        let start = Instant::now();
         let variance = denoising.variance.clone();
         let denoised = self.pool.install(|| {
             Denoiser::default().denoise(image, variance.as_deref().map(Vec::as_slice), &features)
@@ -1541,6 +1557,11 @@ mod tests {
             2,
             "none traced for the path tracer"
         );
+        // Past the samples a film records features of, the denoised image uses the first ones.
+        let long = small_path(12, 8, crate::film::FEATURE_SAMPLES_RECORDED + 6);
+        let frame = finished(&controller, &scene, &long);
+        let (_, denoised) = crate::denoise::render_denoised(&scene, &long);
+        assert_eq!(frame.denoised.as_deref(), denoised.as_ref());
     }
 
     /// With the denoiser on, a frame that doubles the samples (2, 4, 8, 16) shows the image
