@@ -24,7 +24,9 @@
 # the denoiser on (the window's default), waits until it shows a denoised image, then clicks the
 # "Light x" slider (one change, a new job) and reports from the frame log the time from the
 # click to the first frame showing a denoised image of at least CLEAN_SAMPLES samples (default
-# 16: PERFORMANCE.md's denoiser table gives their quality), RUNS times (default 3).
+# 16: PERFORMANCE.md's denoiser table gives their quality), RUNS times (default 3). With
+# CLEAN_SLIDER=camera it clicks "Camera x" instead: a new view, whose denoiser features must be
+# found anew.
 #
 # Needs what scripts/install-display-tools.sh installs. Honours CARGO_TARGET_DIR; RAYLAB_BIN
 # names a binary to measure instead of building one (to compare two builds).
@@ -178,9 +180,11 @@ if [ "$mode" = clean ]; then
     grep -Eq "denoised=[1-9]" "$log" || { echo "measure-window: no denoised frame logged" >&2; exit 1; }
     sleep 1
     before=$(wc -l <"$log")
-    # The Light x slider's handle (its place with the Camera and Light sections open, as they
-    # are on the path stage) dragged a little to the right: new jobs as it goes.
-    xdotool mousemove --window "$window" 75 572
+    # The Light x (or Camera x) slider's handle (its place with the Camera and Light sections
+    # open, as they are on the path stage) dragged a little to the right: new jobs as it goes.
+    slider_y=572
+    [ "${CLEAN_SLIDER:-light}" = camera ] && slider_y=301
+    xdotool mousemove --window "$window" 75 "$slider_y"
     sleep 0.3
     xdotool mousedown 1
     sleep 0.1
