@@ -18,7 +18,8 @@
 
 use glam::Vec3;
 
-use super::{BATCH, DiffuseHits, Recorder, Tracer, continue_ray, shaded_value};
+use super::hits::lanes_of;
+use super::{BATCH, DiffuseHits, GROUPS, PlainHit, Recorder, Tracer, continue_ray, shaded_value};
 use crate::accel::Hit;
 use crate::geometry::Ray;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
@@ -114,7 +115,38 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     let mut hits: [Option<Hit>; BATCH] = [None; BATCH];
     scene.closest_hits(rays, f32::INFINITY, &mut hits[..rays.len()]);
     let mut diffuse = DiffuseHits::new();
-    for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
+    diffuse.clear(rays.len());
+    let groups = rays.len().div_ceil(LANES);
+    // Where the tracer is plain, the diffuse hits' surfaces are made sixteen at a time; the
+    // other hits (all of them when recording, or where surfaces are textured or smooth) one
+    // at a time, below.
+    let mut one_at_a_time = [u16::MAX; GROUPS];
+    if tracer.plain && !R::ENABLED {
+        for (g, lanes) in one_at_a_time.iter_mut().enumerate().take(groups) {
+            let (rays, hits) = (&rays[g * LANES..], &hits[g * LANES..rays.len()]);
+            let hit_of = |lane: usize| {
+                let (ray, hit) = (rays.get(lane)?, (*hits.get(lane)?)?);
+                let hit = intersection(ray, hit);
+                Some(PlainHit {
+                    triangle_index: hit.triangle_index,
+                    u: hit.u,
+                    v: hit.v,
+                    position: hit.position,
+                    incoming: ray.direction,
+                })
+            };
+            let owner_of = |lane: usize| (g * LANES + lane) as u8;
+            *lanes = diffuse.fill_plain(g, tracer, shading.shadows, hit_of, owner_of);
+        }
+    }
+    let one_at_a_time = one_at_a_time
+        .iter()
+        .enumerate()
+        .take(groups)
+        .flat_map(|(g, &lanes)| lanes_of(lanes).map(move |lane| g * LANES + lane))
+        .take_while(|&i| i < rays.len());
+    for i in one_at_a_time {
+        let (hit, ray) = (&hits[i], &rays[i]);
         let hit = hit.map(|hit| intersection(ray, hit));
         if R::ENABLED {
             let (weight, depth) = match wave {
@@ -126,7 +158,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         let Some(hit) = &hit else { continue };
         let material = tracer.material_of(hit.triangle_index);
         if material.is_diffuse() {
-            diffuse.push(tracer.surface(hit, material, ray.direction), i);
+            diffuse.push(i, tracer.surface(hit, material, ray.direction), i);
             continue;
         }
         if !material.is_specular() {
@@ -135,7 +167,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             // surface), so equation 28 gives its highlight: π·f·D.
             let mut surface = tracer.surface(hit, material, ray.direction);
             surface.rho = tracer.glossy_reflectance(material, &surface, ray.direction);
-            diffuse.push(surface, i);
+            diffuse.push(i, surface, i);
             continue;
         }
         // Mirror and glass reflect about the triangle's own normal (a smooth normal could send
@@ -194,8 +226,8 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             Vec3x16::splat(indirect),
         );
     }
-    for (k, &i) in diffuse.owner[..diffuse.len].iter().enumerate() {
-        let (g, lane) = (k / LANES, k % LANES);
+    let hits = (0..groups).flat_map(|g| diffuse.owners(g).map(move |(lane, i)| (g, lane, i)));
+    for (g, lane, i) in hits {
         let value = values[g].lane(lane);
         // What the inspector is told: this hit's terms, as `HitTerms::at` gives them.
         let terms = || diffuse.terms(g, lane, &lit[g], blocked[g]);

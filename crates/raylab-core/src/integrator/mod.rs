@@ -31,6 +31,7 @@
 //! nothing and compiles away; the pixel inspector ([`crate::inspect`]) passes a recording, so
 //! what it explains is what the renderer computed, not a second copy of the formulas.
 
+mod hits;
 pub mod lab;
 pub mod path;
 pub mod path_mis;
@@ -47,7 +48,7 @@ use crate::camera::ImagePoints;
 use crate::film::Seen;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::lanes::{F32x16, LANES, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
+use crate::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
 use crate::light::{AnyLight, DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::photon_map::PhotonMap;
@@ -64,6 +65,7 @@ use crate::texture::planar_uv;
 pub const BATCH: usize = 64;
 
 pub use crate::settings::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
+pub(crate) use hits::{DiffuseHits, GROUPS, PlainHit};
 
 /// The mirror and glass bounces a camera sample's features follow before they settle on what
 /// was reached ([`Seen`]).
@@ -358,10 +360,10 @@ impl ShadowRays<Vec3x16> {
         })
     }
 
-    /// The first `len` lanes, as the tracer takes shadow rays in lanes
-    /// ([`crate::scene::Scene::occluded_lanes`]): the lanes past `len` are never cast.
+    /// The lanes of `lanes` (bit `i`: lane `i`), as the tracer takes shadow rays in lanes
+    /// ([`crate::scene::Scene::occluded_lanes`]): the others are never cast.
     #[inline(always)]
-    pub fn segment_lanes(&self, len: usize) -> SegmentLanes<'_> {
+    pub fn segment_lanes(&self, lanes: u16) -> SegmentLanes<'_> {
         SegmentLanes {
             origin: [&self.origin.x.0, &self.origin.y.0, &self.origin.z.0],
             direction: [
@@ -370,138 +372,7 @@ impl ShadowRays<Vec3x16> {
                 &self.direction.z.0,
             ],
             t_max: &self.t_max.0,
-            cast: self.cast.bits() & ((1u32 << len.min(16)) - 1) as u16,
-        }
-    }
-}
-
-// A wave's hits fill whole lane groups.
-const _: () = assert!(BATCH.is_multiple_of(LANES));
-
-/// Lane groups in a batch.
-const GROUPS: usize = BATCH / LANES;
-
-/// The diffuse hits of a batch, sixteen to a lane group, and whose each is: both integrators
-/// compute the lab's terms sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`]) and hand
-/// their shadow rays to the tracer as lanes ([`Scene::occluded_lanes`]).
-pub(crate) struct DiffuseHits {
-    pub surfaces: [Surfaces<Vec3x16>; GROUPS],
-    /// Whose each hit is: the index of its ray (lab) or path (path) within the batch.
-    pub owner: [u8; BATCH],
-    pub len: usize,
-}
-
-impl DiffuseHits {
-    #[inline(always)]
-    pub fn new() -> Self {
-        Self {
-            surfaces: [Surfaces::ZERO; GROUPS],
-            owner: [0; BATCH],
-            len: 0,
-        }
-    }
-
-    /// No hits; the lanes keep what they held, never read again (cheaper than zeroing them).
-    #[inline(always)]
-    pub fn clear(&mut self) {
-        self.len = 0;
-    }
-
-    #[inline(always)]
-    pub fn push(&mut self, surface: Surface, owner: usize) {
-        let k = self.len;
-        self.surfaces[k / LANES].set(k % LANES, surface);
-        self.owner[k] = owner as u8;
-        self.len += 1;
-    }
-
-    /// The lane groups holding hits, with how many each holds.
-    #[inline(always)]
-    pub fn groups(&self) -> impl Iterator<Item = (usize, &Surfaces<Vec3x16>)> {
-        self.surfaces
-            .iter()
-            .enumerate()
-            .take(self.len.div_ceil(LANES))
-            .map(|(g, s)| (self.hits_in(g), s))
-    }
-
-    /// How many hits group `g` holds (0 past the last).
-    #[inline(always)]
-    fn hits_in(&self, g: usize) -> usize {
-        self.len.saturating_sub(g * LANES).min(LANES)
-    }
-
-    /// The owners of group `g`'s hits.
-    #[inline(always)]
-    pub fn owners(&self, g: usize) -> &[u8] {
-        &self.owner[g * LANES..self.len.min((g + 1) * LANES)]
-    }
-
-    /// The light at every hit, sixteen at a time, in the order of the hits. With `SPHERE`
-    /// (a spherical light) the shadow rays go to points of the light drawn from
-    /// `rngs[rng_of(owner)]` ([`light_point`]), in that order; otherwise nothing is drawn.
-    /// `SPHERE` is a constant so that, for a point light, the closure that finds the points
-    /// is small enough to inline into the code compiled for the CPU (as a run-time flag it was
-    /// not, and the lab pass took 8 % longer: measured).
-    #[inline(always)]
-    pub fn light<const SPHERE: bool>(
-        &self,
-        tracer: &Tracer,
-        rngs: &mut [Rng],
-        rng_of: impl Fn(u8) -> usize,
-    ) -> [Lighting<Vec3x16>; GROUPS] {
-        let (light, shading) = (&tracer.light, &tracer.shading);
-        let mut lit = [Lighting::NONE; GROUPS];
-        for (g, (_, surfaces)) in self.groups().enumerate() {
-            let owners = self.owners(g);
-            lit[g] = Lighting::at(
-                light,
-                shading.stage,
-                shading.shadows,
-                surfaces,
-                |positions, wanted| {
-                    let mut target = Vec3x16::splat(light.position);
-                    if SPHERE {
-                        for (k, &i) in owners.iter().enumerate() {
-                            if wanted.0[k] {
-                                let rng = &mut rngs[rng_of(i)];
-                                target.set_lane(k, light_point(light, positions.lane(k), rng));
-                            }
-                        }
-                    }
-                    target
-                },
-            );
-        }
-        lit
-    }
-
-    /// Which shadow rays of `lit` (the hits' [`DiffuseHits::light`]) are blocked: bit `lane`
-    /// of group `g`'s mask.
-    #[inline(always)]
-    pub fn blocked(&self, scene: &Scene, lit: &[Lighting<Vec3x16>; GROUPS]) -> [u16; GROUPS] {
-        // Every group's lanes, those past the hits casting nothing (a fixed array: collecting
-        // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass).
-        let groups = self.len.div_ceil(LANES);
-        let shadows: [SegmentLanes; GROUPS] =
-            std::array::from_fn(|g| lit[g].shadow.segment_lanes(self.hits_in(g)));
-        let mut blocked = [0u16; GROUPS];
-        scene.occluded_lanes(&shadows[..groups], &mut blocked[..groups]);
-        blocked
-    }
-
-    /// Hit `lane` of group `g` as [`HitTerms::at`] gives it, its shadow ray answered: what the
-    /// pixel inspector is told.
-    pub fn terms(&self, g: usize, lane: usize, lit: &Lighting<Vec3x16>, blocked: u16) -> HitTerms {
-        let s = &self.surfaces[g];
-        HitTerms {
-            position: s.position.lane(lane),
-            normal: s.normal.lane(lane),
-            rho: s.rho.lane(lane),
-            d: lit.d.lane(lane),
-            relief_shadowed: s.relief_visibility.0[lane] == 0.0,
-            shadow_ray: lit.shadow.lane(lane),
-            blocked: blocked & (1 << lane) != 0,
+            cast: self.cast.bits() & lanes,
         }
     }
 }

@@ -332,7 +332,10 @@ fn batch<R: Recorder>(
         }
         // Each hit to its phase: the diffuse ones into lanes for their light and bounce, the
         // specular ones sampled here.
-        diffuse.clear();
+        diffuse.clear(n_alive);
+        // The diffuse hits in lanes one after another (lanes left empty would cost their
+        // groups' light and shadow rays as much as full ones).
+        let mut n_diffuse = 0;
         let mut n_specular = 0;
         for k in 0..n_alive {
             let (i, ray) = (alive[k] as usize, &rays_alive[k]);
@@ -354,8 +357,9 @@ fn batch<R: Recorder>(
                     surface.geometric = turned;
                     surface.normal = -surface.normal;
                 }
-                arriving[diffuse.len / LANES].set_lane(diffuse.len % LANES, path.beta);
-                diffuse.push(surface, i);
+                arriving[n_diffuse / LANES].set_lane(n_diffuse % LANES, path.beta);
+                diffuse.push(n_diffuse, surface, i);
+                n_diffuse += 1;
             } else {
                 // A direction the BSDF refuses (none for mirror and glass, whose shading
                 // frame is the geometric one) ends the path.
@@ -391,7 +395,7 @@ fn batch<R: Recorder>(
                 owner: [0; LANES],
                 active: M16::NONE,
             };
-            for (lane, &i) in diffuse.owners(g).iter().enumerate() {
+            for (lane, i) in diffuse.owners(g) {
                 let path = &mut paths[i as usize];
                 if path.bounces < max_bounces {
                     path.bounces += 1;
@@ -426,7 +430,7 @@ fn batch<R: Recorder>(
                 Vec3x16::ZERO,
             );
             let seen = arriving[g] * value;
-            for (lane, &i) in diffuse.owners(g).iter().enumerate() {
+            for (lane, i) in diffuse.owners(g) {
                 if R::ENABLED {
                     let terms = diffuse.terms(g, lane, &lit[g], blocked[g]);
                     rec.shaded(&terms, Vec3::ZERO, value.lane(lane), arriving[g].lane(lane));

@@ -282,7 +282,7 @@ pub const EDGE_ZONE: f32 = 2.0 * SHADOW_OFFSET;
 /// [`edge_zones`], made once.
 #[inline]
 pub fn approach_at_edge(triangle: &Triangle, u: f32, v: f32, incoming: Vec3) -> Option<Vec3> {
-    near_an_edge(&edge_zones(triangle), u, v).then_some(incoming)
+    near_an_edge(edge_zones(triangle), u, v).then_some(incoming)
 }
 
 /// A triangle's [`EDGE_ZONE`] in barycentric terms, squared, for [`near_an_edge`]: the
@@ -296,12 +296,13 @@ pub fn edge_zones(triangle: &Triangle) -> [f32; 3] {
     [e1, e2, e2 - e1].map(|e| zone2 * e.length_squared() / n2)
 }
 
-/// Whether barycentric `(u, v)` lies within a triangle's [`edge_zones`].
+/// Whether barycentric `(u, v)` lies within a triangle's [`edge_zones`]: for one point, or
+/// sixteen in lanes ([`crate::lanes`]).
 #[inline(always)]
-pub fn near_an_edge(zones: &[f32; 3], u: f32, v: f32) -> bool {
-    let w = 1.0 - u - v;
+pub fn near_an_edge<R: Real>(zones: [R; 3], u: R, v: R) -> R::Mask {
+    let w = R::splat(1.0) - u - v;
     // `|`, not `||`: three compares and no branch (the answer is nearly always no).
-    (v * v < zones[0]) | (u * u < zones[1]) | (w * w < zones[2])
+    (v * v).simd_lt(zones[0]) | (u * u).simd_lt(zones[1]) | (w * w).simd_lt(zones[2])
 }
 
 /// The shadow ray from a surface point toward the light, and the distance to stop at (lab

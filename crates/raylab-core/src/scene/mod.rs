@@ -89,22 +89,22 @@ impl Scene {
     /// the triangle's edge zones made once (it is asked at every diffuse hit).
     #[inline(always)]
     pub fn approach_at_edge(&self, index: usize, u: f32, v: f32, incoming: Vec3) -> Option<Vec3> {
+        light::near_an_edge(self.edge_zones(index), u, v).then_some(incoming)
+    }
+
+    /// Triangle `index`'s [`light::edge_zones`], made once when the scene was.
+    #[inline(always)]
+    pub fn edge_zones(&self, index: usize) -> [f32; 3] {
         match self.edge_zones.get(index) {
-            Some(zones) => light::near_an_edge(zones, u, v).then_some(incoming),
-            None => self.approach_at_edge_of_a_new_triangle(index, u, v, incoming),
+            Some(zones) => *zones,
+            None => self.edge_zones_of_a_new_triangle(index),
         }
     }
 
-    /// [`Scene::approach_at_edge`] for a triangle added since the scene was made.
+    /// [`Scene::edge_zones`] for a triangle added since the scene was made.
     #[cold]
-    fn approach_at_edge_of_a_new_triangle(
-        &self,
-        index: usize,
-        u: f32,
-        v: f32,
-        incoming: Vec3,
-    ) -> Option<Vec3> {
-        light::approach_at_edge(&self.triangles[index], u, v, incoming)
+    fn edge_zones_of_a_new_triangle(&self, index: usize) -> [f32; 3] {
+        light::edge_zones(&self.triangles[index])
     }
 
     /// The same scene with per-vertex normals and texture coordinates (each empty, or one

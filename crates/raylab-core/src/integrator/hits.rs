@@ -1,0 +1,332 @@
+//! A batch's diffuse hits, sixteen to a lane group, each in its own ray's lane.
+//!
+//! Both integrators compute the lab's terms at a batch's diffuse hits sixteen at a time
+//! ([`Lighting::at`] at [`Vec3x16`]) and hand their shadow rays to the tracer as lanes
+//! ([`Scene::occluded_lanes`]). The hit of the batch's ray `k` sits in lane `k % 16` of group
+//! `k / 16`; a ray that left the scene, or met a mirror or glass, leaves its lane empty (its bit
+//! of [`DiffuseHits::active`] clear). So a group can be filled whole: where the tracer is plain
+//! (no texture, relief or smooth normal anywhere), [`DiffuseHits::fill_plain`] reads sixteen
+//! hits' triangles and materials and makes their surfaces in lanes, the values
+//! [`Tracer::surface_with`] gives one hit at a time, bit for bit (tested). Made one at a time,
+//! each hit's surface passed through the stack field by field; a lab pass spent a quarter of its
+//! instructions there.
+
+use glam::Vec3;
+
+use super::{BATCH, HitTerms, Lighting, Surface, Surfaces, Tracer, light_point};
+use crate::accel::SegmentLanes;
+use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
+use crate::light::near_an_edge;
+use crate::sampling::Rng;
+use crate::scene::Scene;
+
+// A batch's rays fill whole lane groups.
+const _: () = assert!(BATCH.is_multiple_of(LANES));
+
+/// Lane groups in a batch.
+pub(crate) const GROUPS: usize = BATCH / LANES;
+
+/// What [`DiffuseHits::fill_plain`] reads of a hit: which triangle, where on it, and the ray
+/// that found it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlainHit {
+    pub triangle_index: usize,
+    pub u: f32,
+    pub v: f32,
+    pub position: Vec3,
+    /// The direction of the ray that found the hit.
+    pub incoming: Vec3,
+}
+
+/// The lanes whose bits are set in `mask`, in order.
+#[inline(always)]
+pub(crate) fn lanes_of(mut mask: u16) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            lane
+        })
+    })
+}
+
+/// The diffuse hits of a batch of rays, each in its ray's lane, and whose each is.
+pub(crate) struct DiffuseHits {
+    pub surfaces: [Surfaces<Vec3x16>; GROUPS],
+    /// Which lanes of each group hold a hit (bit `lane`). The other lanes hold what they held,
+    /// never read.
+    pub active: [u16; GROUPS],
+    /// Whose each hit is, by the batch's ray: the ray's own index (lab) or its path's (path).
+    owner: [u8; BATCH],
+    /// The groups the batch's rays span.
+    groups: usize,
+}
+
+impl DiffuseHits {
+    #[inline(always)]
+    pub fn new() -> Self {
+        Self {
+            surfaces: [Surfaces::ZERO; GROUPS],
+            active: [0; GROUPS],
+            owner: [0; BATCH],
+            groups: 0,
+        }
+    }
+
+    /// No hits yet, for a batch of `rays` rays.
+    #[inline(always)]
+    pub fn clear(&mut self, rays: usize) {
+        debug_assert!(rays <= BATCH);
+        self.groups = rays.div_ceil(LANES);
+        self.active = [0; GROUPS];
+    }
+
+    /// The batch's ray `k` met a diffuse surface; the hit is `owner`'s.
+    #[inline(always)]
+    pub fn push(&mut self, k: usize, surface: Surface, owner: usize) {
+        let (g, lane) = (k / LANES, k % LANES);
+        self.surfaces[g].set(lane, surface);
+        self.active[g] |= 1 << lane;
+        self.owner[k] = owner as u8;
+    }
+
+    /// Group `g` filled at once, for the batch's rays `16g ..` (`hit_of(lane)` is lane's hit,
+    /// if its ray met something; `owner_of(lane)` whose it is), where `tracer` is plain: each
+    /// diffuse hit's surface is [`Tracer::surface_with`]'s, its `at_edge` asked when
+    /// `at_edges` (as [`Tracer::surface`] asks it). Returns the lanes whose ray met a surface
+    /// that is not diffuse, for the caller to take one at a time.
+    #[inline(always)]
+    pub fn fill_plain(
+        &mut self,
+        g: usize,
+        tracer: &Tracer,
+        at_edges: bool,
+        hit_of: impl Fn(usize) -> Option<PlainHit>,
+        owner_of: impl Fn(usize) -> u8,
+    ) -> u16 {
+        debug_assert!(tracer.plain && g < self.groups);
+        let scene = tracer.scene;
+        let (mut diffuse, mut other) = (0u16, 0u16);
+        let surfaces = &mut self.surfaces[g];
+        let (mut u, mut v, mut zones) = (F32x16::ZERO, F32x16::ZERO, [F32x16::ZERO; 3]);
+        let mut incoming = Vec3x16::ZERO;
+        // Lane by lane, what each hit reads: its triangle's normal and zones, its material's ρ.
+        for lane in 0..LANES {
+            let Some(hit) = hit_of(lane) else { continue };
+            let triangle = &scene.triangles[hit.triangle_index];
+            let material = &tracer.materials[triangle.material as usize];
+            if !material.is_diffuse() {
+                other |= 1 << lane;
+                continue;
+            }
+            diffuse |= 1 << lane;
+            surfaces.position.set_lane(lane, hit.position);
+            surfaces.geometric.set_lane(lane, triangle.normal);
+            surfaces.rho.set_lane(lane, material.reflectance);
+            incoming.set_lane(lane, hit.incoming);
+            (u.0[lane], v.0[lane]) = (hit.u, hit.v);
+            let z = scene.edge_zones(hit.triangle_index);
+            (zones[0].0[lane], zones[1].0[lane], zones[2].0[lane]) = (z[0], z[1], z[2]);
+            self.owner[g * LANES + lane] = owner_of(lane);
+        }
+        // Then sixteen at a time: which lie at an edge ([`Scene::approach_at_edge`]); the
+        // shading normal is the triangle's own.
+        surfaces.near_edge = M16::splat(at_edges) & near_an_edge(zones, u, v);
+        surfaces.incoming = Vec3x16::select(surfaces.near_edge, incoming, Vec3x16::ZERO);
+        surfaces.normal = surfaces.geometric;
+        surfaces.relief_visibility = F32x16::splat(1.0);
+        self.active[g] = diffuse;
+        other
+    }
+
+    /// The groups the batch spans, each with its hits' lanes ([`DiffuseHits::active`]).
+    #[inline(always)]
+    pub fn groups(&self) -> impl Iterator<Item = (u16, &Surfaces<Vec3x16>)> {
+        (0..self.groups).map(|g| (self.active[g], &self.surfaces[g]))
+    }
+
+    /// Group `g`'s hits: each lane holding one, and whose it is, in lane order.
+    #[inline(always)]
+    pub fn owners(&self, g: usize) -> impl Iterator<Item = (usize, u8)> + '_ {
+        lanes_of(self.active[g]).map(move |lane| (lane, self.owner[g * LANES + lane]))
+    }
+
+    /// The light at every hit, sixteen at a time, in the order of the hits. With `SPHERE`
+    /// (a spherical light) the shadow rays go to points of the light drawn from
+    /// `rngs[rng_of(owner)]` ([`light_point`]), in that order; otherwise nothing is drawn.
+    /// `SPHERE` is a constant so that, for a point light, the closure that finds the points
+    /// is small enough to inline into the code compiled for the CPU (as a run-time flag it was
+    /// not, and the lab pass took 8 % longer: measured).
+    #[inline(always)]
+    pub fn light<const SPHERE: bool>(
+        &self,
+        tracer: &Tracer,
+        rngs: &mut [Rng],
+        rng_of: impl Fn(u8) -> usize,
+    ) -> [Lighting<Vec3x16>; GROUPS] {
+        let (light, shading) = (&tracer.light, &tracer.shading);
+        let mut lit = [Lighting::NONE; GROUPS];
+        for (g, (active, surfaces)) in self.groups().enumerate() {
+            if active == 0 {
+                continue;
+            }
+            lit[g] = Lighting::at(
+                light,
+                shading.stage,
+                shading.shadows,
+                surfaces,
+                |positions, wanted| {
+                    let mut target = Vec3x16::splat(light.position);
+                    if SPHERE {
+                        for (lane, i) in self.owners(g) {
+                            if wanted.0[lane] {
+                                let rng = &mut rngs[rng_of(i)];
+                                let point = light_point(light, positions.lane(lane), rng);
+                                target.set_lane(lane, point);
+                            }
+                        }
+                    }
+                    target
+                },
+            );
+        }
+        lit
+    }
+
+    /// Which shadow rays of `lit` (the hits' [`DiffuseHits::light`]) are blocked: bit `lane`
+    /// of group `g`'s mask.
+    #[inline(always)]
+    pub fn blocked(&self, scene: &Scene, lit: &[Lighting<Vec3x16>; GROUPS]) -> [u16; GROUPS] {
+        // Every group's lanes, those without a hit casting nothing (a fixed array: collecting
+        // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass).
+        let shadows: [SegmentLanes; GROUPS] =
+            std::array::from_fn(|g| lit[g].shadow.segment_lanes(self.active[g]));
+        let mut blocked = [0u16; GROUPS];
+        scene.occluded_lanes(&shadows[..self.groups], &mut blocked[..self.groups]);
+        blocked
+    }
+
+    /// Hit `lane` of group `g` as [`HitTerms::at`] gives it, its shadow ray answered: what the
+    /// pixel inspector is told.
+    pub fn terms(&self, g: usize, lane: usize, lit: &Lighting<Vec3x16>, blocked: u16) -> HitTerms {
+        let s = &self.surfaces[g];
+        HitTerms {
+            position: s.position.lane(lane),
+            normal: s.normal.lane(lane),
+            rho: s.rho.lane(lane),
+            d: lit.d.lane(lane),
+            relief_shadowed: s.relief_visibility.0[lane] == 0.0,
+            shadow_ray: lit.shadow.lane(lane),
+            blocked: blocked & (1 << lane) != 0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::intersect::Intersection;
+    use crate::material::MaterialPreset;
+    use crate::sampling::Rng;
+    use crate::scene::cornell_box;
+    use crate::{Camera, RenderSettings, Shading, Stage};
+
+    #[test]
+    fn lanes_of_a_mask_in_order() {
+        assert_eq!(lanes_of(0).count(), 0);
+        assert_eq!(lanes_of(0b1010_0001).collect::<Vec<_>>(), [0, 5, 7]);
+        assert_eq!(
+            lanes_of(u16::MAX).collect::<Vec<_>>(),
+            (0..16).collect::<Vec<_>>()
+        );
+    }
+
+    /// Rays from the camera and from random points in the box in random directions: every
+    /// kind of hit, on every wall and block, at its edges and from behind.
+    fn rays_in_the_box(n: usize) -> Vec<crate::geometry::Ray> {
+        let camera = Camera::default_for(32, 32);
+        let mut rng = Rng::for_pixel_sample(11, 0, 0, 0);
+        let mut rays: Vec<_> = (0..n / 2)
+            .map(|i| camera.pixel_ray((i % 32) as u32, (i / 32 % 32) as u32))
+            .collect();
+        while rays.len() < n {
+            let origin = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            let d = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            if let Some(direction) = d.try_normalize() {
+                rays.push(crate::geometry::Ray { origin, direction });
+            }
+        }
+        rays
+    }
+
+    /// Filling a group at once gives each lane the surface [`Tracer::surface_with`] gives its
+    /// hit, bit for bit, with and without `at_edge`; lanes that missed or met a mirror or glass
+    /// are left to the caller.
+    #[test]
+    fn a_plain_group_equals_its_hits_one_at_a_time() {
+        let scene = cornell_box();
+        let mut settings = RenderSettings::default();
+        settings.shading = Shading::for_stage(Stage::Path);
+        settings.material_preset = MaterialPreset::Both;
+        let tracer = Tracer::new(&scene, &settings);
+        assert!(tracer.plain);
+        let rays = rays_in_the_box(4096);
+        let mut hits = vec![None; rays.len()];
+        scene.closest_intersections(&rays, f32::INFINITY, &mut hits);
+        let plain_hit = |ray: &crate::geometry::Ray, hit: &Intersection| PlainHit {
+            triangle_index: hit.triangle_index,
+            u: hit.u,
+            v: hit.v,
+            position: hit.position,
+            incoming: ray.direction,
+        };
+        let (mut edges, mut others) = (0, 0);
+        for at_edges in [true, false] {
+            for (rays, hits) in rays.chunks(LANES).zip(hits.chunks(LANES)) {
+                let mut group = DiffuseHits::new();
+                group.clear(LANES);
+                let hit_of = |lane: usize| hits[lane].as_ref().map(|h| plain_hit(&rays[lane], h));
+                let other = group.fill_plain(0, &tracer, at_edges, hit_of, |lane| 3 * lane as u8);
+                for (lane, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+                    let bit = 1 << lane;
+                    let Some(hit) = hit else {
+                        assert_eq!((group.active[0] | other) & bit, 0);
+                        continue;
+                    };
+                    let material = tracer.material_of(hit.triangle_index);
+                    if !material.is_diffuse() {
+                        assert_eq!((group.active[0] & bit, other & bit), (0, bit));
+                        others += 1;
+                        continue;
+                    }
+                    assert_eq!((group.active[0] & bit, other & bit), (bit, 0));
+                    let at_edge = match at_edges {
+                        true => {
+                            scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction)
+                        }
+                        false => None,
+                    };
+                    let expected = tracer.surface_with(hit, material, ray.direction, at_edge);
+                    edges += usize::from(at_edge.is_some());
+                    let mut one = DiffuseHits::new();
+                    one.clear(LANES);
+                    one.push(lane, expected, 3 * lane);
+                    let (a, b) = (&group.surfaces[0], &one.surfaces[0]);
+                    assert_eq!(a.position.lane(lane), b.position.lane(lane));
+                    assert_eq!(a.normal.lane(lane), b.normal.lane(lane));
+                    assert_eq!(a.geometric.lane(lane), b.geometric.lane(lane));
+                    assert_eq!(a.rho.lane(lane), b.rho.lane(lane));
+                    assert_eq!(a.near_edge.0[lane], b.near_edge.0[lane]);
+                    assert_eq!(a.incoming.lane(lane), b.incoming.lane(lane));
+                    assert_eq!(a.relief_visibility.0[lane], 1.0);
+                    assert_eq!(
+                        group.owners(0).find(|o| o.0 == lane),
+                        Some((lane, 3 * lane as u8))
+                    );
+                }
+            }
+        }
+        // The rays met every case: edges, mirror and glass.
+        assert!(edges > 20 && others > 100, "{edges} {others}");
+    }
+}
