@@ -229,7 +229,7 @@ mod tests {
     use crate::material::MaterialPreset;
     use crate::sampling::Rng;
     use crate::scene::cornell_box;
-    use crate::{Camera, RenderSettings, Shading, Stage};
+    use crate::{Camera, RenderSettings};
 
     #[test]
     fn lanes_of_a_mask_in_order() {
@@ -265,9 +265,10 @@ mod tests {
     #[test]
     fn a_plain_group_equals_its_hits_one_at_a_time() {
         let scene = cornell_box();
-        let mut settings = RenderSettings::default();
-        settings.shading = Shading::for_stage(Stage::Path);
-        settings.material_preset = MaterialPreset::Both;
+        let settings = RenderSettings {
+            material_preset: MaterialPreset::Both,
+            ..RenderSettings::default()
+        };
         let tracer = Tracer::new(&scene, &settings);
         assert!(tracer.plain);
         let rays = rays_in_the_box(4096);
