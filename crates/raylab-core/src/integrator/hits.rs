@@ -106,6 +106,7 @@ impl DiffuseHits {
     ) -> u16 {
         debug_assert!(tracer.plain && g < self.groups);
         let scene = tracer.scene;
+        let all_diffuse = tracer.all_diffuse;
         let (mut diffuse, mut other) = (0u16, 0u16);
         let surfaces = &mut self.surfaces[g];
         let (mut u, mut v, mut zones) = (F32x16::ZERO, F32x16::ZERO, [F32x16::ZERO; 3]);
@@ -115,7 +116,9 @@ impl DiffuseHits {
             let Some(hit) = hit_of(lane) else { continue };
             let triangle = &scene.triangles[hit.triangle_index];
             let material = &tracer.materials[triangle.material as usize];
-            if !material.is_diffuse() {
+            // Asked only where some material is not diffuse: the answer would wait on two
+            // loads one after the other, and the lab's box has no other.
+            if !all_diffuse && !material.is_diffuse() {
                 other |= 1 << lane;
                 continue;
             }
@@ -260,13 +263,26 @@ mod tests {
     }
 
     /// Filling a group at once gives each lane the surface [`Tracer::surface_with`] gives its
-    /// hit, bit for bit, with and without `at_edge`; lanes that missed or met a mirror or glass
-    /// are left to the caller.
+    /// hit, bit for bit, with and without `at_edge`, in the lab's box (every material diffuse)
+    /// and with the mirror and glass blocks, whose lanes are left to the caller, as are those
+    /// that missed.
     #[test]
     fn a_plain_group_equals_its_hits_one_at_a_time() {
+        for preset in [MaterialPreset::None, MaterialPreset::Both] {
+            let others = plain_groups_equal_their_hits(preset);
+            match preset {
+                MaterialPreset::None => assert_eq!(others, 0),
+                _ => assert!(others > 100, "{others}"),
+            }
+        }
+    }
+
+    /// [`a_plain_group_equals_its_hits_one_at_a_time`] with `preset`: how many hits were on
+    /// mirror or glass.
+    fn plain_groups_equal_their_hits(preset: MaterialPreset) -> usize {
         let scene = cornell_box();
         let settings = RenderSettings {
-            material_preset: MaterialPreset::Both,
+            material_preset: preset,
             ..RenderSettings::default()
         };
         let tracer = Tracer::new(&scene, &settings);
@@ -327,7 +343,8 @@ mod tests {
                 }
             }
         }
-        // The rays met every case: edges, mirror and glass.
-        assert!(edges > 20 && others > 100, "{edges} {others}");
+        // The rays met the triangles' edges.
+        assert!(edges > 20, "{edges}");
+        others
     }
 }

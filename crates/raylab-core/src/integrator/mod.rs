@@ -525,6 +525,8 @@ pub struct Tracer<'a> {
     random: bool,
     /// No texture and no smooth normal anywhere: every surface is the lab's (flat, constant ρ).
     plain: bool,
+    /// Every material diffuse (no mirror, glass or rough metal).
+    all_diffuse: bool,
     /// The pass's caustic photon map, when the path stage gathers caustics from photons
     /// ([`Tracer::for_pass`]).
     photons: Option<PhotonMap>,
@@ -550,6 +552,7 @@ impl<'a> Tracer<'a> {
             .iter()
             .all(|m| m.texture.is_none() && m.relief.is_none())
             && (scene.vertex_normals.is_empty() || !settings.shading.smooth);
+        let all_diffuse = materials.iter().all(Material::is_diffuse);
         Self {
             scene,
             materials,
@@ -559,6 +562,7 @@ impl<'a> Tracer<'a> {
             shading: settings.shading,
             random,
             plain,
+            all_diffuse,
             photons: None,
         }
     }
