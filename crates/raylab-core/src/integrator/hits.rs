@@ -1,15 +1,17 @@
-//! A batch's diffuse hits, sixteen to a lane group, each in its own ray's lane.
+//! A batch's diffuse hits, sixteen to a lane group, and whose each is.
 //!
 //! Both integrators compute the lab's terms at a batch's diffuse hits sixteen at a time
 //! ([`Lighting::at`] at [`Vec3x16`]) and hand their shadow rays to the tracer as lanes
-//! ([`Scene::occluded_lanes`]). The hit of the batch's ray `k` sits in lane `k % 16` of group
-//! `k / 16`; a ray that left the scene, or met a mirror or glass, leaves its lane empty (its bit
-//! of [`DiffuseHits::active`] clear). So a group can be filled whole: where the tracer is plain
-//! (no texture, relief or smooth normal anywhere), [`DiffuseHits::fill_plain`] reads sixteen
-//! hits' triangles and materials and makes their surfaces in lanes, the values
-//! [`Tracer::surface_with`] gives one hit at a time, bit for bit (tested). Made one at a time,
-//! each hit's surface passed through the stack field by field; a lab pass spent a quarter of its
-//! instructions there.
+//! ([`Scene::occluded_lanes`]). Hit `k` sits in lane `k % 16` of group `k / 16`, and each
+//! group's [`DiffuseHits::active`] says which lanes hold one. The lab puts each ray's hit in the
+//! ray's own lane, leaving empty those of rays that left the scene or met a mirror or glass; so
+//! a group can be filled whole: where the tracer is plain (no texture, relief or smooth normal
+//! anywhere), [`DiffuseHits::fill_plain`] reads sixteen hits' triangles and materials and makes
+//! their surfaces in lanes, the values [`Tracer::surface_with`] gives one hit at a time, bit for
+//! bit (tested). One at a time, each surface went through the stack field by field, with a
+//! branch for the edge test (PERFORMANCE.md). The path tracer packs its diffuse hits one after
+//! another instead: its rays that leave the box would leave their lanes empty, and empty lanes
+//! cost their group's light and shadow rays as full ones do (a pass took 11 % longer).
 
 use glam::Vec3;
 
@@ -50,13 +52,13 @@ pub(crate) fn lanes_of(mut mask: u16) -> impl Iterator<Item = usize> {
     })
 }
 
-/// The diffuse hits of a batch of rays, each in its ray's lane, and whose each is.
+/// The diffuse hits of a batch of rays, in lanes, and whose each is.
 pub(crate) struct DiffuseHits {
     pub surfaces: [Surfaces<Vec3x16>; GROUPS],
     /// Which lanes of each group hold a hit (bit `lane`). The other lanes hold what they held,
     /// never read.
     pub active: [u16; GROUPS],
-    /// Whose each hit is, by the batch's ray: the ray's own index (lab) or its path's (path).
+    /// Whose each hit is, by its place: the index of its ray (lab) or path (path) in the batch.
     owner: [u8; BATCH],
     /// The groups the batch's rays span.
     groups: usize,
@@ -73,7 +75,7 @@ impl DiffuseHits {
         }
     }
 
-    /// No hits yet, for a batch of `rays` rays.
+    /// No hits yet, for a batch of `rays` rays (at most one hit each).
     #[inline(always)]
     pub fn clear(&mut self, rays: usize) {
         debug_assert!(rays <= BATCH);
@@ -81,7 +83,7 @@ impl DiffuseHits {
         self.active = [0; GROUPS];
     }
 
-    /// The batch's ray `k` met a diffuse surface; the hit is `owner`'s.
+    /// Hit `k` (lane `k % 16` of group `k / 16`) is at `surface`, and `owner`'s.
     #[inline(always)]
     pub fn push(&mut self, k: usize, surface: Surface, owner: usize) {
         let (g, lane) = (k / LANES, k % LANES);
