@@ -17,6 +17,7 @@ use glam::Vec3;
 
 use super::{BATCH, HitTerms, Lighting, Surface, Surfaces, Tracer, light_point};
 use crate::accel::SegmentLanes;
+use crate::intersect::Intersection;
 use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
 use crate::light::near_an_edge;
 use crate::sampling::Rng;
@@ -27,18 +28,6 @@ const _: () = assert!(BATCH.is_multiple_of(LANES));
 
 /// Lane groups in a batch.
 pub(crate) const GROUPS: usize = BATCH / LANES;
-
-/// What [`DiffuseHits::fill_plain`] reads of a hit: which triangle, where on it, and the ray
-/// that found it.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct PlainHit {
-    pub triangle_index: usize,
-    pub u: f32,
-    pub v: f32,
-    pub position: Vec3,
-    /// The direction of the ray that found the hit.
-    pub incoming: Vec3,
-}
 
 /// The lanes whose bits are set in `mask`, in order.
 #[inline(always)]
@@ -60,7 +49,7 @@ pub(crate) struct DiffuseHits {
     pub active: [u16; GROUPS],
     /// Whose each hit is, by its place: the index of its ray (lab) or path (path) in the batch.
     owner: [u8; BATCH],
-    /// The groups the batch's rays span.
+    /// The groups up to the last that holds a hit.
     groups: usize,
 }
 
@@ -75,11 +64,10 @@ impl DiffuseHits {
         }
     }
 
-    /// No hits yet, for a batch of `rays` rays (at most one hit each).
+    /// No hits.
     #[inline(always)]
-    pub fn clear(&mut self, rays: usize) {
-        debug_assert!(rays <= BATCH);
-        self.groups = rays.div_ceil(LANES);
+    pub fn clear(&mut self) {
+        self.groups = 0;
         self.active = [0; GROUPS];
     }
 
@@ -90,23 +78,24 @@ impl DiffuseHits {
         self.surfaces[g].set(lane, surface);
         self.active[g] |= 1 << lane;
         self.owner[k] = owner as u8;
+        self.groups = self.groups.max(g + 1);
     }
 
-    /// Group `g` filled at once, for the batch's rays `16g ..` (`hit_of(lane)` is lane's hit,
-    /// if its ray met something; `owner_of(lane)` whose it is), where `tracer` is plain: each
-    /// diffuse hit's surface is [`Tracer::surface_with`]'s, its `at_edge` asked when
-    /// `at_edges` (as [`Tracer::surface`] asks it). Returns the lanes whose ray met a surface
-    /// that is not diffuse, for the caller to take one at a time.
+    /// Group `g` filled at once with the hits of the batch's rays `16g ..`, each in its ray's
+    /// lane and its ray's (`hit_of(lane)`: the hit, if the ray met something, and the ray's
+    /// direction), where `tracer` is plain: each diffuse hit's surface is
+    /// [`Tracer::surface_with`]'s, its `at_edge` asked when `at_edges` (as [`Tracer::surface`]
+    /// asks it). Returns the lanes whose ray met a surface that is not diffuse, for the caller
+    /// to take one at a time.
     #[inline(always)]
     pub fn fill_plain(
         &mut self,
         g: usize,
         tracer: &Tracer,
         at_edges: bool,
-        hit_of: impl Fn(usize) -> Option<PlainHit>,
-        owner_of: impl Fn(usize) -> u8,
+        hit_of: impl Fn(usize) -> Option<(Intersection, Vec3)>,
     ) -> u16 {
-        debug_assert!(tracer.plain && g < self.groups);
+        debug_assert!(tracer.plain && g < GROUPS);
         let scene = tracer.scene;
         let all_diffuse = tracer.all_diffuse;
         let (mut diffuse, mut other) = (0u16, 0u16);
@@ -115,7 +104,9 @@ impl DiffuseHits {
         let mut incoming = Vec3x16::ZERO;
         // Lane by lane, what each hit reads: its triangle's normal and zones, its material's ρ.
         for lane in 0..LANES {
-            let Some(hit) = hit_of(lane) else { continue };
+            let Some((hit, direction)) = hit_of(lane) else {
+                continue;
+            };
             let triangle = &scene.triangles[hit.triangle_index];
             let material = &tracer.materials[triangle.material as usize];
             // Asked only where some material is not diffuse: the answer would wait on two
@@ -128,11 +119,11 @@ impl DiffuseHits {
             surfaces.position.set_lane(lane, hit.position);
             surfaces.geometric.set_lane(lane, triangle.normal);
             surfaces.rho.set_lane(lane, material.reflectance);
-            incoming.set_lane(lane, hit.incoming);
+            incoming.set_lane(lane, direction);
             (u.0[lane], v.0[lane]) = (hit.u, hit.v);
             let z = scene.edge_zones(hit.triangle_index);
             (zones[0].0[lane], zones[1].0[lane], zones[2].0[lane]) = (z[0], z[1], z[2]);
-            self.owner[g * LANES + lane] = owner_of(lane);
+            self.owner[g * LANES + lane] = (g * LANES + lane) as u8;
         }
         // Then sixteen at a time: which lie at an edge ([`Scene::approach_at_edge`]); the
         // shading normal is the triangle's own.
@@ -141,6 +132,9 @@ impl DiffuseHits {
         surfaces.normal = surfaces.geometric;
         surfaces.relief_visibility = F32x16::splat(1.0);
         self.active[g] = diffuse;
+        if diffuse != 0 {
+            self.groups = self.groups.max(g + 1);
+        }
         other
     }
 
@@ -230,7 +224,6 @@ impl DiffuseHits {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::intersect::Intersection;
     use crate::material::MaterialPreset;
     use crate::sampling::Rng;
     use crate::scene::cornell_box;
@@ -292,20 +285,13 @@ mod tests {
         let rays = rays_in_the_box(4096);
         let mut hits = vec![None; rays.len()];
         scene.closest_intersections(&rays, f32::INFINITY, &mut hits);
-        let plain_hit = |ray: &crate::geometry::Ray, hit: &Intersection| PlainHit {
-            triangle_index: hit.triangle_index,
-            u: hit.u,
-            v: hit.v,
-            position: hit.position,
-            incoming: ray.direction,
-        };
         let (mut edges, mut others) = (0, 0);
         for at_edges in [true, false] {
             for (rays, hits) in rays.chunks(LANES).zip(hits.chunks(LANES)) {
                 let mut group = DiffuseHits::new();
-                group.clear(LANES);
-                let hit_of = |lane: usize| hits[lane].as_ref().map(|h| plain_hit(&rays[lane], h));
-                let other = group.fill_plain(0, &tracer, at_edges, hit_of, |lane| 3 * lane as u8);
+                group.clear();
+                let hit_of = |lane: usize| hits[lane].map(|h| (h, rays[lane].direction));
+                let other = group.fill_plain(0, &tracer, at_edges, hit_of);
                 for (lane, (ray, hit)) in rays.iter().zip(hits).enumerate() {
                     let bit = 1 << lane;
                     let Some(hit) = hit else {
@@ -328,8 +314,8 @@ mod tests {
                     let expected = tracer.surface_with(hit, material, ray.direction, at_edge);
                     edges += usize::from(at_edge.is_some());
                     let mut one = DiffuseHits::new();
-                    one.clear(LANES);
-                    one.push(lane, expected, 3 * lane);
+                    one.clear();
+                    one.push(lane, expected, lane);
                     let (a, b) = (&group.surfaces[0], &one.surfaces[0]);
                     assert_eq!(a.position.lane(lane), b.position.lane(lane));
                     assert_eq!(a.normal.lane(lane), b.normal.lane(lane));
@@ -340,7 +326,7 @@ mod tests {
                     assert_eq!(a.relief_visibility.0[lane], 1.0);
                     assert_eq!(
                         group.owners(0).find(|o| o.0 == lane),
-                        Some((lane, 3 * lane as u8))
+                        Some((lane, lane as u8))
                     );
                 }
             }

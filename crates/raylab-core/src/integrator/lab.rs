@@ -19,7 +19,7 @@
 use glam::Vec3;
 
 use super::hits::lanes_of;
-use super::{BATCH, DiffuseHits, GROUPS, PlainHit, Recorder, Tracer, continue_ray, shaded_value};
+use super::{BATCH, DiffuseHits, GROUPS, Recorder, Tracer, continue_ray, shaded_value};
 use crate::accel::Hit;
 use crate::geometry::Ray;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
@@ -115,7 +115,6 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     let mut hits: [Option<Hit>; BATCH] = [None; BATCH];
     scene.closest_hits(rays, f32::INFINITY, &mut hits[..rays.len()]);
     let mut diffuse = DiffuseHits::new();
-    diffuse.clear(rays.len());
     let groups = rays.len().div_ceil(LANES);
     // Where the tracer is plain, the diffuse hits' surfaces are made sixteen at a time; the
     // other hits (all of them when recording, or where surfaces are textured or smooth) one
@@ -126,17 +125,9 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             let (rays, hits) = (&rays[g * LANES..], &hits[g * LANES..rays.len()]);
             let hit_of = |lane: usize| {
                 let (ray, hit) = (rays.get(lane)?, (*hits.get(lane)?)?);
-                let hit = intersection(ray, hit);
-                Some(PlainHit {
-                    triangle_index: hit.triangle_index,
-                    u: hit.u,
-                    v: hit.v,
-                    position: hit.position,
-                    incoming: ray.direction,
-                })
+                Some((intersection(ray, hit), ray.direction))
             };
-            let owner_of = |lane: usize| (g * LANES + lane) as u8;
-            *lanes = diffuse.fill_plain(g, tracer, shading.shadows, hit_of, owner_of);
+            *lanes = diffuse.fill_plain(g, tracer, shading.shadows, hit_of);
         }
     }
     let one_at_a_time = one_at_a_time

@@ -65,7 +65,7 @@ use crate::texture::planar_uv;
 pub const BATCH: usize = 64;
 
 pub use crate::settings::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
-pub(crate) use hits::{DiffuseHits, GROUPS, PlainHit};
+pub(crate) use hits::{DiffuseHits, GROUPS};
 
 /// The mirror and glass bounces a camera sample's features follow before they settle on what
 /// was reached ([`Seen`]).

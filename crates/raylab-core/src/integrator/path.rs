@@ -332,7 +332,7 @@ fn batch<R: Recorder>(
         }
         // Each hit to its phase: the diffuse ones into lanes for their light and bounce, the
         // specular ones sampled here.
-        diffuse.clear(n_alive);
+        diffuse.clear();
         // The diffuse hits in lanes one after another (lanes left empty would cost their
         // groups' light and shadow rays as much as full ones).
         let mut n_diffuse = 0;
