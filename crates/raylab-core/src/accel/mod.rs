@@ -44,6 +44,7 @@
 pub mod bvh;
 pub mod calibrate;
 pub mod cull;
+pub mod gather;
 #[cfg(target_arch = "x86_64")]
 pub mod packet;
 pub mod simd;
@@ -79,6 +80,71 @@ pub struct Hit {
     pub t: f32,
     pub u: f32,
     pub v: f32,
+}
+
+/// The closest hits of up to sixteen rays side by side, one lane a ray (structure of arrays):
+/// lane `i` holds ray `i`'s [`Hit`], its `index` [`HitLanes::MISS`] where the ray met nothing.
+/// What [`Accel::closest_lanes`] hands back, so that an integrator can read sixteen hits'
+/// triangles at once ([`HitLanes::get`] gives one).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct HitLanes {
+    pub t: [f32; 16],
+    pub index: [u32; 16],
+    pub u: [f32; 16],
+    pub v: [f32; 16],
+}
+
+impl HitLanes {
+    /// A lane's `index` where its ray met nothing.
+    pub const MISS: u32 = u32::MAX;
+
+    /// No hit in any lane, `t` at `t_max` (the limit a traversal compares against).
+    #[inline(always)]
+    pub fn new(t_max: f32) -> Self {
+        Self {
+            t: [t_max; 16],
+            index: [Self::MISS; 16],
+            u: [0.0; 16],
+            v: [0.0; 16],
+        }
+    }
+
+    /// Lane `lane`'s hit, if its ray met something.
+    #[inline(always)]
+    pub fn get(&self, lane: usize) -> Option<Hit> {
+        (self.index[lane] != Self::MISS).then(|| Hit {
+            index: self.index[lane],
+            t: self.t[lane],
+            u: self.u[lane],
+            v: self.v[lane],
+        })
+    }
+
+    /// Puts `hit` in lane `lane` (a miss: `None`).
+    #[inline(always)]
+    pub fn set(&mut self, lane: usize, hit: Option<Hit>) {
+        let h = hit.unwrap_or(Hit {
+            index: Self::MISS,
+            t: f32::INFINITY,
+            u: 0.0,
+            v: 0.0,
+        });
+        self.t[lane] = h.t;
+        self.index[lane] = h.index;
+        self.u[lane] = h.u;
+        self.v[lane] = h.v;
+    }
+
+    /// The lanes whose ray met something: bit `i` for lane `i`.
+    #[inline(always)]
+    pub fn hits(&self) -> u16 {
+        let mut bits = 0u16;
+        for (lane, &index) in self.index.iter().enumerate() {
+            bits |= u16::from(index != Self::MISS) << lane;
+        }
+        bits
+    }
 }
 
 /// The work one closest-hit query did ([`Accel::closest_counting`]): what the workbench's
@@ -459,6 +525,22 @@ impl Accel {
         with_kernels!(isa, |k| k.closest_batch(s, triangles, rays, t_max, out))
     }
 
+    /// [`Accel::closest_batch`] into lanes: lane `i` of `out[g]` is `rays[16g + i]`'s hit, the
+    /// lanes past the last ray none. The same answers; a culled flat list hands its packets'
+    /// lanes over as they are.
+    #[inline(never)]
+    pub fn closest_lanes(
+        &self,
+        triangles: &[Triangle],
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [HitLanes],
+    ) {
+        debug_assert_eq!(rays.len().div_ceil(16), out.len());
+        let (s, isa) = (&self.structure, self.isa);
+        with_kernels!(isa, |k| k.closest_lanes(s, triangles, rays, t_max, out))
+    }
+
     /// [`Accel::occluded`] for many rays, each with its own `t_max`: `out[i]` for `rays[i]`,
     /// the same answers, the choice of structure and kernels made once for the batch.
     #[inline(never)]
@@ -582,6 +664,23 @@ trait Batches: KernelSet {
     }
 
     #[inline(never)]
+    fn closest_lanes(
+        self,
+        s: &Structure,
+        triangles: &[Triangle],
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [HitLanes],
+    ) {
+        for (rays, out) in rays.chunks(16).zip(out) {
+            *out = HitLanes::new(t_max);
+            for (lane, ray) in rays.iter().enumerate() {
+                out.set(lane, s.closest_with(self, triangles, ray, t_max));
+            }
+        }
+    }
+
+    #[inline(never)]
     fn occluded_batch(
         self,
         s: &Structure,
@@ -677,6 +776,29 @@ macro_rules! simd_batches {
                 unsafe { compiled(self, s, triangles, rays, t_max, out) }
             }
 
+            fn closest_lanes(
+                self,
+                s: &Structure,
+                triangles: &[Triangle],
+                rays: &[Ray],
+                t_max: f32,
+                out: &mut [HitLanes],
+            ) {
+                #[target_feature(enable = $features)]
+                fn compiled(
+                    k: $isa,
+                    s: &Structure,
+                    triangles: &[Triangle],
+                    rays: &[Ray],
+                    t_max: f32,
+                    out: &mut [HitLanes],
+                ) {
+                    closest_lanes_packets(k, s, triangles, rays, t_max, out)
+                }
+                // SAFETY: as above.
+                unsafe { compiled(self, s, triangles, rays, t_max, out) }
+            }
+
             fn occluded_batch(
                 self,
                 s: &Structure,
@@ -760,6 +882,54 @@ fn closest_packets<P: packet::PacketIsa>(
         // No kernels: the scalar loop.
         Structure::BruteForce | Structure::Bvh2(_) => {
             Scalar.closest_batch(s, triangles, rays, t_max, out)
+        }
+    }
+}
+
+/// [`closest_packets`] into lanes ([`Accel::closest_lanes`]): a culled flat list's packets
+/// keep their lanes; any other batch is answered by [`closest_packets`], sixteen rays at a time,
+/// and its hits put in lanes.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn closest_lanes_packets<P: packet::PacketIsa>(
+    k: P,
+    s: &Structure,
+    triangles: &[Triangle],
+    rays: &[Ray],
+    t_max: f32,
+    out: &mut [HitLanes],
+) {
+    if let Structure::Flat(f) = s
+        && f.cullable()
+        && let Some(cone) = Cone::around_rays_simd(k, rays)
+    {
+        let kept = cull::kept(&cone, k, &f.corners, f.count);
+        for (rays, out) in rays.chunks(16).zip(out) {
+            *out = HitLanes::new(t_max);
+            for (c, rays) in rays.chunks(P::WIDTH).enumerate() {
+                if c == 0 {
+                    packet::nearest_in_list(k, &f.packets16, kept, rays, t_max, out);
+                    continue;
+                }
+                // AVX2's second packet of eight: its lanes moved up to where its rays are.
+                let mut part = HitLanes::new(t_max);
+                packet::nearest_in_list(k, &f.packets16, kept, rays, t_max, &mut part);
+                let (from, to) = (0..rays.len(), c * P::WIDTH..c * P::WIDTH + rays.len());
+                out.t[to.clone()].copy_from_slice(&part.t[from.clone()]);
+                out.index[to.clone()].copy_from_slice(&part.index[from.clone()]);
+                out.u[to.clone()].copy_from_slice(&part.u[from.clone()]);
+                out.v[to].copy_from_slice(&part.v[from]);
+            }
+        }
+        return;
+    }
+    let mut hits = [None; 16];
+    for (rays, out) in rays.chunks(16).zip(out) {
+        let hits = &mut hits[..rays.len()];
+        closest_packets(k, s, triangles, rays, t_max, hits);
+        *out = HitLanes::new(t_max);
+        for (lane, &hit) in hits.iter().enumerate() {
+            out.set(lane, hit);
         }
     }
 }

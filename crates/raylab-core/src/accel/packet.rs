@@ -745,43 +745,11 @@ fn first_lanes(n: usize) -> u32 {
 }
 
 /// Each lane's best hit so far, as the single-ray traversal keeps it (the first
-/// [`PacketIsa::WIDTH`] entries).
-struct Best {
-    t: [f32; MAX_WIDTH],
-    index: [u32; MAX_WIDTH],
-    u: [f32; MAX_WIDTH],
-    v: [f32; MAX_WIDTH],
-}
+/// [`PacketIsa::WIDTH`] entries): the lanes a closest-hit query hands back
+/// ([`super::HitLanes`]).
+use super::HitLanes as Best;
 
 impl Best {
-    #[inline(always)]
-    fn new(t_max: f32) -> Self {
-        Self {
-            t: [t_max; MAX_WIDTH],
-            index: [u32::MAX; MAX_WIDTH],
-            u: [0.0; MAX_WIDTH],
-            v: [0.0; MAX_WIDTH],
-        }
-    }
-
-    #[inline(always)]
-    fn get(&self, lane: usize) -> Option<Hit> {
-        (self.index[lane] != u32::MAX).then(|| Hit {
-            index: self.index[lane],
-            t: self.t[lane],
-            u: self.u[lane],
-            v: self.v[lane],
-        })
-    }
-
-    #[inline(always)]
-    fn set(&mut self, lane: usize, h: Hit) {
-        self.t[lane] = h.t;
-        self.index[lane] = h.index;
-        self.u[lane] = h.u;
-        self.v[lane] = h.v;
-    }
-
     /// Each lane's box limit: its best `t` with the boxes' slack.
     #[inline(always)]
     fn box_limit<P: PacketIsa>(&self, k: P) -> P::F {
@@ -863,13 +831,28 @@ pub(super) fn closest_in_list<P: PacketIsa>(
     out: &mut [Option<Hit>],
 ) {
     debug_assert!(!rays.is_empty() && rays.len() <= P::WIDTH && rays.len() == out.len());
-    let lanes = Lanes::for_triangles(k, k.rays(rays));
-    let all = first_lanes(rays.len());
     let mut b = Best::new(t_max);
-    lanes.nearest_among(kept_triangles(packets, kept), all, &mut b, t_max);
+    nearest_in_list(k, packets, kept, rays, t_max, &mut b);
     for (lane, hit) in out.iter_mut().enumerate() {
         *hit = b.get(lane);
     }
+}
+
+/// [`closest_in_list`] into lanes: lane `i` of `out` (made [`HitLanes::new`] by the caller) is
+/// `rays[i]`'s hit.
+#[inline(always)]
+pub(super) fn nearest_in_list<P: PacketIsa>(
+    k: P,
+    packets: &[Packet16],
+    kept: u64,
+    rays: &[Ray],
+    t_max: f32,
+    out: &mut Best,
+) {
+    debug_assert!(!rays.is_empty() && rays.len() <= P::WIDTH);
+    let lanes = Lanes::for_triangles(k, k.rays(rays));
+    let all = first_lanes(rays.len());
+    lanes.nearest_among(kept_triangles(packets, kept), all, out, t_max);
 }
 
 /// Any-hit queries of up to [`PacketIsa::WIDTH`] rays, each with its own `t_max`, against the
@@ -972,7 +955,7 @@ impl Bvh8 {
         if self.max_stack > STACK_INLINE {
             for lane in lanes_of(active) {
                 if let Some(h) = self.closest(k8, &RayK::new(&rays[lane]), t_max, b.get(lane)) {
-                    b.set(lane, h);
+                    b.set(lane, Some(h));
                 }
             }
             return;
@@ -989,7 +972,7 @@ impl Bvh8 {
                     let found =
                         self.closest_on(k8, &r, t_max, b.get(lane), item, &mut alone, &mut ());
                     if let Some(h) = found {
-                        b.set(lane, h);
+                        b.set(lane, Some(h));
                     }
                 }
             } else if item & LEAF != 0 {

@@ -6,20 +6,22 @@
 //! group's [`DiffuseHits::active`] says which lanes hold one. The lab puts each ray's hit in the
 //! ray's own lane, leaving empty those of rays that left the scene or met a mirror or glass; so
 //! a group can be filled whole: where the tracer is plain (no texture, relief or smooth normal
-//! anywhere), [`DiffuseHits::fill_plain`] reads sixteen hits' triangles and materials and makes
-//! their surfaces in lanes, the values [`Tracer::surface_with`] gives one hit at a time, bit for
-//! bit (tested). One at a time, each surface went through the stack field by field, with a
-//! branch for the edge test (PERFORMANCE.md). The path tracer packs its diffuse hits one after
+//! anywhere), [`DiffuseHits::fill_plain`] takes sixteen hits in lanes ([`HitLanes`]), reads
+//! their rays and, in a scene of at most 32 triangles, their triangles' [`TriangleTable`]
+//! entries in registers, and makes their surfaces in lanes: the values [`Tracer::surface_with`]
+//! gives one hit at a time, bit for bit (tested). One at a time, each surface went through the
+//! stack field by field, with a branch for the edge test (PERFORMANCE.md). The path tracer
+//! packs its diffuse hits one after
 //! another instead: its rays that leave the box would leave their lanes empty, and empty lanes
 //! cost their group's light and shadow rays as full ones do (a pass took 11 % longer).
 
-use glam::Vec3;
-
 use super::{BATCH, HitTerms, Lighting, Surface, Surfaces, Tracer, light_point};
-use crate::accel::SegmentLanes;
-use crate::intersect::Intersection;
+use crate::accel::gather::{ray_lanes, table_lanes};
+use crate::accel::{HitLanes, Isa, SegmentLanes};
+use crate::geometry::Ray;
 use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
 use crate::light::near_an_edge;
+use crate::material::Material;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 
@@ -39,6 +41,63 @@ pub(crate) fn lanes_of(mut mask: u16) -> impl Iterator<Item = usize> {
             lane
         })
     })
+}
+
+/// A scene of at most 32 triangles, plain (flat, constant ρ), as tables by triangle index: each
+/// triangle's normal, ρ (its material's, the preset applied) and edge zones. Sixteen hits read
+/// them with one permute per table ([`table_lanes`]) where they would gather each lane from the
+/// triangles (PERFORMANCE.md).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct TriangleTable {
+    normal: [[f32; 32]; 3],
+    rho: [[f32; 32]; 3],
+    zones: [[f32; 32]; 3],
+}
+
+impl TriangleTable {
+    /// The tables of `scene` with `materials`, if it has at most 32 triangles.
+    pub fn new(scene: &Scene, materials: &[Material]) -> Option<Self> {
+        let n = scene.triangles.len();
+        if n > 32 {
+            return None;
+        }
+        let mut table = Self {
+            normal: [[0.0; 32]; 3],
+            rho: [[0.0; 32]; 3],
+            zones: [[0.0; 32]; 3],
+        };
+        for (i, triangle) in scene.triangles.iter().enumerate() {
+            let rho = materials[triangle.material as usize].reflectance;
+            let zones = scene.edge_zones(i);
+            for axis in 0..3 {
+                table.normal[axis][i] = triangle.normal[axis];
+                table.rho[axis][i] = rho[axis];
+                table.zones[axis][i] = zones[axis];
+            }
+        }
+        Some(table)
+    }
+
+    /// The normal, ρ and edge zones of triangles `index` in the lanes of `lanes` (0 in the
+    /// others).
+    #[inline(always)]
+    fn lanes(&self, isa: Isa, index: &[u32; LANES], lanes: u16) -> (Vec3x16, Vec3x16, Vec3x16) {
+        (
+            Self::read(&self.normal, isa, index, lanes),
+            Self::read(&self.rho, isa, index, lanes),
+            Self::read(&self.zones, isa, index, lanes),
+        )
+    }
+
+    /// A table of vectors' entries for `index`, in the lanes of `lanes`.
+    #[inline(always)]
+    fn read(rows: &[[f32; 32]; 3], isa: Isa, index: &[u32; LANES], lanes: u16) -> Vec3x16 {
+        Vec3x16::new(
+            F32x16(table_lanes(isa, &rows[0], index, lanes)),
+            F32x16(table_lanes(isa, &rows[1], index, lanes)),
+            F32x16(table_lanes(isa, &rows[2], index, lanes)),
+        )
+    }
 }
 
 /// The diffuse hits of a batch of rays, in lanes, and whose each is.
@@ -81,56 +140,76 @@ impl DiffuseHits {
         self.groups = self.groups.max(g + 1);
     }
 
-    /// Group `g` filled at once with the hits of the batch's rays `16g ..`, each in its ray's
-    /// lane and its ray's (`hit_of(lane)`: the hit, if the ray met something, and the ray's
-    /// direction), where `tracer` is plain: each diffuse hit's surface is
-    /// [`Tracer::surface_with`]'s, its `at_edge` asked when `at_edges` (as [`Tracer::surface`]
-    /// asks it). Returns the lanes whose ray met a surface that is not diffuse, for the caller
-    /// to take one at a time.
+    /// Group `g` filled at once with the hits of the batch's rays `16g ..` (`rays`, and their
+    /// closest hits `hits` in the same lanes), each in its ray's lane, where `tracer` is plain:
+    /// each diffuse hit's surface is [`Tracer::surface_with`]'s for
+    /// [`crate::scene::intersection`] of its ray and hit, its `at_edge` asked when `at_edges`
+    /// (as [`Tracer::surface`] asks it). The hits' triangles, materials, edge zones and rays
+    /// are read a field at a time for all sixteen lanes ([`field_lanes`]). Returns the lanes
+    /// whose ray met a surface that is not diffuse, for the caller to take one at a time.
     #[inline(always)]
     pub fn fill_plain(
         &mut self,
         g: usize,
         tracer: &Tracer,
         at_edges: bool,
-        hit_of: impl Fn(usize) -> Option<(Intersection, Vec3)>,
+        rays: &[Ray],
+        hits: &HitLanes,
     ) -> u16 {
-        debug_assert!(tracer.plain && g < GROUPS);
+        debug_assert!(tracer.plain && g < GROUPS && !rays.is_empty() && rays.len() <= LANES);
         let scene = tracer.scene;
-        let all_diffuse = tracer.all_diffuse;
-        let (mut diffuse, mut other) = (0u16, 0u16);
-        let surfaces = &mut self.surfaces[g];
-        let (mut u, mut v, mut zones) = (F32x16::ZERO, F32x16::ZERO, [F32x16::ZERO; 3]);
-        let mut incoming = Vec3x16::ZERO;
-        // Lane by lane, what each hit reads: its triangle's normal and zones, its material's ρ.
-        for lane in 0..LANES {
-            let Some((hit, direction)) = hit_of(lane) else {
-                continue;
-            };
-            let triangle = &scene.triangles[hit.triangle_index];
-            let material = &tracer.materials[triangle.material as usize];
-            // Asked only where some material is not diffuse: the answer would wait on two
-            // loads one after the other, and the lab's box has no other.
-            if !all_diffuse && !material.is_diffuse() {
-                other |= 1 << lane;
-                continue;
+        let isa = scene.accel().isa();
+        let met = hits.hits() & (u32::MAX >> (32 - rays.len())) as u16;
+        // Asked only where some material is not diffuse: the answer waits on two loads one
+        // after the other, and the lab's box has no other.
+        let mut other = 0u16;
+        if !tracer.all_diffuse {
+            for lane in lanes_of(met) {
+                if !tracer.material_of(hits.index[lane] as usize).is_diffuse() {
+                    other |= 1 << lane;
+                }
             }
-            diffuse |= 1 << lane;
-            surfaces.position.set_lane(lane, hit.position);
-            surfaces.geometric.set_lane(lane, triangle.normal);
-            surfaces.rho.set_lane(lane, material.reflectance);
-            incoming.set_lane(lane, direction);
-            (u.0[lane], v.0[lane]) = (hit.u, hit.v);
-            let z = scene.edge_zones(hit.triangle_index);
-            (zones[0].0[lane], zones[1].0[lane], zones[2].0[lane]) = (z[0], z[1], z[2]);
-            self.owner[g * LANES + lane] = (g * LANES + lane) as u8;
         }
-        // Then sixteen at a time: which lie at an edge ([`Scene::approach_at_edge`]); the
-        // shading normal is the triangle's own.
+        let diffuse = met & !other;
+        let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
+        let index = &hits.index;
+        let (geometric, rho, zones) = match &tracer.triangle_table {
+            Some(table) => table.lanes(isa, index, diffuse),
+            None => {
+                // Lane by lane, what each hit reads: its triangle's normal and zones, its
+                // material's ρ.
+                let (mut geometric, mut rho, mut zones) =
+                    (Vec3x16::ZERO, Vec3x16::ZERO, Vec3x16::ZERO);
+                for lane in lanes_of(diffuse) {
+                    let triangle = &triangles[index[lane] as usize];
+                    geometric.set_lane(lane, triangle.normal);
+                    rho.set_lane(lane, materials[triangle.material as usize].reflectance);
+                    let z = scene.edge_zones(index[lane] as usize);
+                    zones.set_lane(lane, glam::Vec3::from(z));
+                }
+                (geometric, rho, zones)
+            }
+        };
+        let zones = [zones.x, zones.y, zones.z];
+        let [ox, oy, oz, dx, dy, dz] = ray_lanes(isa, rays);
+        let origin = Vec3x16::new(F32x16(ox), F32x16(oy), F32x16(oz));
+        let direction = Vec3x16::new(F32x16(dx), F32x16(dy), F32x16(dz));
+        let active = M16::from_bits(diffuse);
+        let t = F32x16::select(active, F32x16(hits.t), F32x16::ZERO);
+        let (u, v) = (F32x16(hits.u), F32x16(hits.v));
+        // Then sixteen at a time: the position `ray.at(t)`, which lie at an edge
+        // ([`Scene::approach_at_edge`]); the shading normal is the triangle's own.
+        let surfaces = &mut self.surfaces[g];
+        surfaces.position = origin + Vec3x16::scale(t, direction);
+        surfaces.geometric = geometric;
+        surfaces.normal = geometric;
+        surfaces.rho = rho;
         surfaces.near_edge = M16::splat(at_edges) & near_an_edge(zones, u, v);
-        surfaces.incoming = Vec3x16::select(surfaces.near_edge, incoming, Vec3x16::ZERO);
-        surfaces.normal = surfaces.geometric;
+        surfaces.incoming = Vec3x16::select(surfaces.near_edge, direction, Vec3x16::ZERO);
         surfaces.relief_visibility = F32x16::splat(1.0);
+        for (lane, owner) in self.owner[g * LANES..][..LANES].iter_mut().enumerate() {
+            *owner = (g * LANES + lane) as u8;
+        }
         self.active[g] = diffuse;
         if diffuse != 0 {
             self.groups = self.groups.max(g + 1);
@@ -223,6 +302,8 @@ impl DiffuseHits {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
     use crate::material::MaterialPreset;
     use crate::sampling::Rng;
@@ -260,38 +341,77 @@ mod tests {
     /// Filling a group at once gives each lane the surface [`Tracer::surface_with`] gives its
     /// hit, bit for bit, with and without `at_edge`, in the lab's box (every material diffuse)
     /// and with the mirror and glass blocks, whose lanes are left to the caller, as are those
-    /// that missed.
+    /// that missed; read from the box's [`TriangleTable`] and, as a larger scene reads them,
+    /// lane by lane from the triangles.
     #[test]
     fn a_plain_group_equals_its_hits_one_at_a_time() {
         for preset in [MaterialPreset::None, MaterialPreset::Both] {
-            let others = plain_groups_equal_their_hits(preset);
-            match preset {
-                MaterialPreset::None => assert_eq!(others, 0),
-                _ => assert!(others > 100, "{others}"),
+            for table in [true, false] {
+                let others = plain_groups_equal_their_hits(preset, table);
+                match preset {
+                    MaterialPreset::None => assert_eq!(others, 0),
+                    _ => assert!(others > 100, "{others}"),
+                }
             }
         }
     }
 
-    /// [`a_plain_group_equals_its_hits_one_at_a_time`] with `preset`: how many hits were on
-    /// mirror or glass.
-    fn plain_groups_equal_their_hits(preset: MaterialPreset) -> usize {
+    /// The triangle table of the box: each triangle's normal, its material's ρ and its zones.
+    #[test]
+    fn the_table_holds_each_triangles_normal_reflectance_and_zones() {
+        let scene = cornell_box();
+        let table = TriangleTable::new(&scene, &scene.materials).expect("30 triangles");
+        for (i, t) in scene.triangles.iter().enumerate() {
+            let rho = scene.materials[t.material as usize].reflectance;
+            let zones = scene.edge_zones(i);
+            for axis in 0..3 {
+                assert_eq!(table.normal[axis][i], t.normal[axis]);
+                assert_eq!(table.rho[axis][i], rho[axis]);
+                assert_eq!(table.zones[axis][i], zones[axis]);
+            }
+        }
+        let mut grown = scene.clone();
+        grown.triangles.extend_from_slice(&scene.triangles[..3]);
+        assert_eq!(
+            TriangleTable::new(&grown, &grown.materials),
+            None,
+            "33 triangles"
+        );
+    }
+
+    /// [`a_plain_group_equals_its_hits_one_at_a_time`] with `preset`, with or without the
+    /// triangle table: how many hits were on mirror or glass.
+    fn plain_groups_equal_their_hits(preset: MaterialPreset, table: bool) -> usize {
         let scene = cornell_box();
         let settings = RenderSettings {
             material_preset: preset,
             ..RenderSettings::default()
         };
-        let tracer = Tracer::new(&scene, &settings);
-        assert!(tracer.plain);
-        let rays = rays_in_the_box(4096);
+        let mut tracer = Tracer::new(&scene, &settings);
+        assert!(tracer.plain && tracer.triangle_table.is_some());
+        if !table {
+            tracer.triangle_table = None;
+        }
+        // 4,091 rays: the last group holds eleven.
+        let rays = rays_in_the_box(4091);
         let mut hits = vec![None; rays.len()];
         scene.closest_intersections(&rays, f32::INFINITY, &mut hits);
         let (mut edges, mut others) = (0, 0);
         for at_edges in [true, false] {
             for (rays, hits) in rays.chunks(LANES).zip(hits.chunks(LANES)) {
+                let mut lanes = HitLanes::new(f32::INFINITY);
+                for (lane, hit) in hits.iter().enumerate() {
+                    let hit = hit.map(|h| crate::accel::Hit {
+                        index: h.triangle_index as u32,
+                        t: h.distance,
+                        u: h.u,
+                        v: h.v,
+                    });
+                    lanes.set(lane, hit);
+                }
                 let mut group = DiffuseHits::new();
                 group.clear();
-                let hit_of = |lane: usize| hits[lane].map(|h| (h, rays[lane].direction));
-                let other = group.fill_plain(0, &tracer, at_edges, hit_of);
+                let other = group.fill_plain(0, &tracer, at_edges, rays, &lanes);
                 for (lane, (ray, hit)) in rays.iter().zip(hits).enumerate() {
                     let bit = 1 << lane;
                     let Some(hit) = hit else {

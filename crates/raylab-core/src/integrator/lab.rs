@@ -20,7 +20,7 @@ use glam::Vec3;
 
 use super::hits::lanes_of;
 use super::{BATCH, DiffuseHits, GROUPS, Recorder, Tracer, continue_ray, shaded_value};
-use crate::accel::Hit;
+use crate::accel::HitLanes;
 use crate::geometry::Ray;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
 use crate::sampling::Rng;
@@ -111,23 +111,19 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     debug_assert!(rays.len() <= BATCH);
     let scene = tracer.scene;
     let shading = &tracer.shading;
-    // The structure's hits, each made an `Intersection` only here, where it is used.
-    let mut hits: [Option<Hit>; BATCH] = [None; BATCH];
-    scene.closest_hits(rays, f32::INFINITY, &mut hits[..rays.len()]);
-    let mut diffuse = DiffuseHits::new();
+    // The structure's hits in lanes, each made an `Intersection` only where it is used.
     let groups = rays.len().div_ceil(LANES);
+    let mut hits = [HitLanes::new(f32::INFINITY); GROUPS];
+    scene.closest_hit_lanes(rays, f32::INFINITY, &mut hits[..groups]);
+    let mut diffuse = DiffuseHits::new();
     // Where the tracer is plain, the diffuse hits' surfaces are made sixteen at a time; the
     // other hits (all of them when recording, or where surfaces are textured or smooth) one
     // at a time, below.
     let mut one_at_a_time = [u16::MAX; GROUPS];
     if tracer.plain && !R::ENABLED {
         for (g, lanes) in one_at_a_time.iter_mut().enumerate().take(groups) {
-            let (rays, hits) = (&rays[g * LANES..], &hits[g * LANES..rays.len()]);
-            let hit_of = |lane: usize| {
-                let (ray, hit) = (rays.get(lane)?, (*hits.get(lane)?)?);
-                Some((intersection(ray, hit), ray.direction))
-            };
-            *lanes = diffuse.fill_plain(g, tracer, shading.shadows, hit_of);
+            let rays = &rays[g * LANES..rays.len().min((g + 1) * LANES)];
+            *lanes = diffuse.fill_plain(g, tracer, shading.shadows, rays, &hits[g]);
         }
     }
     let one_at_a_time = one_at_a_time
@@ -137,8 +133,10 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         .flat_map(|(g, &lanes)| lanes_of(lanes).map(move |lane| g * LANES + lane))
         .take_while(|&i| i < rays.len());
     for i in one_at_a_time {
-        let (hit, ray) = (&hits[i], &rays[i]);
-        let hit = hit.map(|hit| intersection(ray, hit));
+        let ray = &rays[i];
+        let hit = hits[i / LANES]
+            .get(i % LANES)
+            .map(|hit| intersection(ray, hit));
         if R::ENABLED {
             let (weight, depth) = match wave {
                 Wave::Camera => (Vec3::ONE, 0),

@@ -527,6 +527,8 @@ pub struct Tracer<'a> {
     plain: bool,
     /// Every material diffuse (no mirror, glass or rough metal).
     all_diffuse: bool,
+    /// A plain scene's triangles as tables, if it has at most 32 ([`hits::TriangleTable`]).
+    triangle_table: Option<hits::TriangleTable>,
     /// The pass's caustic photon map, when the path stage gathers caustics from photons
     /// ([`Tracer::for_pass`]).
     photons: Option<PhotonMap>,
@@ -553,6 +555,10 @@ impl<'a> Tracer<'a> {
             .all(|m| m.texture.is_none() && m.relief.is_none())
             && (scene.vertex_normals.is_empty() || !settings.shading.smooth);
         let all_diffuse = materials.iter().all(Material::is_diffuse);
+        let triangle_table = match plain {
+            true => hits::TriangleTable::new(scene, &materials),
+            false => None,
+        };
         Self {
             scene,
             materials,
@@ -563,6 +569,7 @@ impl<'a> Tracer<'a> {
             random,
             plain,
             all_diffuse,
+            triangle_table,
             photons: None,
         }
     }

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::{Accel, AccelKind, Hit, Isa, SegmentLanes};
+use crate::accel::{Accel, AccelKind, Hit, HitLanes, Isa, SegmentLanes};
 use crate::geometry::{Ray, Triangle};
 use crate::intersect::{self, Intersection};
 use crate::light;
@@ -243,6 +243,32 @@ impl Scene {
             return;
         }
         self.accel.closest_batch(&self.triangles, rays, t_max, out);
+    }
+
+    /// [`Scene::closest_hits`] into lanes ([`Accel::closest_lanes`]): lane `i` of `out[g]` is
+    /// `rays[16g + i]`'s hit.
+    pub fn closest_hit_lanes(&self, rays: &[Ray], t_max: f32, out: &mut [HitLanes]) {
+        debug_assert_eq!(rays.len().div_ceil(16), out.len());
+        if !self.accel.built_for(self.triangles.len()) {
+            for (rays, out) in rays.chunks(16).zip(out) {
+                *out = HitLanes::new(t_max);
+                for (lane, ray) in rays.iter().enumerate() {
+                    let hit =
+                        intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
+                    out.set(
+                        lane,
+                        hit.map(|i| Hit {
+                            index: i.triangle_index as u32,
+                            t: i.distance,
+                            u: i.u,
+                            v: i.v,
+                        }),
+                    );
+                }
+            }
+            return;
+        }
+        self.accel.closest_lanes(&self.triangles, rays, t_max, out);
     }
 
     /// [`Scene::occluded_many`] for shadow rays given as lanes, sixteen a group (as the lab's
