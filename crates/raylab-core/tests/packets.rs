@@ -274,14 +274,18 @@ fn shadow_rays_given_as_lanes_equal_brute_force() {
                         cast,
                     })
                     .collect();
-                let mut blocked = vec![0u16; groups.len()];
-                scene.occluded_lanes(&groups, &mut blocked);
-                for (k, (ray, t_max)) in batch.iter().enumerate() {
-                    let (g, i) = (k / 16, k % 16);
-                    let want = cast[g] & (1 << i) != 0
-                        && occluded_brute_force(ray, &scene.triangles, *t_max);
-                    assert_eq!(blocked[g] & (1 << i) != 0, want, "{} {ray:?}", isa.name());
-                    checked += 1;
+                // Told the rays are neighbours' (a group may have a cone where the batch has
+                // none) or not: the same answers.
+                for neighbours in [true, false] {
+                    let mut blocked = vec![0u16; groups.len()];
+                    scene.occluded_lanes(&groups, neighbours, &mut blocked);
+                    for (k, (ray, t_max)) in batch.iter().enumerate() {
+                        let (g, i) = (k / 16, k % 16);
+                        let want = cast[g] & (1 << i) != 0
+                            && occluded_brute_force(ray, &scene.triangles, *t_max);
+                        assert_eq!(blocked[g] & (1 << i) != 0, want, "{} {ray:?}", isa.name());
+                        checked += 1;
+                    }
                 }
             }
             assert!(checked > 5_000, "{checked}");

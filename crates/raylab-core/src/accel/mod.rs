@@ -586,17 +586,21 @@ impl Accel {
     /// tests each group's lanes straight from the lanes, against the triangles the whole set's
     /// cone may reach ([`cull`]) or, without a cone, against all of them; anything else copies
     /// the rays into arrays of up to [`BATCH_OF_LANES`] groups and asks
-    /// [`Accel::occluded_batch`].
+    /// [`Accel::occluded_batch`]. `neighbours`: whether the rays of each group start at
+    /// neighbouring points (the hits of neighbouring pixels' rays), so that a group may have a
+    /// cone where the whole set has none.
     #[inline(never)]
     pub fn occluded_lanes(
         &self,
         triangles: &[Triangle],
         groups: &[SegmentLanes],
+        neighbours: bool,
         blocked: &mut [u16],
     ) {
         debug_assert_eq!(groups.len(), blocked.len());
         if let Structure::Flat(f) = &self.structure
-            && with_kernels!(self.isa, |k| k.occluded_lanes(f, groups, blocked))
+            && with_kernels!(self.isa, |k| k
+                .occluded_lanes(f, groups, neighbours, blocked))
         {
             return;
         }
@@ -695,7 +699,13 @@ trait Batches: KernelSet {
 
     /// [`Accel::occluded_lanes`] on the flat list; false (nothing done) where it does not
     /// take lanes (a list too long to cull, or no SIMD).
-    fn occluded_lanes(self, _f: &Flat, _groups: &[SegmentLanes], _blocked: &mut [u16]) -> bool {
+    fn occluded_lanes(
+        self,
+        _f: &Flat,
+        _groups: &[SegmentLanes],
+        _neighbours: bool,
+        _blocked: &mut [u16],
+    ) -> bool {
         false
     }
 }
@@ -824,6 +834,7 @@ macro_rules! simd_batches {
                 self,
                 f: &Flat,
                 groups: &[SegmentLanes],
+                neighbours: bool,
                 blocked: &mut [u16],
             ) -> bool {
                 #[target_feature(enable = $features)]
@@ -831,12 +842,13 @@ macro_rules! simd_batches {
                     k: $isa,
                     f: &Flat,
                     groups: &[SegmentLanes],
+                    neighbours: bool,
                     blocked: &mut [u16],
                 ) -> bool {
-                    occluded_lanes_in(k, f, groups, blocked)
+                    occluded_lanes_in(k, f, groups, neighbours, blocked)
                 }
                 // SAFETY: as above.
-                unsafe { compiled(self, f, groups, blocked) }
+                unsafe { compiled(self, f, groups, neighbours, blocked) }
             }
         }
     };
@@ -1027,18 +1039,34 @@ fn occluded_lanes_in<P: packet::PacketIsa>(
     k: P,
     f: &Flat,
     groups: &[SegmentLanes],
+    neighbours: bool,
     blocked: &mut [u16],
 ) -> bool {
     if !f.cullable() {
         return false;
     }
-    // Without a cone (rays from all over the scene, as the path tracer's), every triangle,
-    // still tested straight from the lanes.
-    let kept = match Cone::around_segment_lanes(k, groups) {
-        Some(cone) => cull::kept(&cone, k, &f.corners, f.count),
-        None => u64::MAX.checked_shr(64 - f.count as u32).unwrap_or(0),
-    };
+    if let Some(cone) = Cone::around_segment_lanes(k, groups) {
+        let kept = cull::kept(&cone, k, &f.corners, f.count);
+        for (g, blocked) in groups.iter().zip(blocked) {
+            *blocked = packet::occluded_lanes_in_list(k, &f.packets16, kept, g);
+        }
+        return true;
+    }
+    // Without a cone for the whole set: a fan of neighbours' rays too wide for one (the lab's
+    // rows that pass under the light) may still have one a group of sixteen, tried until a
+    // group has none; rays from all over the scene (the path tracer's bounces) are not tried.
+    // Either way, the groups without one are tested against every triangle, still straight
+    // from the lanes.
+    let all = u64::MAX.checked_shr(64 - f.count as u32).unwrap_or(0);
+    let mut coned = neighbours && groups.len() > 1;
     for (g, blocked) in groups.iter().zip(blocked) {
+        let mut kept = all;
+        if coned {
+            match Cone::around_segment_lanes(k, std::slice::from_ref(g)) {
+                Some(cone) => kept = cull::kept(&cone, k, &f.corners, f.count),
+                None => coned = false,
+            }
+        }
         *blocked = packet::occluded_lanes_in_list(k, &f.packets16, kept, g);
     }
     true

@@ -272,15 +272,22 @@ impl DiffuseHits {
     }
 
     /// Which shadow rays of `lit` (the hits' [`DiffuseHits::light`]) are blocked: bit `lane`
-    /// of group `g`'s mask.
+    /// of group `g`'s mask. `neighbours`: whether the hits are those of neighbouring pixels'
+    /// rays ([`crate::accel::Accel::occluded_lanes`]).
     #[inline(always)]
-    pub fn blocked(&self, scene: &Scene, lit: &[Lighting<Vec3x16>; GROUPS]) -> [u16; GROUPS] {
+    pub fn blocked(
+        &self,
+        scene: &Scene,
+        lit: &[Lighting<Vec3x16>; GROUPS],
+        neighbours: bool,
+    ) -> [u16; GROUPS] {
         // Every group's lanes, those without a hit casting nothing (a fixed array: collecting
         // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass).
         let shadows: [SegmentLanes; GROUPS] =
             std::array::from_fn(|g| lit[g].shadow.segment_lanes(self.active[g]));
         let mut blocked = [0u16; GROUPS];
-        scene.occluded_lanes(&shadows[..self.groups], &mut blocked[..self.groups]);
+        let (shadows, answers) = (&shadows[..self.groups], &mut blocked[..self.groups]);
+        scene.occluded_lanes(shadows, neighbours, answers);
         blocked
     }
 

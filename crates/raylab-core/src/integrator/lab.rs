@@ -202,7 +202,8 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         Wave::Branches(b) => b[i as usize].pixel as usize,
     };
     let lit = diffuse.light::<SPHERE_LIGHT>(tracer, rngs, pixel_of);
-    let blocked = diffuse.blocked(scene, &lit);
+    // The hits of a wave are neighbouring pixels' (or their mirror images').
+    let blocked = diffuse.blocked(scene, &lit, true);
     let indirect = shading.indirect_term();
     let mut values = [Vec3x16::ZERO; BATCH / LANES];
     for (g, (_, surfaces)) in diffuse.groups().enumerate() {

@@ -324,6 +324,8 @@ fn batch<R: Recorder>(
     // β of each diffuse hit's path as it arrives.
     let mut arriving = [Vec3x16::ZERO; GROUPS];
 
+    // Whether the paths' hits are the camera rays' (neighbouring pixels'): the first step.
+    let mut first_step = true;
     while n_alive > 0 {
         scene.closest_intersections(&rays_alive[..n_alive], f32::INFINITY, &mut hits[..n_alive]);
         if still_looking > 0 {
@@ -420,7 +422,8 @@ fn batch<R: Recorder>(
         }
         n_alive = still;
         // The shadow rays, and the direct term times β into each path's pixel.
-        let blocked = diffuse.blocked(scene, &lit);
+        let blocked = diffuse.blocked(scene, &lit, first_step);
+        first_step = false;
         for (g, (_, surfaces)) in diffuse.groups().enumerate() {
             let value = shaded_value(
                 Stage::Path,

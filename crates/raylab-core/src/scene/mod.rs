@@ -274,8 +274,8 @@ impl Scene {
     /// [`Scene::occluded_many`] for shadow rays given as lanes, sixteen a group (as the lab's
     /// shading makes them): bit `i` of `blocked[g]` set when lane `i` of `groups[g]` is cast
     /// and blocked. The same answers, without copying the rays into an array first where the
-    /// structure can take lanes ([`Accel::occluded_lanes`]).
-    pub fn occluded_lanes(&self, groups: &[SegmentLanes], blocked: &mut [u16]) {
+    /// structure can take lanes ([`Accel::occluded_lanes`], which says what `neighbours` is).
+    pub fn occluded_lanes(&self, groups: &[SegmentLanes], neighbours: bool, blocked: &mut [u16]) {
         if !self.accel.built_for(self.triangles.len()) {
             for (g, blocked) in groups.iter().zip(blocked) {
                 *blocked = 0;
@@ -288,7 +288,8 @@ impl Scene {
             }
             return;
         }
-        self.accel.occluded_lanes(&self.triangles, groups, blocked);
+        self.accel
+            .occluded_lanes(&self.triangles, groups, neighbours, blocked);
     }
 
     /// [`Scene::occluded`] for many shadow rays at once, each with its own `t_max`.
