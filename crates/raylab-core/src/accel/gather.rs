@@ -8,6 +8,8 @@
 //! stall). Gathers avoid the stall but read each lane from memory one at a time: slower still
 //! (PERFORMANCE.md).
 
+use glam::Vec3;
+
 use super::Isa;
 #[cfg(target_arch = "x86_64")]
 use super::packet::PacketIsa;
@@ -88,10 +90,71 @@ unsafe fn rays_avx512(k: Avx512, rays: &[Ray]) -> [[f32; 16]; 6] {
     unsafe { std::mem::transmute::<[Avx512F32; 6], [[f32; 16]; 6]>(k.rays(rays)) }
 }
 
+/// Sixteen 3-vectors given as lanes (`x`, `y`, `z`) stored one after another into `out`, as
+/// an array of `Vec3`: with AVX-512, six register permutes and three stores, where lane by lane
+/// it is forty-eight scalar moves.
+#[inline(always)]
+pub fn store_vec3s(isa: Isa, x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
+    #[cfg(target_arch = "x86_64")]
+    if let Isa::Avx512(_) = isa {
+        // SAFETY: `Isa::Avx512` exists only on a CPU with AVX-512 F.
+        return unsafe { store_vec3s_avx512(x, y, z, out) };
+    }
+    let _ = isa;
+    for (lane, v) in out.iter_mut().enumerate() {
+        *v = Vec3::new(x[lane], y[lane], z[lane]);
+    }
+}
+
+/// [`store_vec3s`] with AVX-512. Float `f` of the output (`16k + p` of its vector `k`) is
+/// component `f % 3` of vector `f / 3`: the first permute of each output vector picks the `x`
+/// and `y` components from those two inputs, the second keeps them and picks `z`.
+///
+/// # Safety
+///
+/// The CPU runs AVX-512 F.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx512f")]
+unsafe fn store_vec3s_avx512(x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
+    use std::arch::x86_64::*;
+    /// For output vector `k`: the indices into (x, y), then into (that, z).
+    const fn picks(k: usize) -> ([i32; 16], [i32; 16]) {
+        let (mut xy, mut then_z) = ([0; 16], [0; 16]);
+        let mut p = 0;
+        while p < 16 {
+            let f = 16 * k + p;
+            let (vector, component) = ((f / 3) as i32, f % 3);
+            xy[p] = if component == 1 { 16 + vector } else { vector };
+            then_z[p] = if component == 2 {
+                16 + vector
+            } else {
+                p as i32
+            };
+            p += 1;
+        }
+        (xy, then_z)
+    }
+    const PICKS: [([i32; 16], [i32; 16]); 3] = [picks(0), picks(1), picks(2)];
+    // SAFETY: the loads read the three inputs' 64 bytes each and the index tables; the stores
+    // write `out`'s 192 bytes (sixteen `Vec3`s of three `f32`, `repr(C)`), unaligned.
+    unsafe {
+        let (x, y, z) = (
+            _mm512_loadu_ps(x.as_ptr()),
+            _mm512_loadu_ps(y.as_ptr()),
+            _mm512_loadu_ps(z.as_ptr()),
+        );
+        let base = out.as_mut_ptr().cast::<f32>();
+        for (k, (xy, then_z)) in PICKS.iter().enumerate() {
+            let xy = _mm512_permutex2var_ps(x, _mm512_loadu_si512(xy.as_ptr().cast()), y);
+            let v = _mm512_permutex2var_ps(xy, _mm512_loadu_si512(then_z.as_ptr().cast()), z);
+            _mm512_storeu_ps(base.add(16 * k), v);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use glam::Vec3;
-
     use super::*;
 
     /// Every kernel set puts the same rays in lanes, for every count.
@@ -116,6 +179,21 @@ mod tests {
                         assert_eq!(lanes[c][lane].to_bits(), expected[c].to_bits(), "{isa:?}");
                     }
                 }
+            }
+        }
+    }
+
+    /// Every kernel set stores the same sixteen vectors.
+    #[test]
+    fn stored_vectors_are_the_lanes() {
+        let x: [f32; 16] = std::array::from_fn(|i| i as f32);
+        let y: [f32; 16] = std::array::from_fn(|i| 100.0 + i as f32);
+        let z: [f32; 16] = std::array::from_fn(|i| -0.5 * i as f32);
+        for isa in Isa::available() {
+            let mut out = [Vec3::splat(f32::NAN); 16];
+            store_vec3s(isa, &x, &y, &z, &mut out);
+            for (lane, v) in out.iter().enumerate() {
+                assert_eq!(*v, Vec3::new(x[lane], y[lane], z[lane]), "{isa:?} {lane}");
             }
         }
     }

@@ -21,6 +21,7 @@ use glam::Vec3;
 use super::hits::lanes_of;
 use super::{BATCH, DiffuseHits, GROUPS, Recorder, Tracer, continue_ray, shaded_value};
 use crate::accel::HitLanes;
+use crate::accel::gather::store_vec3s;
 use crate::geometry::Ray;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
 use crate::sampling::Rng;
@@ -215,6 +216,27 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             blocked,
             Vec3x16::splat(indirect),
         );
+    }
+    if let Wave::Camera = wave
+        && !R::ENABLED
+    {
+        // Camera rays: each group's values straight into its sixteen pixels (0 where no
+        // diffuse hit is: as `out` holds before the first wave), the last group's lane by lane
+        // if the batch ends within it.
+        let isa = scene.accel().isa();
+        let mut pixels = out.chunks_exact_mut(LANES);
+        for (g, pixels) in pixels.by_ref().enumerate() {
+            let v = Vec3x16::select(M16::from_bits(diffuse.active[g]), values[g], Vec3x16::ZERO);
+            let pixels: &mut [Vec3; LANES] = pixels.try_into().expect("sixteen pixels");
+            store_vec3s(isa, &v.x.0, &v.y.0, &v.z.0, pixels);
+        }
+        let g = rays.len() / LANES;
+        for (lane, pixel) in pixels.into_remainder().iter_mut().enumerate() {
+            if diffuse.active[g] & (1 << lane) != 0 {
+                *pixel = values[g].lane(lane);
+            }
+        }
+        return;
     }
     let hits = (0..groups).flat_map(|g| diffuse.owners(g).map(move |(lane, i)| (g, lane, i)));
     for (g, lane, i) in hits {
