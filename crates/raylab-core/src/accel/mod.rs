@@ -110,6 +110,17 @@ impl HitLanes {
         }
     }
 
+    /// Lane `i` holds `hits[i]` (at most sixteen), the lanes past them none.
+    #[inline(always)]
+    pub fn of(hits: &[Option<Hit>], t_max: f32) -> Self {
+        debug_assert!(hits.len() <= 16);
+        let mut lanes = Self::new(t_max);
+        for (lane, &hit) in hits.iter().enumerate() {
+            lanes.set(lane, hit);
+        }
+        lanes
+    }
+
     /// Lane `lane`'s hit, if its ray met something.
     #[inline(always)]
     pub fn get(&self, lane: usize) -> Option<Hit> {
@@ -939,10 +950,7 @@ fn closest_lanes_packets<P: packet::PacketIsa>(
     for (rays, out) in rays.chunks(16).zip(out) {
         let hits = &mut hits[..rays.len()];
         closest_packets(k, s, triangles, rays, t_max, hits);
-        *out = HitLanes::new(t_max);
-        for (lane, &hit) in hits.iter().enumerate() {
-            out.set(lane, hit);
-        }
+        *out = HitLanes::of(hits, t_max);
     }
 }
 

@@ -144,9 +144,10 @@ impl DiffuseHits {
     /// closest hits `hits` in the same lanes), each in its ray's lane, where `tracer` is plain:
     /// each diffuse hit's surface is [`Tracer::surface_with`]'s for
     /// [`crate::scene::intersection`] of its ray and hit, its `at_edge` asked when `at_edges`
-    /// (as [`Tracer::surface`] asks it). The hits' triangles, materials, edge zones and rays
-    /// are read a field at a time for all sixteen lanes ([`field_lanes`]). Returns the lanes
-    /// whose ray met a surface that is not diffuse, for the caller to take one at a time.
+    /// (as [`Tracer::surface`] asks it). The hits' normals, ρ and edge zones come from the
+    /// tracer's [`TriangleTable`], sixteen lanes a permute (lane by lane from the triangles in
+    /// a larger scene), their rays from [`ray_lanes`]. Returns the lanes whose ray met a
+    /// surface that is not diffuse, for the caller to take one at a time.
     #[inline(always)]
     pub fn fill_plain(
         &mut self,

@@ -250,21 +250,12 @@ impl Scene {
     pub fn closest_hit_lanes(&self, rays: &[Ray], t_max: f32, out: &mut [HitLanes]) {
         debug_assert_eq!(rays.len().div_ceil(16), out.len());
         if !self.accel.built_for(self.triangles.len()) {
+            // Triangles added since the structure was built: `closest_hits`' loop over them.
+            let mut hits = [None; 16];
             for (rays, out) in rays.chunks(16).zip(out) {
-                *out = HitLanes::new(t_max);
-                for (lane, ray) in rays.iter().enumerate() {
-                    let hit =
-                        intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);
-                    out.set(
-                        lane,
-                        hit.map(|i| Hit {
-                            index: i.triangle_index as u32,
-                            t: i.distance,
-                            u: i.u,
-                            v: i.v,
-                        }),
-                    );
-                }
+                let hits = &mut hits[..rays.len()];
+                self.closest_hits(rays, t_max, hits);
+                *out = HitLanes::of(hits, t_max);
             }
             return;
         }
@@ -560,6 +551,37 @@ mod tests {
     /// same intersections, bit for bit, as `closest_intersection` one ray at a time, through
     /// the structure and through the brute-force loop a scene falls back on when triangles were
     /// added after it was built.
+    /// The hits in lanes are the hits one ray at a time, with the structure and, once
+    /// triangles are added after it was built, without it; a partial last group's other lanes
+    /// hold none.
+    #[test]
+    fn closest_hit_lanes_are_the_closest_hits() {
+        let scene = cornell::cornell_box();
+        let settings = crate::bench::lab_settings(37, 29);
+        let rays = crate::bench::primary_rays(&settings.camera);
+        let mut grown = scene.clone();
+        grown.triangles.push(Triangle::new(
+            Vec3::new(-0.2, -0.2, 0.0),
+            Vec3::new(0.2, -0.2, 0.0),
+            Vec3::new(0.0, 0.2, 0.0),
+            0,
+        ));
+        for scene in [&scene, &grown] {
+            let mut hits = vec![None; rays.len()];
+            scene.closest_hits(&rays, f32::INFINITY, &mut hits);
+            for batch in 0..rays.len().div_ceil(64) {
+                let rays = &rays[batch * 64..rays.len().min(batch * 64 + 64)];
+                let hits = &hits[batch * 64..batch * 64 + rays.len()];
+                let mut lanes = [HitLanes::new(0.0); 4];
+                let lanes = &mut lanes[..rays.len().div_ceil(16)];
+                scene.closest_hit_lanes(rays, f32::INFINITY, lanes);
+                for (k, lane) in (0..16 * lanes.len()).map(|k| (k, &lanes[k / 16])) {
+                    assert_eq!(lane.get(k % 16), hits.get(k).copied().flatten(), "{k}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn closest_hits_make_the_intersections_closest_intersection_finds() {
         let scene = cornell::cornell_box();
