@@ -44,7 +44,7 @@
 pub mod bvh;
 pub mod calibrate;
 pub mod cull;
-pub mod gather;
+pub mod lane_io;
 #[cfg(target_arch = "x86_64")]
 pub mod packet;
 pub mod simd;
@@ -687,11 +687,11 @@ trait Batches: KernelSet {
         t_max: f32,
         out: &mut [HitLanes],
     ) {
+        let mut hits = [None; 16];
         for (rays, out) in rays.chunks(16).zip(out) {
-            *out = HitLanes::new(t_max);
-            for (lane, ray) in rays.iter().enumerate() {
-                out.set(lane, s.closest_with(self, triangles, ray, t_max));
-            }
+            let hits = &mut hits[..rays.len()];
+            self.closest_batch(s, triangles, rays, t_max, hits);
+            *out = HitLanes::of(hits, t_max);
         }
     }
 

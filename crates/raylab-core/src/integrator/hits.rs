@@ -16,7 +16,7 @@
 //! cost their group's light and shadow rays as full ones do (a pass took 11 % longer).
 
 use super::{BATCH, HitTerms, Lighting, Surface, Surfaces, Tracer, light_point};
-use crate::accel::gather::{ray_lanes, table_lanes};
+use crate::accel::lane_io::{ray_lanes, table_lanes};
 use crate::accel::{HitLanes, Isa, SegmentLanes};
 use crate::geometry::Ray;
 use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};

@@ -21,7 +21,7 @@ use glam::Vec3;
 use super::hits::lanes_of;
 use super::{BATCH, DiffuseHits, GROUPS, Recorder, Tracer, continue_ray, shaded_value};
 use crate::accel::HitLanes;
-use crate::accel::gather::store_vec3s;
+use crate::accel::lane_io::store_vec3s;
 use crate::geometry::Ray;
 use crate::lanes::{LANES, M16, Vec3x16, Vector};
 use crate::sampling::Rng;

@@ -223,10 +223,9 @@ impl Scene {
     }
 
     /// [`Scene::closest_intersections`] as the structure answers, a [`Hit`] per ray (`t`, `u`,
-    /// `v` and the triangle): what the lab's wave sorts straight into its lanes, making each
-    /// [`Intersection`] only where it is used ([`intersection`]). The copy into an array of
-    /// `Intersection`s was 28 of the 386 instructions a pixel of the Cornell box's lab pass
-    /// (PERFORMANCE.md, "What the slow state is").
+    /// `v` and the triangle), each made an [`Intersection`] only where it is used
+    /// ([`intersection`]). The lab's wave takes them in lanes instead
+    /// ([`Scene::closest_hit_lanes`]).
     #[inline]
     pub fn closest_hits(&self, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
         debug_assert_eq!(rays.len(), out.len());
@@ -547,10 +546,19 @@ pub fn in_shadow(
 mod tests {
     use super::*;
 
-    /// The lab's wave takes the structure's hits and makes each `Intersection` itself: the
-    /// same intersections, bit for bit, as `closest_intersection` one ray at a time, through
-    /// the structure and through the brute-force loop a scene falls back on when triangles were
-    /// added after it was built.
+    /// `scene` with a triangle added after its structure was built: its queries fall back on
+    /// the brute-force loop.
+    fn grown(scene: &Scene) -> Scene {
+        let mut grown = scene.clone();
+        grown.triangles.push(Triangle::new(
+            Vec3::new(-0.2, -0.2, 0.0),
+            Vec3::new(0.2, -0.2, 0.0),
+            Vec3::new(0.0, 0.2, 0.0),
+            0,
+        ));
+        grown
+    }
+
     /// The hits in lanes are the hits one ray at a time, with the structure and, once
     /// triangles are added after it was built, without it; a partial last group's other lanes
     /// hold none.
@@ -559,13 +567,7 @@ mod tests {
         let scene = cornell::cornell_box();
         let settings = crate::bench::lab_settings(37, 29);
         let rays = crate::bench::primary_rays(&settings.camera);
-        let mut grown = scene.clone();
-        grown.triangles.push(Triangle::new(
-            Vec3::new(-0.2, -0.2, 0.0),
-            Vec3::new(0.2, -0.2, 0.0),
-            Vec3::new(0.0, 0.2, 0.0),
-            0,
-        ));
+        let grown = grown(&scene);
         for scene in [&scene, &grown] {
             let mut hits = vec![None; rays.len()];
             scene.closest_hits(&rays, f32::INFINITY, &mut hits);
@@ -582,18 +584,16 @@ mod tests {
         }
     }
 
+    /// The lab's wave takes the structure's hits and makes each `Intersection` itself: the
+    /// same intersections, bit for bit, as `closest_intersection` one ray at a time, through
+    /// the structure and through the brute-force loop a scene falls back on when triangles were
+    /// added after it was built.
     #[test]
     fn closest_hits_make_the_intersections_closest_intersection_finds() {
         let scene = cornell::cornell_box();
         let settings = crate::bench::lab_settings(64, 64);
         let rays = crate::bench::primary_rays(&settings.camera);
-        let mut grown = scene.clone();
-        grown.triangles.push(Triangle::new(
-            Vec3::new(-0.2, -0.2, 0.0),
-            Vec3::new(0.2, -0.2, 0.0),
-            Vec3::new(0.0, 0.2, 0.0),
-            0,
-        ));
+        let grown = grown(&scene);
         assert!(!grown.accel.built_for(grown.triangles.len()));
         for scene in [&scene, &grown] {
             let mut hits = vec![None; rays.len()];

@@ -1,7 +1,8 @@
-//! Sixteen hits' data in lanes at once, for an integrator that holds sixteen hits side by side
-//! ([`super::HitLanes`]): their rays ([`ray_lanes`]) and, in a scene of at most 32 triangles,
-//! each hit's entry of a per-triangle table ([`table_lanes`]). With AVX-512 each is a few
-//! register operations (loads and permutes); elsewhere lane by lane. Both give the same values.
+//! Sixteen values into SIMD lanes, or out of them, at once, for an integrator that holds
+//! sixteen hits side by side ([`super::HitLanes`]): their rays ([`ray_lanes`]), each hit's
+//! entry of a per-triangle table in a scene of at most 32 triangles ([`table_lanes`]), and
+//! sixteen values stored back as `Vec3`s ([`store_vec3s`]). With AVX-512 each is a few register
+//! operations (loads, permutes, stores); elsewhere lane by lane. Both give the same values.
 //!
 //! Why: filled lane by lane, sixteen hits' fields went through the stack one `f32` at a time,
 //! and the vector loads that then read them back waited for those stores (a store-forwarding
