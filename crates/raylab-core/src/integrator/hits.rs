@@ -17,7 +17,7 @@
 
 use super::{BATCH, HitTerms, Lighting, Surface, Surfaces, Tracer, light_point};
 use crate::accel::lane_io::{ray_lanes, table_lanes};
-use crate::accel::{HitLanes, Isa, SegmentLanes};
+use crate::accel::{HitLanes, Isa};
 use crate::geometry::Ray;
 use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
 use crate::light::near_an_edge;
@@ -283,9 +283,12 @@ impl DiffuseHits {
         neighbours: bool,
     ) -> [u16; GROUPS] {
         // Every group's lanes, those without a hit casting nothing (a fixed array: collecting
-        // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass).
-        let shadows: [SegmentLanes; GROUPS] =
-            std::array::from_fn(|g| lit[g].shadow.segment_lanes(self.active[g]));
+        // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass;
+        // made by `array::from_fn`, its closure was called out of line, 5).
+        let mut shadows = [lit[0].shadow.segment_lanes(self.active[0]); GROUPS];
+        for (g, shadows) in shadows.iter_mut().enumerate().skip(1) {
+            *shadows = lit[g].shadow.segment_lanes(self.active[g]);
+        }
         let mut blocked = [0u16; GROUPS];
         let (shadows, answers) = (&shadows[..self.groups], &mut blocked[..self.groups]);
         scene.occluded_lanes(shadows, neighbours, answers);
