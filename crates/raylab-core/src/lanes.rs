@@ -404,8 +404,8 @@ impl M16 {
     /// Lane `i` as bit `i`.
     #[inline(always)]
     pub fn bits(self) -> u16 {
-        // A plain loop: through `fold` and its closure, the code compiled for the CPU called
-        // the closure out of line (5 instructions a lab pixel, counted).
+        // A plain loop, no closure: a closure inside the code compiled for the CPU may be
+        // called out of line (`DiffuseHits::blocked`'s was, PERFORMANCE.md).
         let mut bits = 0;
         for (i, &b) in self.0.iter().enumerate() {
             bits |= u16::from(b) << i;
