@@ -127,13 +127,17 @@ impl Uniform<F32x16> for Rng16 {
         // 0. A plain loop over the arrays: LLVM vectorises it (through `array::from_fn` and its
         // closure it did not, quite).
         let mut out = [0.0; LANES];
-        #[allow(clippy::needless_range_loop)] // three arrays indexed alike: the vectorised form
+        // The new states go into a copy stored whole: stored lane by lane under the mask (as
+        // LLVM made the update in place), the next draw's load of the states waited for it.
+        let mut next = [0; LANES];
+        #[allow(clippy::needless_range_loop)] // four arrays indexed alike: the vectorised form
         for i in 0..LANES {
             let (state, bits) = pcg_step(self.state[i]);
             let wanted = wanted.0[i];
-            self.state[i] = if wanted { state } else { self.state[i] };
+            next[i] = if wanted { state } else { self.state[i] };
             out[i] = if wanted { unit_f32(bits) } else { 0.0 };
         }
+        self.state = next;
         F32x16(out)
     }
 }
