@@ -110,13 +110,16 @@ impl HitLanes {
         }
     }
 
-    /// Lane `i` holds `hits[i]` (at most sixteen), the lanes past them none.
+    /// Lane `i` holds `hits[i]` (at most sixteen); the lanes of misses, and those past the
+    /// hits, none (`t` at `t_max`, as [`HitLanes::new`] leaves them).
     #[inline(always)]
     pub fn of(hits: &[Option<Hit>], t_max: f32) -> Self {
         debug_assert!(hits.len() <= 16);
         let mut lanes = Self::new(t_max);
         for (lane, &hit) in hits.iter().enumerate() {
-            lanes.set(lane, hit);
+            if hit.is_some() {
+                lanes.set(lane, hit);
+            }
         }
         lanes
     }

@@ -11,9 +11,9 @@
 //! entries in registers, and makes their surfaces in lanes: the values [`Tracer::surface_with`]
 //! gives one hit at a time, bit for bit (tested). One at a time, each surface went through the
 //! stack field by field, with a branch for the edge test (PERFORMANCE.md). The path tracer
-//! packs its diffuse hits one after
-//! another instead: its rays that leave the box would leave their lanes empty, and empty lanes
-//! cost their group's light and shadow rays as full ones do (a pass took 11 % longer).
+//! packs its diffuse hits one after another instead: its rays that leave the box would leave
+//! their lanes empty, and empty lanes cost their group's light and shadow rays as full ones do
+//! (a pass took 11 % longer).
 
 use super::{BATCH, HitTerms, Lighting, Surface, Surfaces, Tracer, light_point};
 use crate::accel::lane_io::{ray_lanes, table_lanes};
@@ -66,16 +66,23 @@ impl TriangleTable {
             rho: [[0.0; 32]; 3],
             zones: [[0.0; 32]; 3],
         };
-        for (i, triangle) in scene.triangles.iter().enumerate() {
-            let rho = materials[triangle.material as usize].reflectance;
-            let zones = scene.edge_zones(i);
+        for i in 0..n {
+            let [normal, rho, zones] = Self::entry(scene, materials, i);
             for axis in 0..3 {
-                table.normal[axis][i] = triangle.normal[axis];
+                table.normal[axis][i] = normal[axis];
                 table.rho[axis][i] = rho[axis];
                 table.zones[axis][i] = zones[axis];
             }
         }
         Some(table)
+    }
+
+    /// What the table holds of triangle `i`: its normal, its material's ρ, its edge zones.
+    #[inline(always)]
+    fn entry(scene: &Scene, materials: &[Material], i: usize) -> [glam::Vec3; 3] {
+        let triangle = &scene.triangles[i];
+        let rho = materials[triangle.material as usize].reflectance;
+        [triangle.normal, rho, scene.edge_zones(i).into()]
     }
 
     /// The normal, ρ and edge zones of triangles `index` in the lanes of `lanes` (0 in the
@@ -172,21 +179,20 @@ impl DiffuseHits {
             }
         }
         let diffuse = met & !other;
-        let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
         let index = &hits.index;
         let (geometric, rho, zones) = match &tracer.triangle_table {
             Some(table) => table.lanes(isa, index, diffuse),
             None => {
-                // Lane by lane, what each hit reads: its triangle's normal and zones, its
-                // material's ρ.
+                // Lane by lane, the same entries from the triangles.
                 let (mut geometric, mut rho, mut zones) =
                     (Vec3x16::ZERO, Vec3x16::ZERO, Vec3x16::ZERO);
                 for lane in lanes_of(diffuse) {
-                    let triangle = &triangles[index[lane] as usize];
-                    geometric.set_lane(lane, triangle.normal);
-                    rho.set_lane(lane, materials[triangle.material as usize].reflectance);
-                    let z = scene.edge_zones(index[lane] as usize);
-                    zones.set_lane(lane, glam::Vec3::from(z));
+                    let i = index[lane] as usize;
+                    let [normal, reflectance, z] =
+                        TriangleTable::entry(scene, &tracer.materials, i);
+                    geometric.set_lane(lane, normal);
+                    rho.set_lane(lane, reflectance);
+                    zones.set_lane(lane, z);
                 }
                 (geometric, rho, zones)
             }
