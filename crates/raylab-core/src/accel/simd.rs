@@ -187,6 +187,19 @@ pub trait Kernels: Copy {
     fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]);
     /// The nearest hit in the packet with `0 < t < t_limit`, the lowest lane among equal `t`.
     fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit>;
+    /// The nearest hit among `packets`: the packet's position in the slice, and the hit; among
+    /// equal `t`, the first packet's, then its lowest lane's. Unless a kernel set keeps each
+    /// lane's nearest across the packets (as [`Avx512::nearest16_among`] does), the packets one
+    /// after another, each with the limit of the nearest hit so far.
+    #[inline(always)]
+    fn nearest_among(
+        self,
+        packets: &[Packet8],
+        ray: &RayK,
+        t_limit: f32,
+    ) -> Option<(usize, LaneHit)> {
+        nearest_packet_by_packet(self, packets, ray, t_limit)
+    }
     /// Whether any triangle of the packet is hit with `0 < t < t_limit`.
     fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool;
 }
@@ -317,6 +330,31 @@ impl Avx512 {
         p.nearest_scalar(r, t_limit)
     }
 
+    /// The nearest hit among 16-wide `packets`: the packet's position in the slice, and the
+    /// hit. The same answer as [`nearest16_packet_by_packet`], bit for bit: among equal `t`,
+    /// the first packet's, then its lowest lane's.
+    ///
+    /// Each lane keeps its own nearest `t`, `u`, `v` and packet from packet to packet, and the
+    /// sixteen are reduced to one only at the end. Packet by packet, every packet with a hit
+    /// reduced its lanes to one at once, a chain of about fifteen dependent instructions
+    /// that the next packet's limit waited for: most of the closest-hit time of the path
+    /// tracer's bounce rays, which each meet two packets of the Cornell box.
+    #[inline(always)]
+    pub fn nearest16_among(
+        self,
+        packets: &[Packet16],
+        r: &RayK,
+        t_limit: f32,
+    ) -> Option<(usize, LaneHit)> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: as above.
+            unsafe { x86::nearest16_among(packets, r, t_limit) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        nearest16_packet_by_packet(self, packets, r, t_limit)
+    }
+
     /// Whether any triangle of a 16-wide packet is hit.
     #[inline(always)]
     pub fn any16(self, p: &Packet16, r: &RayK, t_limit: f32) -> bool {
@@ -328,6 +366,48 @@ impl Avx512 {
         #[cfg(not(target_arch = "x86_64"))]
         p.any_scalar(r, t_limit)
     }
+}
+
+/// The nearest hit among 8-wide `packets`, one packet after another, each tested with the
+/// limit of the nearest hit so far (strict, so the first of equal hits wins): the readable
+/// definition of [`Kernels::nearest_among`].
+#[inline(always)]
+pub fn nearest_packet_by_packet<K: Kernels>(
+    k: K,
+    packets: &[Packet8],
+    r: &RayK,
+    t_limit: f32,
+) -> Option<(usize, LaneHit)> {
+    let mut best = None;
+    let mut limit = t_limit;
+    for (i, p) in packets.iter().enumerate() {
+        if let Some(h) = k.nearest(p, r, limit) {
+            best = Some((i, h));
+            limit = h.t;
+        }
+    }
+    best
+}
+
+/// The nearest hit among 16-wide `packets`, one packet after another, each tested with the
+/// limit of the nearest hit so far (strict, so the first of equal hits wins): the readable
+/// definition of [`Avx512::nearest16_among`].
+#[inline(always)]
+pub fn nearest16_packet_by_packet(
+    k: Avx512,
+    packets: &[Packet16],
+    r: &RayK,
+    t_limit: f32,
+) -> Option<(usize, LaneHit)> {
+    let mut best = None;
+    let mut limit = t_limit;
+    for (i, p) in packets.iter().enumerate() {
+        if let Some(h) = k.nearest16(p, r, limit) {
+            best = Some((i, h));
+            limit = h.t;
+        }
+    }
+    best
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -342,6 +422,17 @@ impl Kernels for Avx2 {
     fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit> {
         // SAFETY: as above.
         unsafe { x86::nearest(packet, ray, t_limit) }
+    }
+
+    #[inline(always)]
+    fn nearest_among(
+        self,
+        packets: &[Packet8],
+        ray: &RayK,
+        t_limit: f32,
+    ) -> Option<(usize, LaneHit)> {
+        // SAFETY: as above.
+        unsafe { x86::nearest_among(packets, ray, t_limit) }
     }
 
     #[inline(always)]
@@ -443,6 +534,66 @@ mod x86 {
         })
     }
 
+    /// [`super::Kernels::nearest_among`]: each lane's nearest kept across the packets, as in
+    /// `nearest16_among`, and reduced to one at the end.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub fn nearest_among(packets: &[Packet8], r: &RayK, t_limit: f32) -> Option<(usize, LaneHit)> {
+        let mut t_best = _mm256_set1_ps(f32::INFINITY);
+        let (mut u_best, mut v_best) = (_mm256_setzero_ps(), _mm256_setzero_ps());
+        let mut packet_best = _mm256_setzero_ps();
+        let mut hit_any = _mm256_setzero_ps();
+        for (i, p) in packets.iter().enumerate() {
+            let ([t, u, v], hit) = hits(p, r, t_limit);
+            // Strictly nearer: a lane keeps its first packet's hit among equal `t`.
+            let nearer = _mm256_and_ps(hit, _mm256_cmp_ps::<_CMP_LT_OQ>(t, t_best));
+            t_best = _mm256_blendv_ps(t_best, t, nearer);
+            u_best = _mm256_blendv_ps(u_best, u, nearer);
+            v_best = _mm256_blendv_ps(v_best, v, nearer);
+            let i = _mm256_castsi256_ps(_mm256_set1_epi32(i as i32));
+            packet_best = _mm256_blendv_ps(packet_best, i, nearer);
+            hit_any = _mm256_or_ps(hit_any, hit);
+        }
+        if _mm256_movemask_ps(hit_any) == 0 {
+            return None;
+        }
+        let t = t_best;
+        let m = _mm256_min_ps(t, _mm256_permute2f128_ps::<1>(t, t));
+        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b01_00_11_10>(m));
+        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m));
+        let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t, m), hit_any);
+        let at_min = _mm256_movemask_ps(at_min) as u32;
+        let mut lane = at_min.trailing_zeros() as usize & (LANES - 1);
+        let mut packet = lane_of(packet_best, lane).to_bits();
+        if at_min.count_ones() > 1 {
+            // Equal `t` in several lanes (rare): the first packet among them, then the lowest
+            // lane.
+            for other in lane + 1..LANES {
+                let other_packet = lane_of(packet_best, other).to_bits();
+                if at_min & (1 << other) != 0 && other_packet < packet {
+                    (lane, packet) = (other, other_packet);
+                }
+            }
+        }
+        Some((
+            packet as usize,
+            LaneHit {
+                lane,
+                t: _mm256_cvtss_f32(m),
+                u: lane_of(u_best, lane),
+                v: lane_of(v_best, lane),
+            },
+        ))
+    }
+
+    /// Lane `lane` of `a`, moved to lane 0 in registers (see `nearest16`). (Not a closure: a
+    /// closure inside a `#[target_feature]` function may be compiled without its features.)
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn lane_of(a: __m256, lane: usize) -> f32 {
+        _mm256_cvtss_f32(_mm256_permutevar8x32_ps(a, _mm256_set1_epi32(lane as i32)))
+    }
+
     #[inline]
     #[target_feature(enable = "avx2,fma")]
     pub fn any(p: &Packet8, r: &RayK, t_limit: f32) -> bool {
@@ -520,6 +671,55 @@ mod x86 {
             u: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, u)),
             v: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, v)),
         })
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq")]
+    pub fn nearest16_among(
+        packets: &[Packet16],
+        r: &RayK,
+        t_limit: f32,
+    ) -> Option<(usize, LaneHit)> {
+        let mut t_best = _mm512_set1_ps(f32::INFINITY);
+        let (mut u_best, mut v_best) = (_mm512_setzero_ps(), _mm512_setzero_ps());
+        let mut packet_best = _mm512_setzero_si512();
+        let mut hit_any: __mmask16 = 0;
+        for (i, p) in packets.iter().enumerate() {
+            let ([t, u, v], hit) = hits16(p, r, t_limit);
+            // Strictly nearer: a lane keeps its first packet's hit among equal `t`.
+            let nearer = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(hit, t, t_best);
+            t_best = _mm512_mask_blend_ps(nearer, t_best, t);
+            u_best = _mm512_mask_blend_ps(nearer, u_best, u);
+            v_best = _mm512_mask_blend_ps(nearer, v_best, v);
+            packet_best = _mm512_mask_blend_epi32(nearer, packet_best, _mm512_set1_epi32(i as i32));
+            hit_any |= hit;
+        }
+        if hit_any == 0 {
+            return None;
+        }
+        let m = _mm512_reduce_min_ps(t_best);
+        let at_min = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(hit_any, t_best, _mm512_set1_ps(m));
+        // Equal `t` in several lanes (rare): the first packet among them, then the lowest lane.
+        let first = match at_min.count_ones() {
+            1 => at_min,
+            _ => {
+                let p = _mm512_mask_reduce_min_epu32(at_min, packet_best);
+                _mm512_mask_cmpeq_epi32_mask(at_min, packet_best, _mm512_set1_epi32(p as i32))
+            }
+        };
+        let lane = (first as u32).trailing_zeros() as usize & 15;
+        // Moved to lane 0 in registers (see `nearest16`).
+        let pick = _mm512_set1_epi32(lane as i32);
+        let packet = _mm512_permutexvar_epi32(pick, packet_best);
+        Some((
+            _mm_cvtsi128_si32(_mm512_castsi512_si128(packet)) as usize,
+            LaneHit {
+                lane,
+                t: m,
+                u: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, u_best)),
+                v: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, v_best)),
+            },
+        ))
     }
 
     #[inline]
@@ -618,6 +818,105 @@ mod tests {
             hits += usize::from(want.is_some());
         }
         assert!(hits > 5_000, "{hits}");
+    }
+
+    /// The lanes' running nearest across packets gives exactly the packet-by-packet answer,
+    /// ties included: the same triangles repeated in later packets and other lanes (equal `t`
+    /// in several lanes and packets) must come back as their first copy.
+    #[test]
+    fn nearest_among_packets_equals_packet_by_packet() {
+        let Some(k) = Avx512::detect() else {
+            return crate::accel::skip_unless_required("avx512", "nearest_among_packets");
+        };
+        let mut rng = Rng::new(13);
+        let (mut hits, mut ties) = (0, 0);
+        for _ in 0..20_000 {
+            let (mut tris, ray) = case(&mut rng);
+            let n_packets = 1 + (rng.next_u32() % 4) as usize;
+            // Copies of earlier triangles, so that equal `t` occur across lanes and packets.
+            for i in 16..16 * n_packets {
+                let t = if rng.next_f32() < 0.3 {
+                    tris[(rng.next_u32() as usize) % i]
+                } else {
+                    case(&mut rng).0[i % 16]
+                };
+                tris.push(t);
+            }
+            let ids: Vec<u32> = (0..tris.len() as u32).collect();
+            let packets: Vec<Packet16> = ids.chunks(16).map(|c| Packet16::new(&tris, c)).collect();
+            let r = RayK::new(&ray);
+            let limit = if rng.next_f32() < 0.5 {
+                f32::INFINITY
+            } else {
+                rng.uniform(0.0, 5.0)
+            };
+            let want = nearest16_packet_by_packet(k, &packets, &r, limit);
+            let got = k.nearest16_among(&packets, &r, limit);
+            assert_eq!(
+                got.map(|(p, h)| (p, h.lane, h.t.to_bits(), h.u.to_bits(), h.v.to_bits())),
+                want.map(|(p, h)| (p, h.lane, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
+            );
+            if let Some((p, h)) = want {
+                hits += 1;
+                let equal = tris
+                    .iter()
+                    .filter_map(|t| intersect_triangle(&ray, t, limit))
+                    .filter(|&(t, _, _)| t == h.t)
+                    .count();
+                ties += usize::from(equal > 1);
+                // And the brute-force loop's first nearest triangle.
+                let mut first = None;
+                for (i, t) in tris.iter().enumerate() {
+                    let lim = first.map_or(limit, |(_, t)| t);
+                    if let Some((t, _, _)) = intersect_triangle(&ray, t, lim) {
+                        first = Some((i, t));
+                    }
+                }
+                assert_eq!(first.map(|(i, _)| i), Some(p * 16 + h.lane));
+            }
+        }
+        assert!(hits > 5_000 && ties > 500, "{hits} hits, {ties} with ties");
+    }
+
+    /// The same for the 8-wide packets: the AVX2 set's running nearest, and the default
+    /// (the scalar twin's), against the packets one after another.
+    #[test]
+    fn nearest_among_8_wide_packets_equals_packet_by_packet() {
+        let avx2 = Avx2::detect();
+        if avx2.is_none() {
+            crate::accel::skip_unless_required("avx2", "nearest_among_8_wide_packets");
+        }
+        let mut rng = Rng::new(14);
+        let mut ties = 0;
+        for _ in 0..20_000 {
+            let (mut tris, ray) = case(&mut rng);
+            for i in 16..16 + 8 * (rng.next_u32() % 3) as usize {
+                tris.push(tris[(rng.next_u32() as usize) % i]);
+            }
+            let ids: Vec<u32> = (0..tris.len() as u32).collect();
+            let packets: Vec<Packet8> = ids.chunks(LANES).map(|c| Packet8::new(&tris, c)).collect();
+            let r = RayK::new(&ray);
+            let limit = if rng.next_f32() < 0.5 {
+                f32::INFINITY
+            } else {
+                rng.uniform(0.0, 5.0)
+            };
+            let bits = |h: Option<(usize, LaneHit)>| {
+                h.map(|(p, h)| (p, h.lane, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
+            };
+            let want = nearest_packet_by_packet(Scalar, &packets, &r, limit);
+            assert_eq!(bits(Scalar.nearest_among(&packets, &r, limit)), bits(want));
+            if let Some(k) = avx2 {
+                assert_eq!(bits(k.nearest_among(&packets, &r, limit)), bits(want));
+            }
+            if let Some((_, h)) = want {
+                let equal = tris
+                    .iter()
+                    .filter_map(|t| intersect_triangle(&ray, t, limit));
+                ties += usize::from(equal.filter(|&(t, _, _)| t == h.t).count() > 1);
+            }
+        }
+        assert!(ties > 500, "{ties} with ties");
     }
 
     #[test]

@@ -198,41 +198,27 @@ impl KernelSet for Avx512 {
 /// The nearest hit among 16-wide `packets` (the flat list, or its culled copy).
 #[inline(always)]
 pub fn closest16_in(packets: &[Packet16], k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
-    let mut best = None;
-    let mut limit = t_max;
-    for p in packets {
-        if let Some(h) = k.nearest16(p, r, limit) {
-            best = Some(Hit {
-                index: p.index[h.lane],
-                t: h.t,
-                u: h.u,
-                v: h.v,
-            });
-            limit = h.t;
-        }
-    }
-    best
+    let (p, h) = k.nearest16_among(packets, r, t_max)?;
+    Some(Hit {
+        index: packets[p].index[h.lane],
+        t: h.t,
+        u: h.u,
+        v: h.v,
+    })
 }
 
 /// The nearest hit among 8-wide `packets` (the flat list, or its culled copy).
 #[inline(always)]
 pub fn closest_in<K: Kernels>(packets: &[Packet8], k: K, r: &RayK, t_max: f32) -> Option<Hit> {
-    let mut best = None;
-    let mut limit = t_max;
-    // Packets and lanes are in index order and the limit is strict: the first of equal
-    // hits wins, as in the brute-force loop.
-    for p in packets {
-        if let Some(h) = k.nearest(p, r, limit) {
-            best = Some(Hit {
-                index: p.index[h.lane],
-                t: h.t,
-                u: h.u,
-                v: h.v,
-            });
-            limit = h.t;
-        }
-    }
-    best
+    // Packets and lanes are in index order and the first of equal hits wins, as in the
+    // brute-force loop.
+    let (p, h) = k.nearest_among(packets, r, t_max)?;
+    Some(Hit {
+        index: packets[p].index[h.lane],
+        t: h.t,
+        u: h.u,
+        v: h.v,
+    })
 }
 
 /// How many of a packet's lanes hold a triangle (the others are [`Packet8::EMPTY`]'s padding).
