@@ -18,7 +18,7 @@ use crate::accel::simd::Avx512;
 use crate::camera::ImagePoints;
 use crate::film::{Film, Image, Seen};
 use crate::geometry::Ray;
-use crate::integrator::{BATCH, Tracer};
+use crate::integrator::{BATCH, Scratch, Tracer};
 use crate::memory::AllocError;
 use crate::sampling::{Rng, concentric_disk, pixel_offset, pixel_sample};
 use crate::scene::Scene;
@@ -173,20 +173,33 @@ pub fn render_pass(
 ) -> Result<Image, Cancelled> {
     let (width, height) = (settings.camera.width, settings.camera.height);
     let tracer = Tracer::for_pass(scene, settings, sample);
-    let mut image = Image::new(width, height);
     let rows = Rows::new(&tracer, settings, sample);
-    image
-        .pixels
+    // The image is written row by row on the pool, once, into memory not filled first.
+    // Filled with zeros first, on the calling thread alone, the Cornell box's lab pass at
+    // 512² took 3.65 against 3.55 ms on one thread, 1.99 against 1.89 ms on two (Zen 5).
+    let len = width as usize * height as usize;
+    let mut pixels: Vec<Vec3> = Vec::with_capacity(len);
+    pixels.spare_capacity_mut()[..len]
         .par_chunks_mut(width as usize)
         .enumerate()
         .try_for_each(|(y, row)| {
             if cancelled() {
                 return Err(Cancelled);
             }
-            rows.trace(y as u32, row, &mut [], |pixel, value| *pixel = value);
+            rows.trace(y as u32, row, &mut [], |pixel, value| {
+                pixel.write(value);
+            });
             Ok(())
         })?;
-    Ok(image)
+    // SAFETY: every row of the first `len` slots was traced (a cancelled pass returned above,
+    // its length still 0), and `Rows::trace` calls `put` on every slot of its row: all `len`
+    // hold a value.
+    unsafe { pixels.set_len(len) };
+    Ok(Image {
+        width,
+        height,
+        pixels,
+    })
 }
 
 /// [`render_pass`] added into `film` as its next pass ([`Film::add_pass_rows`]): the same sums
@@ -235,20 +248,22 @@ impl<'a> Rows<'a> {
     }
 
     /// Traces row `y` in batches ([`Tracer::trace_camera`]: the image points are found here,
-    /// the rays made by the tracer), hands each pixel of `row` its value, and puts what each
-    /// sample saw into `seen` if it is not empty.
+    /// the rays made by the tracer), hands each pixel of `row` its value (`put`, once for
+    /// every slot of `row`: [`render_pass`] relies on it), and puts what each sample saw into
+    /// `seen` if it is not empty.
     #[inline(always)]
-    fn trace(
+    fn trace<P>(
         &self,
         y: u32,
-        row: &mut [Vec3],
+        row: &mut [P],
         seen: &mut [Option<Seen>],
-        mut put: impl FnMut(&mut Vec3, Vec3),
+        mut put: impl FnMut(&mut P, Vec3),
     ) {
         let (mut px, mut py) = ([0.0; BATCH], [0.0; BATCH]);
         let (mut lens_x, mut lens_y) = ([0.0; BATCH], [0.0; BATCH]);
         let mut rngs = [Rng::UNUSED; BATCH];
         let mut values = [Vec3::ZERO; BATCH];
+        let mut scratch = Scratch::new();
         // Nothing random and a pinhole (the lab's stages as the lab sets them): each image
         // point is its pixel's offset alone, with no generator and no lens point, in a loop
         // the compiler can keep simple (the loop below, asking both per pixel, took 8 % of the
@@ -298,8 +313,13 @@ impl<'a> Rows<'a> {
                 true => &mut [],
                 false => &mut seen[first as usize..first as usize + n],
             };
-            self.tracer
-                .trace_camera(&points, &mut rngs[..n], &mut values[..n], seen);
+            self.tracer.trace_camera(
+                &points,
+                &mut rngs[..n],
+                &mut values[..n],
+                seen,
+                &mut scratch,
+            );
             for (pixel, value) in chunk.iter_mut().zip(&values[..n]) {
                 put(pixel, *value);
             }

@@ -19,7 +19,7 @@
 use glam::Vec3;
 
 use super::hits::lanes_of;
-use super::{BATCH, DiffuseHits, GROUPS, Recorder, Tracer, continue_ray, shaded_value};
+use super::{BATCH, GROUPS, Recorder, Scratch, Tracer, continue_ray, shaded_value};
 use crate::accel::HitLanes;
 use crate::accel::lane_io::store_vec3s;
 use crate::geometry::Ray;
@@ -46,13 +46,15 @@ enum Wave<'a> {
     Branches(&'a [Branch]),
 }
 
-/// The value of every ray, into `out`; each step told to `rec` ([`Recorder`]).
+/// The value of every ray, into `out`; each step told to `rec` ([`Recorder`]). The batches
+/// work in `scratch`.
 #[inline(always)]
 pub(super) fn trace<R: Recorder>(
     tracer: &Tracer,
     rays: &[Ray],
     rngs: &mut [Rng],
     out: &mut [Vec3],
+    scratch: &mut Scratch,
     rec: &mut R,
 ) {
     let (mut rays_next, mut branches_next) = (Vec::new(), Vec::new());
@@ -64,14 +66,15 @@ pub(super) fn trace<R: Recorder>(
         let end = (start + BATCH).min(rngs.len());
         let rngs = &mut rngs[start..end];
         let next = (&mut rays_next, &mut branches_next);
-        wave_for_light(tracer, rays, Wave::Camera, rngs, out, next, rec);
+        wave_for_light(tracer, rays, Wave::Camera, rngs, out, next, scratch, rec);
         // Mirror and glass: trace the branches, wave after wave, until none is left.
         while !rays_next.is_empty() {
             let rays = std::mem::take(&mut rays_next);
             let branches = std::mem::take(&mut branches_next);
             for (rays, branches) in rays.chunks(BATCH).zip(branches.chunks(BATCH)) {
                 let next = (&mut rays_next, &mut branches_next);
-                wave_for_light(tracer, rays, Wave::Branches(branches), rngs, out, next, rec);
+                let wave = Wave::Branches(branches);
+                wave_for_light(tracer, rays, wave, rngs, out, next, scratch, rec);
             }
         }
     }
@@ -80,6 +83,7 @@ pub(super) fn trace<R: Recorder>(
 /// [`wave`] for the scene's light: compiled apart for the lab's point light, whose loop then
 /// carries no random numbers at all (with them the lab pass took half as long again).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // `wave`'s
 fn wave_for_light<R: Recorder>(
     tracer: &Tracer,
     rays: &[Ray],
@@ -87,12 +91,13 @@ fn wave_for_light<R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
+    scratch: &mut Scratch,
     rec: &mut R,
 ) {
     if tracer.light.is_area() {
-        wave::<true, R>(tracer, rays, wave_kind, rngs, out, next, rec);
+        wave::<true, R>(tracer, rays, wave_kind, rngs, out, next, scratch, rec);
     } else {
-        wave::<false, R>(tracer, rays, wave_kind, rngs, out, next, rec);
+        wave::<false, R>(tracer, rays, wave_kind, rngs, out, next, scratch, rec);
     }
 }
 
@@ -100,6 +105,8 @@ fn wave_for_light<R: Recorder>(
 /// diffuse hits (sixteen at a time), their shadow rays, the sums into `out`; the specular hits'
 /// branches go to `next`. Each step is told to `rec` (nothing is, for `()`).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // the rays and what they are, their generators, where
+// their values and next rays go, the working memory: each borrowed apart
 fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     tracer: &Tracer,
     rays: &[Ray],
@@ -107,6 +114,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
+    scratch: &mut Scratch,
     rec: &mut R,
 ) {
     debug_assert!(rays.len() <= BATCH);
@@ -116,7 +124,8 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     let groups = rays.len().div_ceil(LANES);
     let mut hits = [HitLanes::new(f32::INFINITY); GROUPS];
     scene.closest_hit_lanes(rays, f32::INFINITY, &mut hits[..groups]);
-    let mut diffuse = DiffuseHits::new();
+    let Scratch { diffuse, lit } = scratch;
+    diffuse.clear();
     // Where the tracer is plain, the diffuse hits' surfaces are made sixteen at a time; the
     // other hits (all of them when recording, or where surfaces are textured or smooth) one
     // at a time, below.
@@ -202,9 +211,9 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
         Wave::Camera => i as usize,
         Wave::Branches(b) => b[i as usize].pixel as usize,
     };
-    let lit = diffuse.light::<SPHERE_LIGHT>(tracer, rngs, pixel_of);
+    diffuse.light::<SPHERE_LIGHT>(tracer, rngs, pixel_of, lit);
     // The hits of a wave are neighbouring pixels' (or their mirror images').
-    let blocked = diffuse.blocked(scene, &lit, true);
+    let blocked = diffuse.blocked(scene, lit, true);
     let indirect = shading.indirect_term();
     let mut values = [Vec3x16::ZERO; BATCH / LANES];
     for (g, (_, surfaces)) in diffuse.groups().enumerate() {

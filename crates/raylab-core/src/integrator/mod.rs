@@ -65,7 +65,8 @@ use crate::texture::planar_uv;
 pub const BATCH: usize = 64;
 
 pub use crate::settings::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
-pub(crate) use hits::{DiffuseHits, GROUPS};
+pub(crate) use hits::GROUPS;
+pub use hits::Scratch;
 
 /// The mirror and glass bounces a camera sample's features follow before they settle on what
 /// was reached ([`Seen`]).
@@ -753,7 +754,8 @@ impl<'a> Tracer<'a> {
     /// the path tracer runs faster (PERFORMANCE.md).
     pub fn trace(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         debug_assert_eq!(rays.len(), out.len());
-        self.trace_for_cpu(Primary::Rays(rays), rngs, out, &mut []);
+        let scratch = &mut Scratch::new();
+        self.trace_for_cpu(Primary::Rays(rays), rngs, out, &mut [], scratch);
     }
 
     /// [`Tracer::trace`] for the camera rays through `points`, made here
@@ -763,17 +765,19 @@ impl<'a> Tracer<'a> {
     ///
     /// If `seen` is not empty (one per ray) and the integrator [records
     /// features](Tracer::records_features), each ray's [`Seen`] goes there (`None`: it left
-    /// the scene); otherwise `seen` is left as it is.
+    /// the scene); otherwise `seen` is left as it is. The batches work in `scratch`, which a
+    /// caller tracing many batches (a row of the image) makes once and hands to each.
     pub fn trace_camera(
         &self,
         points: &ImagePoints,
         rngs: &mut [Rng],
         out: &mut [Vec3],
         seen: &mut [Option<Seen>],
+        scratch: &mut Scratch,
     ) {
         debug_assert_eq!(points.len(), out.len());
         debug_assert!(seen.is_empty() || seen.len() == out.len());
-        self.trace_for_cpu(Primary::Camera(points), rngs, out, seen);
+        self.trace_for_cpu(Primary::Camera(points), rngs, out, seen, scratch);
     }
 
     /// [`Tracer::trace_primary`] in the code compiled for the CPU.
@@ -784,19 +788,20 @@ impl<'a> Tracer<'a> {
         rngs: &mut [Rng],
         out: &mut [Vec3],
         seen: &mut [Option<Seen>],
+        scratch: &mut Scratch,
     ) {
         match self.scene.accel().isa() {
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2(k) => {
                 // SAFETY: `k` proves the CPU has AVX2 and FMA.
-                unsafe { self.trace_avx2(k, primary, rngs, out, seen) }
+                unsafe { self.trace_avx2(k, primary, rngs, out, seen, scratch) }
             }
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512(k) => {
                 // SAFETY: `k` proves the CPU has AVX-512 F, DQ and VL, AVX2 and FMA.
-                unsafe { self.trace_avx512(k, primary, rngs, out, seen) }
+                unsafe { self.trace_avx512(k, primary, rngs, out, seen, scratch) }
             }
-            _ => self.trace_primary(primary, rngs, out, seen),
+            _ => self.trace_primary(primary, rngs, out, seen, scratch),
         }
     }
 
@@ -811,8 +816,9 @@ impl<'a> Tracer<'a> {
         rngs: &mut [Rng],
         out: &mut [Vec3],
         seen: &mut [Option<Seen>],
+        scratch: &mut Scratch,
     ) {
-        self.trace_primary(primary, rngs, out, seen);
+        self.trace_primary(primary, rngs, out, seen, scratch);
     }
 
     /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (Passing a closure to one such
@@ -827,8 +833,9 @@ impl<'a> Tracer<'a> {
         rngs: &mut [Rng],
         out: &mut [Vec3],
         seen: &mut [Option<Seen>],
+        scratch: &mut Scratch,
     ) {
-        self.trace_primary(primary, rngs, out, seen);
+        self.trace_primary(primary, rngs, out, seen, scratch);
     }
 
     /// The rays of `primary`, made in batches of [`BATCH`] if they come as image points, traced
@@ -840,9 +847,10 @@ impl<'a> Tracer<'a> {
         rngs: &mut [Rng],
         out: &mut [Vec3],
         seen: &mut [Option<Seen>],
+        scratch: &mut Scratch,
     ) {
         match primary {
-            Primary::Rays(rays) => self.trace_seen(rays, rngs, out, seen, &mut ()),
+            Primary::Rays(rays) => self.trace_seen(rays, rngs, out, seen, scratch, &mut ()),
             Primary::Camera(points) => {
                 let mut rays = [Ray {
                     origin: Vec3::ZERO,
@@ -858,7 +866,8 @@ impl<'a> Tracer<'a> {
                         start..(start + BATCH).min(len)
                     };
                     let (r, s) = (part(rngs.len()), part(seen.len()));
-                    self.trace_seen(rays, &mut rngs[r], out, &mut seen[s], &mut ());
+                    let (rngs, seen) = (&mut rngs[r], &mut seen[s]);
+                    self.trace_seen(rays, rngs, out, seen, scratch, &mut ());
                 }
             }
         }
@@ -867,7 +876,7 @@ impl<'a> Tracer<'a> {
     /// [`Tracer::trace`] for any CPU; inlined into the AVX2 version.
     #[inline(always)]
     pub fn trace_portable(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_seen(rays, rngs, out, &mut [], &mut ());
+        self.trace_seen(rays, rngs, out, &mut [], &mut Scratch::new(), &mut ());
     }
 
     /// [`Tracer::trace_portable`], telling `recorder` every step (see [`Recorder`]): what the
@@ -880,7 +889,7 @@ impl<'a> Tracer<'a> {
         out: &mut [Vec3],
         recorder: &mut R,
     ) {
-        self.trace_seen(rays, rngs, out, &mut [], recorder);
+        self.trace_seen(rays, rngs, out, &mut [], &mut Scratch::new(), recorder);
     }
 
     /// [`Tracer::trace_recorded`], and what each ray sees into `seen` as
@@ -892,6 +901,7 @@ impl<'a> Tracer<'a> {
         rngs: &mut [Rng],
         out: &mut [Vec3],
         seen: &mut [Option<Seen>],
+        scratch: &mut Scratch,
         recorder: &mut R,
     ) {
         match self.shading.stage.integrator() {
@@ -900,7 +910,7 @@ impl<'a> Tracer<'a> {
                     !self.random || rngs.len() == rays.len(),
                     "soft shadows and the lens need a generator per ray"
                 );
-                lab::trace(self, rays, rngs, out, recorder);
+                lab::trace(self, rays, rngs, out, scratch, recorder);
             }
             Integrator::Path => {
                 assert_eq!(
@@ -911,7 +921,7 @@ impl<'a> Tracer<'a> {
                 if self.general {
                     path_mis::trace(self, rays, rngs, out, recorder);
                 } else {
-                    path::trace(self, rays, rngs, out, seen, recorder);
+                    path::trace(self, rays, rngs, out, seen, scratch, recorder);
                 }
             }
         }
@@ -1231,6 +1241,42 @@ mod tests {
                     v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
                 };
                 assert_eq!(bits(&fast), bits(&portable), "{stage} {preset}");
+            }
+        }
+    }
+
+    /// A [`Scratch`] reused batch after batch, as a row's batches reuse it, holds whatever the
+    /// batches before left in it (other stages, other presets, more groups of hits than this
+    /// batch has): the values are bit for bit those traced with a fresh one.
+    #[test]
+    fn a_reused_scratch_gives_the_values_of_a_fresh_one() {
+        let scene = cornell_box();
+        let rays = primary_rays(&Camera::default_for(53, 29));
+        let mut reused = Scratch::new();
+        let bits = |v: &[Vec3]| -> Vec<[u32; 3]> {
+            v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+        };
+        for preset in [MaterialPreset::Both, MaterialPreset::None] {
+            for stage in Stage::ALL {
+                let mut settings = RenderSettings::default();
+                settings.shading = Shading::for_stage(stage);
+                settings.material_preset = preset;
+                let tracer = Tracer::new(&scene, &settings);
+                // Batches of 64, then of fewer: later groups keep an earlier batch's hits.
+                for (c, rays) in rays.chunks(BATCH).chain(rays.chunks(23)).enumerate() {
+                    let rngs = || -> Vec<Rng> {
+                        (0..rays.len())
+                            .map(|i| Rng::for_pixel_sample(5, i as u32, c as u32, 1))
+                            .collect()
+                    };
+                    let mut fresh = vec![Vec3::NAN; rays.len()];
+                    let mut again = vec![Vec3::NAN; rays.len()];
+                    let mut scratch = Scratch::new();
+                    let primary = Primary::Rays(rays);
+                    tracer.trace_for_cpu(primary, &mut rngs(), &mut fresh, &mut [], &mut scratch);
+                    tracer.trace_for_cpu(primary, &mut rngs(), &mut again, &mut [], &mut reused);
+                    assert_eq!(bits(&again), bits(&fresh), "{stage} {preset} batch {c}");
+                }
             }
         }
     }

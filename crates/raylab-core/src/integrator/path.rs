@@ -31,7 +31,7 @@
 use glam::Vec3;
 
 use super::{
-    BATCH, DiffuseHits, FEATURE_SPECULAR_BOUNCES, GROUPS, Recorder, Seen, Stage, Tracer,
+    BATCH, FEATURE_SPECULAR_BOUNCES, GROUPS, Recorder, Scratch, Seen, Stage, Tracer,
     departure_points, shaded_value,
 };
 use crate::bsdf::ShadingFrame;
@@ -65,7 +65,8 @@ struct PathState {
 }
 
 /// The value of every ray (π × radiance), into `out`; what each ray sees into `seen` if it is
-/// not empty ([`Seen`], one per ray); each step told to `rec` ([`Recorder`]).
+/// not empty ([`Seen`], one per ray); each step told to `rec` ([`Recorder`]). The batches
+/// work in `scratch`.
 #[inline(always)]
 pub(super) fn trace<R: Recorder>(
     tracer: &Tracer,
@@ -73,6 +74,7 @@ pub(super) fn trace<R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     seen: &mut [Option<Seen>],
+    scratch: &mut Scratch,
     rec: &mut R,
 ) {
     for (c, ((rays, rngs), out)) in rays
@@ -85,7 +87,7 @@ pub(super) fn trace<R: Recorder>(
             true => &mut [],
             false => &mut seen[c * BATCH..c * BATCH + out.len()],
         };
-        batch(tracer, rays, rngs, out, seen, rec);
+        batch(tracer, rays, rngs, out, seen, scratch, rec);
     }
 }
 
@@ -291,6 +293,7 @@ fn batch<R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     seen: &mut [Option<Seen>],
+    scratch: &mut Scratch,
     rec: &mut R,
 ) {
     let scene = tracer.scene;
@@ -320,7 +323,7 @@ fn batch<R: Recorder>(
     let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
     // Mirror and glass vertices, sampled one at a time.
     let mut specular = [Departures::NONE; GROUPS];
-    let mut diffuse = DiffuseHits::new();
+    let Scratch { diffuse, lit } = scratch;
     // β of each diffuse hit's path as it arrives.
     let mut arriving = [Vec3x16::ZERO; GROUPS];
 
@@ -379,11 +382,11 @@ fn batch<R: Recorder>(
         }
         let mut still = 0;
         // The direct term at the diffuse hits (drawing a spherical light's points first).
-        let lit = if sphere_light {
-            diffuse.light::<true>(tracer, rngs, |i| i as usize)
+        if sphere_light {
+            diffuse.light::<true>(tracer, rngs, |i| i as usize, lit);
         } else {
-            diffuse.light::<false>(tracer, rngs, |i| i as usize)
-        };
+            diffuse.light::<false>(tracer, rngs, |i| i as usize, lit);
+        }
         // Their bounces: a cosine-weighted direction about the turned normal, weight ρ.
         for (g, (_, surfaces)) in diffuse.groups().enumerate() {
             let mut d = Departures {
@@ -422,7 +425,7 @@ fn batch<R: Recorder>(
         }
         n_alive = still;
         // The shadow rays, and the direct term times β into each path's pixel.
-        let blocked = diffuse.blocked(scene, &lit, first_step);
+        let blocked = diffuse.blocked(scene, lit, first_step);
         first_step = false;
         for (g, (_, surfaces)) in diffuse.groups().enumerate() {
             let value = shaded_value(

@@ -387,6 +387,7 @@ mod tests {
             &mut generators(rays.len(), 1),
             &mut lanes,
             &mut [],
+            &mut crate::integrator::Scratch::new(),
             &mut (),
         );
         trace(
@@ -427,6 +428,7 @@ mod tests {
                         &mut rngs,
                         &mut out,
                         &mut [],
+                        &mut crate::integrator::Scratch::new(),
                         &mut (),
                     );
                 } else {
