@@ -229,12 +229,47 @@ pub fn accumulate_pass(
     })
 }
 
-/// What tracing a row of one pass needs, made once a pass.
+/// What tracing a row needs, made once a pass (or once for all the samples of a render).
 struct Rows<'a> {
     tracer: &'a Tracer<'a>,
     settings: &'a RenderSettings,
     rotation: Mat3,
     sample: u32,
+    /// Nothing random and a pinhole (the lab's stages as the lab sets them): each image point
+    /// is its pixel's offset alone, with no generator and no lens point, in a loop the
+    /// compiler can keep simple (a loop asking both per pixel took 8 % of the lab pass's
+    /// instructions: PERFORMANCE.md).
+    points_only: bool,
+}
+
+/// The working memory of a row's batches: which samples they are (pixel `x[i]`, sample
+/// `sample[i]`), their image points, generators and values, and the tracer's [`Scratch`].
+struct Batch {
+    x: [u32; BATCH],
+    sample: [u32; BATCH],
+    px: [f32; BATCH],
+    py: [f32; BATCH],
+    lens_x: [f32; BATCH],
+    lens_y: [f32; BATCH],
+    rngs: [Rng; BATCH],
+    values: [Vec3; BATCH],
+    scratch: Scratch,
+}
+
+impl Batch {
+    fn new() -> Self {
+        Self {
+            x: [0; BATCH],
+            sample: [0; BATCH],
+            px: [0.0; BATCH],
+            py: [0.0; BATCH],
+            lens_x: [0.0; BATCH],
+            lens_y: [0.0; BATCH],
+            rngs: [Rng::UNUSED; BATCH],
+            values: [Vec3::ZERO; BATCH],
+            scratch: Scratch::new(),
+        }
+    }
 }
 
 impl<'a> Rows<'a> {
@@ -244,13 +279,13 @@ impl<'a> Rows<'a> {
             settings,
             rotation: settings.camera.rotation(),
             sample,
+            points_only: !tracer.uses_random_numbers() && settings.camera.aperture <= 0.0,
         }
     }
 
-    /// Traces row `y` in batches ([`Tracer::trace_camera`]: the image points are found here,
-    /// the rays made by the tracer), hands each pixel of `row` its value (`put`, once for
-    /// every slot of `row`: [`render_pass`] relies on it), and puts what each sample saw into
-    /// `seen` if it is not empty.
+    /// Traces row `y` of this pass in batches, hands each pixel of `row` its value (`put`,
+    /// once for every slot of `row`: [`render_pass`] relies on it), and puts what each sample
+    /// saw into `seen` if it is not empty.
     #[inline(always)]
     fn trace<P>(
         &self,
@@ -259,86 +294,126 @@ impl<'a> Rows<'a> {
         seen: &mut [Option<Seen>],
         mut put: impl FnMut(&mut P, Vec3),
     ) {
-        let (mut px, mut py) = ([0.0; BATCH], [0.0; BATCH]);
-        let (mut lens_x, mut lens_y) = ([0.0; BATCH], [0.0; BATCH]);
-        let mut rngs = [Rng::UNUSED; BATCH];
-        let mut values = [Vec3::ZERO; BATCH];
-        let mut scratch = Scratch::new();
-        // Nothing random and a pinhole (the lab's stages as the lab sets them): each image
-        // point is its pixel's offset alone, with no generator and no lens point, in a loop
-        // the compiler can keep simple (the loop below, asking both per pixel, took 8 % of the
-        // lab pass's instructions: PERFORMANCE.md).
-        let points_only =
-            !self.tracer.uses_random_numbers() && self.settings.camera.aperture <= 0.0;
-        let seed = self.settings.seed;
+        let mut b = Batch::new();
         for (c, chunk) in row.chunks_mut(BATCH).enumerate() {
             let n = chunk.len();
             let first = (c * BATCH) as u32;
-            if points_only && self.sample == 0 {
-                // Sample 0 is every pixel's centre: one offset for the whole row.
-                let centre = pixel_offset(seed, first, y, 0);
-                for (i, (px, py)) in px[..n].iter_mut().zip(&mut py[..n]).enumerate() {
-                    (*px, *py) = image_plane_point(first + i as u32, y, centre);
-                }
-            } else if points_only {
-                jittered_points(
-                    self.tracer.scene.accel().isa(),
-                    seed,
-                    (first, y),
-                    self.sample,
-                    &mut px[..n],
-                    &mut py[..n],
-                );
-            } else {
-                for (i, rng) in rngs[..n].iter_mut().enumerate() {
-                    let x = first + i as u32;
-                    let ((x, y), lens) =
-                        image_point(self.tracer, self.settings, x, y, self.sample, rng);
-                    (px[i], py[i]) = (x, y);
-                    let lens = lens.unwrap_or_default();
-                    (lens_x[i], lens_y[i]) = (lens.x, lens.y);
-                }
+            for (i, (x, sample)) in b.x[..n].iter_mut().zip(&mut b.sample[..n]).enumerate() {
+                (*x, *sample) = (first + i as u32, self.sample);
             }
-            // A pinhole ignores the lens points (and they may be empty).
-            let lens = if points_only { 0 } else { n };
-            let points = ImagePoints {
-                camera: &self.settings.camera,
-                rotation: &self.rotation,
-                px: &px[..n],
-                py: &py[..n],
-                lens_x: &lens_x[..lens],
-                lens_y: &lens_y[..lens],
-            };
             let seen = match seen.is_empty() {
                 true => &mut [],
                 false => &mut seen[first as usize..first as usize + n],
             };
-            self.tracer.trace_camera(
-                &points,
-                &mut rngs[..n],
-                &mut values[..n],
-                seen,
-                &mut scratch,
-            );
-            for (pixel, value) in chunk.iter_mut().zip(&values[..n]) {
+            self.trace_batch(y, &mut b, n, self.sample == 0, seen);
+            for (pixel, value) in chunk.iter_mut().zip(&b.values[..n]) {
                 put(pixel, *value);
             }
         }
     }
+
+    /// Samples `0..samples` of every pixel of row `y`, added into `row` in sample order: the
+    /// same sums, bit for bit, as [`Rows::trace`] pass after pass, each pass added. But each
+    /// batch holds a few neighbouring pixels' samples (16 samples of 4 pixels, or all 8 of 8
+    /// pixels, …): rays through one pixel are as alike as rays get, so each batch's culling
+    /// keeps fewer triangles, for the camera rays and the shadow rays alike.
+    #[inline(always)]
+    fn trace_samples(&self, y: u32, row: &mut [Vec3], samples: u32) {
+        // Each batch: `pixels` pixels, up to `each` samples of each, a pixel's one after
+        // another. Its sums are `pixels` chains of additions, each waiting on the one before:
+        // side by side they wait together (one pixel's 64 samples a batch, a chain of 64,
+        // took 4 % of a 64-sample render of the lab's box).
+        let each = samples.clamp(1, (BATCH / 4) as u32) as usize;
+        let pixels = BATCH / each;
+        let mut b = Batch::new();
+        for (c, row) in row.chunks_mut(pixels).enumerate() {
+            let first = (c * pixels) as u32;
+            for start in (0..samples).step_by(each) {
+                let k = (samples - start).min(each as u32) as usize;
+                let n = row.len() * k;
+                for (p, (x, sample)) in b.x[..n]
+                    .chunks_mut(k)
+                    .zip(b.sample.chunks_mut(k))
+                    .enumerate()
+                {
+                    x.fill(first + p as u32);
+                    for (i, sample) in sample.iter_mut().enumerate() {
+                        *sample = start + i as u32;
+                    }
+                }
+                self.trace_batch(y, &mut b, n, samples == 1, &mut []);
+                for (pixel, values) in row.iter_mut().zip(b.values[..n].chunks(k)) {
+                    let mut sum = *pixel;
+                    for value in values {
+                        sum += *value;
+                    }
+                    *pixel = sum;
+                }
+            }
+        }
+    }
+
+    /// Traces the batch's first `n` samples (pixel `b.x[i]` of row `y`, sample `b.sample[i]`):
+    /// their image points found here, the rays made by the tracer
+    /// ([`Tracer::trace_camera`]), their values into `b.values`, what each saw into `seen` if
+    /// it is not empty. `centres`: every sample is sample 0, each pixel's centre.
+    #[inline(always)]
+    fn trace_batch(
+        &self,
+        y: u32,
+        b: &mut Batch,
+        n: usize,
+        centres: bool,
+        seen: &mut [Option<Seen>],
+    ) {
+        let seed = self.settings.seed;
+        let (px, py) = (&mut b.px[..n], &mut b.py[..n]);
+        if self.points_only && centres {
+            let centre = pixel_offset(seed, 0, y, 0);
+            for (&x, (px, py)) in b.x[..n].iter().zip(px.iter_mut().zip(py.iter_mut())) {
+                (*px, *py) = image_plane_point(x, y, centre);
+            }
+        } else if self.points_only {
+            let isa = self.tracer.scene.accel().isa();
+            jittered_points(isa, seed, y, (&b.x[..n], &b.sample[..n]), px, py);
+        } else {
+            for i in 0..n {
+                let (x, sample) = (b.x[i], b.sample[i]);
+                let ((x, y), lens) =
+                    image_point(self.tracer, self.settings, x, y, sample, &mut b.rngs[i]);
+                (b.px[i], b.py[i]) = (x, y);
+                let lens = lens.unwrap_or_default();
+                (b.lens_x[i], b.lens_y[i]) = (lens.x, lens.y);
+            }
+        }
+        // A pinhole ignores the lens points (and they may be empty).
+        let lens = if self.points_only { 0 } else { n };
+        let points = ImagePoints {
+            camera: &self.settings.camera,
+            rotation: &self.rotation,
+            px: &b.px[..n],
+            py: &b.py[..n],
+            lens_x: &b.lens_x[..lens],
+            lens_y: &b.lens_y[..lens],
+        };
+        let (rngs, values) = (&mut b.rngs[..n], &mut b.values[..n]);
+        self.tracer
+            .trace_camera(&points, rngs, values, seen, &mut b.scratch);
+    }
 }
 
-/// The image points of sample `sample` (jittered: not 0) of pixels `first.0, first.0 + 1, …` of
-/// row `first.1`, one per slot of `px` and `py`: [`image_plane_point`] at [`pixel_offset`],
-/// pixel by pixel. The offsets are integer hashing (64-bit multiplies) and took a fifth of a
+/// The jittered image points of samples `samples.1[i]` (not 0) of pixels `samples.0[i]` of
+/// row `y`, one per slot of `px` and `py`: [`image_plane_point`] at [`pixel_offset`], sample
+/// by sample. The offsets are integer hashing (64-bit multiplies) and took a fifth of a
 /// jittered lab pass's instructions one pixel at a time; compiled for AVX-512 the same loop is
-/// done sixteen pixels at once (the same bits: the hashing is integer arithmetic and each float
-/// is made by the same conversion; `jittered_points_are_the_same_on_every_isa`).
+/// done sixteen samples at once (the same bits: the hashing is integer arithmetic and each
+/// float is made by the same conversion; `jittered_points_are_the_same_on_every_isa`).
 #[inline(always)]
 fn jittered_points(
     isa: Isa,
     seed: u64,
-    first: (u32, u32),
-    sample: u32,
+    y: u32,
+    samples: (&[u32], &[u32]),
     px: &mut [f32],
     py: &mut [f32],
 ) {
@@ -346,25 +421,25 @@ fn jittered_points(
         #[cfg(target_arch = "x86_64")]
         Isa::Avx512(k) => {
             // SAFETY: `k` proves the CPU has AVX-512 F, DQ and VL, AVX2 and FMA.
-            unsafe { jittered_points_avx512(k, seed, first, sample, px, py) }
+            unsafe { jittered_points_avx512(k, seed, y, samples, px, py) }
         }
-        _ => jittered_points_portable(seed, first, sample, px, py),
+        _ => jittered_points_portable(seed, y, samples, px, py),
     }
 }
 
-/// [`jittered_points`], one pixel at a time as the compiler makes it for any CPU.
+/// [`jittered_points`], one sample at a time as the compiler makes it for any CPU.
 #[inline(always)]
 fn jittered_points_portable(
     seed: u64,
-    first: (u32, u32),
-    sample: u32,
+    y: u32,
+    (xs, samples): (&[u32], &[u32]),
     px: &mut [f32],
     py: &mut [f32],
 ) {
-    let (x0, y) = first;
-    for (i, (px, py)) in px.iter_mut().zip(py.iter_mut()).enumerate() {
-        let x = x0 + i as u32;
-        (*px, *py) = image_plane_point(x, y, pixel_offset(seed, x, y, sample));
+    let n = px.len().min(py.len()).min(xs.len()).min(samples.len());
+    for i in 0..n {
+        let (x, sample) = (xs[i], samples[i]);
+        (px[i], py[i]) = image_plane_point(x, y, pixel_offset(seed, x, y, sample));
     }
 }
 
@@ -375,12 +450,12 @@ fn jittered_points_portable(
 fn jittered_points_avx512(
     _proof: Avx512,
     seed: u64,
-    first: (u32, u32),
-    sample: u32,
+    y: u32,
+    samples: (&[u32], &[u32]),
     px: &mut [f32],
     py: &mut [f32],
 ) {
-    jittered_points_portable(seed, first, sample, px, py);
+    jittered_points_portable(seed, y, samples, px, py);
 }
 
 /// The full image: `samples_per_pixel` passes averaged. Not cancellable; for the command line
@@ -399,26 +474,33 @@ pub fn try_render(scene: &Scene, settings: &RenderSettings) -> Result<Image, All
     Ok(image)
 }
 
-/// Adds `samples_per_pixel` passes into `sum` (all zeros), a row at a time, then divides by
-/// their number: the mean of the passes in the one image, where a [`Film`] holds its sum and a
-/// whole pass beside it and resolves into a third image (three full-size images at the peak;
-/// one here). The same operations in the same order as [`Film::add_pass`] and
-/// [`Film::resolve`], so the same image bit for bit (the workbench's, accumulated in a film,
-/// equals this one: `progressive`'s tests).
+/// Adds `samples_per_pixel` samples of every pixel into `sum` (all zeros), a row at a time,
+/// then divides by their number: the mean of the passes in the one image, where a [`Film`]
+/// holds its sum and a whole pass beside it and resolves into a third image (three full-size
+/// images at the peak; one here). The same operations in the same order as
+/// [`Film::add_pass`] and [`Film::resolve`], so the same image bit for bit (the workbench's,
+/// accumulated in a film, equals this one: `progressive`'s tests). A row's samples are traced
+/// pixel by pixel ([`Rows::trace_samples`]), but pass after pass when caustics come from
+/// photons: each pass then has its own photon map.
 fn accumulate(scene: &Scene, settings: &RenderSettings, sum: &mut Image) {
     let width = settings.camera.width as usize;
-    let mut tracer = Tracer::new(scene, settings);
     let samples = settings.samples_per_pixel.max(1);
-    for sample in 0..samples {
-        // Each pass its own photon map, when caustics come from photons.
-        if settings.shading.photon_caustics() {
-            tracer = Tracer::for_pass(scene, settings, sample);
+    if settings.shading.photon_caustics() {
+        for sample in 0..samples {
+            let tracer = Tracer::for_pass(scene, settings, sample);
+            let rows = Rows::new(&tracer, settings, sample);
+            sum.pixels
+                .par_chunks_mut(width.max(1))
+                .enumerate()
+                .for_each(|(y, row)| rows.trace(y as u32, row, &mut [], |s, value| *s += value));
         }
-        let rows = Rows::new(&tracer, settings, sample);
+    } else {
+        let tracer = Tracer::new(scene, settings);
+        let rows = Rows::new(&tracer, settings, 0);
         sum.pixels
             .par_chunks_mut(width.max(1))
             .enumerate()
-            .for_each(|(y, row)| rows.trace(y as u32, row, &mut [], |s, value| *s += value));
+            .for_each(|(y, row)| rows.trace_samples(y as u32, row, samples));
     }
     // `Film::resolve`'s scale.
     let scale = 1.0 / samples as f32;
@@ -457,24 +539,82 @@ mod tests {
             (u64::MAX, 63, (100, 16_383), 100),
             (42, 4_000, (16_000, 9), 37),
         ] {
-            let (mut px, mut py) = (vec![0.0; n], vec![0.0; n]);
-            jittered_points_portable(seed, first, sample, &mut px, &mut py);
-            for (i, (&x, &y)) in px.iter().zip(&py).enumerate() {
-                let (dx, dy) = pixel_offset(seed, first.0 + i as u32, first.1, sample);
-                assert_eq!(
-                    (x, y),
-                    ((first.0 + i as u32) as f32 + dx, first.1 as f32 + dy)
-                );
-                assert!(dx != 0.5 || dy != 0.5, "jittered");
+            // A pass's stretch of a row (one sample, pixel after pixel), then a pixel's samples
+            // one after another (as a render traces them).
+            for along_row in [true, false] {
+                let xs: Vec<u32> = (0..n as u32)
+                    .map(|i| {
+                        if along_row {
+                            first.0 + i
+                        } else {
+                            first.0 + i / 7
+                        }
+                    })
+                    .collect();
+                let samples: Vec<u32> = (0..n as u32)
+                    .map(|i| if along_row { sample } else { sample + i % 7 })
+                    .collect();
+                let (mut px, mut py) = (vec![0.0; n], vec![0.0; n]);
+                jittered_points_portable(seed, first.1, (&xs, &samples), &mut px, &mut py);
+                for (i, (&x, &y)) in px.iter().zip(&py).enumerate() {
+                    let (dx, dy) = pixel_offset(seed, xs[i], first.1, samples[i]);
+                    assert_eq!((x, y), (xs[i] as f32 + dx, first.1 as f32 + dy));
+                    assert!(dx != 0.5 || dy != 0.5, "jittered");
+                }
+                #[cfg(target_arch = "x86_64")]
+                {
+                    let (mut qx, mut qy) = (vec![0.0; n], vec![0.0; n]);
+                    let samples = (&xs[..], &samples[..]);
+                    // SAFETY: `k` proves the CPU has AVX-512.
+                    unsafe { jittered_points_avx512(k, seed, first.1, samples, &mut qx, &mut qy) };
+                    let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&qx), bits(&px), "seed {seed}, sample {sample}");
+                    assert_eq!(bits(&qy), bits(&py), "seed {seed}, sample {sample}");
+                }
             }
-            #[cfg(target_arch = "x86_64")]
-            {
-                let (mut qx, mut qy) = (vec![0.0; n], vec![0.0; n]);
-                // SAFETY: `k` proves the CPU has AVX-512.
-                unsafe { jittered_points_avx512(k, seed, first, sample, &mut qx, &mut qy) };
-                let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(&qx), bits(&px), "seed {seed}, sample {sample}");
-                assert_eq!(bits(&qy), bits(&py), "seed {seed}, sample {sample}");
+        }
+    }
+
+    /// A render traces each row's samples a few pixels at a time, all their samples before
+    /// the next pixels: the same image, bit for bit, as its passes rendered one after another
+    /// and added in a film. Sample counts that fill the batches and that do not (the last
+    /// round of a pixel's samples short), rows that do not end on a whole batch; the lab's
+    /// jittered stages, the path tracer, soft shadows with a lens.
+    #[test]
+    fn a_render_pixel_by_pixel_equals_its_passes_added() {
+        let scene = cornell_box();
+        let mut settings = small();
+        settings.camera = settings.camera.with_resolution(37, 5);
+        for (stage, samples) in [
+            (crate::Stage::Shadows, 1),
+            (crate::Stage::Shadows, 70),
+            (crate::Stage::Lab, 3),
+            (crate::Stage::Path, 17),
+            (crate::Stage::Path, 16),
+        ] {
+            for soft in [false, true] {
+                settings.shading = crate::Shading::for_stage(stage);
+                settings.samples_per_pixel = samples;
+                if soft {
+                    settings.light.radius = 0.1;
+                    settings.camera.aperture = 0.03;
+                }
+                let image = render(&scene, &settings);
+                let mut film = Film::new(37, 5);
+                for sample in 0..samples {
+                    film.add_pass(&render_pass(&scene, &settings, sample, &|| false).unwrap());
+                }
+                let bits = |i: &Image| -> Vec<[u32; 3]> {
+                    i.pixels
+                        .iter()
+                        .map(|p| p.to_array().map(f32::to_bits))
+                        .collect()
+                };
+                assert_eq!(
+                    bits(&image),
+                    bits(&film.resolve()),
+                    "{stage}, {samples}, {soft}"
+                );
             }
         }
     }
