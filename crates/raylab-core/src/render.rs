@@ -375,7 +375,12 @@ impl<'a> Rows<'a> {
             }
         } else if self.points_only {
             let isa = self.tracer.scene.accel().isa();
-            jittered_points(isa, seed, y, (&b.x[..n], &b.sample[..n]), px, py);
+            jittered_points(isa, seed, y, (&b.x[..n], &b.sample[..n]), px, py, &mut []);
+        } else if self.settings.camera.aperture <= 0.0 {
+            // A pinhole: the points and each sample's generator, as `image_point` makes them.
+            let isa = self.tracer.scene.accel().isa();
+            let rngs = &mut b.rngs[..n];
+            jittered_points(isa, seed, y, (&b.x[..n], &b.sample[..n]), px, py, rngs);
         } else {
             for i in 0..n {
                 let (x, sample) = (b.x[i], b.sample[i]);
@@ -402,12 +407,14 @@ impl<'a> Rows<'a> {
     }
 }
 
-/// The jittered image points of samples `samples.1[i]` (not 0) of pixels `samples.0[i]` of
-/// row `y`, one per slot of `px` and `py`: [`image_plane_point`] at [`pixel_offset`], sample
-/// by sample. The offsets are integer hashing (64-bit multiplies) and took a fifth of a
-/// jittered lab pass's instructions one pixel at a time; compiled for AVX-512 the same loop is
-/// done sixteen samples at once (the same bits: the hashing is integer arithmetic and each
-/// float is made by the same conversion; `jittered_points_are_the_same_on_every_isa`).
+/// The jittered image points of samples `samples.1[i]` of pixels `samples.0[i]` of row `y`,
+/// one per slot of `px` and `py`: [`image_plane_point`] at [`pixel_offset`], sample by sample;
+/// and, if `rngs` is not empty, each sample's generator as [`pixel_sample`] leaves it (the
+/// path tracer's bounces draw from it). The offsets are integer hashing (64-bit multiplies)
+/// and took a fifth of a jittered lab pass's instructions one pixel at a time; compiled for
+/// AVX-512 the same loop is done sixteen samples at once (the same bits: the hashing is
+/// integer arithmetic and each float is made by the same conversion;
+/// `jittered_points_are_the_same_on_every_isa`).
 #[inline(always)]
 fn jittered_points(
     isa: Isa,
@@ -416,14 +423,15 @@ fn jittered_points(
     samples: (&[u32], &[u32]),
     px: &mut [f32],
     py: &mut [f32],
+    rngs: &mut [Rng],
 ) {
     match isa {
         #[cfg(target_arch = "x86_64")]
         Isa::Avx512(k) => {
             // SAFETY: `k` proves the CPU has AVX-512 F, DQ and VL, AVX2 and FMA.
-            unsafe { jittered_points_avx512(k, seed, y, samples, px, py) }
+            unsafe { jittered_points_avx512(k, seed, y, samples, px, py, rngs) }
         }
-        _ => jittered_points_portable(seed, y, samples, px, py),
+        _ => jittered_points_portable(seed, y, samples, px, py, rngs),
     }
 }
 
@@ -435,11 +443,21 @@ fn jittered_points_portable(
     (xs, samples): (&[u32], &[u32]),
     px: &mut [f32],
     py: &mut [f32],
+    rngs: &mut [Rng],
 ) {
     let n = px.len().min(py.len()).min(xs.len()).min(samples.len());
-    for i in 0..n {
-        let (x, sample) = (xs[i], samples[i]);
-        (px[i], py[i]) = image_plane_point(x, y, pixel_offset(seed, x, y, sample));
+    if rngs.is_empty() {
+        for i in 0..n {
+            let (x, sample) = (xs[i], samples[i]);
+            (px[i], py[i]) = image_plane_point(x, y, pixel_offset(seed, x, y, sample));
+        }
+    } else {
+        for (i, rng) in rngs.iter_mut().enumerate().take(n) {
+            let (x, sample) = (xs[i], samples[i]);
+            let (offset, stream) = pixel_sample(seed, x, y, sample);
+            *rng = stream;
+            (px[i], py[i]) = image_plane_point(x, y, offset);
+        }
     }
 }
 
@@ -454,8 +472,9 @@ fn jittered_points_avx512(
     samples: (&[u32], &[u32]),
     px: &mut [f32],
     py: &mut [f32],
+    rngs: &mut [Rng],
 ) {
-    jittered_points_portable(seed, y, samples, px, py);
+    jittered_points_portable(seed, y, samples, px, py, rngs);
 }
 
 /// The full image: `samples_per_pixel` passes averaged. Not cancellable; for the command line
@@ -555,7 +574,7 @@ mod tests {
                     .map(|i| if along_row { sample } else { sample + i % 7 })
                     .collect();
                 let (mut px, mut py) = (vec![0.0; n], vec![0.0; n]);
-                jittered_points_portable(seed, first.1, (&xs, &samples), &mut px, &mut py);
+                jittered_points_portable(seed, first.1, (&xs, &samples), &mut px, &mut py, &mut []);
                 for (i, (&x, &y)) in px.iter().zip(&py).enumerate() {
                     let (dx, dy) = pixel_offset(seed, xs[i], first.1, samples[i]);
                     assert_eq!((x, y), (xs[i] as f32 + dx, first.1 as f32 + dy));
@@ -566,10 +585,25 @@ mod tests {
                     let (mut qx, mut qy) = (vec![0.0; n], vec![0.0; n]);
                     let samples = (&xs[..], &samples[..]);
                     // SAFETY: `k` proves the CPU has AVX-512.
-                    unsafe { jittered_points_avx512(k, seed, first.1, samples, &mut qx, &mut qy) };
+                    unsafe {
+                        jittered_points_avx512(k, seed, first.1, samples, &mut qx, &mut qy, &mut [])
+                    };
                     let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
                     assert_eq!(bits(&qx), bits(&px), "seed {seed}, sample {sample}");
                     assert_eq!(bits(&qy), bits(&py), "seed {seed}, sample {sample}");
+                }
+                // With each sample's generator too: the same points, and the generators
+                // `pixel_sample` leaves, on every kernel set.
+                for isa in [Isa::Scalar, Isa::widest()] {
+                    let mut rngs = vec![Rng::UNUSED; n];
+                    let (mut rx, mut ry) = (vec![0.0; n], vec![0.0; n]);
+                    let samples = (&xs[..], &samples[..]);
+                    jittered_points(isa, seed, first.1, samples, &mut rx, &mut ry, &mut rngs);
+                    assert_eq!((&rx, &ry), (&px, &py));
+                    for (i, rng) in rngs.iter_mut().enumerate() {
+                        let mut want = pixel_sample(seed, xs[i], first.1, samples.1[i]).1;
+                        assert_eq!(rng.next_u32(), want.next_u32(), "seed {seed}, sample {i}");
+                    }
                 }
             }
         }
