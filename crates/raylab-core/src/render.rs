@@ -392,7 +392,11 @@ impl<'a> Rows<'a> {
             }
         }
         // A pinhole ignores the lens points (and they may be empty).
-        let lens = if self.points_only { 0 } else { n };
+        let lens = if self.settings.camera.aperture > 0.0 {
+            n
+        } else {
+            0
+        };
         let points = ImagePoints {
             camera: &self.settings.camera,
             rotation: &self.rotation,

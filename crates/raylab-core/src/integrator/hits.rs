@@ -118,6 +118,8 @@ pub struct Scratch {
 }
 
 impl Scratch {
+    /// Working memory for any batch: a batch takes only what it wrote into it (the lanes it
+    /// left are computed with, never taken; `a_reused_scratch_gives_the_values_of_a_fresh_one`).
     pub fn new() -> Self {
         Self {
             diffuse: DiffuseHits::new(),
