@@ -198,7 +198,7 @@ pub trait Kernels: Copy {
         ray: &RayK,
         t_limit: f32,
     ) -> Option<(usize, LaneHit)> {
-        nearest_packet_by_packet(self, packets, ray, t_limit)
+        nearest_packet_by_packet(packets, t_limit, |p, limit| self.nearest(p, ray, limit))
     }
     /// Whether any triangle of the packet is hit with `0 < t < t_limit`.
     fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool;
@@ -331,7 +331,7 @@ impl Avx512 {
     }
 
     /// The nearest hit among 16-wide `packets`: the packet's position in the slice, and the
-    /// hit. The same answer as [`nearest16_packet_by_packet`], bit for bit: among equal `t`,
+    /// hit. The same answer as [`nearest_packet_by_packet`], bit for bit: among equal `t`,
     /// the first packet's, then its lowest lane's.
     ///
     /// Each lane keeps its own nearest `t`, `u`, `v` and packet from packet to packet, and the
@@ -352,7 +352,7 @@ impl Avx512 {
             unsafe { x86::nearest16_among(packets, r, t_limit) }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        nearest16_packet_by_packet(self, packets, r, t_limit)
+        nearest_packet_by_packet(packets, t_limit, |p, limit| self.nearest16(p, r, limit))
     }
 
     /// Whether any triangle of a 16-wide packet is hit.
@@ -368,41 +368,19 @@ impl Avx512 {
     }
 }
 
-/// The nearest hit among 8-wide `packets`, one packet after another, each tested with the
-/// limit of the nearest hit so far (strict, so the first of equal hits wins): the readable
-/// definition of [`Kernels::nearest_among`].
+/// The nearest hit among `packets`, one packet after another, each tested by `nearest` with
+/// the limit of the nearest hit so far (strict, so the first of equal hits wins): the readable
+/// definition of [`Kernels::nearest_among`] and [`Avx512::nearest16_among`].
 #[inline(always)]
-pub fn nearest_packet_by_packet<K: Kernels>(
-    k: K,
-    packets: &[Packet8],
-    r: &RayK,
+pub fn nearest_packet_by_packet<P>(
+    packets: &[P],
     t_limit: f32,
+    nearest: impl Fn(&P, f32) -> Option<LaneHit>,
 ) -> Option<(usize, LaneHit)> {
     let mut best = None;
     let mut limit = t_limit;
     for (i, p) in packets.iter().enumerate() {
-        if let Some(h) = k.nearest(p, r, limit) {
-            best = Some((i, h));
-            limit = h.t;
-        }
-    }
-    best
-}
-
-/// The nearest hit among 16-wide `packets`, one packet after another, each tested with the
-/// limit of the nearest hit so far (strict, so the first of equal hits wins): the readable
-/// definition of [`Avx512::nearest16_among`].
-#[inline(always)]
-pub fn nearest16_packet_by_packet(
-    k: Avx512,
-    packets: &[Packet16],
-    r: &RayK,
-    t_limit: f32,
-) -> Option<(usize, LaneHit)> {
-    let mut best = None;
-    let mut limit = t_limit;
-    for (i, p) in packets.iter().enumerate() {
-        if let Some(h) = k.nearest16(p, r, limit) {
+        if let Some(h) = nearest(p, limit) {
             best = Some((i, h));
             limit = h.t;
         }
@@ -850,7 +828,7 @@ mod tests {
             } else {
                 rng.uniform(0.0, 5.0)
             };
-            let want = nearest16_packet_by_packet(k, &packets, &r, limit);
+            let want = nearest_packet_by_packet(&packets, limit, |p, l| k.nearest16(p, &r, l));
             let got = k.nearest16_among(&packets, &r, limit);
             assert_eq!(
                 got.map(|(p, h)| (p, h.lane, h.t.to_bits(), h.u.to_bits(), h.v.to_bits())),
@@ -904,7 +882,7 @@ mod tests {
             let bits = |h: Option<(usize, LaneHit)>| {
                 h.map(|(p, h)| (p, h.lane, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
             };
-            let want = nearest_packet_by_packet(Scalar, &packets, &r, limit);
+            let want = nearest_packet_by_packet(&packets, limit, |p, l| Scalar.nearest(p, &r, l));
             assert_eq!(bits(Scalar.nearest_among(&packets, &r, limit)), bits(want));
             if let Some(k) = avx2 {
                 assert_eq!(bits(k.nearest_among(&packets, &r, limit)), bits(want));

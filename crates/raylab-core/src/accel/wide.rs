@@ -15,7 +15,7 @@ use crate::geometry::{Ray, Triangle};
 
 use super::bvh::{BOX_T_SLACK, Bvh};
 use super::cull::Corners;
-use super::simd::{Avx2, Avx512, Kernels, LANES, Node8, Packet8, Packet16, RayK, Scalar};
+use super::simd::{Avx2, Avx512, Kernels, LANES, LaneHit, Node8, Packet8, Packet16, RayK, Scalar};
 use super::{Hit, TraversalCost};
 
 pub const LEAF: u32 = 1 << 31;
@@ -199,12 +199,7 @@ impl KernelSet for Avx512 {
 #[inline(always)]
 pub fn closest16_in(packets: &[Packet16], k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
     let (p, h) = k.nearest16_among(packets, r, t_max)?;
-    Some(Hit {
-        index: packets[p].index[h.lane],
-        t: h.t,
-        u: h.u,
-        v: h.v,
-    })
+    Some(scene_hit(&packets[p].index, h))
 }
 
 /// The nearest hit among 8-wide `packets` (the flat list, or its culled copy).
@@ -213,12 +208,18 @@ pub fn closest_in<K: Kernels>(packets: &[Packet8], k: K, r: &RayK, t_max: f32) -
     // Packets and lanes are in index order and the first of equal hits wins, as in the
     // brute-force loop.
     let (p, h) = k.nearest_among(packets, r, t_max)?;
-    Some(Hit {
-        index: packets[p].index[h.lane],
+    Some(scene_hit(&packets[p].index, h))
+}
+
+/// A packet's hit `h` as the scene's: its lane's triangle, from the packet's `index`.
+#[inline(always)]
+fn scene_hit<const N: usize>(index: &[u32; N], h: LaneHit) -> Hit {
+    Hit {
+        index: index[h.lane],
         t: h.t,
         u: h.u,
         v: h.v,
-    })
+    }
 }
 
 /// How many of a packet's lanes hold a triangle (the others are [`Packet8::EMPTY`]'s padding).
