@@ -195,7 +195,10 @@ impl Scene {
     }
 
     /// [`Scene::closest_intersection`] for many rays at once: `out[i]` for `rays[i]`, the same
-    /// answers, faster (see [`Accel::closest_batch`]).
+    /// answers, faster (see [`Accel::closest_batch`]). Inlined, so that the path tracer's
+    /// vertex, compiled for the CPU, makes the `Intersection`s with its instruction set: path
+    /// pass 48.9 → 48.3 ms (Zen 5, one thread, alternating).
+    #[inline]
     pub fn closest_intersections(
         &self,
         rays: &[Ray],
