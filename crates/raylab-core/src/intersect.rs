@@ -139,8 +139,9 @@ pub fn intersect_lanes_giving_up<V: Vector>(
     let inv_det = V::Real::splat(1.0) / -direction.dot(n);
     let t = b.dot(n) * inv_det;
     if give_up && !in_range(t, t_max).any() {
-        // One ray gives up here. Lanes go on, and test `t` with `u` and `v` (a mask kept
-        // from here would hold a register through the rest).
+        // One ray gives up here, and lanes where asked to (alike rays, which mostly miss a
+        // triangle's plane together). Otherwise lanes go on, and test `t` with `u` and `v` (a
+        // mask kept from here would hold a register through the rest).
         return Hits {
             t,
             u: t,

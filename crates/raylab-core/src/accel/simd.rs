@@ -492,10 +492,7 @@ mod x86 {
             return None;
         }
         let t = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), t, hit);
-        // Horizontal minimum, broadcast to every lane.
-        let m = _mm256_min_ps(t, _mm256_permute2f128_ps::<1>(t, t));
-        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b01_00_11_10>(m));
-        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m));
+        let m = min_of_lanes(t);
         let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t, m), hit);
         let lane = (_mm256_movemask_ps(at_min) as u32).trailing_zeros() as usize;
         let mut uv = [[0.0f32; LANES]; 2];
@@ -535,11 +532,8 @@ mod x86 {
         if _mm256_movemask_ps(hit_any) == 0 {
             return None;
         }
-        let t = t_best;
-        let m = _mm256_min_ps(t, _mm256_permute2f128_ps::<1>(t, t));
-        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b01_00_11_10>(m));
-        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m));
-        let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t, m), hit_any);
+        let m = min_of_lanes(t_best);
+        let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t_best, m), hit_any);
         let at_min = _mm256_movemask_ps(at_min) as u32;
         let mut lane = at_min.trailing_zeros() as usize & (LANES - 1);
         let mut packet = lane_of(packet_best, lane).to_bits();
@@ -562,6 +556,15 @@ mod x86 {
                 v: lane_of(v_best, lane),
             },
         ))
+    }
+
+    /// The smallest of `a`'s lanes, in every lane.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn min_of_lanes(a: __m256) -> __m256 {
+        let m = _mm256_min_ps(a, _mm256_permute2f128_ps::<1>(a, a));
+        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b01_00_11_10>(m));
+        _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m))
     }
 
     /// Lane `lane` of `a`, moved to lane 0 in registers (see `nearest16`). (Not a closure: a
