@@ -9,6 +9,8 @@
 //! Each sample's jitter and random numbers depend only on (seed, pixel, sample index), so the
 //! image is the same whatever the thread count, and any pixel can be recomputed on its own.
 
+use std::cell::RefCell;
+
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -18,7 +20,7 @@ use crate::accel::simd::Avx512;
 use crate::camera::ImagePoints;
 use crate::film::{Film, Image, Seen};
 use crate::geometry::Ray;
-use crate::integrator::{BATCH, Scratch, Tracer};
+use crate::integrator::{BATCH, PATH_BATCH, Scratch, Tracer};
 use crate::memory::AllocError;
 use crate::sampling::{Rng, concentric_disk, pixel_offset, pixel_sample};
 use crate::scene::Scene;
@@ -244,29 +246,47 @@ struct Rows<'a> {
 
 /// The working memory of a row's batches: which samples they are (pixel `x[i]`, sample
 /// `sample[i]`), their image points, generators and values, and the tracer's [`Scratch`].
+/// Room for the longest batch ([`Tracer::batch_len`]).
 struct Batch {
-    x: [u32; BATCH],
-    sample: [u32; BATCH],
-    px: [f32; BATCH],
-    py: [f32; BATCH],
-    lens_x: [f32; BATCH],
-    lens_y: [f32; BATCH],
-    rngs: [Rng; BATCH],
-    values: [Vec3; BATCH],
+    x: [u32; PATH_BATCH],
+    sample: [u32; PATH_BATCH],
+    px: [f32; PATH_BATCH],
+    py: [f32; PATH_BATCH],
+    lens_x: [f32; PATH_BATCH],
+    lens_y: [f32; PATH_BATCH],
+    rngs: [Rng; PATH_BATCH],
+    values: [Vec3; PATH_BATCH],
     scratch: Scratch,
 }
 
+thread_local! {
+    /// Each thread's [`Batch`], made at its first row and reused for every row after: about
+    /// 110 KB with room for the path tracer's batches, whose zeroing for each row took 7 % of
+    /// the lab pass (a row of 512 pixels is 6 µs).
+    static BATCH_MEMORY: RefCell<Option<Box<Batch>>> = const { RefCell::new(None) };
+}
+
 impl Batch {
+    /// `work` with this thread's batch memory ([`BATCH_MEMORY`]), or with a fresh one if
+    /// it is in use (never, unless a row were traced inside another's tracing).
+    #[inline(always)]
+    fn with<T>(work: impl FnOnce(&mut Batch) -> T) -> T {
+        BATCH_MEMORY.with(|memory| match memory.try_borrow_mut() {
+            Ok(mut memory) => work(memory.get_or_insert_with(|| Box::new(Batch::new()))),
+            Err(_) => work(&mut Batch::new()),
+        })
+    }
+
     fn new() -> Self {
         Self {
-            x: [0; BATCH],
-            sample: [0; BATCH],
-            px: [0.0; BATCH],
-            py: [0.0; BATCH],
-            lens_x: [0.0; BATCH],
-            lens_y: [0.0; BATCH],
-            rngs: [Rng::UNUSED; BATCH],
-            values: [Vec3::ZERO; BATCH],
+            x: [0; PATH_BATCH],
+            sample: [0; PATH_BATCH],
+            px: [0.0; PATH_BATCH],
+            py: [0.0; PATH_BATCH],
+            lens_x: [0.0; PATH_BATCH],
+            lens_y: [0.0; PATH_BATCH],
+            rngs: [Rng::UNUSED; PATH_BATCH],
+            values: [Vec3::ZERO; PATH_BATCH],
             scratch: Scratch::new(),
         }
     }
@@ -294,29 +314,32 @@ impl<'a> Rows<'a> {
         seen: &mut [Option<Seen>],
         mut put: impl FnMut(&mut P, Vec3),
     ) {
-        let mut b = Batch::new();
-        for (c, chunk) in row.chunks_mut(BATCH).enumerate() {
-            let n = chunk.len();
-            let first = (c * BATCH) as u32;
-            for (i, (x, sample)) in b.x[..n].iter_mut().zip(&mut b.sample[..n]).enumerate() {
-                (*x, *sample) = (first + i as u32, self.sample);
+        let len = self.tracer.batch_len();
+        Batch::with(|b| {
+            for (c, chunk) in row.chunks_mut(len).enumerate() {
+                let n = chunk.len();
+                let first = (c * len) as u32;
+                for (i, (x, sample)) in b.x[..n].iter_mut().zip(&mut b.sample[..n]).enumerate() {
+                    (*x, *sample) = (first + i as u32, self.sample);
+                }
+                let seen = match seen.is_empty() {
+                    true => &mut [],
+                    false => &mut seen[first as usize..first as usize + n],
+                };
+                self.trace_batch(y, b, n, self.sample == 0, seen);
+                for (pixel, value) in chunk.iter_mut().zip(&b.values[..n]) {
+                    put(pixel, *value);
+                }
             }
-            let seen = match seen.is_empty() {
-                true => &mut [],
-                false => &mut seen[first as usize..first as usize + n],
-            };
-            self.trace_batch(y, &mut b, n, self.sample == 0, seen);
-            for (pixel, value) in chunk.iter_mut().zip(&b.values[..n]) {
-                put(pixel, *value);
-            }
-        }
+        })
     }
 
     /// Samples `0..samples` of every pixel of row `y`, added into `row` in sample order: the
     /// same sums, bit for bit, as [`Rows::trace`] pass after pass, each pass added. But each
     /// batch holds a few neighbouring pixels' samples (16 samples of 4 pixels, or all 8 of 8
-    /// pixels, …): rays through one pixel are as alike as rays get, so each batch's culling
-    /// keeps fewer triangles, for the camera rays and the shadow rays alike.
+    /// pixels, …; four times as many pixels in the path tracer's longer batches): rays through
+    /// one pixel are as alike as rays get, so each batch's culling keeps fewer triangles, for
+    /// the camera rays and the shadow rays alike.
     #[inline(always)]
     fn trace_samples(&self, y: u32, row: &mut [Vec3], samples: u32) {
         // Each batch: `pixels` pixels, up to `each` samples of each, a pixel's one after
@@ -324,33 +347,34 @@ impl<'a> Rows<'a> {
         // side by side they wait together (one pixel's 64 samples a batch, a chain of 64,
         // took 4 % of a 64-sample render of the lab's box).
         let each = samples.clamp(1, (BATCH / 4) as u32) as usize;
-        let pixels = BATCH / each;
-        let mut b = Batch::new();
-        for (c, row) in row.chunks_mut(pixels).enumerate() {
-            let first = (c * pixels) as u32;
-            for start in (0..samples).step_by(each) {
-                let k = (samples - start).min(each as u32) as usize;
-                let n = row.len() * k;
-                for (p, (x, sample)) in b.x[..n]
-                    .chunks_mut(k)
-                    .zip(b.sample[..n].chunks_mut(k))
-                    .enumerate()
-                {
-                    x.fill(first + p as u32);
-                    for (i, sample) in sample.iter_mut().enumerate() {
-                        *sample = start + i as u32;
+        let pixels = self.tracer.batch_len() / each;
+        Batch::with(|b| {
+            for (c, row) in row.chunks_mut(pixels).enumerate() {
+                let first = (c * pixels) as u32;
+                for start in (0..samples).step_by(each) {
+                    let k = (samples - start).min(each as u32) as usize;
+                    let n = row.len() * k;
+                    for (p, (x, sample)) in b.x[..n]
+                        .chunks_mut(k)
+                        .zip(b.sample[..n].chunks_mut(k))
+                        .enumerate()
+                    {
+                        x.fill(first + p as u32);
+                        for (i, sample) in sample.iter_mut().enumerate() {
+                            *sample = start + i as u32;
+                        }
                     }
-                }
-                self.trace_batch(y, &mut b, n, samples == 1, &mut []);
-                for (pixel, values) in row.iter_mut().zip(b.values[..n].chunks(k)) {
-                    let mut sum = *pixel;
-                    for value in values {
-                        sum += *value;
+                    self.trace_batch(y, b, n, samples == 1, &mut []);
+                    for (pixel, values) in row.iter_mut().zip(b.values[..n].chunks(k)) {
+                        let mut sum = *pixel;
+                        for value in values {
+                            sum += *value;
+                        }
+                        *pixel = sum;
                     }
-                    *pixel = sum;
                 }
             }
-        }
+        })
     }
 
     /// Traces the batch's first `n` samples (pixel `b.x[i]` of row `y`, sample `b.sample[i]`):

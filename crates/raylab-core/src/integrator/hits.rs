@@ -15,7 +15,7 @@
 //! their lanes empty, and empty lanes cost their group's light and shadow rays as full ones do
 //! (a pass took 11 % longer).
 
-use super::{BATCH, HitTerms, Lighting, Surface, Surfaces, Tracer, light_point};
+use super::{BATCH, HitTerms, Lighting, PATH_BATCH, Surface, Surfaces, Tracer, light_point};
 use crate::accel::lane_io::{ray_lanes, table_lanes};
 use crate::accel::{HitLanes, Isa};
 use crate::geometry::Ray;
@@ -30,6 +30,9 @@ const _: () = assert!(BATCH.is_multiple_of(LANES));
 
 /// Lane groups in a batch.
 pub(crate) const GROUPS: usize = BATCH / LANES;
+
+/// Lane groups in a batch of the path tracer's paths ([`PATH_BATCH`]).
+pub(crate) const PATH_GROUPS: usize = PATH_BATCH / LANES;
 
 /// The lanes whose bits are set in `mask`, in order.
 #[inline(always)]
@@ -107,52 +110,42 @@ impl TriangleTable {
     }
 }
 
-/// The working memory of the sixteen-lane integrators' batches (the lab's waves, the path
-/// tracer's vertices): the diffuse hits in lanes and the light at them, about 7 KB. Made
-/// once for a row of the image and reused batch after batch; made afresh for every batch of
-/// 64 rays, its zeroing (a `memset` of that size, `rep stosb` in glibc) took 6 % of the
-/// Cornell box's lab pass (Zen 5, one thread).
-pub struct Scratch {
-    pub(super) diffuse: DiffuseHits,
-    pub(super) lit: [Lighting<Vec3x16>; GROUPS],
+/// The part of [`super::Scratch`] an integrator works in: the diffuse hits of `G` lane groups
+/// and the light at them ([`super::GROUPS`] for the lab's batches, [`PATH_GROUPS`] for the path
+/// tracer's).
+pub(crate) struct HitScratch<const G: usize> {
+    pub(super) diffuse: DiffuseHits<G>,
+    pub(super) lit: [Lighting<Vec3x16>; G],
 }
 
-impl Scratch {
-    /// Working memory for any batch: a batch takes only what it wrote into it (the lanes it
-    /// left are computed with, never taken; `a_reused_scratch_gives_the_values_of_a_fresh_one`).
+impl<const G: usize> HitScratch<G> {
     pub fn new() -> Self {
         Self {
             diffuse: DiffuseHits::new(),
-            lit: [Lighting::NONE; GROUPS],
+            lit: [Lighting::NONE; G],
         }
     }
 }
 
-impl Default for Scratch {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 /// The diffuse hits of a batch of rays, in lanes, and whose each is.
-pub(crate) struct DiffuseHits {
-    pub surfaces: [Surfaces<Vec3x16>; GROUPS],
+pub(crate) struct DiffuseHits<const G: usize> {
+    pub surfaces: [Surfaces<Vec3x16>; G],
     /// Which lanes of each group hold a hit (bit `lane`). The other lanes hold what they held,
     /// never read.
-    pub active: [u16; GROUPS],
+    pub active: [u16; G],
     /// Whose each hit is, by its place: the index of its ray (lab) or path (path) in the batch.
-    owner: [u8; BATCH],
+    owner: [[u8; LANES]; G],
     /// The groups up to the last that holds a hit.
     groups: usize,
 }
 
-impl DiffuseHits {
+impl<const G: usize> DiffuseHits<G> {
     #[inline(always)]
     pub fn new() -> Self {
         Self {
-            surfaces: [Surfaces::ZERO; GROUPS],
-            active: [0; GROUPS],
-            owner: [0; BATCH],
+            surfaces: [Surfaces::ZERO; G],
+            active: [0; G],
+            owner: [[0; LANES]; G],
             groups: 0,
         }
     }
@@ -161,7 +154,7 @@ impl DiffuseHits {
     #[inline(always)]
     pub fn clear(&mut self) {
         self.groups = 0;
-        self.active = [0; GROUPS];
+        self.active = [0; G];
     }
 
     /// Hit `k` (lane `k % 16` of group `k / 16`) is at `surface`, and `owner`'s.
@@ -170,7 +163,7 @@ impl DiffuseHits {
         let (g, lane) = (k / LANES, k % LANES);
         self.surfaces[g].set(lane, surface);
         self.active[g] |= 1 << lane;
-        self.owner[k] = owner as u8;
+        self.owner[g][lane] = owner as u8;
         self.groups = self.groups.max(g + 1);
     }
 
@@ -191,7 +184,7 @@ impl DiffuseHits {
         rays: &[Ray],
         hits: &HitLanes,
     ) -> u16 {
-        debug_assert!(tracer.plain && g < GROUPS && !rays.is_empty() && rays.len() <= LANES);
+        debug_assert!(tracer.plain && g < G && !rays.is_empty() && rays.len() <= LANES);
         let scene = tracer.scene;
         let isa = scene.accel().isa();
         let met = hits.hits() & (u32::MAX >> (32 - rays.len())) as u16;
@@ -241,7 +234,7 @@ impl DiffuseHits {
         surfaces.near_edge = M16::splat(at_edges) & near_an_edge(zones, u, v);
         surfaces.incoming = Vec3x16::select(surfaces.near_edge, direction, Vec3x16::ZERO);
         surfaces.relief_visibility = F32x16::splat(1.0);
-        for (lane, owner) in self.owner[g * LANES..][..LANES].iter_mut().enumerate() {
+        for (lane, owner) in self.owner[g].iter_mut().enumerate() {
             *owner = (g * LANES + lane) as u8;
         }
         self.active[g] = diffuse;
@@ -260,7 +253,7 @@ impl DiffuseHits {
     /// Group `g`'s hits: each lane holding one, and whose it is, in lane order.
     #[inline(always)]
     pub fn owners(&self, g: usize) -> impl Iterator<Item = (usize, u8)> + '_ {
-        lanes_of(self.active[g]).map(move |lane| (lane, self.owner[g * LANES + lane]))
+        lanes_of(self.active[g]).map(move |lane| (lane, self.owner[g][lane]))
     }
 
     /// The light at every hit, sixteen at a time, in the order of the hits. With `SPHERE`
@@ -276,7 +269,7 @@ impl DiffuseHits {
         tracer: &Tracer,
         rngs: &mut [Rng],
         rng_of: impl Fn(u8) -> usize,
-        lit: &mut [Lighting<Vec3x16>; GROUPS],
+        lit: &mut [Lighting<Vec3x16>; G],
     ) {
         let (light, shading) = (&tracer.light, &tracer.shading);
         for (g, (active, surfaces)) in self.groups().enumerate() {
@@ -308,24 +301,30 @@ impl DiffuseHits {
 
     /// Which shadow rays of `lit` (the hits' [`DiffuseHits::light`]) are blocked: bit `lane`
     /// of group `g`'s mask. `neighbours`: whether the hits are those of neighbouring pixels'
-    /// rays ([`crate::accel::Accel::occluded_lanes`]).
+    /// rays ([`crate::accel::Accel::occluded_lanes`]); their shadow rays are then asked a
+    /// batch of [`BATCH`] at a time, each bounded by its own cone (the path tracer's batch of
+    /// [`PATH_BATCH`] spans four times the fan, whose cone would keep more triangles).
     #[inline(always)]
     pub fn blocked(
         &self,
         scene: &Scene,
-        lit: &[Lighting<Vec3x16>; GROUPS],
+        lit: &[Lighting<Vec3x16>; G],
         neighbours: bool,
-    ) -> [u16; GROUPS] {
+    ) -> [u16; G] {
         // Every group's lanes, those without a hit casting nothing (a fixed array: collecting
         // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass;
-        // made by `array::from_fn`, its closure was called out of line, 5).
-        let mut shadows = [lit[0].shadow.segment_lanes(self.active[0]); GROUPS];
-        for (g, shadows) in shadows.iter_mut().enumerate().skip(1) {
+        // made by `array::from_fn`, its closure was called out of line, 5). Past the last
+        // group in use the copies of the first are never read.
+        let mut shadows = [lit[0].shadow.segment_lanes(self.active[0]); G];
+        for (g, shadows) in shadows.iter_mut().enumerate().take(self.groups).skip(1) {
             *shadows = lit[g].shadow.segment_lanes(self.active[g]);
         }
-        let mut blocked = [0u16; GROUPS];
+        let mut blocked = [0u16; G];
         let (shadows, answers) = (&shadows[..self.groups], &mut blocked[..self.groups]);
-        scene.occluded_lanes(shadows, neighbours, answers);
+        let each = if neighbours { GROUPS } else { G };
+        for (shadows, answers) in shadows.chunks(each).zip(answers.chunks_mut(each)) {
+            scene.occluded_lanes(shadows, neighbours, answers);
+        }
         blocked
     }
 
@@ -454,7 +453,7 @@ mod tests {
                     });
                     lanes.set(lane, hit);
                 }
-                let mut group = DiffuseHits::new();
+                let mut group = DiffuseHits::<GROUPS>::new();
                 group.clear();
                 let other = group.fill_plain(0, &tracer, at_edges, rays, &lanes);
                 for (lane, (ray, hit)) in rays.iter().zip(hits).enumerate() {
@@ -478,7 +477,7 @@ mod tests {
                     };
                     let expected = tracer.surface_with(hit, material, ray.direction, at_edge);
                     edges += usize::from(at_edge.is_some());
-                    let mut one = DiffuseHits::new();
+                    let mut one = DiffuseHits::<GROUPS>::new();
                     one.clear();
                     one.push(lane, expected, lane);
                     let (a, b) = (&group.surfaces[0], &one.surfaces[0]);

@@ -19,7 +19,7 @@
 use glam::Vec3;
 
 use super::hits::lanes_of;
-use super::{BATCH, GROUPS, Recorder, Scratch, Tracer, continue_ray, shaded_value};
+use super::{BATCH, GROUPS, HitScratch, Recorder, Tracer, continue_ray, shaded_value};
 use crate::accel::HitLanes;
 use crate::accel::lane_io::store_vec3s;
 use crate::geometry::Ray;
@@ -54,7 +54,7 @@ pub(super) fn trace<R: Recorder>(
     rays: &[Ray],
     rngs: &mut [Rng],
     out: &mut [Vec3],
-    scratch: &mut Scratch,
+    scratch: &mut HitScratch<GROUPS>,
     rec: &mut R,
 ) {
     let (mut rays_next, mut branches_next) = (Vec::new(), Vec::new());
@@ -91,7 +91,7 @@ fn wave_for_light<R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
-    scratch: &mut Scratch,
+    scratch: &mut HitScratch<GROUPS>,
     rec: &mut R,
 ) {
     if tracer.light.is_area() {
@@ -114,7 +114,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     next: (&mut Vec<Ray>, &mut Vec<Branch>),
-    scratch: &mut Scratch,
+    scratch: &mut HitScratch<GROUPS>,
     rec: &mut R,
 ) {
     debug_assert!(rays.len() <= BATCH);
@@ -124,7 +124,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     let groups = rays.len().div_ceil(LANES);
     let mut hits = [HitLanes::new(f32::INFINITY); GROUPS];
     scene.closest_hit_lanes(rays, f32::INFINITY, &mut hits[..groups]);
-    let Scratch { diffuse, lit } = scratch;
+    let HitScratch { diffuse, lit } = scratch;
     diffuse.clear();
     // Where the tracer is plain, the diffuse hits' surfaces are made sixteen at a time; the
     // other hits (all of them when recording, or where surfaces are textured or smooth) one

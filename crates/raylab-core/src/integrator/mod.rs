@@ -64,9 +64,60 @@ use crate::texture::planar_uv;
 /// PERFORMANCE.md).
 pub const BATCH: usize = 64;
 
+/// How many paths the sixteen-lane path tracer takes through each phase together: four
+/// batches of camera rays. Paths end at different vertices and each vertex's phases run in
+/// whole groups of sixteen lanes, so at each vertex a batch's last group is partly empty (with
+/// 64 paths the groups were 76.7 % full on the Cornell box); and each phase has costs of its
+/// own (calls, the kernels' set-up), shared by four times the paths. The path pass took
+/// 44.5–45.1 ms against 49.6–50.0 with batches of 64 (Zen 5, one thread, alternating), the
+/// same images. The camera rays' first hits and their shadow rays are still bounded by cones
+/// a batch of [`BATCH`] at a time (`accel::cull`: a wider fan keeps more triangles). At most
+/// 256: a path's index in its batch is a byte.
+pub const PATH_BATCH: usize = 256;
+const _: () = assert!(PATH_BATCH.is_multiple_of(BATCH) && PATH_BATCH <= 256);
+
 pub use crate::settings::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
-pub(crate) use hits::GROUPS;
-pub use hits::Scratch;
+use hits::HitScratch;
+pub(crate) use hits::{GROUPS, PATH_GROUPS};
+use path::PathScratch;
+
+/// The working memory of the sixteen-lane integrators' batches (the lab's waves, the path
+/// tracer's vertices): the camera rays, the diffuse hits in lanes and the light at them, and
+/// the path tracer's paths, about 100 KB. Made once for a thread's rows and reused batch
+/// after batch: made afresh for every batch of 64 rays, its zeroing (a `memset`, `rep stosb`
+/// in glibc) took 6 % of the Cornell box's lab pass when it was 7 KB (Zen 5, one thread).
+pub struct Scratch {
+    /// The lab's batches' hits, [`GROUPS`] groups.
+    lab: HitScratch<GROUPS>,
+    /// The path tracer's hits ([`PATH_GROUPS`] groups) and paths.
+    path: PathScratch,
+    /// A batch's camera rays, made from their image points.
+    rays: [Ray; PATH_BATCH],
+}
+
+impl Scratch {
+    /// Working memory for any batch: a batch takes only what it wrote into it (the lanes it
+    /// left are computed with, never taken; `a_reused_scratch_gives_the_values_of_a_fresh_one`).
+    pub fn new() -> Self {
+        Self {
+            lab: HitScratch::new(),
+            path: PathScratch::new(),
+            rays: [Ray {
+                origin: glam::Vec3::ZERO,
+                direction: glam::Vec3::ZERO,
+            }; PATH_BATCH],
+        }
+    }
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The integrators' working memory ([`Scratch`]'s parts for the lab and the path tracer).
+type Working<'a> = (&'a mut HitScratch<GROUPS>, &'a mut PathScratch);
 
 /// The mirror and glass bounces a camera sample's features follow before they settle on what
 /// was reached ([`Seen`]).
@@ -744,6 +795,16 @@ impl<'a> Tracer<'a> {
         self.shading.stage.integrator() == Integrator::Path && !self.general
     }
 
+    /// How many camera rays to hand [`Tracer::trace_camera`] at a time: [`PATH_BATCH`] for
+    /// the sixteen-lane path tracer, [`BATCH`] for the others.
+    pub fn batch_len(&self) -> usize {
+        if self.records_features() {
+            PATH_BATCH
+        } else {
+            BATCH
+        }
+    }
+
     /// The value of each ray, into `out`. `rngs` holds each ray's random stream (from
     /// [`crate::sampling::pixel_sample`]); where nothing is random
     /// ([`Tracer::uses_random_numbers`] is false) it may be empty.
@@ -838,8 +899,8 @@ impl<'a> Tracer<'a> {
         self.trace_primary(primary, rngs, out, seen, scratch);
     }
 
-    /// The rays of `primary`, made in batches of [`BATCH`] if they come as image points, traced
-    /// by [`Tracer::trace_seen`].
+    /// The rays of `primary`, made in batches of [`Tracer::batch_len`] if they come as image
+    /// points, traced by [`Tracer::trace_seen`].
     #[inline(always)]
     fn trace_primary(
         &self,
@@ -850,33 +911,54 @@ impl<'a> Tracer<'a> {
         scratch: &mut Scratch,
     ) {
         match primary {
-            Primary::Rays(rays) => self.trace_seen(rays, rngs, out, seen, scratch, &mut ()),
-            Primary::Camera(points) => {
-                let mut rays = [Ray {
-                    origin: Vec3::ZERO,
-                    direction: Vec3::ZERO,
-                }; BATCH];
-                for (c, out) in out.chunks_mut(BATCH).enumerate() {
-                    let rays = &mut rays[..out.len()];
-                    points.rays(c * BATCH, rays);
-                    // Each ray's generator (none if nothing is random) and features (none if
-                    // not asked for).
-                    let part = |len: usize| {
-                        let start = (c * BATCH).min(len);
-                        start..(start + BATCH).min(len)
-                    };
-                    let (r, s) = (part(rngs.len()), part(seen.len()));
-                    let (rngs, seen) = (&mut rngs[r], &mut seen[s]);
-                    self.trace_seen(rays, rngs, out, seen, scratch, &mut ());
-                }
+            Primary::Rays(rays) => {
+                let working = (&mut scratch.lab, &mut scratch.path);
+                self.trace_seen(rays, rngs, out, seen, working, &mut ())
             }
+            // The batch's length a constant in each: as a run-time value the lab pass took
+            // 2-3 % longer (the loops around it compiled differently; measured).
+            Primary::Camera(points) if self.records_features() => {
+                self.camera_batches::<PATH_BATCH>(points, rngs, out, seen, scratch)
+            }
+            Primary::Camera(points) => {
+                self.camera_batches::<BATCH>(points, rngs, out, seen, scratch)
+            }
+        }
+    }
+
+    /// The camera rays through `points` made and traced `LEN` at a time ([`Tracer::batch_len`]).
+    #[inline(always)]
+    fn camera_batches<const LEN: usize>(
+        &self,
+        points: &ImagePoints,
+        rngs: &mut [Rng],
+        out: &mut [Vec3],
+        seen: &mut [Option<Seen>],
+        scratch: &mut Scratch,
+    ) {
+        let Scratch { lab, path, rays } = scratch;
+        for (c, out) in out.chunks_mut(LEN).enumerate() {
+            let rays = &mut rays[..out.len()];
+            for (k, rays) in rays.chunks_mut(ImagePoints::MAX_RAYS).enumerate() {
+                points.rays(c * LEN + k * ImagePoints::MAX_RAYS, rays);
+            }
+            // Each ray's generator (none if nothing is random) and features (none if not asked
+            // for).
+            let part = |all: usize| {
+                let start = (c * LEN).min(all);
+                start..(start + LEN).min(all)
+            };
+            let (r, s) = (part(rngs.len()), part(seen.len()));
+            let (rngs, seen) = (&mut rngs[r], &mut seen[s]);
+            self.trace_seen(rays, rngs, out, seen, (lab, path), &mut ());
         }
     }
 
     /// [`Tracer::trace`] for any CPU; inlined into the AVX2 version.
     #[inline(always)]
     pub fn trace_portable(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        self.trace_seen(rays, rngs, out, &mut [], &mut Scratch::new(), &mut ());
+        let (lab, path) = (&mut HitScratch::new(), &mut PathScratch::new());
+        self.trace_seen(rays, rngs, out, &mut [], (lab, path), &mut ());
     }
 
     /// [`Tracer::trace_portable`], telling `recorder` every step (see [`Recorder`]): what the
@@ -889,7 +971,8 @@ impl<'a> Tracer<'a> {
         out: &mut [Vec3],
         recorder: &mut R,
     ) {
-        self.trace_seen(rays, rngs, out, &mut [], &mut Scratch::new(), recorder);
+        let (lab, path) = (&mut HitScratch::new(), &mut PathScratch::new());
+        self.trace_seen(rays, rngs, out, &mut [], (lab, path), recorder);
     }
 
     /// [`Tracer::trace_recorded`], and what each ray sees into `seen` as
@@ -901,7 +984,7 @@ impl<'a> Tracer<'a> {
         rngs: &mut [Rng],
         out: &mut [Vec3],
         seen: &mut [Option<Seen>],
-        scratch: &mut Scratch,
+        (lab, path): Working,
         recorder: &mut R,
     ) {
         match self.shading.stage.integrator() {
@@ -910,7 +993,7 @@ impl<'a> Tracer<'a> {
                     !self.random || rngs.len() == rays.len(),
                     "soft shadows and the lens need a generator per ray"
                 );
-                lab::trace(self, rays, rngs, out, scratch, recorder);
+                lab::trace(self, rays, rngs, out, lab, recorder);
             }
             Integrator::Path => {
                 assert_eq!(
@@ -921,7 +1004,7 @@ impl<'a> Tracer<'a> {
                 if self.general {
                     path_mis::trace(self, rays, rngs, out, recorder);
                 } else {
-                    path::trace(self, rays, rngs, out, seen, scratch, recorder);
+                    path::trace(self, rays, rngs, out, seen, path, recorder);
                 }
             }
         }

@@ -16,8 +16,8 @@
 //! and β is divided by q (Russian roulette), which ends paths without bias. A path of
 //! [`MAX_DEPTH`] vertices is ended anyway, a guard against rays trapped between facing mirrors.
 //!
-//! Paths run in batches of [`BATCH`], phase by phase, as the lab stages do, and each phase of a
-//! vertex runs sixteen paths at a time, a path a lane ([`crate::lanes`]): the direct term
+//! Paths run in batches of [`PATH_BATCH`], phase by phase, as the lab stages do, and each phase
+//! of a vertex runs sixteen paths at a time, a path a lane ([`crate::lanes`]): the direct term
 //! ([`DiffuseHits::light`], the lab's own code), the diffuse bounce's direction
 //! ([`hemisphere_around`]), the throughput, Russian roulette and the next ray
 //! ([`departure_points`]). Only what differs from path to path in control flow stays one path
@@ -31,8 +31,8 @@
 use glam::Vec3;
 
 use super::{
-    BATCH, FEATURE_SPECULAR_BOUNCES, GROUPS, Recorder, Scratch, Seen, Stage, Tracer,
-    departure_points, shaded_value,
+    BATCH, FEATURE_SPECULAR_BOUNCES, HitScratch, PATH_BATCH, PATH_GROUPS, Recorder, Seen, Stage,
+    Tracer, departure_points, shaded_value,
 };
 use crate::bsdf::ShadingFrame;
 use crate::geometry::Ray;
@@ -54,6 +54,53 @@ pub const ROULETTE_MAX_SURVIVAL: f32 = 0.95;
 /// Vertices after which a path is ended whatever its throughput.
 pub const MAX_DEPTH: u32 = 256;
 
+/// The path tracer's working memory ([`super::Scratch`]'s part for it): its hits in lanes
+/// and the light at them, and its paths.
+pub(crate) struct PathScratch {
+    pub(super) hits: HitScratch<PATH_GROUPS>,
+    memory: Box<PathMemory>,
+}
+
+impl PathScratch {
+    pub fn new() -> Self {
+        Self {
+            hits: HitScratch::new(),
+            memory: Box::new(PathMemory {
+                looking: [Looking::START; PATH_BATCH],
+                paths: [PathState {
+                    beta: Vec3::ONE,
+                    bounces: 0,
+                    depth: 0,
+                }; PATH_BATCH],
+                alive: [0; PATH_BATCH],
+                rays_alive: [Ray {
+                    origin: Vec3::ZERO,
+                    direction: Vec3::ZERO,
+                }; PATH_BATCH],
+                hits: [None; PATH_BATCH],
+                specular: [Departures::NONE; PATH_GROUPS],
+                arriving: [Vec3x16::ZERO; PATH_GROUPS],
+            }),
+        }
+    }
+}
+
+/// A batch's paths: what each camera sample looks for ([`Looking`]), each path's state, the
+/// paths still going and their next rays and hits, the mirror and glass vertices, and β of
+/// each diffuse hit's path as it arrives, about 50 KB. Kept off the stack: as the batch's own
+/// arrays, they made the frame of the code compiled for the CPU, which the lab's batches
+/// share, 59 KB, and the lab pass 8–11 % slower. A batch sets each entry before reading it.
+struct PathMemory {
+    looking: [Looking; PATH_BATCH],
+    paths: [PathState; PATH_BATCH],
+    alive: [u8; PATH_BATCH],
+    rays_alive: [Ray; PATH_BATCH],
+    hits: [Option<Intersection>; PATH_BATCH],
+    /// Mirror and glass vertices, sampled one at a time.
+    specular: [Departures; PATH_GROUPS],
+    arriving: [Vec3x16; PATH_GROUPS],
+}
+
 #[derive(Clone, Copy, Debug)]
 struct PathState {
     /// β, the throughput: what light found at the next vertex is multiplied by.
@@ -74,18 +121,18 @@ pub(super) fn trace<R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     seen: &mut [Option<Seen>],
-    scratch: &mut Scratch,
+    scratch: &mut PathScratch,
     rec: &mut R,
 ) {
     for (c, ((rays, rngs), out)) in rays
-        .chunks(BATCH)
-        .zip(rngs.chunks_mut(BATCH))
-        .zip(out.chunks_mut(BATCH))
+        .chunks(PATH_BATCH)
+        .zip(rngs.chunks_mut(PATH_BATCH))
+        .zip(out.chunks_mut(PATH_BATCH))
         .enumerate()
     {
         let seen = match seen.is_empty() {
             true => &mut [],
-            false => &mut seen[c * BATCH..c * BATCH + out.len()],
+            false => &mut seen[c * PATH_BATCH..c * PATH_BATCH + out.len()],
         };
         batch(tracer, rays, rngs, out, seen, scratch, rec);
     }
@@ -121,8 +168,8 @@ impl Looking {
 fn look(
     tracer: &Tracer,
     (alive, rays, hits): (&[u8], &[Ray], &[Option<Intersection>]),
-    paths: &[PathState; BATCH],
-    looking: &mut [Looking; BATCH],
+    paths: &[PathState; PATH_BATCH],
+    looking: &mut [Looking; PATH_BATCH],
     seen: &mut [Option<Seen>],
 ) -> usize {
     let mut still = 0;
@@ -220,9 +267,9 @@ impl Departures {
 #[inline(always)]
 fn go_on<R: Recorder>(
     d: &Departures,
-    paths: &mut [PathState; BATCH],
+    paths: &mut [PathState; PATH_BATCH],
     rng: &mut Rng16,
-    next: (&mut [u8; BATCH], &mut [Ray; BATCH]),
+    next: (&mut [u8; PATH_BATCH], &mut [Ray; PATH_BATCH]),
     still: &mut usize,
     rec: &mut R,
 ) {
@@ -293,7 +340,7 @@ fn batch<R: Recorder>(
     rngs: &mut [Rng],
     out: &mut [Vec3],
     seen: &mut [Option<Seen>],
-    scratch: &mut Scratch,
+    scratch: &mut PathScratch,
     rec: &mut R,
 ) {
     let scene = tracer.scene;
@@ -305,35 +352,48 @@ fn batch<R: Recorder>(
     // a perfect mirror or glass; `None` if it leaves the scene (or ends at a mirror or glass)
     // before one.
     seen.fill(None);
-    let mut looking = [Looking::START; BATCH];
-    let mut still_looking = if seen.is_empty() { 0 } else { rays.len() };
-    let mut paths = [PathState {
+    let PathScratch {
+        hits: lanes,
+        memory,
+    } = scratch;
+    let PathMemory {
+        looking,
+        paths,
+        alive,
+        rays_alive,
+        hits,
+        specular,
+        arriving,
+    } = &mut **memory;
+    let HitScratch { diffuse, lit } = lanes;
+    let n = rays.len();
+    looking[..n].fill(Looking::START);
+    let mut still_looking = if seen.is_empty() { 0 } else { n };
+    paths[..n].fill(PathState {
         beta: Vec3::ONE,
         bounces: 0,
         depth: 0,
-    }; BATCH];
+    });
     // The paths still going, by index, and the ray each goes on with.
-    let mut alive = [0u8; BATCH];
-    let mut rays_alive = [rays[0]; BATCH];
     for (i, ray) in rays.iter().enumerate() {
         alive[i] = i as u8;
         rays_alive[i] = *ray;
     }
-    let mut n_alive = rays.len();
-    let mut hits: [Option<Intersection>; BATCH] = [None; BATCH];
-    // Mirror and glass vertices, sampled one at a time.
-    let mut specular = [Departures::NONE; GROUPS];
-    let Scratch { diffuse, lit } = scratch;
-    // β of each diffuse hit's path as it arrives.
-    let mut arriving = [Vec3x16::ZERO; GROUPS];
+    let mut n_alive = n;
 
     // Whether the paths' hits are the camera rays' (neighbouring pixels'): the first step.
     let mut first_step = true;
     while n_alive > 0 {
-        scene.closest_intersections(&rays_alive[..n_alive], f32::INFINITY, &mut hits[..n_alive]);
+        // The camera rays a batch of BATCH at a time, each a cone's worth of neighbours
+        // (`PATH_BATCH` notes why); the bounces, from all over the scene, have none.
+        let each = if first_step { BATCH } else { PATH_BATCH };
+        let asked = rays_alive[..n_alive].chunks(each);
+        for (rays, hits) in asked.zip(hits[..n_alive].chunks_mut(each)) {
+            scene.closest_intersections(rays, f32::INFINITY, hits);
+        }
         if still_looking > 0 {
             let arrived = (&alive[..n_alive], &rays_alive[..n_alive], &hits[..n_alive]);
-            still_looking = look(tracer, arrived, &paths, &mut looking, seen);
+            still_looking = look(tracer, arrived, paths, looking, seen);
         }
         // Each hit to its phase: the diffuse ones into lanes for their light and bounce, the
         // specular ones sampled here.
@@ -412,15 +472,15 @@ fn batch<R: Recorder>(
                 let mut rng = take_rngs(&d, rngs);
                 let local = cosine_hemisphere_by_rejection(&mut rng, d.active);
                 d.direction = hemisphere_around(surfaces.geometric, local);
-                let next = (&mut alive, &mut rays_alive);
-                go_on(&d, &mut paths, &mut rng, next, &mut still, rec);
+                let next = (&mut *alive, &mut *rays_alive);
+                go_on(&d, paths, &mut rng, next, &mut still, rec);
                 give_back(&d, &rng, rngs);
             }
         }
         for d in &specular[..n_specular.div_ceil(LANES)] {
             let mut rng = take_rngs(d, rngs);
-            let next = (&mut alive, &mut rays_alive);
-            go_on(d, &mut paths, &mut rng, next, &mut still, rec);
+            let next = (&mut *alive, &mut *rays_alive);
+            go_on(d, paths, &mut rng, next, &mut still, rec);
             give_back(d, &rng, rngs);
         }
         n_alive = still;

@@ -387,7 +387,7 @@ mod tests {
             &mut generators(rays.len(), 1),
             &mut lanes,
             &mut [],
-            &mut crate::integrator::Scratch::new(),
+            &mut super::super::path::PathScratch::new(),
             &mut (),
         );
         trace(
@@ -428,7 +428,7 @@ mod tests {
                         &mut rngs,
                         &mut out,
                         &mut [],
-                        &mut crate::integrator::Scratch::new(),
+                        &mut super::super::path::PathScratch::new(),
                         &mut (),
                     );
                 } else {
