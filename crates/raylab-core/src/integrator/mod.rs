@@ -827,7 +827,7 @@ impl<'a> Tracer<'a> {
     /// If `seen` is not empty (one per ray) and the integrator [records
     /// features](Tracer::records_features), each ray's [`Seen`] goes there (`None`: it left
     /// the scene); otherwise `seen` is left as it is. The batches work in `scratch`, which a
-    /// caller tracing many batches (a row of the image) makes once and hands to each.
+    /// caller tracing many batches (the rows of the image) makes once and hands to each.
     pub fn trace_camera(
         &self,
         points: &ImagePoints,
