@@ -261,7 +261,7 @@ struct Batch {
 
 thread_local! {
     /// Each thread's [`Batch`], made at its first row and reused for every row after: about
-    /// 110 KB with room for the path tracer's batches, whose zeroing for each row took 7 % of
+    /// 100 KB with room for the path tracer's batches, whose zeroing for each row took 7 % of
     /// the lab pass (a row of 512 pixels is 6 µs).
     static BATCH_MEMORY: RefCell<Option<Box<Batch>>> = const { RefCell::new(None) };
 }

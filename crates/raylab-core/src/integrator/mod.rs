@@ -83,7 +83,7 @@ use path::PathScratch;
 
 /// The working memory of the sixteen-lane integrators' batches (the lab's waves, the path
 /// tracer's vertices): the camera rays, the diffuse hits in lanes and the light at them, and
-/// the path tracer's paths, about 100 KB. Made once for a thread's rows and reused batch
+/// the path tracer's paths, about 90 KB. Made once for a thread's rows and reused batch
 /// after batch: made afresh for every batch of 64 rays, its zeroing (a `memset`, `rep stosb`
 /// in glibc) took 6 % of the Cornell box's lab pass when it was 7 KB (Zen 5, one thread).
 pub struct Scratch {
@@ -917,7 +917,7 @@ impl<'a> Tracer<'a> {
             }
             // The batch's length a constant in each: as a run-time value the lab pass took
             // 2-3 % longer (the loops around it compiled differently; measured).
-            Primary::Camera(points) if self.records_features() => {
+            Primary::Camera(points) if self.batch_len() == PATH_BATCH => {
                 self.camera_batches::<PATH_BATCH>(points, rngs, out, seen, scratch)
             }
             Primary::Camera(points) => {

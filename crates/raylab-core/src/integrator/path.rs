@@ -67,11 +67,7 @@ impl PathScratch {
             hits: HitScratch::new(),
             memory: Box::new(PathMemory {
                 looking: [Looking::START; PATH_BATCH],
-                paths: [PathState {
-                    beta: Vec3::ONE,
-                    bounces: 0,
-                    depth: 0,
-                }; PATH_BATCH],
+                paths: [PathState::START; PATH_BATCH],
                 alive: [0; PATH_BATCH],
                 rays_alive: [Ray {
                     origin: Vec3::ZERO,
@@ -87,9 +83,11 @@ impl PathScratch {
 
 /// A batch's paths: what each camera sample looks for ([`Looking`]), each path's state, the
 /// paths still going and their next rays and hits, the mirror and glass vertices, and β of
-/// each diffuse hit's path as it arrives, about 50 KB. Kept off the stack: as the batch's own
+/// each diffuse hit's path as it arrives, about 47 KB. Kept off the stack: as the batch's own
 /// arrays, they made the frame of the code compiled for the CPU, which the lab's batches
-/// share, 59 KB, and the lab pass 8–11 % slower. A batch sets each entry before reading it.
+/// share, 59 KB, and the lab pass 8–11 % slower. A batch takes only what it wrote: the
+/// entries of its paths are set when they start, and lanes left from earlier vertices or
+/// batches are computed with, never taken (as [`super::Scratch`]'s).
 struct PathMemory {
     looking: [Looking; PATH_BATCH],
     paths: [PathState; PATH_BATCH],
@@ -109,6 +107,15 @@ struct PathState {
     bounces: u32,
     /// Vertices visited.
     depth: u32,
+}
+
+impl PathState {
+    /// A path at the camera: full throughput, no vertex yet.
+    const START: Self = Self {
+        beta: Vec3::ONE,
+        bounces: 0,
+        depth: 0,
+    };
 }
 
 /// The value of every ray (π × radiance), into `out`; what each ray sees into `seen` if it is
@@ -369,11 +376,7 @@ fn batch<R: Recorder>(
     let n = rays.len();
     looking[..n].fill(Looking::START);
     let mut still_looking = if seen.is_empty() { 0 } else { n };
-    paths[..n].fill(PathState {
-        beta: Vec3::ONE,
-        bounces: 0,
-        depth: 0,
-    });
+    paths[..n].fill(PathState::START);
     // The paths still going, by index, and the ray each goes on with.
     for (i, ray) in rays.iter().enumerate() {
         alive[i] = i as u8;
