@@ -7,6 +7,7 @@
 //! sRGB, filmic) live in [`crate::display`]. EXR keeps the unclamped linear values whatever the
 //! display.
 
+use std::cell::RefCell;
 use std::fs;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -580,7 +581,6 @@ impl Film {
         let rows = self.sum.pixels.len().div_ceil(width);
         let recording = self.records_seen();
         let seen_width = if recording { width } else { 0 };
-        let buffers = || (vec![Vec3::ZERO; width], vec![None; seen_width]);
         // A sum the film does not track zips in as empty rows.
         let sum_sq = self.sum_sq.as_deref_mut().unwrap_or_default();
         let seen_sums = match recording {
@@ -593,19 +593,22 @@ impl Film {
             .zip(par_rows(sum_sq, width, rows))
             .zip(par_rows(seen_sums, width, rows))
             .enumerate()
-            .try_for_each_init(buffers, |(row, seen), (y, ((sum, sum_sq), seen_sums))| {
-                trace(y as u32, row, seen)?;
-                for (s, p) in sum.iter_mut().zip(row.iter()) {
-                    *s += *p;
-                }
-                for (q, p) in sum_sq.iter_mut().zip(row.iter()) {
-                    let y = channel_mean(*p);
-                    *q += y * y;
-                }
-                for (sums, seen) in seen_sums.iter_mut().zip(seen.iter()) {
-                    sums.add(*seen);
-                }
-                Ok(())
+            .with_max_len(rows_per_job())
+            .try_for_each(|(y, ((sum, sum_sq), seen_sums))| {
+                with_row_buffers(width, seen_width, |row, seen| {
+                    trace(y as u32, row, seen)?;
+                    for (s, p) in sum.iter_mut().zip(row.iter()) {
+                        *s += *p;
+                    }
+                    for (q, p) in sum_sq.iter_mut().zip(row.iter()) {
+                        let y = channel_mean(*p);
+                        *q += y * y;
+                    }
+                    for (sums, seen) in seen_sums.iter_mut().zip(seen.iter()) {
+                        sums.add(*seen);
+                    }
+                    Ok(())
+                })
             })?;
         self.samples += 1;
         self.seen_samples += u32::from(recording);
@@ -695,6 +698,51 @@ impl Film {
             pixels: self.sum.pixels.par_iter().map(|p| *p * scale).collect(),
         }
     }
+}
+
+/// The image rows a job of the rayon pool traces at most: one when the pool has threads to
+/// share them, so that a thread that runs out of rows takes the next one from another's
+/// share. Left to rayon's own splitting, a pass is cut into a few long runs of rows, each
+/// traced to its end by one thread; the path stage's rows differ in cost, so on two threads
+/// one thread finished first and waited while the other, which had a tenth more to trace,
+/// ended its run: the render threads were busy 1.89 of 2 CPUs, and the Cornell box's path
+/// pass at 512² took 23.0-24.0 ms against 22.3-22.7 ms with a job a row (Zen 5). On one
+/// thread there is no one to share with, and a job a row (about 0.2 µs each) cost the lab
+/// pass 3.5 %: there, rayon's own splitting.
+pub(crate) fn rows_per_job() -> usize {
+    match rayon::current_num_threads() {
+        1 => usize::MAX,
+        _ => 1,
+    }
+}
+
+thread_local! {
+    /// A thread's row and its samples' features, for [`Film::add_pass_rows`]: made once, not
+    /// once a row (a 512-pixel row's are 26 KB to fill).
+    static ROW_BUFFERS: RefCell<(Vec<Vec3>, Vec<Option<Seen>>)> = const {
+        RefCell::new((Vec::new(), Vec::new()))
+    };
+}
+
+/// `work` with a row of `width` values and `seen_width` features to write into: this
+/// thread's [`ROW_BUFFERS`], or fresh ones if they are in use (never, unless a row were
+/// added inside another's tracing). The row holds what the last row left, for `work` to
+/// overwrite; the features are all `None`, for those `work` does not tell.
+fn with_row_buffers<T>(
+    width: usize,
+    seen_width: usize,
+    work: impl FnOnce(&mut [Vec3], &mut [Option<Seen>]) -> T,
+) -> T {
+    ROW_BUFFERS.with(|buffers| match buffers.try_borrow_mut() {
+        Ok(mut buffers) => {
+            let (row, seen) = &mut *buffers;
+            row.resize(width, Vec3::ZERO);
+            seen.clear();
+            seen.resize(seen_width, None);
+            work(&mut row[..width], &mut seen[..seen_width])
+        }
+        Err(_) => work(&mut vec![Vec3::ZERO; width], &mut vec![None; seen_width]),
+    })
 }
 
 /// `buffer`'s rows of `width` values in parallel, or `rows` empty rows if it is empty.

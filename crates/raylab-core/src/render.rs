@@ -18,7 +18,7 @@ use crate::accel::Isa;
 #[cfg(target_arch = "x86_64")]
 use crate::accel::simd::Avx512;
 use crate::camera::ImagePoints;
-use crate::film::{Film, Image, Seen};
+use crate::film::{Film, Image, Seen, rows_per_job};
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, PATH_BATCH, Scratch, Tracer};
 use crate::memory::AllocError;
@@ -184,6 +184,7 @@ pub fn render_pass(
     pixels.spare_capacity_mut()[..len]
         .par_chunks_mut(width as usize)
         .enumerate()
+        .with_max_len(rows_per_job())
         .try_for_each(|(y, row)| {
             if cancelled() {
                 return Err(Cancelled);
@@ -539,6 +540,7 @@ fn accumulate(scene: &Scene, settings: &RenderSettings, sum: &mut Image) {
             sum.pixels
                 .par_chunks_mut(width.max(1))
                 .enumerate()
+                .with_max_len(rows_per_job())
                 .for_each(|(y, row)| rows.trace(y as u32, row, &mut [], |s, value| *s += value));
         }
     } else {
@@ -550,6 +552,7 @@ fn accumulate(scene: &Scene, settings: &RenderSettings, sum: &mut Image) {
         sum.pixels
             .par_chunks_mut(width.max(1))
             .enumerate()
+            .with_max_len(rows_per_job())
             .for_each(|(y, row)| rows.trace_samples(y as u32, row, samples));
     }
     // `Film::resolve`'s scale.
