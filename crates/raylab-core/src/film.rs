@@ -705,8 +705,8 @@ impl Film {
 /// share. Left to rayon's own splitting, a pass is cut into a few long runs of rows, each
 /// traced to its end by one thread; the path stage's rows differ in cost, so on two threads
 /// one thread finished first and waited while the other, which had a tenth more to trace,
-/// ended its run: the render threads were busy 1.89 of 2 CPUs, and the Cornell box's path
-/// pass at 512² took 23.0-24.0 ms against 22.3-22.7 ms with a job a row (Zen 5). On one
+/// ended its run: a path render kept 1.89 of 2 CPUs busy, and the Cornell box's path
+/// pass at 512² took 23.0-24.0 ms against 22.1-22.7 ms with a job a row (Zen 5). On one
 /// thread there is no one to share with, and a job a row (about 0.2 µs each) cost the lab
 /// pass 3.5 %: there, rayon's own splitting.
 pub(crate) fn rows_per_job() -> usize {
