@@ -823,6 +823,41 @@ mod tests {
         assert!(Film::new(2, 1).seen().is_none());
     }
 
+    /// A sample whose row's trace tells nothing adds nothing, whatever the row traced before
+    /// it on the same thread told, and every row is added once: on a pool of one thread (the
+    /// rows in order, rayon's own splitting) and of two (a job a row). Row 0 saw a surface
+    /// in both pixels, row 1 was not told.
+    #[test]
+    fn a_row_adds_only_what_its_own_trace_told() {
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut film = Film::new(2, 8).with_features();
+            let result: Result<(), ()> = pool.install(|| {
+                film.add_pass_rows(|y, row, seen| {
+                    row.fill(Vec3::splat(y as f32));
+                    if y == 0 {
+                        seen.fill(Some(Seen::at(Vec3::ONE, Vec3::ONE, Vec3::Z, Vec3::Z, 1.0)));
+                    }
+                    Ok(())
+                })
+            });
+            result.unwrap();
+            let (sums, _) = film.seen().unwrap();
+            assert_eq!(sums[0].hits, 1, "{threads} thread(s)");
+            assert_eq!(sums[1].hits, 1, "{threads} thread(s)");
+            for (i, sum) in sums.iter().enumerate().skip(2) {
+                assert_eq!(*sum, SeenSum::default(), "pixel {i}, {threads} thread(s)");
+            }
+            let image = film.resolve();
+            for (i, pixel) in image.pixels.iter().enumerate() {
+                assert_eq!(*pixel, Vec3::splat((i / 2) as f32), "pixel {i}");
+            }
+        }
+    }
+
     /// Two pixels over four passes, by hand. Pixel 0 is constant 1: no spread. Pixel 1 takes
     /// 1, 3, 1, 3 (grey): mean 2, s² = (1+1+1+1)/3 = 4/3, its mean's variance s²/n = 1/3, so
     /// its relative error is √(1/3)/2 = 0.2887 (> 1%). The image mean's relative error is
