@@ -4,12 +4,14 @@
 #   scripts/peers.sh [--threads N] [--rounds R] [--launches L]
 #
 # Each round runs `raylab bench --scene cornell --stage path --threads N --json` (the lab pass
-# and the path pass, medians of 61 passes), `raylab render --stage shadows --samples 64` (the
-# `direct` integrator's equivalent, at Mitsuba's 64 samples a pixel in one go; the render alone
-# is timed, not writing the file) and then scripts/mitsuba/time.py --threads N (the `direct` and
-# `path` integrators, 64 samples per pixel a launch, L launches of which the first, the JIT
-# compilation, is left out), so both see the same minute of this shared machine. Prints one line
-# per round and pair:
+# and the path pass, medians of 61 passes), `raylab render --stage shadows --samples 64` three
+# times (the `direct` integrator's equivalent, at Mitsuba's 64 samples a pixel in one go; the
+# render alone is timed, not writing the file, and the median of the three taken: one render
+# is a tenth of a second, and a hiccup of the shared host that long moved it by 5 %) and then
+# scripts/mitsuba/time.py --threads N (the `direct` and `path` integrators, 64 samples per
+# pixel a launch, L launches of which the first, the JIT compilation, is left out, and their
+# median taken), so both see the same minute of this shared machine. Prints one line per round
+# and pair:
 #
 #   lab pass (figure 7, one sample a pixel) samples/s  vs  Mitsuba `direct` samples/s
 #   shadows stage, 64 spp render, samples/s            vs  Mitsuba `direct` samples/s
@@ -51,15 +53,19 @@ for round in $(seq 1 "$ROUNDS"); do
     raylab_json=$("$RAYLAB" bench --scene cornell --stage path --threads "$THREADS" --passes 61 \
         --json)
     out=$(mktemp --suffix=.exr)
-    raylab_render=$("$RAYLAB" render --stage shadows --samples 64 --threads "$THREADS" \
-        --out "$out")
+    raylab_render=""
+    for _ in 1 2 3; do
+        raylab_render+=$("$RAYLAB" render --stage shadows --samples 64 --threads "$THREADS" \
+            --out "$out")$'\n'
+    done
     rm -f "$out"
     mitsuba_json=$("$PY" scripts/mitsuba/time.py --threads "$THREADS" --launches "$LAUNCHES" \
         | tail -n 1)
     RAYLAB_JSON=$raylab_json RAYLAB_RENDER=$raylab_render MITSUBA_JSON=$mitsuba_json ROUND=$round "$PY" - <<'EOF'
 import json, os, re
 r = json.loads(os.environ["RAYLAB_JSON"])
-render_ms = float(re.search(r"64 spp\) in ([0-9.]+) ms", os.environ["RAYLAB_RENDER"]).group(1))
+renders = re.findall(r"64 spp\) in ([0-9.]+) ms", os.environ["RAYLAB_RENDER"])
+render_ms = sorted(float(t) for t in renders)[len(renders) // 2]
 m = json.loads(os.environ["MITSUBA_JSON"])
 pixels = r["width"] * r["height"]
 lab = pixels / (r["lab_pass_ms"] / 1e3)
