@@ -717,8 +717,8 @@ pub(crate) fn rows_per_job() -> usize {
 }
 
 thread_local! {
-    /// A thread's row and its samples' features, for [`Film::add_pass_rows`]: made once, not
-    /// once a row (a 512-pixel row's are 26 KB to fill).
+    /// A thread's row and its samples' features, for [`Film::add_pass_rows`]: made once a
+    /// thread, not once a job, which is a row on two threads (a 512-pixel row's are 22 KB).
     static ROW_BUFFERS: RefCell<(Vec<Vec3>, Vec<Option<Seen>>)> = const {
         RefCell::new((Vec::new(), Vec::new()))
     };
