@@ -273,9 +273,19 @@ impl Batch {
     #[inline(always)]
     fn with<T>(work: impl FnOnce(&mut Batch) -> T) -> T {
         BATCH_MEMORY.with(|memory| match memory.try_borrow_mut() {
-            Ok(mut memory) => work(memory.get_or_insert_with(|| Box::new(Batch::new()))),
-            Err(_) => work(&mut Batch::new()),
+            Ok(mut memory) => work(memory.get_or_insert_with(Batch::boxed)),
+            Err(_) => work(&mut Batch::boxed()),
         })
+    }
+
+    /// A new batch memory on the heap. Out of line, so that the row loop, inlined into
+    /// rayon's splitting (a frame a level, nine levels for 512 rows a job each), never holds
+    /// room for one (100 KB) in its own stack frame: it had, twice, and a frame of 110 KB a
+    /// level came near the 2 MiB of a rayon thread's stack.
+    #[cold]
+    #[inline(never)]
+    fn boxed() -> Box<Batch> {
+        Box::new(Batch::new())
     }
 
     fn new() -> Self {
@@ -728,6 +738,36 @@ mod tests {
             .collect();
         assert_eq!(images[0], images[1]);
         assert_eq!(images[0], images[2]);
+    }
+
+    /// Rows a job each nest rayon's splitting a level a halving (thirteen for 8,192 rows), a
+    /// stack frame a level, and a thread waiting on a job runs others on its stack: a tall
+    /// image on two threads with half a mebibyte of stack each traces every row, in a pass, a
+    /// film's pass and a render. (Built for release, with each level's frame holding room for
+    /// two row memories, 110 KB, the test overflowed its stack; the test build inlines less
+    /// and passed either way.)
+    #[test]
+    fn a_tall_image_fits_in_a_small_stack() {
+        let scene = cornell_box();
+        let mut settings = small();
+        settings.shading = crate::Shading::for_stage(crate::Stage::Path);
+        settings.camera = crate::Camera::default_for(2, 8192);
+        settings.samples_per_pixel = 2;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .stack_size(512 * 1024)
+            .build()
+            .unwrap();
+        let (pass, film, image) = pool.install(|| {
+            let pass = render_pass(&scene, &settings, 0, &|| false).unwrap();
+            let mut film = Film::new(2, 8192);
+            accumulate_pass(&scene, &settings, 0, &mut film, &|| false).unwrap();
+            (pass, film, render(&scene, &settings))
+        });
+        assert_eq!(pass.pixels.len(), 2 * 8192);
+        assert_eq!(film.resolve(), pass);
+        assert!(image.pixels.iter().all(|p| p.is_finite()));
+        assert!(image.pixels.iter().any(|p| p.max_element() > 0.0));
     }
 
     #[test]
