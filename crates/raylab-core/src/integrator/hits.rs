@@ -134,7 +134,7 @@ pub(crate) struct DiffuseHits<const G: usize> {
     /// never read.
     pub active: [u16; G],
     /// Whose each hit is, by its place: the index of its ray (lab) or path (path) in the batch.
-    owner: [[u8; LANES]; G],
+    owner: [[u16; LANES]; G],
     /// The groups up to the last that holds a hit.
     groups: usize,
 }
@@ -163,7 +163,7 @@ impl<const G: usize> DiffuseHits<G> {
         let (g, lane) = (k / LANES, k % LANES);
         self.surfaces[g].set(lane, surface);
         self.active[g] |= 1 << lane;
-        self.owner[g][lane] = owner as u8;
+        self.owner[g][lane] = owner as u16;
         self.groups = self.groups.max(g + 1);
     }
 
@@ -235,7 +235,7 @@ impl<const G: usize> DiffuseHits<G> {
         surfaces.incoming = Vec3x16::select(surfaces.near_edge, direction, Vec3x16::ZERO);
         surfaces.relief_visibility = F32x16::splat(1.0);
         for (lane, owner) in self.owner[g].iter_mut().enumerate() {
-            *owner = (g * LANES + lane) as u8;
+            *owner = (g * LANES + lane) as u16;
         }
         self.active[g] = diffuse;
         if diffuse != 0 {
@@ -252,7 +252,7 @@ impl<const G: usize> DiffuseHits<G> {
 
     /// Group `g`'s hits: each lane holding one, and whose it is, in lane order.
     #[inline(always)]
-    pub fn owners(&self, g: usize) -> impl Iterator<Item = (usize, u8)> + '_ {
+    pub fn owners(&self, g: usize) -> impl Iterator<Item = (usize, u16)> + '_ {
         lanes_of(self.active[g]).map(move |lane| (lane, self.owner[g][lane]))
     }
 
@@ -268,7 +268,7 @@ impl<const G: usize> DiffuseHits<G> {
         &self,
         tracer: &Tracer,
         rngs: &mut [Rng],
-        rng_of: impl Fn(u8) -> usize,
+        rng_of: impl Fn(u16) -> usize,
         lit: &mut [Lighting<Vec3x16>; G],
     ) {
         let (light, shading) = (&tracer.light, &tracer.shading);
@@ -490,7 +490,7 @@ mod tests {
                     assert_eq!(a.relief_visibility.0[lane], 1.0);
                     assert_eq!(
                         group.owners(0).find(|o| o.0 == lane),
-                        Some((lane, lane as u8))
+                        Some((lane, lane as u16))
                     );
                 }
             }

@@ -207,7 +207,7 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
     // The light at the diffuse hits, sixteen at a time, in the order of the hits (a spherical
     // light draws from each pixel's generator in that order), and their shadow rays, handed to
     // the tracer as the lanes they are in.
-    let pixel_of = |i: u8| match wave {
+    let pixel_of = |i: u16| match wave {
         Wave::Camera => i as usize,
         Wave::Branches(b) => b[i as usize].pixel as usize,
     };

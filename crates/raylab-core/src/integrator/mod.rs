@@ -64,17 +64,18 @@ use crate::texture::planar_uv;
 /// PERFORMANCE.md).
 pub const BATCH: usize = 64;
 
-/// How many paths the sixteen-lane path tracer takes through each phase together: four
+/// How many paths the sixteen-lane path tracer takes through each phase together: eight
 /// batches of camera rays. Paths end at different vertices and each vertex's phases run in
 /// whole groups of sixteen lanes, so at each vertex a batch's last group is partly empty (with
 /// 64 paths the groups were 76.7 % full on the Cornell box); and each phase has costs of its
-/// own (calls, the kernels' set-up), shared by four times the paths. The path pass took
-/// 44.5–45.1 ms against 49.6–50.0 with batches of 64 (Zen 5, one thread, alternating), the
-/// same images. The camera rays' first hits and their shadow rays are still bounded by cones
-/// a batch of [`BATCH`] at a time (`accel::cull`: a wider fan keeps more triangles). At most
-/// 256: a path's index in its batch is a byte.
-pub const PATH_BATCH: usize = 256;
-const _: () = assert!(PATH_BATCH.is_multiple_of(BATCH) && PATH_BATCH <= 256);
+/// own (calls, the kernels' set-up), shared by more paths. The Cornell box's path pass at 512²
+/// took 44.5–45.1 ms with batches of 256 against 49.6–50.0 with 64 (46.9–47.8 with 128), and
+/// 42.3–42.5 with 512 against 44.1–44.6 with 256 (Zen 5, one thread, alternating runs; the
+/// same images each time). The camera rays' first hits and
+/// their shadow rays are still bounded by cones a batch of [`BATCH`] at a time (`accel::cull`:
+/// a wider fan keeps more triangles). At most 65,536: a path's index in its batch is a `u16`.
+pub const PATH_BATCH: usize = 512;
+const _: () = assert!(PATH_BATCH.is_multiple_of(BATCH) && PATH_BATCH <= 1 << 16);
 
 pub use crate::settings::{DEFAULT_SPECULAR_DEPTH, Integrator, MAX_SPECULAR_DEPTH, Shading, Stage};
 use hits::HitScratch;
@@ -83,7 +84,8 @@ use path::PathScratch;
 
 /// The working memory of the sixteen-lane integrators' batches (the lab's waves, the path
 /// tracer's vertices): the camera rays, the diffuse hits in lanes and the light at them, and
-/// the path tracer's paths, about 90 KB. Made once for a thread's rows and reused batch
+/// the path tracer's paths, 78 KB here and the path batch's 95 KB on the heap
+/// (`PathScratch`). Made once for a thread's rows and reused batch
 /// after batch: made afresh for every batch of 64 rays, its zeroing (a `memset`, `rep stosb`
 /// in glibc) took 6 % of the Cornell box's lab pass when it was 7 KB (Zen 5, one thread).
 pub struct Scratch {

@@ -83,15 +83,15 @@ impl PathScratch {
 
 /// A batch's paths: what each camera sample looks for ([`Looking`]), each path's state, the
 /// paths still going and their next rays and hits, the mirror and glass vertices, and β of
-/// each diffuse hit's path as it arrives, about 47 KB. Kept off the stack: as the batch's own
-/// arrays, they made the frame of the code compiled for the CPU, which the lab's batches
-/// share, 59 KB, and the lab pass 8–11 % slower. A batch takes only what it wrote: the
+/// each diffuse hit's path as it arrives, about 95 KB. Kept off the stack: as the batch's own
+/// arrays (in batches of 256 paths), they made the frame of the code compiled for the CPU,
+/// which the lab's batches share, 59 KB, and the lab pass 8–11 % slower. A batch takes only what it wrote: the
 /// entries of its paths are set when they start, and lanes left from earlier vertices or
 /// batches are computed with, never taken (as [`super::Scratch`]'s).
 struct PathMemory {
     looking: [Looking; PATH_BATCH],
     paths: [PathState; PATH_BATCH],
-    alive: [u8; PATH_BATCH],
+    alive: [u16; PATH_BATCH],
     rays_alive: [Ray; PATH_BATCH],
     hits: [Option<Intersection>; PATH_BATCH],
     /// Mirror and glass vertices, sampled one at a time.
@@ -174,7 +174,7 @@ impl Looking {
 #[inline(never)]
 fn look(
     tracer: &Tracer,
-    (alive, rays, hits): (&[u8], &[Ray], &[Option<Intersection>]),
+    (alive, rays, hits): (&[u16], &[Ray], &[Option<Intersection>]),
     paths: &[PathState; PATH_BATCH],
     looking: &mut [Looking; PATH_BATCH],
     seen: &mut [Option<Seen>],
@@ -226,7 +226,7 @@ struct Departures {
     beta: Vec3x16,
     weight: Vec3x16,
     /// The path in each lane (an index into the batch's paths).
-    owner: [u8; LANES],
+    owner: [u16; LANES],
     /// The lanes that hold a vertex.
     active: M16,
 }
@@ -250,7 +250,7 @@ impl Departures {
         self.position.set_lane(i, hit.position);
         self.normal.set_lane(i, normal);
         self.beta.set_lane(i, beta);
-        self.owner[i] = owner as u8;
+        self.owner[i] = owner as u16;
         self.active.0[i] = true;
     }
 
@@ -276,7 +276,7 @@ fn go_on<R: Recorder>(
     d: &Departures,
     paths: &mut [PathState; PATH_BATCH],
     rng: &mut Rng16,
-    next: (&mut [u8; PATH_BATCH], &mut [Ray; PATH_BATCH]),
+    next: (&mut [u16; PATH_BATCH], &mut [Ray; PATH_BATCH]),
     still: &mut usize,
     rec: &mut R,
 ) {
@@ -317,7 +317,7 @@ fn go_on<R: Recorder>(
             };
             rec.scattered(&scatter, survival.0[lane], path.beta, keep);
         }
-        alive[*still] = i as u8;
+        alive[*still] = i as u16;
         *still += usize::from(keep);
     }
 }
@@ -379,7 +379,7 @@ fn batch<R: Recorder>(
     paths[..n].fill(PathState::START);
     // The paths still going, by index, and the ray each goes on with.
     for (i, ray) in rays.iter().enumerate() {
-        alive[i] = i as u8;
+        alive[i] = i as u16;
         rays_alive[i] = *ray;
     }
     let mut n_alive = n;
