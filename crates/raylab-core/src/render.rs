@@ -280,8 +280,9 @@ impl Batch {
 
     /// A new batch memory on the heap. Out of line, so that the row loop, inlined into
     /// rayon's splitting (a frame a level, nine levels for 512 rows a job each), never holds
-    /// room for one (100 KB) in its own stack frame: it had, twice, and a frame of 110 KB a
-    /// level came near the 2 MiB of a rayon thread's stack.
+    /// room for one (101 KB) in its own stack frame. It had held room for two (110 KB with
+    /// batches of 256 paths), and a tall image's levels came near the 2 MiB of a rayon
+    /// thread's stack (`a_tall_image_fits_in_a_small_stack`).
     #[cold]
     #[inline(never)]
     fn boxed() -> Box<Batch> {

@@ -71,9 +71,9 @@ pub const BATCH: usize = 64;
 /// own (calls, the kernels' set-up), shared by more paths. The Cornell box's path pass at 512²
 /// took 44.5–45.1 ms with batches of 256 against 49.6–50.0 with 64 (46.9–47.8 with 128), and
 /// 42.3–42.5 with 512 against 44.1–44.6 with 256 (Zen 5, one thread, alternating runs; the
-/// same images each time). The camera rays' first hits and
-/// their shadow rays are still bounded by cones a batch of [`BATCH`] at a time (`accel::cull`:
-/// a wider fan keeps more triangles). At most 65,536: a path's index in its batch is a `u16`.
+/// same images each time). The camera rays' first hits and their shadow rays are still
+/// bounded by cones a batch of [`BATCH`] at a time (`accel::cull`: a wider fan keeps more
+/// triangles). At most 65,536: a path's index in its batch is a `u16`.
 pub const PATH_BATCH: usize = 512;
 const _: () = assert!(PATH_BATCH.is_multiple_of(BATCH) && PATH_BATCH <= 1 << 16);
 
@@ -85,9 +85,9 @@ use path::PathScratch;
 /// The working memory of the sixteen-lane integrators' batches (the lab's waves, the path
 /// tracer's vertices): the camera rays, the diffuse hits in lanes and the light at them, and
 /// the path tracer's paths, 78 KB here and the path batch's 95 KB on the heap
-/// (`PathScratch`). Made once for a thread's rows and reused batch
-/// after batch: made afresh for every batch of 64 rays, its zeroing (a `memset`, `rep stosb`
-/// in glibc) took 6 % of the Cornell box's lab pass when it was 7 KB (Zen 5, one thread).
+/// (`PathScratch`). Made once for a thread's rows and reused batch after batch: made afresh
+/// for every batch of 64 rays, its zeroing (a `memset`, `rep stosb` in glibc) took 6 % of the
+/// Cornell box's lab pass when it was 7 KB (Zen 5, one thread).
 pub struct Scratch {
     /// The lab's batches' hits, [`GROUPS`] groups.
     lab: HitScratch<GROUPS>,

@@ -85,9 +85,9 @@ impl PathScratch {
 /// paths still going and their next rays and hits, the mirror and glass vertices, and β of
 /// each diffuse hit's path as it arrives, about 95 KB. Kept off the stack: as the batch's own
 /// arrays (in batches of 256 paths), they made the frame of the code compiled for the CPU,
-/// which the lab's batches share, 59 KB, and the lab pass 8–11 % slower. A batch takes only what it wrote: the
-/// entries of its paths are set when they start, and lanes left from earlier vertices or
-/// batches are computed with, never taken (as [`super::Scratch`]'s).
+/// which the lab's batches share, 59 KB, and the lab pass 8–11 % slower. A batch takes only
+/// what it wrote: the entries of its paths are set when they start, and lanes left from
+/// earlier vertices or batches are computed with, never taken (as [`super::Scratch`]'s).
 struct PathMemory {
     looking: [Looking; PATH_BATCH],
     paths: [PathState; PATH_BATCH],
