@@ -16,7 +16,7 @@ use glam::Vec3;
 
 use crate::display::Display;
 pub use crate::display::to_display_u8;
-use crate::memory::{AllocError, try_vec};
+use crate::memory::{AllocError, try_vec, with_thread_memory};
 
 /// A `width × height` image of linear RGB values, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -733,15 +733,11 @@ fn with_row_buffers<T>(
     seen_width: usize,
     work: impl FnOnce(&mut [Vec3], &mut [Option<Seen>]) -> T,
 ) -> T {
-    ROW_BUFFERS.with(|buffers| match buffers.try_borrow_mut() {
-        Ok(mut buffers) => {
-            let (row, seen) = &mut *buffers;
-            row.resize(width, Vec3::ZERO);
-            seen.clear();
-            seen.resize(seen_width, None);
-            work(&mut row[..width], &mut seen[..seen_width])
-        }
-        Err(_) => work(&mut vec![Vec3::ZERO; width], &mut vec![None; seen_width]),
+    with_thread_memory(&ROW_BUFFERS, Default::default, |(row, seen)| {
+        row.resize(width, Vec3::ZERO);
+        seen.clear();
+        seen.resize(seen_width, None);
+        work(&mut row[..width], &mut seen[..seen_width])
     })
 }
 

@@ -18,7 +18,9 @@
 //! * the memory the kernel says is available to start new work (`MemAvailable` in
 //!   `/proc/meminfo`).
 
+use std::cell::RefCell;
 use std::fmt;
+use std::thread::LocalKey;
 
 /// One gibibyte, the unit sizes are given in.
 pub const GIB: u64 = 1 << 30;
@@ -186,6 +188,32 @@ pub fn try_with_capacity<T>(len: usize, what: impl Fn() -> String) -> Result<Vec
         bytes,
     })?;
     Ok(v)
+}
+
+/// `work` with this thread's value in `key`, or with `fresh()` if that is in use (a caller
+/// inside another's work): working memory made once a thread and reused, where making it for
+/// every call (a row, a job) would fill it again each time.
+#[inline(always)]
+pub(crate) fn with_thread_memory<T: 'static, R>(
+    key: &'static LocalKey<RefCell<T>>,
+    fresh: impl FnOnce() -> T,
+    work: impl FnOnce(&mut T) -> R,
+) -> R {
+    key.with(|memory| {
+        // One call of `work` for both cases: it is inlined, and is often a whole row loop.
+        let (mut borrowed, mut made);
+        let memory: &mut T = match memory.try_borrow_mut() {
+            Ok(memory) => {
+                borrowed = memory;
+                &mut borrowed
+            }
+            Err(_) => {
+                made = fresh();
+                &mut made
+            }
+        };
+        work(memory)
+    })
 }
 
 #[cfg(test)]

@@ -21,7 +21,7 @@ use crate::camera::ImagePoints;
 use crate::film::{Film, Image, Seen, rows_per_job};
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, PATH_BATCH, Scratch, Tracer};
-use crate::memory::AllocError;
+use crate::memory::{AllocError, with_thread_memory};
 use crate::sampling::{Rng, concentric_disk, pixel_offset, pixel_sample};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -272,10 +272,11 @@ impl Batch {
     /// it is in use (never, unless a row were traced inside another's tracing).
     #[inline(always)]
     fn with<T>(work: impl FnOnce(&mut Batch) -> T) -> T {
-        BATCH_MEMORY.with(|memory| match memory.try_borrow_mut() {
-            Ok(mut memory) => work(memory.get_or_insert_with(Batch::boxed)),
-            Err(_) => work(&mut Batch::boxed()),
-        })
+        with_thread_memory(
+            &BATCH_MEMORY,
+            || None,
+            |memory| work(memory.get_or_insert_with(Batch::boxed)),
+        )
     }
 
     /// A new batch memory on the heap. Out of line, so that the row loop, inlined into
@@ -349,7 +350,7 @@ impl<'a> Rows<'a> {
     /// Samples `0..samples` of every pixel of row `y`, added into `row` in sample order: the
     /// same sums, bit for bit, as [`Rows::trace`] pass after pass, each pass added. But each
     /// batch holds a few neighbouring pixels' samples (16 samples of 4 pixels, or all 8 of 8
-    /// pixels, …; four times as many pixels in the path tracer's longer batches): rays through
+    /// pixels, …; eight times as many pixels in the path tracer's longer batches): rays through
     /// one pixel are as alike as rays get, so each batch's culling keeps fewer triangles, for
     /// the camera rays and the shadow rays alike.
     #[inline(always)]
