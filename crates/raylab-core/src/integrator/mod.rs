@@ -38,6 +38,7 @@ pub mod path_mis;
 pub mod photons;
 
 use std::borrow::Cow;
+use std::cell::RefCell;
 
 use glam::Vec3;
 
@@ -51,6 +52,7 @@ use crate::intersect::Intersection;
 use crate::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
 use crate::light::{AnyLight, DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
+use crate::memory::with_thread_memory;
 use crate::photon_map::PhotonMap;
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -115,6 +117,33 @@ impl Scratch {
 impl Default for Scratch {
     fn default() -> Self {
         Self::new()
+    }
+}
+
+thread_local! {
+    /// The working memory of this thread's single calls ([`Tracer::trace`],
+    /// [`Tracer::trace_recorded`]), made at the first: 78 KB and the path batch's 95 KB to fill,
+    /// where a call on one pixel (the inspector's) traces in microseconds.
+    static CALL_SCRATCH: RefCell<Option<Box<Scratch>>> = const { RefCell::new(None) };
+}
+
+impl Scratch {
+    /// `work` with this thread's [`CALL_SCRATCH`], or a fresh one if it is in use (a call
+    /// inside another's recorder).
+    fn with_thread<T>(work: impl FnOnce(&mut Scratch) -> T) -> T {
+        with_thread_memory(
+            &CALL_SCRATCH,
+            || None,
+            |scratch| work(scratch.get_or_insert_with(Scratch::boxed)),
+        )
+    }
+
+    /// A new working memory on the heap, made out of line: inlined, its 78 KB went into the
+    /// callers' stack frames.
+    #[cold]
+    #[inline(never)]
+    fn boxed() -> Box<Scratch> {
+        Box::new(Scratch::new())
     }
 }
 
@@ -817,8 +846,9 @@ impl<'a> Tracer<'a> {
     /// the path tracer runs faster (PERFORMANCE.md).
     pub fn trace(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         debug_assert_eq!(rays.len(), out.len());
-        let scratch = &mut Scratch::new();
-        self.trace_for_cpu(Primary::Rays(rays), rngs, out, &mut [], scratch);
+        Scratch::with_thread(|scratch| {
+            self.trace_for_cpu(Primary::Rays(rays), rngs, out, &mut [], scratch)
+        });
     }
 
     /// [`Tracer::trace`] for the camera rays through `points`, made here
@@ -959,8 +989,9 @@ impl<'a> Tracer<'a> {
     /// [`Tracer::trace`] for any CPU; inlined into the AVX2 version.
     #[inline(always)]
     pub fn trace_portable(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
-        let (lab, path) = (&mut HitScratch::new(), &mut PathScratch::new());
-        self.trace_seen(rays, rngs, out, &mut [], (lab, path), &mut ());
+        Scratch::with_thread(|Scratch { lab, path, .. }| {
+            self.trace_seen(rays, rngs, out, &mut [], (lab, path), &mut ())
+        });
     }
 
     /// [`Tracer::trace_portable`], telling `recorder` every step (see [`Recorder`]): what the
@@ -973,8 +1004,9 @@ impl<'a> Tracer<'a> {
         out: &mut [Vec3],
         recorder: &mut R,
     ) {
-        let (lab, path) = (&mut HitScratch::new(), &mut PathScratch::new());
-        self.trace_seen(rays, rngs, out, &mut [], (lab, path), recorder);
+        Scratch::with_thread(|Scratch { lab, path, .. }| {
+            self.trace_seen(rays, rngs, out, &mut [], (lab, path), recorder)
+        });
     }
 
     /// [`Tracer::trace_recorded`], and what each ray sees into `seen` as
