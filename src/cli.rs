@@ -931,6 +931,7 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     let settings = if args.options.settings.is_some() || args.options.scene_file.is_some() {
         args.options.resolve_settings()?
     } else {
+        args.options.check_caustics()?;
         // Given sides other than the default must be the image's (the default cannot be told
         // from a typed 512, so it is taken as "the image's").
         for (name, given, actual) in [

@@ -1435,6 +1435,10 @@ fn surfaces_twice_or_for_an_absent_block_are_refused_at_their_line() {
         scene.to_str().unwrap(),
     ]);
     assert!(saved.status.success(), "{}", stderr(&saved));
+    // A real map, so that only the surfaces themselves can be what is refused.
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 200, 200]))
+        .save(dir.path().join("h.png"))
+        .unwrap();
     let text = std::fs::read_to_string(&scene).unwrap();
     let surface =
         |part: &str| format!("\n[[scene.surfaces]]\npart = \"{part}\"\nheight_map = \"h.png\"\n");
