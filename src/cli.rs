@@ -283,9 +283,10 @@ pub struct RenderOptions {
     /// point light through mirror or glass.
     #[arg(long, default_value = "off", value_name = "off|photons")]
     pub caustics: Caustics,
-    /// Path stage with --caustics photons: photons shot from the light each pass.
-    #[arg(long, default_value_t = DEFAULT_PHOTONS, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_PHOTONS)), value_name = "N")]
-    pub photons: u32,
+    /// Path stage with --caustics photons: photons shot from the light each pass
+    /// [default: 100000].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_PHOTONS)), value_name = "N")]
+    pub photons: Option<u32>,
     /// Image width in pixels.
     #[arg(long, default_value_t = DEFAULT_SIDE, value_parser = parse_side, value_name = "W")]
     pub width: u32,
@@ -391,8 +392,31 @@ impl RenderOptions {
         }
         match &self.settings {
             Some(path) => read_settings_file(path),
-            None => Ok(self.settings()),
+            None => {
+                self.check_caustics()?;
+                Ok(self.settings())
+            }
         }
+    }
+
+    /// `--caustics photons` only in the path stage, and `--photons` only with it: elsewhere
+    /// they would do nothing, without a word.
+    fn check_caustics(&self) -> anyhow::Result<()> {
+        if self.caustics == Caustics::Photons && self.stage != Stage::Path {
+            anyhow::bail!(
+                "--caustics photons needs --stage path: the path tracer gathers the photons, \
+                 while the lab's stage '{}' follows mirror and glass by Whitted's rule and \
+                 shoots none",
+                self.stage
+            );
+        }
+        if self.photons.is_some() && self.caustics != Caustics::Photons {
+            anyhow::bail!(
+                "--photons sets how many photons --caustics photons shoots (with --stage path); \
+                 without --caustics photons it does nothing"
+            );
+        }
+        Ok(())
     }
 
     /// The settings the arguments other than `--settings` describe.
@@ -427,7 +451,7 @@ impl RenderOptions {
                 smooth: self.smooth,
                 parallax_shadows: self.parallax_shadows,
                 caustics: self.caustics,
-                photons: self.photons,
+                photons: self.photons.unwrap_or(DEFAULT_PHOTONS),
                 ..Shading::for_stage(self.stage)
             },
             material_preset: self.material_preset,
@@ -907,6 +931,7 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     let settings = if args.options.settings.is_some() || args.options.scene_file.is_some() {
         args.options.resolve_settings()?
     } else {
+        args.options.check_caustics()?;
         // Given sides other than the default must be the image's (the default cannot be told
         // from a typed 512, so it is taken as "the image's").
         for (name, given, actual) in [

@@ -974,3 +974,71 @@ fn denoise_on_the_command_line() {
     assert_eq!(raw_copy, raw_shot);
     assert_ne!(raw_shot, shot);
 }
+
+/// `--caustics photons` outside the path stage, and `--photons` without it, did nothing
+/// without a word: each is refused in one line, the same in `render`, `inspect` and `check`,
+/// before any file is written; in the path stage with caustics they are taken.
+#[test]
+fn caustics_and_photons_where_they_do_nothing_are_refused_in_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("lab.png");
+    let image = image.to_str().unwrap();
+    let size = ["--width", "8", "--height", "8"];
+    let mut render = vec!["render", "--out", image];
+    render.extend_from_slice(&size);
+    assert!(raylab(&render).status.success());
+    let out = dir.path().join("out.png");
+    for (extra, says) in [
+        (
+            &["--caustics", "photons"][..],
+            "--caustics photons needs --stage path",
+        ),
+        (
+            &[
+                "--caustics",
+                "photons",
+                "--stage",
+                "shadows",
+                "--photons",
+                "10",
+            ],
+            "the lab's stage 'shadows'",
+        ),
+        (
+            &["--photons", "5000"],
+            "without --caustics photons it does nothing",
+        ),
+        (
+            &["--stage", "path", "--photons", "5000"],
+            "without --caustics photons it does nothing",
+        ),
+    ] {
+        for command in [
+            vec!["render", "--out", out.to_str().unwrap()],
+            vec!["inspect", "--pixel", "4,4"],
+            vec!["check", image],
+        ] {
+            let mut args = command.clone();
+            args.extend_from_slice(&size);
+            args.extend_from_slice(extra);
+            let run = raylab(&args);
+            let err = stderr(&run);
+            assert_eq!(run.status.code(), Some(1), "{args:?}: {err}");
+            assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+            assert!(err.contains(says), "{args:?}: '{err}' should say '{says}'");
+            assert!(!out.exists(), "{args:?} wrote a file");
+        }
+    }
+    let mut path = vec!["render", "--out", out.to_str().unwrap()];
+    path.extend_from_slice(&size);
+    path.extend_from_slice(&[
+        "--stage",
+        "path",
+        "--caustics",
+        "photons",
+        "--photons",
+        "50",
+    ]);
+    let ok = raylab(&path);
+    assert!(ok.status.success(), "{}", stderr(&ok));
+}

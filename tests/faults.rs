@@ -1254,3 +1254,223 @@ fn thread_counts_and_kernel_names_from_the_environment() {
         "{err}"
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// Light sizes, surfaces and keys that were taken without a word.
+
+/// An area light too small for its radiance or sampling density to be an `f32` wrote NaN
+/// pixels with exit 0 (a sphere of 1e−30: 1,713 of 1,728 values); it is refused in one line
+/// naming the bound, from the command line, a settings JSON and a scene file; the smallest
+/// allowed size writes finite values, denoised too.
+#[test]
+fn a_tiny_area_light_is_refused_and_the_smallest_allowed_is_finite() {
+    let bound = "must be 0 (the point light) or between 0.001 and 1e6";
+    for shape in ["sphere", "quad"] {
+        for size in ["1e-30", "1e-19", "5e-20", "1e-9"] {
+            assert_render_refused(
+                &[
+                    "--width",
+                    "24",
+                    "--height",
+                    "24",
+                    "--stage",
+                    "path",
+                    "--light-shape",
+                    shape,
+                    "--light-size",
+                    size,
+                ],
+                &[&format!("invalid light size {size}"), bound],
+            );
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("tiny.json");
+    std::fs::write(
+        &json,
+        r#"{"light": {"radius": 1e-30, "shape": "quad"}, "camera": {"width": 8, "height": 8}}"#,
+    )
+    .unwrap();
+    assert_render_refused(
+        &["--settings", json.to_str().unwrap()],
+        &["invalid light size 1e-30", bound],
+    );
+    let scene = dir.path().join("tiny.toml");
+    let saved = raylab(&[
+        "render",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--light-shape",
+        "sphere",
+        "--out",
+        dir.path().join("x.png").to_str().unwrap(),
+        "--save-scene",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&scene, text.replace("radius = 0.1", "radius = 1e-30")).unwrap();
+    assert_render_refused(
+        &["--scene-file", scene.to_str().unwrap()],
+        &["radius = 1e-30", "invalid light size 1e-30", bound],
+    );
+
+    for shape in ["sphere", "quad"] {
+        let exr = dir.path().join(format!("{shape}.exr"));
+        let out = raylab(&[
+            "render",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--stage",
+            "path",
+            "--samples",
+            "4",
+            "--light-shape",
+            shape,
+            "--light-size",
+            "0.001",
+            "--light-power",
+            "1e6",
+            "--light-colour",
+            "1000,1000,1000",
+            "--denoise",
+            "on",
+            "--out",
+            exr.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let pixels = image::open(&exr).unwrap().to_rgb32f().into_raw();
+        assert!(pixels.iter().all(|v| v.is_finite()), "{shape}: {pixels:?}");
+    }
+}
+
+/// `--light-shape point` with a size rendered a sphere without a word, and `--save-scene`
+/// wrote `shape = "point"` with the radius: refused in one line that says what to use
+/// instead, with no image and no scene file written.
+#[test]
+fn a_point_light_with_a_size_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    let exr = dir.path().join("x.exr");
+    let out = raylab(&[
+        "render",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--light-shape",
+        "point",
+        "--light-size",
+        "0.3",
+        "--out",
+        exr.to_str().unwrap(),
+        "--save-scene",
+        scene.to_str().unwrap(),
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains(
+            "invalid light size 0.3: a point light has no size: for an area light of this size \
+             choose the shape sphere or quad (--light-shape), or give the size 0"
+        ),
+        "{err}"
+    );
+    assert!(
+        common::files_in(dir.path()).is_empty(),
+        "a file was written"
+    );
+    // `--light-size` alone is a sphere, as it always was.
+    let out = raylab(&[
+        "render",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--light-size",
+        "0.3",
+        "--out",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+/// A key given twice in a settings JSON (or a screenshot's) was taken as its last value
+/// without a word, where a scene file refuses it: refused in one line naming the key.
+#[test]
+fn a_key_given_twice_in_settings_json_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("twice.json");
+    std::fs::write(
+        &json,
+        r#"{"camera": {"width": 8, "height": 8}, "seed": 1, "light": {"power": 14, "power": 1e6}}"#,
+    )
+    .unwrap();
+    assert_render_refused(
+        &["--settings", json.to_str().unwrap()],
+        &["duplicate key `light.power`", "line 1 column"],
+    );
+}
+
+/// Scene-file surfaces that were dropped without a word: a second entry for one part, and an
+/// entry for a block the scene leaves out. Each is refused naming its line.
+#[test]
+fn surfaces_twice_or_for_an_absent_block_are_refused_at_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    let saved = raylab(&[
+        "render",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        dir.path().join("x.png").to_str().unwrap(),
+        "--save-scene",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    // A real map, so that only the surfaces themselves can be what is refused.
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 200, 200]))
+        .save(dir.path().join("h.png"))
+        .unwrap();
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let surface =
+        |part: &str| format!("\n[[scene.surfaces]]\npart = \"{part}\"\nheight_map = \"h.png\"\n");
+    for (edited, part, says) in [
+        (
+            format!("{text}{}{}", surface("back-wall"), surface("back-wall")),
+            "back-wall",
+            "has maps from an earlier [[scene.surfaces]] already",
+        ),
+        (
+            format!(
+                "{}{}",
+                text.replace("blocks = true", "blocks = false"),
+                surface("short-block")
+            ),
+            "short-block",
+            "is not in the scene: `blocks = false` leaves the blocks out",
+        ),
+    ] {
+        std::fs::write(&scene, &edited).unwrap();
+        let want = format!("part = \"{part}\"");
+        let line = edited
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| *l == want)
+            .last()
+            .unwrap()
+            .0
+            + 1;
+        assert_render_refused(
+            &["--scene-file", scene.to_str().unwrap()],
+            &[&format!("line {line} (part = \"{part}\")"), says],
+        );
+    }
+}

@@ -123,6 +123,19 @@ pub struct NormalMap {
 }
 
 impl NormalMap {
+    /// Why `image` (decoded as [`Decoding::Normal`]) cannot be a normal map, if it cannot:
+    /// a grey image (every texel's three channels equal) is a bump map of heights, which an
+    /// MTL's `map_Bump` also names, not a normal map; read as one, it would tilt every normal
+    /// toward one corner. The one rule for every normal map: a model's material library's (a
+    /// warning, the map left out) and a scene file's (an error).
+    pub fn refusal(image: &TextureImage) -> Option<&'static str> {
+        image
+            .texels
+            .iter()
+            .all(|t| t.x == t.y && t.y == t.z)
+            .then_some("is grey: a bump map of heights, not a normal map")
+    }
+
     /// The tangent-space normal at `uv`: the texels filtered bilinearly, (x, y) scaled by the
     /// strength, normalised; (0, 0, 1) where that leaves nothing (opposite texels averaging
     /// to zero, a non-finite `uv`).

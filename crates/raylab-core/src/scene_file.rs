@@ -223,7 +223,7 @@ fn key_path(name: &str) -> Vec<String> {
         "light position" => &["light", "position"],
         "light power" => &["light", "power"],
         "light colour" => &["light", "colour"],
-        "light radius" => &["light", "radius"],
+        "light size" => &["light", "radius"],
         "roughness" => &["scene", "roughness"],
         "exposure" => &["display", "exposure"],
         "indirect light" => &["shading", "indirect_light"],
@@ -874,6 +874,7 @@ mod tests {
         s.light.power = 21.5;
         s.light.colour = Vec3::new(1.0, 0.8, 0.6);
         s.light.radius = 0.05;
+        s.light.shape = LightShape::Sphere;
         s.shading = Shading::for_stage(Stage::Path);
         s.shading.bounces = Some(3);
         s.shading.indirect_light = Vec3::new(0.1, 0.2, 0.3);
@@ -1172,5 +1173,121 @@ mod tests {
             e.contains("(height = -2.0): invalid scene.models[0].height -2: must be in (0, 2]"),
             "{e}"
         );
+    }
+
+    /// The default file with `[[scene.surfaces]]` for `parts` appended (each with a normal
+    /// map of its own), after `edit`.
+    fn with_surfaces(parts: &[&str], edit: impl Fn(String) -> String) -> String {
+        let mut text = edit(to_text(&RenderSettings::default(), Path::new("/x")).unwrap());
+        for (i, part) in parts.iter().enumerate() {
+            text.push_str(&format!(
+                "\n[[scene.surfaces]]\npart = \"{part}\"\nnormal_map = \"map{i}.png\"\n"
+            ));
+        }
+        text
+    }
+
+    /// The line of `text` that is `line`, counted from 1; the last if there are several.
+    fn line_number(text: &str, line: &str) -> usize {
+        text.lines()
+            .enumerate()
+            .filter(|(_, l)| *l == line)
+            .last()
+            .unwrap()
+            .0
+            + 1
+    }
+
+    /// Two `[[scene.surfaces]]` for one part are refused at the second's line (the first was
+    /// dropped without a word); two parts, one entry each, are read.
+    #[test]
+    fn a_part_given_maps_twice_is_refused_at_its_line() {
+        let text = with_surfaces(&["back-wall", "floor", "back-wall"], |t| t);
+        let e = parse(&text, Path::new("/x")).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "line {} (part = \"back-wall\"): invalid scene.surfaces[2].part \"back-wall\": \
+                 has maps from an earlier [[scene.surfaces]] already: give each part one entry, \
+                 with all its maps",
+                line_number(&text, "part = \"back-wall\"")
+            )
+        );
+        let text = with_surfaces(&["back-wall", "floor"], |t| t);
+        let SceneChoice::Custom(spec) = parse(&text, Path::new("/x")).unwrap().scene else {
+            panic!("{text}")
+        };
+        assert_eq!(spec.surfaces.len(), 2);
+    }
+
+    /// A surface for a part the scene leaves out (a block with `blocks = false`, a wall with
+    /// `room = false`) is refused at its line; it was ignored without a word.
+    #[test]
+    fn a_surface_for_an_absent_part_is_refused_at_its_line() {
+        let text = with_surfaces(&["floor", "short-block"], |t| {
+            t.replace("blocks = true", "blocks = false")
+        });
+        let e = parse(&text, Path::new("/x")).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "line {} (part = \"short-block\"): invalid scene.surfaces[1].part \
+                 \"short-block\": is not in the scene: `blocks = false` leaves the blocks out \
+                 (set `blocks = true`, or remove this surface)",
+                line_number(&text, "part = \"short-block\"")
+            )
+        );
+        let text = with_surfaces(&["tall-block", "left-wall"], |t| {
+            t.replace("room = true", "room = false")
+        });
+        let e = parse(&text, Path::new("/x")).unwrap_err();
+        assert!(
+            e.starts_with(&format!(
+                "line {} (part = \"left-wall\"): invalid scene.surfaces[1].part \"left-wall\": \
+                 is not in the scene: `room = false` leaves the room out",
+                line_number(&text, "part = \"left-wall\"")
+            )),
+            "{e}"
+        );
+        // The blocks without the room may have maps; so may the room without the blocks.
+        let text = with_surfaces(&["tall-block"], |t| {
+            t.replace("room = true", "room = false")
+        });
+        parse(&text, Path::new("/x")).unwrap();
+        let text = with_surfaces(&["ceiling"], |t| {
+            t.replace("blocks = true", "blocks = false")
+        });
+        parse(&text, Path::new("/x")).unwrap();
+    }
+
+    /// A point light given a size, and an area light too small for its radiance to be an
+    /// `f32`, are refused at the radius's line, saying what to use instead.
+    #[test]
+    fn a_point_light_with_a_size_or_a_tiny_area_light_is_refused_at_its_line() {
+        let text = to_text(&RenderSettings::default(), Path::new("/x")).unwrap();
+        assert!(text.contains("radius = 0.0\nshape = \"point\"\n"), "{text}");
+        let line = line_number(&text, "radius = 0.0");
+        let e = error_of(|t| t.replace("radius = 0.0", "radius = 0.3"));
+        assert_eq!(
+            e,
+            format!(
+                "line {line} (radius = 0.3): invalid light size 0.3: a point light has no size: \
+                 for an area light of this size choose the shape sphere or quad \
+                 (--light-shape), or give the size 0"
+            )
+        );
+        for shape in ["sphere", "quad"] {
+            let e = error_of(|t| {
+                t.replace("radius = 0.0", "radius = 1e-30")
+                    .replace("shape = \"point\"", &format!("shape = \"{shape}\""))
+            });
+            assert!(
+                e.starts_with(&format!(
+                    "line {line} (radius = 1e-30): invalid light size 1e-30: must be 0 (the \
+                     point light) or between 0.001 and 1e6 (scene units)"
+                )),
+                "{e}"
+            );
+        }
     }
 }

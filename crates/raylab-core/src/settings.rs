@@ -54,6 +54,19 @@ pub const MAX_FOCUS_DISTANCE: f32 = 1e6;
 /// wider than the scene blurs everything alike; far beyond it, lens points overflow `f32`.
 pub const MAX_APERTURE: f32 = 1e3;
 
+/// The smallest size an area light may have, in scene units (a sphere's radius, a square's
+/// side): the point light's nearest distance,
+/// [`MIN_LIGHT_DISTANCE`](crate::light::MIN_LIGHT_DISTANCE). A sphere of radius R is as
+/// bright at its surface as the point light at the distance R, and no brighter light is
+/// allowed; a smaller light is the point light (size 0). The derivation is in
+/// [`RenderSettings::validate`].
+pub const MIN_LIGHT_SIZE: f32 = crate::light::MIN_LIGHT_DISTANCE;
+
+/// The largest size an area light may have, in scene units: a million times the lab's box,
+/// as [`MAX_COORDINATE`]. Far beyond it the area (4πR², S²) overflows `f32` and the light's
+/// radiance is 0: a black image.
+pub const MAX_LIGHT_SIZE: f32 = 1e6;
+
 /// The largest exposure, either way, in stops.
 pub const MAX_EXPOSURE: f32 = 20.0;
 
@@ -329,6 +342,31 @@ impl RenderSettings {
     /// * A pixel sums up to 65,536 samples before dividing: at most 6e26. The display
     ///   multiplies by at most 2^20 (+20 EV) and its curves take any finite value.
     ///
+    /// **Why an area light has a smallest size.** A sphere of radius R has the radiance
+    /// `π L = P·c / (4π R²)` (lab units), a square of side S `π L = P·c / S²`
+    /// (`light/sphere.rs`, `quad.rs`). With R = S = [`MIN_LIGHT_SIZE`] = 1e−3 and the largest
+    /// power and colour:
+    ///
+    /// * the sphere's `π L` is at most 1e9 / (4π · 1e−6) = 8.0e13, the point light's largest
+    ///   D above (a sphere is as bright at its surface as the point light at distance R); the
+    ///   square's is at most 1e9 / 1e−6 = 1e15;
+    /// * the sphere's sampling density (`SphereLight::cone_pdf`) is `1 / (2π (1 − cos θmax))`
+    ///   with `sin² θmax = R² / d²`: at least 1/(2π), so a light sample `li · cos θ / pdf` is
+    ///   at most 2π · 8.0e13 = 5.0e14; with d at most 2√3 · 1e6 (positions within 1e6),
+    ///   `sin² θmax` is at least 1e−6 / 1.2e13 = 8.3e−20, a normal `f32`, and the density
+    ///   at most 1/(π · 8.3e−20) = 3.8e18, whose square (the power heuristic) is 1.5e37;
+    /// * the square's density `d² / (S² cos θ)` (`QuadLight::solid_angle_pdf`) is at most
+    ///   1.2e19 / cos θ, and its light sample `li · cos θ / pdf = P·c cos θ cos θ' / d²`
+    ///   does not depend on S; where a grazing cos θ makes the density ∞ the sample is 0 and
+    ///   the power heuristic gives that strategy all of the weight (`power_heuristic`);
+    /// * a path's value is then at most 256 · 0.95^−253 · 1e15 ≈ 1.1e23 a sample, 7.4e27
+    ///   summed over 65,536 samples: finite.
+    ///
+    /// Far below 1e−3 it fails: the sphere's radiance overflows to ∞ below R ≈ 5e−16 with the
+    /// largest power (with the lab's 14 W between 1e−19 and 5e−20), and for a far light
+    /// `R² / d²` is 0 (the density ∞) below R ≈ 1e−16; either makes ∞ · 0, NaN pixels. A
+    /// light that small is the point light (size 0).
+    ///
     /// So the image, its sums and the EXR file are always finite; outputs are not clamped.
     pub fn validate(&self) -> Result<(), SettingsError> {
         match &self.scene {
@@ -396,10 +434,7 @@ impl RenderSettings {
             let c = vector(light.colour);
             return Err(err("light colour", c, "each channel must be at most 1000"));
         }
-        check_finite("light radius", light.radius)?;
-        if light.radius < 0.0 {
-            return Err(err("light radius", light.radius, "must be ≥ 0"));
-        }
+        check_light_size(light)?;
         check_roughness("roughness", self.roughness)?;
         check_finite("exposure", self.display.exposure)?;
         if self.display.exposure.abs() > MAX_EXPOSURE {
@@ -509,6 +544,38 @@ fn check_vec(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
     }
 }
 
+/// The light's size: 0 (the lab's point light), or for a sphere or square a size from
+/// [`MIN_LIGHT_SIZE`] to [`MAX_LIGHT_SIZE`]; a point light has none (a size given to it would
+/// silently make it a sphere).
+fn check_light_size(light: &PointLight) -> Result<(), SettingsError> {
+    let size = light.radius;
+    check_finite("light size", size)?;
+    if size < 0.0 {
+        return Err(err("light size", number(size), "must be ≥ 0"));
+    }
+    if size == 0.0 {
+        return Ok(());
+    }
+    if light.shape == crate::light::LightShape::Point {
+        return Err(err(
+            "light size",
+            number(size),
+            "a point light has no size: for an area light of this size choose the shape \
+             sphere or quad (--light-shape), or give the size 0",
+        ));
+    }
+    if !(MIN_LIGHT_SIZE..=MAX_LIGHT_SIZE).contains(&size) {
+        return Err(err(
+            "light size",
+            number(size),
+            "must be 0 (the point light) or between 0.001 and 1e6 (scene units): a smaller \
+             sphere or square is brighter than the light's bounds allow; for a light that \
+             small use the point light (--light-shape point)",
+        ));
+    }
+    Ok(())
+}
+
 /// A camera's or light's position: finite and within [`MAX_COORDINATE`] on each axis.
 fn check_position(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
     check_vec(name, v)?;
@@ -534,8 +601,13 @@ pub struct Loaded {
 /// settings object. Lenient where a scene file is strict
 /// ([`crate::settings_file`]'s module docs say how).
 pub fn from_json(text: &str) -> Result<Loaded, String> {
+    use serde::de::DeserializeSeed as _;
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut value: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    let mut json = serde_json::Deserializer::from_str(text);
+    let mut value = UniqueKeys(String::new())
+        .deserialize(&mut json)
+        .and_then(|value| json.end().map(|()| value))
+        .map_err(|e| e.to_string())?;
     if let Some(inner) = value.get_mut("settings") {
         value = inner.take();
     }
@@ -552,6 +624,87 @@ pub fn from_json(text: &str) -> Result<Loaded, String> {
     })
     .map_err(|e: serde_json::Error| e.to_string())?;
     Ok(Loaded { settings, warnings })
+}
+
+/// JSON read as a [`serde_json::Value`], but an object that gives a key twice is refused,
+/// naming the key by its path (`camera.width`): serde_json keeps the last silently, where a
+/// scene file (TOML) refuses a key given twice. `.0` is the path to the value read.
+struct UniqueKeys(String);
+
+impl UniqueKeys {
+    fn inner(&self, key: impl std::fmt::Display) -> UniqueKeys {
+        UniqueKeys(if self.0.is_empty() {
+            key.to_string()
+        } else {
+            format!("{}.{key}", self.0)
+        })
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for UniqueKeys {
+    type Value = serde_json::Value;
+
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for UniqueKeys {
+    type Value = serde_json::Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_str<E>(self, v: &str) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_unit<E>(self) -> Result<Self::Value, E> {
+        Ok(serde_json::Value::Null)
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(item) =
+            seq.next_element_seed(UniqueKeys(format!("{}[{}]", self.0, items.len())))?
+        {
+            items.push(item);
+        }
+        Ok(serde_json::Value::Array(items))
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let mut object = serde_json::Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            let inner = self.inner(&key);
+            if object.contains_key(&key) {
+                return Err(serde::de::Error::custom(format_args!(
+                    "duplicate key `{}`: each setting may be given once",
+                    inner.0
+                )));
+            }
+            let value = map.next_value_seed(inner)?;
+            object.insert(key, value);
+        }
+        Ok(serde_json::Value::Object(object))
+    }
 }
 
 #[cfg(test)]
@@ -797,6 +950,106 @@ mod tests {
         s.validate().unwrap();
     }
 
+    /// An area light too small for its radiance or sampling density to be an `f32` is
+    /// refused, naming the bound, for both shapes (a sphere of 1e−30 made 1,713 of a 24²
+    /// image's 1,728 values NaN; 1e−19 to 5e−20 made them ∞); so is one too large for its
+    /// area. Size 0 and the bounds themselves are allowed.
+    #[test]
+    fn an_area_light_too_small_or_too_large_is_refused() {
+        use crate::light::LightShape;
+        for shape in [LightShape::Sphere, LightShape::Quad] {
+            for size in [1e-30, 5e-20, 1e-19, 1e-16, 1e-8, 9.9e-4, 1.1e6, 1e30] {
+                let mut s = RenderSettings::default();
+                s.light.shape = shape;
+                s.light.radius = size;
+                let e = s.validate().unwrap_err();
+                assert_eq!(e.name, "light size", "{shape} {size}");
+                assert_eq!(e.value, number(size));
+                assert!(
+                    e.reason.starts_with(
+                        "must be 0 (the point light) or between 0.001 and 1e6 (scene units)"
+                    ),
+                    "{e}"
+                );
+            }
+            for size in [0.0, MIN_LIGHT_SIZE, 0.1, MAX_LIGHT_SIZE] {
+                let mut s = RenderSettings::default();
+                s.light.shape = shape;
+                s.light.radius = size;
+                s.validate().unwrap();
+            }
+        }
+        let mut s = RenderSettings::default();
+        s.light.shape = LightShape::Sphere;
+        s.light.radius = 1e-30;
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid light size 1e-30: must be 0 (the point light) or between 0.001 and 1e6 \
+             (scene units): a smaller sphere or square is brighter than the light's bounds \
+             allow; for a light that small use the point light (--light-shape point)"
+        );
+    }
+
+    /// A size given to a point light is refused with what to do instead (it silently made a
+    /// sphere, and a saved scene said `shape = "point"` with `radius = 0.3`); size 0 is the
+    /// point light itself.
+    #[test]
+    fn a_point_light_with_a_size_is_refused() {
+        let mut s = RenderSettings::default();
+        s.light.radius = 0.3;
+        assert_eq!(s.light.shape, crate::light::LightShape::Point);
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid light size 0.3: a point light has no size: for an area light of this size \
+             choose the shape sphere or quad (--light-shape), or give the size 0"
+        );
+        s.light.radius = 0.0;
+        s.validate().unwrap();
+        // A file written before lights had shapes means a sphere by a radius: still read so.
+        let old = from_json(r#"{"light": {"radius": 0.3}}"#).unwrap().settings;
+        assert_eq!(old.light.shape, crate::light::LightShape::Sphere);
+        old.validate().unwrap();
+        let point = from_json(r#"{"light": {"radius": 0.3, "shape": "point"}}"#).unwrap();
+        assert_eq!(point.settings.validate().unwrap_err().name, "light size");
+    }
+
+    /// The smallest allowed area light with the largest power and colour, a few millimetres
+    /// from the floor: every stage (the lab's and the path tracer, its light samples and the
+    /// light seen directly), raw and denoised, gives finite pixels. The sphere is as bright at
+    /// its surface as the point light is allowed to be (8.0e13 in lab units), the square
+    /// 12.6 times that.
+    #[test]
+    fn the_smallest_allowed_area_light_gives_a_finite_image() {
+        use crate::light::LightShape;
+        let scene = crate::scene::cornell_box();
+        for shape in [LightShape::Sphere, LightShape::Quad] {
+            let mut s = RenderSettings::default();
+            s.camera = s.camera.with_resolution(12, 12);
+            s.light.position = Vec3::new(0.5, 0.995, 0.3);
+            s.light.power = MAX_LIGHT_POWER;
+            s.light.colour = Vec3::splat(MAX_LIGHT_COLOUR);
+            s.light.shape = shape;
+            s.light.radius = MIN_LIGHT_SIZE;
+            for stage in crate::Stage::ALL {
+                s.shading = crate::Shading::for_stage(stage);
+                s.shading.indirect = true;
+                s.samples_per_pixel = 8;
+                s.denoise = true;
+                s.validate().unwrap();
+                let (raw, denoised) = crate::denoise::render_denoised(&scene, &s);
+                let finite =
+                    |image: &crate::film::Image| image.pixels.iter().all(|p| p.is_finite());
+                assert!(finite(&raw), "{shape} {stage}: {:?}", raw.pixels);
+                let denoised = denoised.expect("an area light is noisy: denoised");
+                assert!(finite(&denoised), "{shape} {stage}: {:?}", denoised.pixels);
+                if stage != crate::Stage::Flat {
+                    let brightest = raw.pixels.iter().map(|p| p.max_element());
+                    assert!(brightest.fold(0.0, f32::max) > 1e6, "{shape} {stage}");
+                }
+            }
+        }
+    }
+
     /// The estimate by hand: 16384² pixels × 12 bytes + 64 MiB = 3,288,334,336 bytes for the
     /// Cornell box's shaded image; the normals view adds 16 bytes a pixel (an optional vector);
     /// the terrain adds its 320 MiB.
@@ -978,6 +1231,49 @@ mod tests {
         // A focal length that is given stays.
         let c = from_json(r#"{"camera": {"width": 256, "focal_length": 100}}"#).unwrap();
         assert_eq!(c.settings.camera.focal_length, 100.0);
+    }
+
+    /// A key given twice in settings JSON is refused, naming it by its path and its place,
+    /// at any depth and in a screenshot's sidecar too (the last one was used silently, where
+    /// a scene file refuses it); the same key in two objects is no duplicate.
+    #[test]
+    fn a_key_given_twice_is_refused_naming_it() {
+        for (json, says) in [
+            (r#"{"seed": 1, "seed": 2}"#, "duplicate key `seed`"),
+            (
+                r#"{"camera": {"width": 8, "width": 9}}"#,
+                "duplicate key `camera.width`",
+            ),
+            (
+                r#"{"settings": {"light": {"power": 14, "power": 1e6}}}"#,
+                "duplicate key `settings.light.power`",
+            ),
+            (
+                r#"{"scene": {"Custom": {"models": [{"file": "a", "file": "b"}]}}}"#,
+                "duplicate key `scene.Custom.models[0].file`",
+            ),
+            (
+                r#"{"saved_at": "x", "saved_at": "y"}"#,
+                "duplicate key `saved_at`",
+            ),
+        ] {
+            let e = from_json(json).unwrap_err();
+            assert!(e.starts_with(says), "{json}: {e}");
+            assert!(
+                e.contains("each setting may be given once at line 1 column"),
+                "{e}"
+            );
+        }
+        let two = from_json(
+            r#"{"camera": {"width": 8}, "light": {"position": [0, 0, 0]}, "x": {"width": 1}}"#,
+        )
+        .unwrap();
+        assert_eq!(two.settings.camera.width, 8);
+        assert!(
+            from_json(r#"{"seed": 1} {"seed": 2}"#).is_err(),
+            "trailing text"
+        );
+        assert!(from_json(r#"{"seed": 1}  "#).is_ok());
     }
 
     #[test]

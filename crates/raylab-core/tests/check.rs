@@ -302,6 +302,7 @@ fn what_check_refuses() {
     path.shading.stage = Stage::Path;
     let mut area = s.clone();
     area.light.radius = 0.1;
+    area.light.shape = raylab_core::light::LightShape::Sphere;
     let mut nan = s.clone();
     nan.camera.yaw = f32::NAN;
     for bad in [path, area, nan] {

@@ -390,6 +390,59 @@ fn a_scene_file_names_its_normal_map() {
     assert!(e.contains("bump"), "{e}");
 }
 
+/// A grey image named as a scene file's `normal_map` (a wall's or a model's) is refused as
+/// the same image named by a material library is ("is grey: a bump map of heights, not a
+/// normal map"): it tilted the wall's normals without a word. The same file as a height map
+/// is what it is, and loads.
+#[test]
+fn a_grey_normal_map_in_a_scene_file_is_refused_as_in_a_material_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let grey = dir.path().join("bumps.png");
+    std::fs::write(&grey, png(4, 4, [90, 90, 90])).unwrap();
+    let wall = |relief: ReliefSpec| {
+        let mut spec = SceneSpec::cornell("grey wall");
+        spec.surfaces.push(PartRelief {
+            part: BoxPart::BackWall,
+            relief,
+        });
+        spec
+    };
+    let mut model = SceneChoice::Teapot.spec();
+    model.models[0].relief.normal_map = Some(grey.clone());
+    for spec in [
+        wall(ReliefSpec {
+            normal_map: Some(grey.clone()),
+            ..ReliefSpec::default()
+        }),
+        model,
+    ] {
+        let mut s = settings(Stage::Direct, 16);
+        s.scene = SceneChoice::Custom(Box::new(spec));
+        let file = dir.path().join("grey.toml");
+        std::fs::remove_file(&file).ok();
+        raylab_core::scene_file::save(&s, &file).unwrap();
+        let e = raylab_core::scene_file::load(&file)
+            .unwrap()
+            .scene
+            .load()
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            format!(
+                "could not load the normal map '{}': is grey: a bump map of heights, not a \
+                 normal map",
+                grey.display()
+            )
+        );
+    }
+    let heights = wall(ReliefSpec {
+        height_map: Some(grey.clone()),
+        ..ReliefSpec::default()
+    });
+    SceneChoice::Custom(Box::new(heights)).load().unwrap();
+}
+
 /// Parallax self-shadowing on the parallax-floor preset (lab stage, 128²), under a light low
 /// over the floor's far right corner, so that the tiles' shadows fall toward the camera (with
 /// the lab's light, in front and above, they fall behind the tiles, where the camera cannot

@@ -919,11 +919,8 @@ fn normal_map_or_warning(
             return None;
         }
     };
-    if image.texels.iter().all(|t| t.x == t.y && t.y == t.z) {
-        warnings.push(format!(
-            "'{}' is grey: a bump map of heights, not a normal map; it is not used",
-            image.name
-        ));
+    if let Some(reason) = NormalMap::refusal(&image) {
+        warnings.push(format!("'{}' {reason}; it is not used", image.name));
         return None;
     }
     let strength = if (0.0..=10.0).contains(&strength) {

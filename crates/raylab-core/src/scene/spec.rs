@@ -112,10 +112,20 @@ impl ReliefSpec {
                 .map_err(|e| SceneError::map(decoding, e))
         };
         let normal = match &self.normal_map {
-            Some(file) => Some(NormalMap {
-                image: load(file, Decoding::Normal)?,
-                strength: self.normal_strength,
-            }),
+            Some(file) => {
+                let image = load(file, Decoding::Normal)?;
+                if let Some(reason) = NormalMap::refusal(&image) {
+                    return Err(SceneError::Map {
+                        what: Decoding::Normal.what(),
+                        name: image.name.clone(),
+                        reason: reason.to_owned(),
+                    });
+                }
+                Some(NormalMap {
+                    image,
+                    strength: self.normal_strength,
+                })
+            }
             None => None,
         };
         let height = match &self.height_map {
@@ -205,6 +215,11 @@ crate::named::named_enum!(BoxPart as "box part" {
 });
 
 impl BoxPart {
+    /// Whether the part is one of the two blocks (else the room's: floor, walls, ceiling).
+    pub fn is_block(self) -> bool {
+        matches!(self, BoxPart::ShortBlock | BoxPart::TallBlock)
+    }
+
     /// The name of the part's material in [`cornell_box`].
     pub fn material(self) -> &'static str {
         match self {
@@ -386,8 +401,33 @@ impl SceneSpec {
             m.relief.validate(field)?;
         }
         for (i, part) in self.surfaces.iter().enumerate() {
-            part.relief
-                .validate(|f| format!("scene.surfaces[{i}].{f}"))?;
+            let field = |f: &str| format!("scene.surfaces[{i}].{f}");
+            let name = format!("\"{}\"", part.part);
+            if self.surfaces[..i].iter().any(|p| p.part == part.part) {
+                return Err(bad(
+                    field("part"),
+                    name,
+                    "has maps from an earlier [[scene.surfaces]] already: give each part one \
+                     entry, with all its maps",
+                ));
+            }
+            if !self.blocks && part.part.is_block() {
+                return Err(bad(
+                    field("part"),
+                    name,
+                    "is not in the scene: `blocks = false` leaves the blocks out (set \
+                     `blocks = true`, or remove this surface)",
+                ));
+            }
+            if !self.room && !part.part.is_block() {
+                return Err(bad(
+                    field("part"),
+                    name,
+                    "is not in the scene: `room = false` leaves the room out (set \
+                     `room = true`, or remove this surface)",
+                ));
+            }
+            part.relief.validate(field)?;
         }
         if let Some(w) = &self.water {
             w.validate()?;
