@@ -4,11 +4,12 @@
 //! library and serde_json, which the main package has too.
 
 use std::path::Path;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
+use raylab_core::check::{self, Rgb8};
 use raylab_core::render::render;
 use raylab_core::scene::obj::{Placement, model_in_box, parse_obj};
-use raylab_core::scene::{Scene, cornell_box};
+use raylab_core::scene::{Scene, SceneChoice, cornell_box};
 use raylab_core::view::render_view;
 use raylab_core::{RenderSettings, Shading, Stage};
 
@@ -37,10 +38,12 @@ pub fn obj(data: &[u8]) {
 /// Bytes → `RenderSettings::from_json` (what `raylab render --settings FILE` reads: a
 /// screenshot's sidecar or a bare object) → `validate()`. Valid settings must survive the trip
 /// through JSON that screenshots make; the small ones (at most [`MAX_SIDE`]² pixels and
-/// [`MAX_SAMPLES`] samples) are rendered on the Cornell box, with their display and their debug
-/// view, to find panics in the tracer for any values validation lets through.
+/// [`MAX_SAMPLES`] samples) are rendered on the scene they name ([`scene_for`]: the pool's
+/// water, a scene file's glass and mirror models), with their display and their debug view,
+/// to find panics in the tracer for any values validation lets through. No pixel may be NaN.
+/// Settings `check` takes are checked too, against their own render: exactly the figure, so a
+/// 100 % match and the verdict `none`.
 pub fn settings_json(data: &[u8]) {
-    static SCENE: OnceLock<Scene> = OnceLock::new();
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
@@ -62,15 +65,54 @@ pub fn settings_json(data: &[u8]) {
     {
         return;
     }
-    // The scene the settings name may be a file or the million-triangle terrain: the box
-    // stands in for every one; the tracer is what is fuzzed.
-    let scene = SCENE.get_or_init(cornell_box);
-    let image = render(scene, &settings);
+    let scene = scene_for(&settings.scene);
+    let image = render(&scene, &settings);
     assert_eq!(image.pixels.len(), (camera.width * camera.height) as usize);
+    if let Some(i) = image.pixels.iter().position(|p| p.is_nan()) {
+        panic!("pixel {i} is NaN: {}", settings.summary());
+    }
     let rgba = settings.display.to_rgba8(&image.pixels);
     assert_eq!(rgba.len(), 4 * image.pixels.len());
     if settings.view.is_traced() {
-        let _ = render_view(scene, &settings, settings.view, &|| false);
+        let _ = render_view(&scene, &settings, settings.view, &|| false);
+    }
+    if check::check_settings(&settings).is_ok() {
+        // The lab's display, as `raylab render` writes the PNG a student would check.
+        let figure = Rgb8::from_linear(&image);
+        let checked = check::check(&scene, &settings, &figure)
+            .unwrap_or_else(|e| panic!("{e}: {}", settings.summary()));
+        let report = &checked.report;
+        assert_eq!(checked.figure, figure, "{}", settings.summary());
+        assert_eq!(
+            (report.match_share, report.best.mistake.as_str()),
+            (1.0, "none"),
+            "{}",
+            settings.summary()
+        );
+    }
+}
+
+/// The scene fuzzed settings are rendered on: the box, or the pool, or a scene of the box's
+/// parts with built-in models, water and surfaces (a scene file's), as they name it. What
+/// would read a file (an OBJ, a map) or take long (the million-triangle terrain) is the box:
+/// the tracer is what is fuzzed.
+fn scene_for(choice: &SceneChoice) -> Arc<Scene> {
+    static BOX: OnceLock<Arc<Scene>> = OnceLock::new();
+    static POOL: OnceLock<Arc<Scene>> = OnceLock::new();
+    let the_box = || Arc::clone(BOX.get_or_init(|| Arc::new(cornell_box())));
+    match choice {
+        SceneChoice::Cornell => the_box(),
+        SceneChoice::Pool => Arc::clone(
+            POOL.get_or_init(|| Arc::new(SceneChoice::Pool.load().expect("the pool loads"))),
+        ),
+        SceneChoice::Custom(spec)
+            if spec.terrain.is_none()
+                && spec.models.iter().all(|m| m.built_in().is_some())
+                && spec.models.len() <= 2 =>
+        {
+            choice.load().map_or_else(|_| the_box(), Arc::new)
+        }
+        _ => the_box(),
     }
 }
 

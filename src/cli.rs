@@ -948,12 +948,14 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
                 );
             }
         }
+        // Resolved and validated as render and inspect resolve them: the same options mean
+        // the same (waves asked of a scene with no water are refused).
         RenderOptions {
             width: image.width,
             height: image.height,
             ..args.options.clone()
         }
-        .settings()
+        .resolve_settings()?
     };
     check::check_settings(&settings)?;
     raylab_core::memory::check(

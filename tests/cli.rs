@@ -826,6 +826,77 @@ fn the_check_command() {
     }
 }
 
+/// `raylab check` on raylab's own renders of scenes with water and glass: the pool in every lab
+/// stage, a scene file with `[scene.water]` and a glass model, and a pool screenshot given to
+/// `--settings`; each is `none` at a 100 % match (once a panic in the figures' recombination).
+#[test]
+fn check_follows_water_and_glass() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let exact = |out: &std::process::Output| {
+        assert!(out.status.success(), "{}", stderr(out));
+        let text = String::from_utf8(out.stdout.clone()).unwrap();
+        assert!(text.contains("match: 100.0 %"), "{text}");
+        assert!(text.contains("verdict: none"), "{text}");
+    };
+    for stage in ["flat", "incoming", "direct", "shadows", "lab"] {
+        let p = path(&format!("pool-{stage}.png"));
+        let render = raylab(&[
+            "render", "--scene", "pool", "--stage", stage, "--width", "24", "--height", "24",
+            "--out", &p,
+        ]);
+        assert!(render.status.success(), "{}", stderr(&render));
+        exact(&raylab(&["check", "--scene", "pool", "--stage", stage, &p]));
+        if stage == "lab" {
+            // The screenshot carries its settings.
+            exact(&raylab(&["check", "--settings", &p, &p]));
+        }
+    }
+    let mut s = settings(Stage::Shadows, 24);
+    s.camera = s.camera.with_resolution(24, 20);
+    let mut spec = raylab_core::scene::SceneChoice::Pool.spec();
+    spec.models = vec![raylab_core::scene::spec::ModelSpec {
+        kind: raylab_core::material::MaterialKind::Glass {
+            ior: 1.5,
+            tint: glam::Vec3::ONE,
+        },
+        ..raylab_core::scene::spec::ModelSpec::new(
+            "teapot",
+            &raylab_core::scene::obj::Placement::TEAPOT,
+        )
+    }];
+    s.scene = raylab_core::scene::SceneChoice::from_spec(spec);
+    let toml = path("glass-pool.toml");
+    let text = raylab_core::scene_file::to_text(&s, dir.path()).unwrap();
+    assert!(
+        text.contains("[scene.water]") && text.contains("glass"),
+        "{text}"
+    );
+    std::fs::write(&toml, text).unwrap();
+    let p = path("glass-pool.png");
+    let render = raylab(&["render", "--scene-file", &toml, "--out", &p]);
+    assert!(render.status.success(), "{}", stderr(&render));
+    exact(&raylab(&["check", "--scene-file", &toml, &p]));
+}
+
+/// `check` takes the render options as `render` and `inspect` do: waves asked of a scene with
+/// no water are refused by name, not ignored.
+#[test]
+fn check_refuses_waves_without_water_as_render_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("box.png");
+    let p = p.to_str().unwrap();
+    let render = raylab(&["render", "--width", "8", "--height", "8", "--out", p]);
+    assert!(render.status.success(), "{}", stderr(&render));
+    for flag in ["--water-waves", "--water-time"] {
+        let out = raylab(&["check", flag, "0.05", p]);
+        assert!(!out.status.success(), "{flag}");
+        let err = stderr(&out);
+        assert!(err.contains("need a scene with water"), "{flag}: {err}");
+        assert!(out.stdout.is_empty(), "{flag}");
+    }
+}
+
 /// The pool's waves from the command line: the image is the library's for the same water;
 /// waves asked of a scene with no water are refused by name.
 #[test]

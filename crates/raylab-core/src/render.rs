@@ -153,9 +153,31 @@ pub fn camera_sees_nothing(scene: &Scene, settings: &RenderSettings) -> Option<S
     );
     let p = camera.position;
     let inside = p.cmpge(lo).all() && p.cmple(hi).all();
+    // The view direction (the ray through the image's centre) meets the scene's bounds: the
+    // camera faces the box, and its rays pass beside it (slab test).
+    let forward = camera
+        .primary_ray(camera.width as f32 / 2.0, camera.height as f32 / 2.0)
+        .direction;
+    let (near, far) = ((lo - p) / forward, (hi - p) / forward);
+    let enter = near.min(far).max_element();
+    let leave = near.max(far).min_element();
+    let facing = enter <= leave && leave > 0.0;
     Some(if inside {
         "the camera sees nothing: every ray leaves the scene (the box's open front is behind it)"
             .to_owned()
+    } else if facing {
+        format!(
+            "the camera sees nothing: it is outside the box, at ({:.2}, {:.2}, {:.2}), facing \
+             it, but every ray misses the box's open front (a field of view of {:.1}° × {:.1}° \
+             at {}×{} pixels: the pixels' rays pass beside the opening)",
+            p.x,
+            p.y,
+            p.z,
+            camera.horizontal_fov_degrees(),
+            camera.vertical_fov_degrees(),
+            camera.width,
+            camera.height
+        )
     } else {
         format!(
             "the camera sees nothing: it is outside the box, at ({:.2}, {:.2}, {:.2}), looking \
@@ -840,10 +862,19 @@ mod tests {
         assert!(note.contains("outside the box"), "{note}");
         let mut away = small();
         away.camera.yaw = std::f32::consts::PI;
+        let note = camera_sees_nothing(&scene, &away).unwrap();
+        assert!(note.contains("looking away from it"), "{note}");
+        // One pixel wide and 64 high, the focal length the width: facing the box, every
+        // row's ray is 26.6° or more off the view direction and passes above or below the
+        // open front.
+        let mut tall = small();
+        tall.camera = tall.camera.with_resolution(1, 64);
+        assert_eq!(render(&scene, &tall).pixels, vec![glam::Vec3::ZERO; 64]);
+        let note = camera_sees_nothing(&scene, &tall).unwrap();
         assert!(
-            camera_sees_nothing(&scene, &away)
-                .unwrap()
-                .contains("outside the box")
+            note.contains("facing it") && note.contains("misses the box's open front"),
+            "{note}"
         );
+        assert!(!note.contains("looking away"), "{note}");
     }
 }

@@ -314,3 +314,208 @@ fn what_check_refuses() {
         .to_string();
     assert!(e.contains("32×32") && e.contains("16×16"), "{e}");
 }
+
+/// Scenes with mirror and glass, checked against raylab's own one-sample render of them: the
+/// pool (its water) in every lab stage, the box with each material preset, a scene with no
+/// blocks and a mirror teapot, and one with a glass teapot standing in the pool.
+fn specular_scenes(side: u32) -> Vec<(String, RenderSettings)> {
+    use raylab_core::MaterialPreset;
+    use raylab_core::material::MaterialKind;
+    use raylab_core::scene::obj::Placement;
+    use raylab_core::scene::spec::{ModelSpec, SceneSpec};
+    use raylab_core::scene::{SceneChoice, water::WaterSpec};
+    let mut scenes = Vec::new();
+    for stage in Stage::LAB {
+        let mut s = settings(stage, side);
+        s.scene = SceneChoice::Pool;
+        scenes.push((format!("pool, {stage}"), s));
+    }
+    for preset in [
+        MaterialPreset::Mirror,
+        MaterialPreset::Glass,
+        MaterialPreset::Both,
+        MaterialPreset::Rough,
+    ] {
+        let mut s = settings(Stage::Lab, side);
+        s.material_preset = preset;
+        scenes.push((format!("{preset} preset"), s));
+    }
+    let teapot = |kind| ModelSpec {
+        kind,
+        ..ModelSpec::new("teapot", &Placement::TEAPOT)
+    };
+    let mut mirror = settings(Stage::Lab, side);
+    mirror.scene = SceneChoice::from_spec(SceneSpec {
+        blocks: false,
+        models: vec![teapot(MaterialKind::Mirror {
+            tint: Vec3::splat(0.9),
+        })],
+        ..SceneSpec::cornell("mirror teapot")
+    });
+    scenes.push(("mirror teapot".into(), mirror));
+    let mut glass = settings(Stage::Shadows, side);
+    glass.scene = SceneChoice::from_spec(SceneSpec {
+        models: vec![teapot(MaterialKind::Glass {
+            ior: 1.5,
+            tint: Vec3::ONE,
+        })],
+        water: Some(WaterSpec::default()),
+        ..SceneSpec::cornell("glass teapot in the pool")
+    });
+    scenes.push(("glass teapot in the pool".into(), glass));
+    scenes
+}
+
+/// Mirror and glass are followed as the lab stages follow them: the recombination with no
+/// mistake is the render bit for bit (the pixels behind a specular hit too), so raylab's own
+/// render of a scene with water, glass or a mirror is `none` at a 100 % match, with no note.
+#[test]
+fn mirror_glass_and_water_are_checked_exactly() {
+    for (name, s) in specular_scenes(40) {
+        let scene = s.scene.load().unwrap();
+        let want = render(&scene, &s);
+        let got = formula_figures(&scene, &s, &[Recombined::Mistake(Mistake::None)]);
+        assert_same_image(&got[0], &want, &name);
+        let figure = Rgb8::from_linear(&want);
+        let r = report(&scene, &s, &figure);
+        assert_eq!(
+            (r.best.mistake.as_str(), r.match_share),
+            ("none", 1.0),
+            "{name}"
+        );
+        assert!(r.notes.is_empty(), "{name}: {:?}", r.notes);
+    }
+}
+
+/// The classic mistakes are still named where mirror and glass show them: each formula
+/// mistake's figure of the pool (the floor under the water, the walls in it) and of the mirror
+/// teapot is named as that mistake, explaining all of it.
+#[test]
+fn mistakes_seen_through_water_and_in_a_mirror_are_named() {
+    let scenes = specular_scenes(48);
+    for (name, s) in scenes
+        .iter()
+        .filter(|(n, _)| n == "pool, lab" || n == "mirror teapot")
+    {
+        let scene = s.scene.load().unwrap();
+        for mistake in [
+            Mistake::No4Pi,
+            Mistake::FlippedNormal,
+            Mistake::NoRho,
+            Mistake::ShadowDropsIndirect,
+        ] {
+            let look = &looks(&scene, s, mistake)[0];
+            let r = report(&scene, s, look);
+            assert_eq!(r.best.mistake, mistake.name(), "{name}: {r:?}");
+            assert_eq!(r.best.explains, 1.0, "{name}: {mistake}");
+            assert!(r.match_share < check::RIGHT, "{name}: {mistake}");
+        }
+    }
+}
+
+/// The figure at `s` with each channel of each pixel moved to the end of its 3 × 3
+/// neighbourhood's range (the figure's, [`check::mistakes::figure_with_margin`]) farther from
+/// it: wrong wherever the neighbourhood is not one colour, yet within what the anti-aliasing
+/// allowance takes everywhere.
+fn pushed_to_its_neighbours(scene: &Scene, s: &RenderSettings) -> Rgb8 {
+    let figure = Rgb8::from_linear(&render(scene, s));
+    let margin = Rgb8::from_linear(&check::mistakes::figure_with_margin(scene, s));
+    let mut image = figure.clone();
+    for y in 0..figure.height {
+        for x in 0..figure.width {
+            let f = figure.get(x, y);
+            for c in 0..3 {
+                let around = (0..3).flat_map(|dy| (0..3).map(move |dx| (x + dx, y + dy)));
+                let values: Vec<u8> = around.map(|(mx, my)| margin.get(mx, my)[c]).collect();
+                let (lo, hi) = (*values.iter().min().unwrap(), *values.iter().max().unwrap());
+                let far = if f[c].abs_diff(lo) > f[c].abs_diff(hi) {
+                    lo
+                } else {
+                    hi
+                };
+                image.data[3 * (y * figure.width + x) as usize + c] = far;
+            }
+        }
+    }
+    image
+}
+
+/// The anti-aliasing allowance never makes a poor match the exact figure: a 1 × 1 image of
+/// #123456, a 4 × 4 image and a blurred 4 × 3 render are too small to judge, and a note says
+/// so; a 32 × 32 image off the figure wherever its neighbours differ (within what the
+/// allowance takes, everywhere) matches too few pixels exactly, and a note says that. None is
+/// `none`; the exact figure at each size is.
+#[test]
+fn a_poor_match_is_not_the_exact_figure_by_its_edges() {
+    let scene = cornell_box();
+    let at = |w: u32, h: u32| {
+        let mut s = settings(Stage::Lab, w);
+        s.camera = s.camera.with_resolution(w, h);
+        s
+    };
+    let one = Rgb8 {
+        width: 1,
+        height: 1,
+        data: vec![0x12, 0x34, 0x56],
+    };
+    let blurred = {
+        let figure = Rgb8::from_linear(&render(&scene, &at(4, 3)));
+        // A 3 × 3 box blur, clamped at the borders.
+        let mut out = figure.clone();
+        for y in 0..3i32 {
+            for x in 0..4i32 {
+                for c in 0..3 {
+                    let (mut sum, mut n) = (0u32, 0u32);
+                    for (dx, dy) in (-1..=1).flat_map(|dx| (-1..=1).map(move |dy| (dx, dy))) {
+                        let (nx, ny) = (x + dx, y + dy);
+                        if (0..4).contains(&nx) && (0..3).contains(&ny) {
+                            sum += u32::from(figure.get(nx as u32, ny as u32)[c]);
+                            n += 1;
+                        }
+                    }
+                    out.data[3 * (y as usize * 4 + x as usize) + c] = (sum / n) as u8;
+                }
+            }
+        }
+        out
+    };
+    let cases = [
+        (one, at(1, 1), "too small to judge"),
+        (
+            pushed_to_its_neighbours(&scene, &at(4, 4)),
+            at(4, 4),
+            "too small to judge",
+        ),
+        (blurred, at(4, 3), "too small to judge"),
+        (
+            pushed_to_its_neighbours(&scene, &at(32, 32)),
+            at(32, 32),
+            "match the figure exactly: too few",
+        ),
+    ];
+    for (image, s, note) in &cases {
+        let size = format!("{}×{}", image.width, image.height);
+        let r = report(&scene, s, image);
+        assert!(
+            r.match_share < check::MIN_EXACT,
+            "{size}: {}",
+            r.match_share
+        );
+        assert!(
+            r.with_edges >= check::RIGHT,
+            "{size}: the allowance would take it"
+        );
+        assert_ne!(r.best.mistake, "none", "{size}: {r:?}");
+        assert!(
+            !r.to_text().contains("the image is the exact figure"),
+            "{size}"
+        );
+        assert!(
+            r.notes.iter().any(|n| n.contains(note)),
+            "{size}: {:?}",
+            r.notes
+        );
+        let exact = Rgb8::from_linear(&render(&scene, s));
+        assert_eq!(report(&scene, s, &exact).best.mistake, "none", "{size}");
+    }
+}

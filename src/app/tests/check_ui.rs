@@ -191,3 +191,30 @@ fn what_cannot_be_checked_says_why() {
     }
     assert!(h.query_by_label_contains("the path stage").is_some());
 }
+
+/// Raylab's own render of the pool (water: mirror and glass at once), dropped on the window
+/// with the pool in it: the panel gives `none` at a 100 % match, as the command line does
+/// (once the check panicked and the panel showed the panic's text).
+#[test]
+fn a_render_of_the_pool_is_the_exact_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut state = small_state();
+    state.settings.scene = raylab_core::scene::SceneChoice::Pool;
+    let mut s = figure_settings(&state.settings);
+    s.camera = s.camera.with_resolution(64, 48);
+    let scene = s.scene.load().unwrap();
+    let path = write(
+        &Rgb8::from_linear(&render(&scene, &s)),
+        dir.path(),
+        "pool.png",
+    );
+    let mut h = harness(state);
+    drop_file(&mut h, &path);
+    settle(&mut h);
+    assert_eq!(verdict(&h), "none");
+    assert!(h.query_by_label_contains("Match: 100.0 %").is_some());
+    assert!(
+        h.query_by_label_contains("Verdict: none — your image is the exact figure")
+            .is_some()
+    );
+}

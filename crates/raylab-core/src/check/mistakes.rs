@@ -25,7 +25,7 @@ use super::compare::Rgb8;
 use crate::display::{Display, DisplayTransform};
 use crate::film::Image;
 use crate::geometry::Ray;
-use crate::integrator::{HitTerms, Recorder, Stage, Tracer};
+use crate::integrator::{BATCH, HitTerms, Recorder, Stage, Tracer};
 use crate::intersect::Intersection;
 use crate::light::{DirectLight, PointLight};
 use crate::material::Scatter;
@@ -265,6 +265,10 @@ pub enum Recombined {
 ///
 /// The camera rays are the renderer's for sample 0 (through each pixel's centre,
 /// [`crate::Camera::primary_ray_rotated`]); pixels whose ray hits nothing are black, as there.
+/// A pixel whose camera ray meets mirror or glass is the sum of what its Whitted branches find
+/// (`lab.rs`): each diffuse hit along them recombined with the mistake, times the branch's
+/// weight, added in the integrator's order, so that with no mistake it is the render's pixel
+/// bit for bit there too.
 pub fn formula_figures(
     scene: &Scene,
     settings: &RenderSettings,
@@ -287,19 +291,48 @@ pub fn formula_figures(
             let rays: Vec<Ray> = (0..w)
                 .map(|x| camera.primary_ray_rotated(&rotation, x as f32 + 0.5, y as f32 + 0.5))
                 .collect();
-            let mut hits = HitRecording::default();
-            let mut out = vec![Vec3::ZERO; w];
-            tracer.trace_recorded(&rays, &mut [], &mut out, &mut hits);
-            // Every camera ray's hit, then (the box is all diffuse) that hit's terms, in the
-            // order of the hits.
-            let mut terms = hits.shaded.iter();
             let mut row = vec![Vec3::ZERO; w * wanted.len()];
-            for (x, hit) in hits.hits.iter().enumerate() {
-                let Some((hit, incoming)) = hit else { continue };
-                let Some(t) = terms.next() else { break };
-                debug_assert_eq!(t.position, hit.position, "terms paired with their hit");
-                for (k, r) in wanted.iter().enumerate() {
-                    row[k * w + x] = recombine.value(*r, hit, *incoming, t);
+            let mut put = |x: usize, values: &mut dyn Iterator<Item = Vec3>| {
+                for (k, v) in values.enumerate() {
+                    row[k * w + x] = v;
+                }
+            };
+            let mut out = vec![Vec3::ZERO; BATCH];
+            // A batch at a time, as the integrator takes them: its camera rays are traced
+            // first, so the first hits recorded are theirs, in order.
+            for (c, rays) in rays.chunks(BATCH).enumerate() {
+                let mut recording = HitRecording::default();
+                tracer.trace_recorded(rays, &mut [], &mut out[..rays.len()], &mut recording);
+                let camera_hits = &recording.hits[..rays.len()];
+                let mut shaded = recording.shaded_hits().into_iter();
+                for (i, traced) in camera_hits.iter().enumerate() {
+                    let x = c * BATCH + i;
+                    if traced.specular {
+                        // Its branches' hits are recorded among the others' in waves: the
+                        // pixel is traced again alone, where every hit recorded is its own.
+                        let mut alone = HitRecording::default();
+                        tracer.trace_recorded(&rays[i..=i], &mut [], &mut out[..1], &mut alone);
+                        let branches = alone.shaded_hits();
+                        put(
+                            x,
+                            &mut wanted.iter().map(|r| {
+                                branches.iter().fold(Vec3::ZERO, |sum, s| {
+                                    sum + s.weight
+                                        * recombine.value(*r, &s.hit, s.incoming, &s.terms)
+                                })
+                            }),
+                        );
+                    } else if traced.hit.is_some() {
+                        // A diffuse hit, whose terms are the next recorded: its value is the
+                        // pixel's, as the integrator writes a camera ray's.
+                        let Some(s) = shaded.next() else { break };
+                        put(
+                            x,
+                            &mut wanted
+                                .iter()
+                                .map(|r| recombine.value(*r, &s.hit, s.incoming, &s.terms)),
+                        );
+                    }
                 }
             }
             row
@@ -319,25 +352,77 @@ pub fn formula_figures(
         .collect()
 }
 
-/// What a formula pass records of each camera ray: its hit (and direction), and each diffuse
-/// hit's terms with its shadow ray answered.
+/// One ray traced by a formula pass: its closest hit (and direction), and whether that hit
+/// was mirror or glass (followed by branches, not shaded).
+struct Traced {
+    hit: Option<(Intersection, Vec3)>,
+    specular: bool,
+}
+
+/// What a formula pass records: every ray's hit in the order traced, and each shaded hit's
+/// terms with its shadow ray answered and the weight its pixel gets them with.
 #[derive(Default)]
 struct HitRecording {
-    hits: Vec<Option<(Intersection, Vec3)>>,
-    shaded: Vec<HitTerms>,
+    hits: Vec<Traced>,
+    shaded: Vec<(HitTerms, Vec3)>,
+}
+
+/// A shaded hit: where, found by a ray going which way, its terms, and its weight (1 for a
+/// camera ray; the product of the specular weights along a Whitted branch).
+struct ShadedHit {
+    hit: Intersection,
+    incoming: Vec3,
+    terms: HitTerms,
+    weight: Vec3,
+}
+
+impl HitRecording {
+    /// The shaded hits in the order shaded, each with the hit it was shaded at. The integrator
+    /// shades a wave's hits that are not mirror or glass, in the order of its rays, after
+    /// finding them all, wave after wave: so the hits that are neither mirror, glass nor
+    /// misses, in the order found, are the shaded ones in the order shaded.
+    fn shaded_hits(&self) -> Vec<ShadedHit> {
+        let mut found = self
+            .hits
+            .iter()
+            .filter(|t| !t.specular)
+            .filter_map(|t| t.hit);
+        self.shaded
+            .iter()
+            .map_while(|&(terms, weight)| {
+                let (hit, incoming) = found.next()?;
+                debug_assert_eq!(terms.position, hit.position, "terms paired with their hit");
+                Some(ShadedHit {
+                    hit,
+                    incoming,
+                    terms,
+                    weight,
+                })
+            })
+            .collect()
+    }
 }
 
 impl Recorder for HitRecording {
     const ENABLED: bool = true;
 
     fn closest_hit(&mut self, ray: &Ray, hit: Option<&Intersection>, _: Vec3, _: u32) {
-        self.hits.push(hit.map(|h| (*h, ray.direction)));
+        self.hits.push(Traced {
+            hit: hit.map(|h| (*h, ray.direction)),
+            specular: false,
+        });
     }
 
-    fn specular_hit(&mut self, _: &Intersection, _: Vec3, _: u32, _: &[(Vec3, Vec3)]) {}
+    fn specular_hit(&mut self, hit: &Intersection, _: Vec3, _: u32, _: &[(Vec3, Vec3)]) {
+        // Told right after the same ray's closest hit.
+        if let Some(last) = self.hits.last_mut() {
+            debug_assert_eq!(last.hit.map(|(h, _)| h.position), Some(hit.position));
+            last.specular = true;
+        }
+    }
 
-    fn shaded(&mut self, terms: &HitTerms, _: Vec3, _: Vec3, _: Vec3) {
-        self.shaded.push(*terms);
+    fn shaded(&mut self, terms: &HitTerms, _: Vec3, _: Vec3, weight: Vec3) {
+        self.shaded.push((*terms, weight));
     }
 
     fn scattered(&mut self, _: &Scatter, _: f32, _: Vec3, _: bool) {}

@@ -9,11 +9,17 @@
 //!
 //! * `none` when the image matches the figure on at least [`RIGHT`] of its pixels, or matches
 //!   it everywhere but along edges, where its pixels are blends of their neighbours'
-//!   (anti-aliasing: a note says so);
+//!   (anti-aliasing: a note says so), if the image is large enough to tell ([`MIN_SIDE`]) and
+//!   matches exactly on at least [`MIN_EXACT`] of its pixels (otherwise a note says why the
+//!   allowance is not made);
 //! * the mistake whose figure explains the most pixels, when it explains at least [`WELL`] of
 //!   them and more than the exact figure does;
 //! * `unknown` otherwise: no single classic mistake explains the image, and a guess would
 //!   mislead more than it helps.
+//!
+//! Mirror and glass (the material presets, a scene file's models, the pool's water) are
+//! followed as the lab stages follow them, Whitted-style: every diffuse hit along a pixel's
+//! branches is recombined with the mistake ([`mistakes::formula_figures`]).
 
 pub mod compare;
 pub mod mistakes;
@@ -39,6 +45,17 @@ pub const RIGHT: f64 = 0.99;
 /// an image that has it matches its figure nearly everywhere; an image with two mistakes, or
 /// one not in the catalogue, leaves a tenth or more unexplained.
 pub const WELL: f64 = 0.90;
+
+/// The smallest side, in pixels, of an image whose anti-aliasing can be told from a wrong
+/// image. Along an edge any blend of the neighbours' colours is allowed for; on an image a few
+/// pixels across, each pixel spans several degrees of the view and its 3 × 3 neighbourhood
+/// several surfaces, so nearly any colour would pass.
+pub const MIN_SIDE: u32 = 16;
+
+/// The share of pixels that must match the figure exactly for the anti-aliasing allowance to
+/// be made: a half. Anti-aliasing changes only the pixels an edge crosses; the allowance is
+/// evidence of the exact figure only where the others, inside surfaces, match it exactly.
+pub const MIN_EXACT: f64 = 0.5;
 
 /// For shadow acne: the share of lit pixels that must show each outcome, lit and in shadow,
 /// for the image to count as speckled ([`speckled`]).
@@ -129,8 +146,9 @@ pub struct Checked {
     pub figure: Rgb8,
 }
 
-/// Refuses settings beyond the lab's figures: the path stage, area lights, a lens, mirror,
-/// glass or textures. A check compares pixel for pixel with one deterministic sample.
+/// Refuses settings beyond the lab's figures: the path stage, area lights, a lens or texture
+/// presets. A check compares pixel for pixel with one deterministic sample. Mirror, glass and
+/// the rough metal are checked as the lab stages render them.
 pub fn check_settings(settings: &RenderSettings) -> Result<(), CheckError> {
     settings.validate()?;
     let not = |what: &str| Err(CheckError::NotTheLab(what.to_owned()));
@@ -143,10 +161,8 @@ pub fn check_settings(settings: &RenderSettings) -> Result<(), CheckError> {
     if settings.camera.aperture > 0.0 {
         return not("its camera is a pinhole, with no aperture");
     }
-    if settings.material_preset != crate::MaterialPreset::None
-        || settings.texture_preset != crate::material::TexturePreset::None
-    {
-        return not("its surfaces are the lab's diffuse colours, with no preset");
+    if settings.texture_preset != crate::material::TexturePreset::None {
+        return not("its surfaces are the lab's plain colours, with no texture preset");
     }
     if settings.samples_per_pixel != 1 {
         return not("each is one sample a pixel, at its centre");
@@ -243,7 +259,12 @@ pub fn check(
     let margin = Rgb8::from_linear(&mistakes::figure_with_margin(scene, settings));
     let with_edges = compare::share_explained_with_edges(image, &figure, &margin);
     let worst_block = compare::worst_block(image, &figure);
-    let (best, notes) = verdict(match_share, with_edges, &candidates);
+    let (best, notes) = verdict(
+        [image.width, image.height],
+        match_share,
+        with_edges,
+        &candidates,
+    );
     Ok(Checked {
         report: Report {
             stage: settings.shading.stage,
@@ -315,7 +336,12 @@ pub fn speckled(image: &Rgb8, figure: &Rgb8, shadowed: &Rgb8) -> bool {
 }
 
 /// The verdict from the shares (see the module docs), and its notes.
-fn verdict(match_share: f64, with_edges: f64, candidates: &[Candidate]) -> (Best, Vec<String>) {
+fn verdict(
+    [width, height]: [u32; 2],
+    match_share: f64,
+    with_edges: f64,
+    candidates: &[Candidate],
+) -> (Best, Vec<String>) {
     let mut notes = Vec::new();
     let percent = |s: f64| format!("{:.1} %", 100.0 * s);
     let none = |explains| Best {
@@ -351,7 +377,22 @@ fn verdict(match_share: f64, with_edges: f64, candidates: &[Candidate]) -> (Best
     if let Some(c) = best.filter(|c| c.explains >= RIGHT) {
         return (named(c, &mut notes), notes);
     }
-    if with_edges >= RIGHT {
+    if with_edges >= RIGHT && width.min(height) < MIN_SIDE {
+        notes.push(format!(
+            "the image is too small to judge: at {width}×{height} a pixel's neighbours span \
+             several surfaces, so anti-aliasing (a blend of the neighbours' colours along \
+             edges) cannot be told from a wrong image; render it at least {MIN_SIDE} pixels \
+             wide and high"
+        ));
+    } else if with_edges >= RIGHT && match_share < MIN_EXACT {
+        notes.push(format!(
+            "only {} of pixels match the figure exactly: too few to take the rest for \
+             anti-aliasing (a blend of the neighbours' colours along edges), which leaves the \
+             pixels inside surfaces as they are ({} are needed)",
+            percent(match_share),
+            percent(MIN_EXACT)
+        ));
+    } else if with_edges >= RIGHT {
         notes.push(format!(
             "anti-aliased: the image is the exact figure but along edges, where its pixels are \
              blends of their neighbours' colours ({} with edges allowed for, {} without): \
