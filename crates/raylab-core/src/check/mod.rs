@@ -15,8 +15,12 @@
 //! * `unknown` otherwise: no single classic mistake explains the image, and a guess would
 //!   mislead more than it helps.
 
+pub mod class;
 pub mod compare;
+pub mod csv;
 pub mod mistakes;
+pub mod report;
+pub mod ssim;
 pub mod student;
 
 use serde::{Serialize, Serializer};
