@@ -28,6 +28,8 @@ use raylab_core::settings::{
 };
 use raylab_core::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
+mod class;
+
 #[derive(Debug, Parser)]
 #[command(
     name = "raylab",
@@ -142,17 +144,38 @@ pub struct InspectArgs {
 
 #[derive(Debug, Args)]
 pub struct CheckArgs {
-    /// Your render: PNG, BMP (what SDL saves), PPM or JPEG, 8 bits a channel, any size.
-    #[arg(value_name = "IMAGE")]
-    pub image: PathBuf,
+    /// Your render: PNG, BMP (what SDL saves), PPM or JPEG, 8 bits a channel, any size. Or a
+    /// class: a folder of renders (its subfolders too: a folder a student) or several files,
+    /// each checked, a line each; see --report.
+    #[arg(value_name = "IMAGE|FOLDER", required = true, num_args = 1..)]
+    pub images: Vec<PathBuf>,
     /// Print one JSON object (the match, the verdict and every candidate mistake, best first)
-    /// instead of the report.
+    /// instead of the report; for a class, report.json's.
     #[arg(long)]
     pub json: bool,
     /// Also write the difference picture: |yours − figure| per channel, amplified 8×, black
-    /// where they agree (a PNG).
+    /// where they agree (a PNG). One image only.
     #[arg(long, value_name = "FILE.png")]
     pub diff_out: Option<PathBuf>,
+    /// A class: write its report to this folder (made if needed): index.html, a page to open
+    /// in the browser (a row a submission, the verdicts' histogram, filters, a detail view a
+    /// student with an A/B wipe), report.csv, report.json and the images they show.
+    #[arg(long, value_name = "FOLDER")]
+    pub report: Option<PathBuf>,
+    /// With --report: also Gradescope's results.json for each student, in
+    /// gradescope/STUDENT/ (a test an image, scored when it is the exact figure).
+    #[arg(long, requires = "report")]
+    pub gradescope: bool,
+    /// A class: what each submission is checked against, from a CSV list: a header line with
+    /// `file` (its name below the folder) and any options of this command without `--`
+    /// (stage, yaw, light, shadows, indirect, width, height, settings, …), then a line a
+    /// submission; an empty cell is the option's default. A file not listed is not checked.
+    #[arg(long, value_name = "FILE.csv", conflicts_with_all = SETTINGS_OPTIONS, conflicts_with = "settings", conflicts_with = "scene_file")]
+    pub csv: Option<PathBuf>,
+    /// A class: each PNG carrying a workbench screenshot's settings is checked against them;
+    /// the others against the options given.
+    #[arg(long)]
+    pub screenshot_settings: bool,
     /// The settings your image was rendered with: the stage, camera, light, --shadows and
     /// --indirect as for render. --width and --height are the image's.
     #[command(flatten)]
@@ -916,6 +939,10 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
 
 fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     use raylab_core::check;
+    if class::is_class(args) {
+        return class::run(args);
+    }
+    let path = &args.images[0];
     if let Some(path) = &args.diff_out {
         if OutputFormat::from_path(path)? != OutputFormat::Png {
             anyhow::bail!(
@@ -925,37 +952,13 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
         }
         raylab_core::film::check_file_destination(path)?;
     }
-    let image = check::read_image(&args.image)?;
+    let image = check::read_image(path)?;
     // The figure at the image's size: settings from a file keep their own camera (a size
     // that differs is refused by name), the arguments get the image's width and height.
     let settings = if args.options.settings.is_some() || args.options.scene_file.is_some() {
         args.options.resolve_settings()?
     } else {
-        args.options.check_caustics()?;
-        // Given sides other than the default must be the image's (the default cannot be told
-        // from a typed 512, so it is taken as "the image's").
-        for (name, given, actual) in [
-            ("--width", args.options.width, image.width),
-            ("--height", args.options.height, image.height),
-        ] {
-            if given != DEFAULT_SIDE && given != actual {
-                anyhow::bail!(
-                    "{name} {given}: the image '{}' is {}×{}; the figure is rendered at the \
-                     image's size, so --width and --height can be left out",
-                    args.image.display(),
-                    image.width,
-                    image.height
-                );
-            }
-        }
-        // Resolved and validated as render and inspect resolve them: the same options mean
-        // the same (waves asked of a scene with no water are refused).
-        RenderOptions {
-            width: image.width,
-            height: image.height,
-            ..args.options.clone()
-        }
-        .resolve_settings()?
+        settings_at_image_size(&args.options, path, image.width, image.height)?
     };
     check::check_settings(&settings)?;
     raylab_core::memory::check(
@@ -967,7 +970,7 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
         let scene = settings.scene.load()?;
         Ok(check::check(&scene, &settings, &image)?)
     })?;
-    if let Some(note) = check::lossy_note(&args.image) {
+    if let Some(note) = check::lossy_note(path) {
         checked.report.notes.push(note.to_owned());
     }
     if let Some(path) = &args.diff_out {
@@ -985,6 +988,38 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The settings `options` (with no settings file) describe for the image at `path`, of
+/// `width × height`: theirs at the image's size. Given sides other than the default must be
+/// the image's (the default cannot be told from a typed 512, so it is taken as "the
+/// image's").
+fn settings_at_image_size(
+    options: &RenderOptions,
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+) -> anyhow::Result<RenderSettings> {
+    for (name, given, actual) in [
+        ("--width", options.width, width),
+        ("--height", options.height, height),
+    ] {
+        if given != DEFAULT_SIDE && given != actual {
+            anyhow::bail!(
+                "{name} {given}: the image '{}' is {width}×{height}; the figure is rendered at \
+                 the image's size, so --width and --height can be left out",
+                path.display(),
+            );
+        }
+    }
+    // Resolved and validated as render and inspect resolve them: the same options mean the
+    // same (waves asked of a scene with no water are refused).
+    RenderOptions {
+        width,
+        height,
+        ..options.clone()
+    }
+    .resolve_settings()
 }
 
 fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {

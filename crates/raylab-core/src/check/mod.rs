@@ -21,8 +21,12 @@
 //! followed as the lab stages follow them, Whitted-style: every diffuse hit along a pixel's
 //! branches is recombined with the mistake ([`mistakes::formula_figures`]).
 
+pub mod class;
 pub mod compare;
+pub mod csv;
 pub mod mistakes;
+pub mod report;
+pub mod ssim;
 pub mod student;
 
 use serde::{Serialize, Serializer};
@@ -172,7 +176,8 @@ pub fn check_settings(settings: &RenderSettings) -> Result<(), CheckError> {
 
 /// The memory a check of a `width × height` image needs at its peak, in bytes: the figures of
 /// every formula mistake as linear images (12 bytes a pixel, with their rows, twice), the
-/// student's image, the figure and a few looks at 3 bytes a pixel; plus the program.
+/// [`Figures`] (every mistake's looks, two for gamma, the shadowed figure and the margin) and
+/// the student's image at 3 bytes a pixel, a linear render; plus the program.
 pub fn memory_estimate(width: u32, height: u32) -> u64 {
     let pixels = u64::from(width) * u64::from(height);
     let formulas = Mistake::ALL
@@ -180,17 +185,31 @@ pub fn memory_estimate(width: u32, height: u32) -> u64 {
         .filter(|m| m.kind() == Kind::Formula)
         .count() as u64
         + 1;
-    pixels * (formulas * 24 + 8 * 3 + 12) + crate::settings::BASE_MEMORY
+    let looks = Mistake::ALL.len() as u64 + 4;
+    pixels * (formulas * 24 + looks * 3 + 12) + crate::settings::BASE_MEMORY
 }
 
 /// Compares `image` with the lab's figure for `settings` (whose camera is the image's size:
-/// [`figure_settings`]) and with the figure of each mistake that could change it.
+/// [`figure_settings`]) and with the figure of each mistake that could change it:
+/// [`Figures::render`], then [`Figures::judge`].
 pub fn check(
     scene: &Scene,
     settings: &RenderSettings,
     image: &Rgb8,
 ) -> Result<Checked, CheckError> {
     check_settings(settings)?;
+    // Refused before anything is rendered.
+    same_size(settings, image)?;
+    let figures = Figures::render(scene, settings)?;
+    let report = figures.judge(image)?;
+    Ok(Checked {
+        report,
+        figure: figures.figure,
+    })
+}
+
+/// An image not the size of the figure `settings` render is refused ([`CheckError::Size`]).
+fn same_size(settings: &RenderSettings, image: &Rgb8) -> Result<(), CheckError> {
     let c = &settings.camera;
     if (c.width, c.height) != (image.width, image.height) {
         return Err(CheckError::Size {
@@ -200,74 +219,128 @@ pub fn check(
             height: c.height,
         });
     }
-    let applies: Vec<Mistake> = Mistake::ALL
-        .into_iter()
-        .filter(|m| m.applies(settings))
-        .collect();
-    // One pass of the integrator for the exact figure and every formula mistake.
-    let mut wanted: Vec<Recombined> = applies
-        .iter()
-        .filter(|m| m.kind() == Kind::Formula)
-        .map(|m| Recombined::Mistake(*m))
-        .collect();
-    if applies.contains(&Mistake::ShadowAcne) {
-        wanted.push(Recombined::EveryShadowRayBlocked);
-    }
-    let linear = mistakes::formula_figures(scene, settings, &wanted);
-    let figure_of = |r: Recombined| {
-        wanted
+    Ok(())
+}
+
+/// Everything an image is compared with, rendered once for a stage and its settings: the exact
+/// figure, the looks of each mistake that changes it, and what telling shadow acne and
+/// anti-aliasing apart needs. Many images checked against the same settings (a class:
+/// [`class`]) share one.
+#[derive(Clone, Debug)]
+pub struct Figures {
+    stage: Stage,
+    /// The exact figure as `raylab render` writes it.
+    pub figure: Rgb8,
+    /// Each mistake whose figure differs from the exact one, in the catalogue's order, with
+    /// its looks (any of which explains a pixel).
+    looks: Vec<(Mistake, Vec<Rgb8>)>,
+    /// The figure with every shadow ray blocked, when shadow acne applies.
+    shadowed: Option<Rgb8>,
+    /// The exact figure with a pixel more on every side ([`mistakes::figure_with_margin`]).
+    margin: Rgb8,
+}
+
+impl Figures {
+    /// Renders the exact figure for `settings` (whose camera is the images' size) and the
+    /// figure of each mistake that applies: one pass of the integrator for the exact figure
+    /// and every formula mistake, a render for each settings mistake, the picture mistakes
+    /// from the figure.
+    pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<Figures, CheckError> {
+        check_settings(settings)?;
+        let applies: Vec<Mistake> = Mistake::ALL
+            .into_iter()
+            .filter(|m| m.applies(settings))
+            .collect();
+        let mut wanted: Vec<Recombined> = applies
             .iter()
-            .position(|w| *w == r)
-            .map(|i| Rgb8::from_linear(&linear[i]))
-    };
-    let exact_linear = &linear[0];
-    let figure = Rgb8::from_linear(exact_linear);
-    let match_share = share_within(image, &figure);
-
-    let mut candidates = Vec::new();
-    for &mistake in applies.iter().filter(|m| **m != Mistake::None) {
-        let looks: Vec<Rgb8> = match mistake.kind() {
-            Kind::Formula => figure_of(Recombined::Mistake(mistake))
-                .into_iter()
-                .collect(),
-            Kind::Settings => vec![Rgb8::from_linear(&mistakes::settings_figure(
-                scene, settings, mistake,
-            ))],
-            Kind::Picture => mistakes::picture_looks(mistake, exact_linear, &figure),
-        };
-        // Offered only if it changes the figure.
-        if !looks.iter().any(|l| compare::differs(l, &figure)) {
-            continue;
+            .filter(|m| m.kind() == Kind::Formula)
+            .map(|m| Recombined::Mistake(*m))
+            .collect();
+        if applies.contains(&Mistake::ShadowAcne) {
+            wanted.push(Recombined::EveryShadowRayBlocked);
         }
-        let explains = if mistake == Mistake::ShadowAcne {
-            let shadowed = figure_of(Recombined::EveryShadowRayBlocked);
-            acne_explains(
-                image,
-                &figure,
-                &looks[0],
-                shadowed.as_ref().unwrap_or(&figure),
-            )
-        } else {
-            let looks: Vec<&Rgb8> = looks.iter().collect();
-            share(&within_any(image, &looks))
+        let linear = mistakes::formula_figures(scene, settings, &wanted);
+        let figure_of = |r: Recombined| {
+            wanted
+                .iter()
+                .position(|w| *w == r)
+                .map(|i| Rgb8::from_linear(&linear[i]))
         };
-        candidates.push(Candidate { mistake, explains });
-    }
-    // Best first; equal shares in the catalogue's order (the sort is stable).
-    candidates.sort_by(|a, b| b.explains.total_cmp(&a.explains));
-
-    let margin = Rgb8::from_linear(&mistakes::figure_with_margin(scene, settings));
-    let with_edges = compare::share_explained_with_edges(image, &figure, &margin);
-    let worst_block = compare::worst_block(image, &figure);
-    let (best, notes) = verdict(
-        [image.width, image.height],
-        match_share,
-        with_edges,
-        &candidates,
-    );
-    Ok(Checked {
-        report: Report {
+        let exact_linear = &linear[0];
+        let figure = Rgb8::from_linear(exact_linear);
+        let mut looks = Vec::new();
+        for &mistake in applies.iter().filter(|m| **m != Mistake::None) {
+            let these: Vec<Rgb8> = match mistake.kind() {
+                Kind::Formula => figure_of(Recombined::Mistake(mistake))
+                    .into_iter()
+                    .collect(),
+                Kind::Settings => vec![Rgb8::from_linear(&mistakes::settings_figure(
+                    scene, settings, mistake,
+                ))],
+                Kind::Picture => mistakes::picture_looks(mistake, exact_linear, &figure),
+            };
+            // Offered only if it changes the figure.
+            if these.iter().any(|l| compare::differs(l, &figure)) {
+                looks.push((mistake, these));
+            }
+        }
+        let shadowed = figure_of(Recombined::EveryShadowRayBlocked);
+        let margin = Rgb8::from_linear(&mistakes::figure_with_margin(scene, settings));
+        Ok(Figures {
             stage: settings.shading.stage,
+            figure,
+            looks,
+            shadowed,
+            margin,
+        })
+    }
+
+    /// What `image` (of the figure's size) is: how much of it matches the exact figure, each
+    /// mistake's share, the verdict (see the module docs).
+    pub fn judge(&self, image: &Rgb8) -> Result<Report, CheckError> {
+        let figure = &self.figure;
+        if (figure.width, figure.height) != (image.width, image.height) {
+            return Err(CheckError::Size {
+                image_width: image.width,
+                image_height: image.height,
+                width: figure.width,
+                height: figure.height,
+            });
+        }
+        let match_share = share_within(image, figure);
+        let mut candidates: Vec<Candidate> = self
+            .looks
+            .iter()
+            .map(|(mistake, looks)| {
+                let explains = if *mistake == Mistake::ShadowAcne {
+                    acne_explains(
+                        image,
+                        figure,
+                        &looks[0],
+                        self.shadowed.as_ref().unwrap_or(figure),
+                    )
+                } else {
+                    let looks: Vec<&Rgb8> = looks.iter().collect();
+                    share(&within_any(image, &looks))
+                };
+                Candidate {
+                    mistake: *mistake,
+                    explains,
+                }
+            })
+            .collect();
+        // Best first; equal shares in the catalogue's order (the sort is stable).
+        candidates.sort_by(|a, b| b.explains.total_cmp(&a.explains));
+        let with_edges = compare::share_explained_with_edges(image, figure, &self.margin);
+        let worst_block = compare::worst_block(image, figure);
+        let (best, notes) = verdict(
+            [image.width, image.height],
+            match_share,
+            with_edges,
+            &candidates,
+        );
+        Ok(Report {
+            stage: self.stage,
             size: [image.width, image.height],
             match_share,
             best,
@@ -275,9 +348,8 @@ pub fn check(
             worst_block,
             with_edges,
             notes,
-        },
-        figure,
-    })
+        })
+    }
 }
 
 /// The share of `image` that shadow acne explains. Acne speckles: the points a student's

@@ -53,6 +53,9 @@ pub fn read_image(path: &Path) -> Result<Rgb8, ReadError> {
 
 /// An image file's bytes as 8-bit RGB; the error is the reason alone.
 pub fn decode(bytes: &[u8]) -> Result<Rgb8, String> {
+    if bytes.is_empty() {
+        return Err("the file is empty (0 bytes)".into());
+    }
     let reader = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
@@ -90,13 +93,23 @@ pub fn decode(bytes: &[u8]) -> Result<Rgb8, String> {
     limits.max_alloc = Some(u64::from(width) * u64::from(height) * 8 + (1 << 20));
     decoder.set_limits(limits).map_err(|e| e.to_string())?;
     let rgb = image::DynamicImage::from_decoder(decoder)
-        .map_err(|e| e.to_string())?
+        .map_err(decoding_failed)?
         .into_rgb8();
     Ok(Rgb8 {
         width: rgb.width(),
         height: rgb.height(),
         data: rgb.into_raw(),
     })
+}
+
+/// Why the image's data could not be decoded; a file that ends before its image does says so.
+fn decoding_failed(e: image::ImageError) -> String {
+    match &e {
+        image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            format!("the file is cut short: it ends before its image does ({e})")
+        }
+        _ => e.to_string(),
+    }
 }
 
 #[cfg(test)]
@@ -149,6 +162,7 @@ mod tests {
         assert!(e.contains("5000×1") && e.contains("4096"), "{e}");
         let e = decode(b"P6\n0 7\n255\n").unwrap_err();
         assert!(!e.is_empty(), "an empty image is refused: {e}");
+        assert_eq!(decode(b"").unwrap_err(), "the file is empty (0 bytes)");
         // A 16-bit PPM (maxval above 255).
         let e = decode(b"P6\n1 1\n65535\n\x00\x01\x00\x02\x00\x03").unwrap_err();
         assert!(e.contains("16 bits"), "{e}");
@@ -157,7 +171,8 @@ mod tests {
             &image::DynamicImage::ImageRgb8(image::RgbImage::new(8, 8)),
             ImageFormat::Png,
         );
-        assert!(decode(&png[..png.len() / 2]).is_err());
+        let e = decode(&png[..png.len() / 2]).unwrap_err();
+        assert!(e.starts_with("the file is cut short"), "{e}");
     }
 
     #[test]
