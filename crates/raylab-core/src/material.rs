@@ -172,7 +172,8 @@ impl Material {
     ///   surface's `geometric` normal ([`ShadingFrame::new`]: the geometric normal decides
     ///   reflection and transmission), with one number for the choice of lobe and, where the
     ///   BSDF is not a delta (the rough metal), two for the direction. `shading` is the
-    ///   geometric normal itself, or a relief's bent normal ([`crate::integrator::Tracer::specular_normal`]).
+    ///   geometric normal itself, or a relief's bent normal
+    ///   ([`crate::integrator::Tracer::specular_normal`]).
     #[inline(never)]
     pub fn sample(
         &self,
