@@ -1362,7 +1362,11 @@ mod tests {
 
     /// Under the quad light the general path tracer runs, and the inspector shows each
     /// vertex's light sample with the BSDF's value, both densities and the MIS weight; R is
-    /// still the rendered pixel bit for bit.
+    /// still the rendered pixel bit for bit. The weight is the power heuristic of the two
+    /// densities shown, p_L²/(p_L² + p_B²), computed here in f64 (within 1e-6: f32 rounding
+    /// of the same formula); the balance heuristic p_L/(p_L + p_B), or no weight (1), differ
+    /// from it wherever p_B > 0, so some vertices must have both densities well apart from 0
+    /// and from each other's extremes (a weight in (0.05, 0.95)).
     #[test]
     fn a_path_vertex_under_an_area_light_shows_its_mis_weight() {
         use crate::light::LightShape;
@@ -1372,9 +1376,11 @@ mod tests {
         s.shading = crate::integrator::Shading::for_stage(Stage::Path);
         s.light.position = Vec3::new(0.0, -0.98, 0.0);
         s.light.shape = LightShape::Quad;
-        s.light.radius = 0.5;
+        // A square of side 1.5: large enough that, at vertices near it, BSDF samples find it
+        // as readily as light samples do (at a side of 0.5 no weight of these pixels was within (0.05, 0.95)).
+        s.light.radius = 1.5;
         s.material_preset = crate::material::MaterialPreset::Rough;
-        let mut seen = 0;
+        let (mut seen, mut shared) = (0, 0);
         for (x, y) in [(10, 16), (16, 20), (22, 26), (5, 5)] {
             let i = inspect_pixel(&scene, &s, x, y).unwrap();
             let rendered = crate::render::trace_pixel(&scene, &s, x, y, 0);
@@ -1385,9 +1391,15 @@ mod tests {
             // Every vertex below the light samples it (the ceiling, above it, cannot).
             for v in i.bounces.iter().filter(|v| v.position.y > -0.98) {
                 let l = v.light_sample.expect("a vertex below the light samples it");
-                assert!((0.0..=1.0).contains(&l.mis_weight), "{l:?}");
                 assert!(l.pdf_light > 0.0, "{l:?}");
+                let (p_l, p_b) = (f64::from(l.pdf_light), f64::from(l.pdf_bsdf));
+                let power = p_l * p_l / (p_l * p_l + p_b * p_b);
+                assert!(
+                    (f64::from(l.mis_weight) - power).abs() < 1e-6,
+                    "{l:?}: the power heuristic is {power}"
+                );
                 seen += 1;
+                shared += usize::from((0.05..0.95).contains(&power));
             }
             let text: Vec<String> = i.lines().into_iter().map(|l| l.text).collect();
             if !i.bounces.is_empty() {
@@ -1395,5 +1407,9 @@ mod tests {
             }
         }
         assert!(seen > 0);
+        assert!(
+            shared > 0,
+            "no vertex where the two strategies share the light"
+        );
     }
 }

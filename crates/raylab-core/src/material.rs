@@ -168,16 +168,25 @@ impl Material {
     ///   by rejection: 2.5 numbers on average). The path tracer draws its diffuse bounces
     ///   sixteen at a time with the same functions, weighted by ρ at the hit (a texture's):
     ///   [`Bsdf::Lambertian`]'s sampling, specialised to lanes;
-    /// * every other material: [`Bsdf::sample`] in the shading frame of the surface's
-    ///   geometric `normal` ([`ShadingFrame`]), with one number for the choice of lobe and,
-    ///   where the BSDF is not a delta (the rough metal), two for the direction.
+    /// * every other material: [`Bsdf::sample`] in the shading frame of `shading` about the
+    ///   surface's `geometric` normal ([`ShadingFrame::new`]: the geometric normal decides
+    ///   reflection and transmission), with one number for the choice of lobe and, where the
+    ///   BSDF is not a delta (the rough metal), two for the direction. `shading` is the
+    ///   geometric normal itself, or a relief's bent normal
+    ///   ([`crate::integrator::Tracer::specular_normal`]).
     #[inline(never)]
-    pub fn sample(&self, direction: Vec3, normal: Vec3, rng: &mut Rng) -> Option<Scatter> {
+    pub fn sample(
+        &self,
+        direction: Vec3,
+        shading: Vec3,
+        geometric: Vec3,
+        rng: &mut Rng,
+    ) -> Option<Scatter> {
         let bsdf = self.bsdf(self.reflectance);
         if let Bsdf::Lambertian { rho } = bsdf {
             let local = cosine_hemisphere_by_rejection(rng, true);
             return Some(Scatter {
-                direction: hemisphere_around(facing(normal, direction), local),
+                direction: hemisphere_around(facing(geometric, direction), local),
                 weight: rho,
             });
         }
@@ -187,7 +196,7 @@ impl Material {
         } else {
             Vec2::new(rng.next_f32(), rng.next_f32())
         };
-        let frame = ShadingFrame::new(normal, normal, -direction);
+        let frame = ShadingFrame::new(shading, geometric, -direction);
         frame
             .sample_world(&bsdf, -direction, uc, u)
             .map(|s| Scatter {
@@ -554,7 +563,7 @@ mod tests {
         };
         // Sampled through the BSDF, in the shading frame: the same direction up to the
         // rounding of the change of frame.
-        let s = mirror.sample(d, n, &mut Rng::new(1)).unwrap();
+        let s = mirror.sample(d, n, n, &mut Rng::new(1)).unwrap();
         assert!(
             (s.direction - r).abs().max_element() < 1e-6,
             "{} {r}",
@@ -640,7 +649,7 @@ mod tests {
             let samples = 20_000;
             let mut reflected = 0;
             for _ in 0..samples {
-                let s = glass().sample(d, n, &mut rng).unwrap();
+                let s = glass().sample(d, n, n, &mut rng).unwrap();
                 assert_eq!(s.weight, Vec3::ONE);
                 if s.direction.y < 0.0 {
                     reflected += 1;
@@ -678,7 +687,7 @@ mod tests {
         let n = Vec3::new(0.0, 0.0, -1.0);
         for d in [Vec3::Z, -Vec3::Z] {
             for _ in 0..1000 {
-                let s = m.sample(d, n, &mut rng).unwrap();
+                let s = m.sample(d, n, n, &mut rng).unwrap();
                 assert!(s.direction.dot(d) < 0.0, "back towards the ray's side");
                 assert!((s.direction.length() - 1.0).abs() < 1e-5);
                 assert_eq!(s.weight, Vec3::splat(0.75));

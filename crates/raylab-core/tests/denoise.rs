@@ -69,12 +69,15 @@ fn noiseless_renders_are_left_alone() {
     }
 }
 
-/// A textured lab scene under a sphere light (soft shadows: noisy) at 16 samples: the texture's
+/// A textured lab scene under a sphere light (soft shadows: noisy) at 4 samples: the texture's
 /// edges stay as sharp as in a 512-sample reference: the checker floor's contrast (the summed
 /// absolute difference of neighbouring pixels in the bottom third, where only the floor is) is
-/// within 15 % of the reference's, where a blur would lower it. The noise here is only in the
-/// penumbrae, so there is little to gain: the error against the reference stays within a
-/// quarter of the raw image's (measured: 4.3·10⁻³ against 4.0·10⁻³).
+/// within 15 % of the reference's, where a blur would lower it. The noise is only in the
+/// penumbrae, and the denoiser must take most of it out: its error against the reference at
+/// most half the raw image's (measured: 6.1·10⁻³ against 1.6·10⁻², a ratio of 0.38; a
+/// denoiser that returns its input has 1; over seeds 1 to 4 the ratio was 0.375–0.395, so the
+/// bound lies ten times that spread above it: a false failure is not expected). At 16 samples there was nothing left to gain
+/// (4.2·10⁻³ against 4.0·10⁻³: what remains is the filter's own smoothing of the texture).
 #[test]
 fn texture_detail_is_kept_under_soft_shadows() {
     let scene_settings = |samples: u32, seed: u64| {
@@ -85,7 +88,7 @@ fn texture_detail_is_kept_under_soft_shadows() {
         s.seed = seed;
         s
     };
-    let s = scene_settings(16, 1);
+    let s = scene_settings(4, 1);
     assert!(s.is_stochastic());
     let scene = s.scene.load().unwrap();
     let (raw, denoised) = on_threads(2, || render_denoised(&scene, &s));
@@ -95,8 +98,9 @@ fn texture_detail_is_kept_under_soft_shadows() {
         relative_mse(&raw, &reference),
         relative_mse(&denoised, &reference),
     );
+    eprintln!("relative MSE: raw {e_raw:.3e}, denoised {e_denoised:.3e}");
     assert!(
-        e_denoised < 1.25 * e_raw,
+        e_denoised < 0.5 * e_raw,
         "{e_denoised:.3e} vs raw {e_raw:.3e}"
     );
     let contrast = |image: &raylab_core::Image| {

@@ -169,13 +169,9 @@ fn wave<const SPHERE_LIGHT: bool, R: Recorder>(
             diffuse.push(i, surface, i);
             continue;
         }
-        // Mirror and glass reflect about the triangle's own normal (a smooth normal could send
-        // a reflection below the surface); a relief (normal map, the water's waves) is the
-        // surface's detail, so its bent normal is used.
-        let normal = match &material.relief {
-            None => scene.triangles[hit.triangle_index].normal,
-            Some(_) => tracer.surface(hit, material, ray.direction).normal,
-        };
+        // Mirror and glass reflect about the triangle's own normal, or a relief's bent one (the
+        // water's waves).
+        let normal = tracer.specular_normal(hit, material, ray.direction);
         let branch = match wave {
             Wave::Camera => Branch {
                 pixel: i as u16,

@@ -785,6 +785,20 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// The normal a mirror or glass `material` reflects and refracts about at `hit`, reached
+    /// along `incoming`: the triangle's own (a smooth normal could send a reflection below the
+    /// surface), or, where the material has a relief (a normal map, the water's waves), the
+    /// relief's bent normal, [`Tracer::surface_with`]'s. The lab's stages and the sixteen-lane
+    /// path tracer both ask it here; the general path tracer's [`Tracer::scattering`] holds
+    /// the same bent normal in its frame.
+    #[inline(always)]
+    pub fn specular_normal(&self, hit: &Intersection, material: &Material, incoming: Vec3) -> Vec3 {
+        match &material.relief {
+            None => self.scene.triangles[hit.triangle_index].normal,
+            Some(_) => self.surface_with(hit, material, incoming, None).normal,
+        }
+    }
+
     /// What the lab's stages use as ρ at a glossy hit (the rough metal): π·f(wo, wi), with wo
     /// toward the viewer and wi toward the light's centre, evaluated in the hit's shading
     /// frame ([`ShadingFrame::eval_world`]); for a diffuse surface this would be ρ itself.

@@ -429,9 +429,14 @@ fn batch<R: Recorder>(
                 diffuse.push(n_diffuse, surface, i);
                 n_diffuse += 1;
             } else {
-                // A direction the BSDF refuses (none for mirror and glass, whose shading
-                // frame is the geometric one) ends the path.
-                let Some(scatter) = material.sample(incoming, geometric, &mut rngs[i]) else {
+                // Mirror and glass scatter about the triangle's own normal, or a relief's bent
+                // one (the water's waves), held to the geometric surface's rules as the
+                // general path tracer holds it ([`ShadingFrame::new`]). A direction the
+                // BSDF refuses (a reflection below the triangle or a refraction that does not
+                // cross it: only about a bent normal) ends the path.
+                let shading = tracer.specular_normal(&hit, material, incoming);
+                let Some(scatter) = material.sample(incoming, shading, geometric, &mut rngs[i])
+                else {
                     continue;
                 };
                 let (g, lane) = (n_specular / LANES, n_specular % LANES);
@@ -515,7 +520,7 @@ mod tests {
     use super::*;
     use crate::integrator::HitTerms;
     use crate::intersect::Intersection;
-    use crate::material::{MaterialPreset, TexturePreset};
+    use crate::material::{Material, MaterialPreset, TexturePreset};
     use crate::scene::cornell_box;
     use crate::{Camera, RenderSettings, Shading};
 
@@ -575,5 +580,177 @@ mod tests {
                 .any(|c| c.x == c.y && c.y == c.z && c.x > 0.5),
             "a light grey square passed on its own colour: {colours:?}"
         );
+    }
+
+    /// The first vertex's hit and the direction the path left it along.
+    #[derive(Default)]
+    struct FirstVertex {
+        hit: Option<Intersection>,
+        left_along: Option<Vec3>,
+    }
+
+    impl Recorder for FirstVertex {
+        const ENABLED: bool = true;
+        fn closest_hit(&mut self, _: &Ray, hit: Option<&Intersection>, _: Vec3, _: u32) {
+            self.hit = self.hit.or(hit.copied());
+        }
+        fn specular_hit(&mut self, _: &Intersection, _: Vec3, _: u32, _: &[(Vec3, Vec3)]) {}
+        fn shaded(&mut self, _: &HitTerms, _: Vec3, _: Vec3, _: Vec3) {}
+        fn scattered(&mut self, scatter: &Scatter, _: f32, _: Vec3, _: bool) {
+            self.left_along = self.left_along.or(Some(scatter.direction));
+        }
+    }
+
+    /// The path stage's tracer of `scene` under the lab's light.
+    fn path_tracer_for(scene: &crate::scene::Scene) -> Tracer<'_> {
+        let mut settings = RenderSettings::default();
+        settings.shading = Shading::for_stage(Stage::Path);
+        Tracer::new(scene, &settings)
+    }
+
+    /// Where the path of `ray` went at its first vertex, with `seed`'s numbers: the hit and
+    /// the direction it left along.
+    fn first_vertex(tracer: &Tracer, ray: Ray, seed: u64) -> (Intersection, Vec3) {
+        let mut rec = FirstVertex::default();
+        let mut rng = [Rng::new(seed)];
+        tracer.trace_recorded(&[ray], &mut rng, &mut [Vec3::ZERO], &mut rec);
+        (
+            rec.hit.expect("a hit"),
+            rec.left_along.expect("a scattering"),
+        )
+    }
+
+    /// Where `d` goes off a mirror of unit normal `n`: d − 2(d·n)n.
+    fn mirrored(d: Vec3, n: Vec3) -> Vec3 {
+        d - 2.0 * d.dot(n) * n
+    }
+
+    /// Checks that `t` is `d` refracted into a medium of index `ior` through a surface of unit
+    /// normal `n` facing `d`'s origin, by Snell's law: sin θ_t = sin θ_i / ior, with t in
+    /// the plane of d and n, across the surface and on d's side of n along it.
+    #[track_caller]
+    fn assert_refracted(d: Vec3, t: Vec3, n: Vec3, ior: f32, sin_t: f32) {
+        let sin_i = d.cross(n).length();
+        assert!((sin_i / ior - sin_t).abs() < 1e-6, "{sin_i} {sin_t}");
+        assert!(
+            (t.cross(n).length() - sin_t).abs() < 1e-5,
+            "{t}: sin θ_t {sin_t}"
+        );
+        assert!(t.dot(n) < 0.0 && d.cross(n).dot(t).abs() < 1e-5, "{t}");
+        assert!((d - d.dot(n) * n).dot(t - t.dot(n) * n) > 0.0, "{t}");
+    }
+
+    /// Into the pool's still water (waves 0: the flat surface) the path stage refracts by
+    /// Snell's law about the surface's normal (0, −1, 0): a ray 40° from the vertical goes on
+    /// at asin(sin 40° / 1.33) = 28.90°, sin θ_t = 0.483299; the Fresnel choice's other
+    /// branch reflects it at 40°. A few seeds give both.
+    #[test]
+    fn the_path_stage_refracts_into_flat_water_by_snells_law() {
+        let mut spec = crate::scene::SceneChoice::Pool.spec();
+        spec.water.as_mut().unwrap().waves = 0.0;
+        let scene = crate::scene::SceneChoice::from_spec(spec).load().unwrap();
+        let tracer = path_tracer_for(&scene);
+        let theta = 40f32.to_radians();
+        let d = Vec3::new(theta.sin(), theta.cos(), 0.0);
+        // Over the floor beside both blocks (the short one's x ≤ 0.705 at z ≤ −0.02, the
+        // tall one's x ≤ 0.045).
+        let target = Vec3::new(0.5, 0.7, 0.5);
+        let ray = Ray::new(target - 0.5 * d, d);
+        let n = Vec3::new(0.0, -1.0, 0.0);
+        let (mut refracted, mut reflected) = (0, 0);
+        for seed in 0..40 {
+            let (hit, t) = first_vertex(&tracer, ray, seed);
+            assert_eq!(tracer.material_of(hit.triangle_index).name, "water");
+            assert!((hit.position - target).length() < 1e-5, "{}", hit.position);
+            if t.y > 0.0 {
+                assert_refracted(d, t, n, 1.33, 0.483_299);
+                refracted += 1;
+            } else {
+                assert!((t - mirrored(d, n)).length() < 1e-5, "{t}");
+                reflected += 1;
+            }
+        }
+        assert!(refracted > 0 && reflected > 0, "{refracted} {reflected}");
+    }
+
+    /// Waves tilt the normal mirror and glass scatter about (`Tracer::specular_normal`, the
+    /// lab stages' too). A square at y = 0 facing up (−y) with a one-texel normal map
+    /// (sin 10°, 0, cos 10°) everywhere: with planar coordinates (u, v) = (x, z) its tangent
+    /// frame is t = +x, b = n × t = +z, n = (0, −1, 0), so the tilted normal is
+    /// (sin 10°, −cos 10°, 0). A ray 40° from the vertical, along +x, meets it at 50°:
+    /// as a mirror it leaves along d − 2(d·n)n = (sin 60°, −cos 60°, 0), 20° from the flat
+    /// surface's reflection (sin 40°, −cos 40°, 0); as glass of index 1.33 it also refracts by
+    /// Snell's law about that normal, sin θ_t = sin 50° / 1.33 = 0.575973.
+    #[test]
+    fn the_path_stage_scatters_about_a_tilted_normal() {
+        use crate::geometry::Triangle;
+        use crate::material::MaterialKind;
+        use crate::relief::{NormalMap, Relief};
+        use crate::texture::TextureImage;
+        let tilt = 10f32.to_radians();
+        let map = TextureImage {
+            name: "tilt".into(),
+            width: 1,
+            height: 1,
+            texels: vec![Vec3::new(tilt.sin(), 0.0, tilt.cos())],
+        };
+        let relief = Relief {
+            normal: Some(NormalMap {
+                image: std::sync::Arc::new(map),
+                strength: 1.0,
+            }),
+            height: None,
+            uv_scale: 1.0,
+        };
+        let facing_up = |t: Triangle| match t.normal.y < 0.0 {
+            true => t,
+            false => Triangle::new(t.v0, t.v2, t.v1, t.material),
+        };
+        let (a, b) = (Vec3::new(-5.0, 0.0, -5.0), Vec3::new(5.0, 0.0, -5.0));
+        let (c, e) = (Vec3::new(5.0, 0.0, 5.0), Vec3::new(-5.0, 0.0, 5.0));
+        let square = vec![
+            facing_up(Triangle::new(a, b, c, 0)),
+            facing_up(Triangle::new(a, c, e, 0)),
+        ];
+        let n = Vec3::new(tilt.sin(), -tilt.cos(), 0.0);
+        let theta = 40f32.to_radians();
+        let d = Vec3::new(theta.sin(), theta.cos(), 0.0);
+        let ray = Ray::new(Vec3::new(0.2, 0.0, 0.3) - d, d);
+        let want = mirrored(d, n);
+        assert!(
+            (want - Vec3::new(0.866_025, -0.5, 0.0)).length() < 1e-5,
+            "{want}"
+        );
+        let flat = mirrored(d, Vec3::new(0.0, -1.0, 0.0));
+        assert!((want.dot(flat) - 20f32.to_radians().cos()).abs() < 1e-5);
+        for kind in [
+            MaterialKind::Mirror { tint: Vec3::ONE },
+            MaterialKind::Glass {
+                ior: 1.33,
+                tint: Vec3::ONE,
+            },
+        ] {
+            let material = Material {
+                kind,
+                relief: Some(std::sync::Arc::new(relief.clone())),
+                ..Material::diffuse("tilted", Vec3::ZERO)
+            };
+            let scene = crate::scene::Scene::new(square.clone(), vec![material]);
+            let tracer = path_tracer_for(&scene);
+            let (mut refracted, mut reflected) = (0, 0);
+            for seed in 0..40 {
+                let (_, t) = first_vertex(&tracer, ray, seed);
+                if t.y > 0.0 {
+                    assert_refracted(d, t, n, 1.33, 0.575_973);
+                    refracted += 1;
+                } else {
+                    assert!((t - want).length() < 1e-5, "{kind:?}: {t}, not {want}");
+                    reflected += 1;
+                }
+            }
+            assert!(reflected > 0, "{kind:?}");
+            let glass = matches!(kind, MaterialKind::Glass { .. });
+            assert_eq!(refracted > 0, glass, "{kind:?}: {refracted}");
+        }
     }
 }
