@@ -14,6 +14,9 @@
 //!   them and more than the exact figure does;
 //! * `unknown` otherwise: no single classic mistake explains the image, and a guess would
 //!   mislead more than it helps.
+//!
+//! A class's images are checked at once by [`class`] (the figures rendered once for each
+//! settings, [`Figures`]), and written up for a teacher by [`report`].
 
 pub mod class;
 pub mod compare;
