@@ -61,7 +61,7 @@ chrome --screenshot="$work/detail.png" --window-size=1280,1000 "$page#d-$id" >/d
 sed -e 's/ id="show-all" checked>/ id="show-all">/' \
   -e 's/ id="show-inverse-r">/ id="show-inverse-r" checked>/' \
   "$report/index.html" >"$report/filtered.html"
-chrome --screenshot="$work/filtered.png" --window-size=1280,900 "file://$report/filtered.html" \
+chrome --screenshot="$work/filtered.png" --window-size=1280,1600 "file://$report/filtered.html" \
   >/dev/null
 rm "$report/filtered.html"
 # Sorting (the script): the page opened sorted by SSIM, least similar first.

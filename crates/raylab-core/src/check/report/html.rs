@@ -80,6 +80,7 @@ h1 { font-size: 22px; margin: 0 0 4px; }
 h2 { font-size: 18px; margin: 0 0 8px; }
 .muted, small { color: var(--muted); }
 .top { display: flex; flex-wrap: wrap; gap: 28px; align-items: flex-start; }
+.top > div { flex: 1 1 380px; min-width: 0; }
 .against { list-style: none; padding: 0; margin: 8px 0; }
 .against li { display: flex; gap: 10px; align-items: center; margin: 4px 0; }
 .against img { width: 48px; height: auto; border: 1px solid var(--line); }
@@ -207,10 +208,7 @@ fn table_row(i: usize, row: &Row) -> String {
         "<tr id=\"r-{id}\" class=\"v-{verdict}\" data-name=\"{name}\" data-verdict=\"{rank}\" \
          data-match=\"{m}\" data-ssim=\"{s}\">",
         rank = verdict_rank(verdict),
-        m = row
-            .result
-            .as_ref()
-            .map_or(-1.0, |j| j.report.match_share),
+        m = row.result.as_ref().map_or(-1.0, |j| j.report.match_share),
         s = row.result.as_ref().map_or(-1.0, |j| j.ssim),
     );
     let flag = if row.identical_to.is_empty() {
@@ -312,10 +310,7 @@ fn detail(class: &Class, i: usize, row: &Row) -> String {
     let verdict_line = match verdict {
         "none" => "right: the image is the exact figure".to_owned(),
         "unknown" => "unknown: no classic mistake explains it".to_owned(),
-        m => format!(
-            "{m}: {}",
-            m.parse::<Mistake>().map_or("", |m| m.what())
-        ),
+        m => format!("{m}: {}", m.parse::<Mistake>().map_or("", |m| m.what())),
     };
     let _ = write!(
         t,
@@ -456,11 +451,7 @@ pub fn page(class: &Class, title: &str) -> String {
         let label = stage.figure().map_or(format!("stage {stage}"), |f| {
             format!("figure {f} (stage {stage})")
         });
-        let used = class
-            .rows
-            .iter()
-            .filter(|r| r.against == Some(k))
-            .count();
+        let used = class.rows.iter().filter(|r| r.against == Some(k)).count();
         let _ = write!(
             t,
             "<li><a href=\"{figure}\">{img}</a><span>{label}, {w}×{h}: {used} \
