@@ -3,8 +3,9 @@
 # mistake of the catalogue, right, anti-aliased and JPEG images, broken files, identical
 # images), runs `raylab check FOLDER --csv LIST --report OUT --gradescope`, and has headless
 # Chromium open the page from the file system:
-#   - a screenshot of the page (OUT/../page.png) and of a student's detail view, shown by its
-#     #d-ID fragment with no script (OUT/../detail.png), and
+#   - a screenshot of the page (FOLDER/page.png), of a student's detail view, shown by its
+#     #d-ID fragment with no script (detail.png), of the page filtered to one verdict with no
+#     script (filtered.png) and sorted by SSIM by its script (sorted.png), and
 #   - the page's DOM after its script ran, which must show the sortable headings it marks.
 # Exits non-zero if the report or a screenshot is missing, or the script did not run.
 #
@@ -55,7 +56,17 @@ chrome --screenshot="$work/page.png" --window-size=1280,1600 "$page" >/dev/null
 # A student whose mistake is named: their detail view.
 id=$(grep -B1 -A1 '"file": "inverse-r.png"' "$report/report.json" | grep -o 's[0-9]\{3\}' | head -n 1)
 chrome --screenshot="$work/detail.png" --window-size=1280,1000 "$page#d-$id" >/dev/null
-for shot in page.png detail.png; do
+# Filtering with no script: the page as it is once "inverse-r" is chosen (its radio button
+# checked), a copy beside it so its links still hold.
+sed -e 's/ id="show-all" checked>/ id="show-all">/' \
+  -e 's/ id="show-inverse-r">/ id="show-inverse-r" checked>/' \
+  "$report/index.html" >"$report/filtered.html"
+chrome --screenshot="$work/filtered.png" --window-size=1280,1600 "file://$report/filtered.html" \
+  >/dev/null
+rm "$report/filtered.html"
+# Sorting (the script): the page opened sorted by SSIM, least similar first.
+chrome --screenshot="$work/sorted.png" --window-size=1280,1600 "$page#sort-ssim" >/dev/null
+for shot in page.png detail.png filtered.png sorted.png; do
   if [ "$(stat -c %s "$work/$shot" 2>/dev/null || echo 0)" -lt 10000 ]; then
     echo "screenshot-report: $work/$shot is missing or blank" >&2
     exit 1
@@ -66,4 +77,4 @@ if [ "$sortable" -lt 4 ]; then
   echo "screenshot-report: the page's script did not run (${sortable} sortable headings)" >&2
   exit 1
 fi
-echo "screenshot-report: $work/page.png, $work/detail.png ($sortable sortable headings)"
+echo "screenshot-report: $work/{page,detail,filtered,sorted}.png ($sortable sortable headings)"

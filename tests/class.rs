@@ -49,7 +49,11 @@ fn elements(html: &str) -> Vec<(String, BTreeMap<String, String>)> {
         if let Some(r) = rest.strip_prefix("</") {
             let end = r.find('>').expect("an end tag closes");
             let name = &r[..end];
-            assert_eq!(open.pop().as_deref(), Some(name), "</{name}> closes what is open");
+            assert_eq!(
+                open.pop().as_deref(),
+                Some(name),
+                "</{name}> closes what is open"
+            );
             rest = &r[end + 1..];
             continue;
         }
@@ -138,7 +142,10 @@ fn assert_links_inside(html: &str, folder: &Path) {
 fn assert_gradescope(results: &Value) {
     let object = results.as_object().expect("an object");
     for key in object.keys() {
-        assert!(["tests", "output", "score"].contains(&key.as_str()), "{key}");
+        assert!(
+            ["tests", "output", "score"].contains(&key.as_str()),
+            "{key}"
+        );
     }
     assert!(object["output"].is_string());
     let tests = object["tests"].as_array().expect("tests");
@@ -152,7 +159,10 @@ fn assert_gradescope(results: &Value) {
             );
         }
         assert!(!t["name"].as_str().unwrap().is_empty());
-        let (score, max) = (t["score"].as_f64().unwrap(), t["max_score"].as_f64().unwrap());
+        let (score, max) = (
+            t["score"].as_f64().unwrap(),
+            t["max_score"].as_f64().unwrap(),
+        );
         assert!(score == 0.0 || score == max, "{score} of {max}");
         assert!(max > 0.0);
         assert!(!t["output"].as_str().unwrap().is_empty());
@@ -364,7 +374,12 @@ fn bad_lists_and_empty_folders_are_refused() {
     std::fs::copy(&image, folder.join("b.png")).unwrap();
     let list = dir.path().join("list.csv");
     std::fs::write(&list, "file,colour\na.png,red\n").unwrap();
-    let run = raylab(&["check", folder.to_str().unwrap(), "--csv", list.to_str().unwrap()]);
+    let run = raylab(&[
+        "check",
+        folder.to_str().unwrap(),
+        "--csv",
+        list.to_str().unwrap(),
+    ]);
     assert!(!run.status.success());
     assert!(
         stderr(&run).contains("column 'colour' is not an option"),
@@ -372,10 +387,18 @@ fn bad_lists_and_empty_folders_are_refused() {
         stderr(&run)
     );
     std::fs::write(&list, "file,stage\na.png,lab\nb.png,sepia\n").unwrap();
-    let run = raylab(&["check", folder.to_str().unwrap(), "--csv", list.to_str().unwrap()]);
+    let run = raylab(&[
+        "check",
+        folder.to_str().unwrap(),
+        "--csv",
+        list.to_str().unwrap(),
+    ]);
     assert!(run.status.success(), "{}", stderr(&run));
     let stdout = String::from_utf8(run.stdout).unwrap();
-    assert!(stdout.contains("a.png") && stdout.contains("none"), "{stdout}");
+    assert!(
+        stdout.contains("a.png") && stdout.contains("none"),
+        "{stdout}"
+    );
     assert!(
         stdout.contains("b.png") && stdout.contains("list.csv' line 3") && stdout.contains("sepia"),
         "{stdout}"

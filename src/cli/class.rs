@@ -222,8 +222,7 @@ pub(super) fn run(args: &CheckArgs) -> anyhow::Result<()> {
         .map_err(anyhow::Error::msg)?;
     let mut leave_out: Vec<PathBuf> = args.report.iter().cloned().collect();
     leave_out.extend(args.csv.iter().cloned());
-    let submissions =
-        class::submissions(&args.images, &leave_out).map_err(anyhow::Error::msg)?;
+    let submissions = class::submissions(&args.images, &leave_out).map_err(anyhow::Error::msg)?;
 
     let against = |s: &Submission, width: u32, height: u32| -> Result<RenderSettings, String> {
         let failed = |e: anyhow::Error| format!("{e:#}");
@@ -325,10 +324,6 @@ fn summary(class: &Class) -> String {
         .into_iter()
         .map(|(v, n)| format!("{n} {v}"))
         .collect();
-    t += &format!(
-        "{} submissions: {}\n",
-        class.rows.len(),
-        counts.join(", ")
-    );
+    t += &format!("{} submissions: {}\n", class.rows.len(), counts.join(", "));
     t
 }

@@ -66,8 +66,10 @@ pub fn submissions(paths: &[PathBuf], leave_out: &[PathBuf]) -> Result<Vec<Submi
 
 /// A file's name without its extension.
 fn stem(path: &Path) -> String {
-    path.file_stem()
-        .map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into())
+    path.file_stem().map_or_else(
+        || path.display().to_string(),
+        |s| s.to_string_lossy().into(),
+    )
 }
 
 fn walk(
@@ -116,8 +118,7 @@ fn walk(
 /// What a submission is checked against: the settings for a submission whose image is
 /// `width × height`, or the reason there are none (a line of a list that cannot be read,
 /// sides that are not the image's).
-pub type Against<'a> =
-    dyn Fn(&Submission, u32, u32) -> Result<RenderSettings, String> + Sync + 'a;
+pub type Against<'a> = dyn Fn(&Submission, u32, u32) -> Result<RenderSettings, String> + Sync + 'a;
 
 /// What became of a submission.
 #[derive(Clone, Debug)]
@@ -342,7 +343,13 @@ mod tests {
         let d = dir.path();
         std::fs::create_dir_all(d.join("carol/out")).unwrap();
         std::fs::create_dir_all(d.join("report")).unwrap();
-        for f in ["bob.png", "alice.bmp", ".DS_Store", "carol/out/a.png", "carol/b.ppm"] {
+        for f in [
+            "bob.png",
+            "alice.bmp",
+            ".DS_Store",
+            "carol/out/a.png",
+            "carol/b.ppm",
+        ] {
             std::fs::write(d.join(f), b"x").unwrap();
         }
         std::fs::write(d.join("report/index.html"), b"x").unwrap();

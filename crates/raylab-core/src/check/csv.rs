@@ -39,7 +39,11 @@ pub fn parse(text: &str) -> Result<Vec<Vec<String>>, String> {
                 quoted = true;
                 was_quoted = true;
             }
-            '"' => return Err(format!("line {line}: a quote inside a field that is not quoted")),
+            '"' => {
+                return Err(format!(
+                    "line {line}: a quote inside a field that is not quoted"
+                ));
+            }
             ',' => {
                 record.push(std::mem::take(&mut field));
                 was_quoted = false;
@@ -90,11 +94,7 @@ pub fn field(value: &str) -> Cow<'_, str> {
 
 /// One record: the fields joined by commas, and a line break.
 pub fn record<'a>(fields: impl IntoIterator<Item = &'a str>) -> String {
-    let mut line = fields
-        .into_iter()
-        .map(field)
-        .collect::<Vec<_>>()
-        .join(",");
+    let mut line = fields.into_iter().map(field).collect::<Vec<_>>().join(",");
     line.push_str("\r\n");
     line
 }
@@ -137,7 +137,15 @@ mod tests {
     /// What is written reads back as it was.
     #[test]
     fn written_records_read_back() {
-        let fields = ["plain", "a,b", "say \"hi\"", "two\nlines", "=SUM(A1)", "-0.5", ""];
+        let fields = [
+            "plain",
+            "a,b",
+            "say \"hi\"",
+            "two\nlines",
+            "=SUM(A1)",
+            "-0.5",
+            "",
+        ];
         let text = record(fields) + &record(["x"]);
         assert_eq!(
             text,
@@ -146,7 +154,15 @@ mod tests {
         let back = parse(&text).unwrap();
         assert_eq!(
             back[0],
-            ["plain", "a,b", "say \"hi\"", "two\nlines", "'=SUM(A1)", "-0.5", ""]
+            [
+                "plain",
+                "a,b",
+                "say \"hi\"",
+                "two\nlines",
+                "'=SUM(A1)",
+                "-0.5",
+                ""
+            ]
         );
         assert_eq!(back[1], ["x"]);
     }

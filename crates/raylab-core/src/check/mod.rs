@@ -20,6 +20,9 @@
 //! Mirror and glass (the material presets, a scene file's models, the pool's water) are
 //! followed as the lab stages follow them, Whitted-style: every diffuse hit along a pixel's
 //! branches is recombined with the mistake ([`mistakes::formula_figures`]).
+//!
+//! A class's images are checked at once by [`class`] (the figures rendered once for each
+//! settings, [`Figures`]), and written up for a teacher by [`report`].
 
 pub mod class;
 pub mod compare;

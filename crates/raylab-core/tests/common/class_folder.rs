@@ -226,7 +226,10 @@ fn round(side: u32, prefix: &str, seed: u64) -> Vec<Made> {
     // One student's two files, the same pixels (the shadows stage, which no one else hands
     // in): not flagged.
     let (shadows, shadows_line) = stage_at(Stage::Shadows, side);
-    let twice = png(&jittered(&Rgb8::from_linear(&render(&scene, &shadows)), seed));
+    let twice = png(&jittered(
+        &Rgb8::from_linear(&render(&scene, &shadows)),
+        seed,
+    ));
     for name in ["first.png", "second.png"] {
         let file = format!("{prefix}pair/{name}");
         made.push(Made {
@@ -299,7 +302,10 @@ pub fn make_class(
         } else {
             format!("r{r}-")
         };
-        for m in round(side, &prefix, r).into_iter().take(count - expected.len()) {
+        for m in round(side, &prefix, r)
+            .into_iter()
+            .take(count - expected.len())
+        {
             let path = folder.join(&m.file);
             std::fs::create_dir_all(path.parent().unwrap()).unwrap();
             std::fs::write(&path, &m.bytes).unwrap();

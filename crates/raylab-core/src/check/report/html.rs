@@ -80,6 +80,7 @@ h1 { font-size: 22px; margin: 0 0 4px; }
 h2 { font-size: 18px; margin: 0 0 8px; }
 .muted, small { color: var(--muted); }
 .top { display: flex; flex-wrap: wrap; gap: 28px; align-items: flex-start; }
+.top > div { flex: 1 1 380px; min-width: 0; }
 .against { list-style: none; padding: 0; margin: 8px 0; }
 .against li { display: flex; gap: 10px; align-items: center; margin: 4px 0; }
 .against img { width: 48px; height: auto; border: 1px solid var(--line); }
@@ -96,7 +97,8 @@ th[data-key] { cursor: pointer; }
 th[data-dir="asc"]::after { content: " ▲"; } th[data-dir="desc"]::after { content: " ▼"; }
 td.num { text-align: right; white-space: nowrap; font-variant-numeric: tabular-nums; }
 td.pic img { display: block; width: 80px; height: auto; border: 1px solid var(--line); background: #000; }
-td.name a { font-weight: 600; color: #0d47a1; text-decoration: none; word-break: break-all; }
+td.name { min-width: 11em; overflow-wrap: anywhere; }
+td.name a { font-weight: 600; color: #0d47a1; text-decoration: none; }
 .verdict { font-weight: 700; }
 .fix { display: block; max-width: 38em; }
 .flag { display: inline-block; margin-top: 4px; padding: 1px 6px; border-radius: 4px; background: #fdecea; color: #b71c1c; font-size: 12px; }
@@ -120,27 +122,31 @@ td.name a { font-weight: 600; color: #0d47a1; text-decoration: none; word-break:
 "#;
 
 /// Sorting by a column: a click on a heading with a `data-key` orders the rows by their
-/// `data-KEY` values (numbers as numbers), and again the other way.
+/// `data-KEY` values (numbers as numbers), and again the other way. A page opened at
+/// `#sort-KEY` (or `#sort-KEY-desc`) starts sorted so.
 const SCRIPT: &str = r##"
+function sortBy(th, dir) {
+  var key = th.dataset.key, body = document.querySelector("#class tbody");
+  document.querySelectorAll("th[data-key]").forEach(function (h) { delete h.dataset.dir; });
+  th.dataset.dir = dir;
+  var rows = Array.prototype.slice.call(body.rows);
+  rows.sort(function (a, b) {
+    var x = a.dataset[key], y = b.dataset[key], nx = parseFloat(x), ny = parseFloat(y);
+    var c = (!isNaN(nx) && !isNaN(ny)) ? nx - ny : x.localeCompare(y);
+    return dir === "asc" ? c : -c;
+  });
+  rows.forEach(function (r) { body.appendChild(r); });
+}
 document.querySelectorAll("th[data-key]").forEach(function (th) {
   th.tabIndex = 0;
   th.title = "Sort by this column";
-  function sort() {
-    var key = th.dataset.key, body = document.querySelector("#class tbody");
-    var dir = th.dataset.dir === "asc" ? "desc" : "asc";
-    document.querySelectorAll("th[data-key]").forEach(function (h) { delete h.dataset.dir; });
-    th.dataset.dir = dir;
-    var rows = Array.prototype.slice.call(body.rows);
-    rows.sort(function (a, b) {
-      var x = a.dataset[key], y = b.dataset[key], nx = parseFloat(x), ny = parseFloat(y);
-      var c = (!isNaN(nx) && !isNaN(ny)) ? nx - ny : x.localeCompare(y);
-      return dir === "asc" ? c : -c;
-    });
-    rows.forEach(function (r) { body.appendChild(r); });
-  }
-  th.addEventListener("click", sort);
-  th.addEventListener("keydown", function (e) { if (e.key === "Enter" || e.key === " ") { e.preventDefault(); sort(); } });
+  function flip() { sortBy(th, th.dataset.dir === "asc" ? "desc" : "asc"); }
+  th.addEventListener("click", flip);
+  th.addEventListener("keydown", function (e) { if (e.key === "Enter" || e.key === " ") { e.preventDefault(); flip(); } });
 });
+var asked = /^#sort-(\w+?)(-desc)?$/.exec(location.hash);
+var heading = asked && document.querySelector('th[data-key="' + asked[1] + '"]');
+if (heading) { sortBy(heading, asked[2] ? "desc" : "asc"); }
 "##;
 
 /// The histogram of verdicts as an SVG: a bar a verdict, its count after it.
@@ -202,10 +208,7 @@ fn table_row(i: usize, row: &Row) -> String {
         "<tr id=\"r-{id}\" class=\"v-{verdict}\" data-name=\"{name}\" data-verdict=\"{rank}\" \
          data-match=\"{m}\" data-ssim=\"{s}\">",
         rank = verdict_rank(verdict),
-        m = row
-            .result
-            .as_ref()
-            .map_or(-1.0, |j| j.report.match_share),
+        m = row.result.as_ref().map_or(-1.0, |j| j.report.match_share),
         s = row.result.as_ref().map_or(-1.0, |j| j.ssim),
     );
     let flag = if row.identical_to.is_empty() {
@@ -307,10 +310,7 @@ fn detail(class: &Class, i: usize, row: &Row) -> String {
     let verdict_line = match verdict {
         "none" => "right: the image is the exact figure".to_owned(),
         "unknown" => "unknown: no classic mistake explains it".to_owned(),
-        m => format!(
-            "{m}: {}",
-            m.parse::<Mistake>().map_or("", |m| m.what())
-        ),
+        m => format!("{m}: {}", m.parse::<Mistake>().map_or("", |m| m.what())),
     };
     let _ = write!(
         t,
@@ -451,15 +451,12 @@ pub fn page(class: &Class, title: &str) -> String {
         let label = stage.figure().map_or(format!("stage {stage}"), |f| {
             format!("figure {f} (stage {stage})")
         });
-        let used = class
-            .rows
-            .iter()
-            .filter(|r| r.against == Some(k))
-            .count();
+        let used = class.rows.iter().filter(|r| r.against == Some(k)).count();
         let _ = write!(
             t,
             "<li><a href=\"{figure}\">{img}</a><span>{label}, {w}×{h}: {used} \
-             submissions<br><small>{summary}</small></span></li>",
+             submission{plural}<br><small>{summary}</small></span></li>",
+            plural = if used == 1 { "" } else { "s" },
             img = img(&thumb, "the exact figure", 48, 48, ""),
             label = escape(&label),
             w = settings.camera.width,

@@ -16,7 +16,7 @@ use serde_json::{Value, json};
 use super::class::{Class, Keep, REFUSED, Row};
 use super::compare::{Rgb8, TOLERANCE, difference_picture};
 use super::{Figures, RIGHT, WELL};
-use crate::film::write_atomically;
+use crate::film::{SaveError, write_atomically, write_atomically_with};
 
 /// The longest side of a thumbnail, in pixels.
 pub const THUMBNAIL: u32 = 96;
@@ -69,10 +69,7 @@ pub fn thumbnail(image: &Rgb8) -> Rgb8 {
     if factor == 1 {
         return image.clone();
     }
-    let (w, h) = (
-        image.width.div_ceil(factor),
-        image.height.div_ceil(factor),
-    );
+    let (w, h) = (image.width.div_ceil(factor), image.height.div_ceil(factor));
     let mut data = Vec::with_capacity(3 * (w * h) as usize);
     for ty in 0..h {
         for tx in 0..w {
@@ -117,10 +114,31 @@ impl ReportFolder {
         &self.root
     }
 
-    /// Saves `image` as `name` (a PNG through the film's writer: a temporary file renamed
-    /// into place), remembering the first failure.
+    /// Saves `image` as `name`, a PNG written under a temporary name and renamed into place
+    /// ([`write_atomically_with`]), remembering the first failure. Its bytes go to the encoder
+    /// as they are, with fast compression: a class's report writes four images a submission.
     fn save(&self, name: &str, image: &Rgb8) {
-        if let Err(e) = image.to_image().save(&self.root.join(name)) {
+        let path = self.root.join(name);
+        let saved = write_atomically_with(&path, |file| {
+            let failed = |e: png::EncodingError| match e {
+                png::EncodingError::IoError(reason) => SaveError::Write {
+                    path: path.clone(),
+                    reason,
+                },
+                e => SaveError::Encode {
+                    path: path.clone(),
+                    message: e.to_string(),
+                },
+            };
+            let mut encoder = png::Encoder::new(file, image.width, image.height);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder.set_compression(png::Compression::Fast);
+            let mut writer = encoder.write_header().map_err(failed)?;
+            writer.write_image_data(&image.data).map_err(failed)?;
+            writer.finish().map_err(failed)
+        });
+        if let Err(e) = saved {
             let mut failed = self.failed.lock().unwrap_or_else(|e| e.into_inner());
             failed.get_or_insert(e.to_string());
         }
