@@ -372,7 +372,8 @@ pub struct RenderOptions {
     /// Seed for the sample jitter.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Render threads [default: one per core].
+    /// Render threads, 1 to 1024 [default: one per core, or RAYON_NUM_THREADS up to 4 a
+    /// core].
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024), value_name = "N")]
     pub threads: Option<u16>,
 }
@@ -587,6 +588,9 @@ pub fn main() -> ExitCode {
     if matches!(cli.command, Some(Command::Render(_))) {
         // First: the threads started below inherit the signals it blocks.
         crate::signals::remove_temporary_files_when_stopped();
+    } else {
+        // `main` blocked them; other commands are stopped by them as by default.
+        crate::signals::unblock();
     }
     // Whatever runs outside the commands' own pools (the kernels' calibration, for one) runs
     // on rayon's global pool: its thread count is given too, so `RAYON_NUM_THREADS` cannot
@@ -594,6 +598,7 @@ pub fn main() -> ExitCode {
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(raylab_core::progressive::default_threads())
         .thread_name(|i| format!("raylab-{i}"))
+        .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
         .build_global();
     if cli.isa == "best"
         && let Some(note) = Isa::environment_note()
@@ -679,6 +684,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     raylab_core::film::check_writable(&args.out)?;
     let mut settings = args.options.resolve_settings()?;
     settings.validate()?;
+    refuse_output_onto(
+        "--out",
+        &args.out,
+        "the render",
+        files_read(&args.options, &settings),
+    )?;
     // Denoised when asked, or when the settings given were those of a denoised image.
     settings.denoise |= args.denoise;
     // A screenshot made with a debug view is that view again, unless --view says otherwise.
@@ -814,6 +825,40 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             args.out.display()
         )),
     }
+}
+
+/// The files a command given `options` reads, beside the image it checks: the file given to
+/// `--settings` or `--scene-file`, and every file its scene reads.
+fn files_read(
+    options: &RenderOptions,
+    settings: &RenderSettings,
+) -> Vec<raylab_core::inputs::Input> {
+    let given = [
+        (&options.settings, "the --settings file"),
+        (&options.scene_file, "the --scene-file file"),
+    ];
+    let mut files: Vec<_> = given
+        .into_iter()
+        .filter_map(|(path, what)| {
+            let path = path.as_deref()?;
+            Some(raylab_core::inputs::Input::new(path, what))
+        })
+        .collect();
+    files.extend(settings.scene.files_read());
+    files
+}
+
+/// Refuses an output (`option`'s `path`) that would replace one of the `files` `reader` reads
+/// ([`raylab_core::inputs::refuse_output_onto`]), before any work. `--save-scene` needs no
+/// such check: it never replaces a file ([`save_scene_file`]).
+fn refuse_output_onto(
+    option: &str,
+    path: &std::path::Path,
+    reader: &str,
+    files: Vec<raylab_core::inputs::Input>,
+) -> anyhow::Result<()> {
+    raylab_core::inputs::refuse_output_onto(option, path, reader, &files)
+        .map_err(anyhow::Error::msg)
 }
 
 /// Writes `--save-scene`'s text at `path`, or, if a file is there (the scene file the render
@@ -960,6 +1005,14 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     } else {
         settings_at_image_size(&args.options, path, image.width, image.height)?
     };
+    if let Some(path) = &args.diff_out {
+        let mut files = files_read(&args.options, &settings);
+        files.push(raylab_core::inputs::Input::new(
+            &args.image,
+            "the image to check",
+        ));
+        refuse_output_onto("--diff-out", path, "the check", files)?;
+    }
     check::check_settings(&settings)?;
     raylab_core::memory::check(
         format!("checking a {}×{} image", image.width, image.height),
@@ -1245,8 +1298,8 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
 }
 
 /// A pool of `threads` threads named `raylab-{what}-N`, or by default
-/// [`raylab_core::progressive::default_threads`] (`RAYON_NUM_THREADS` up to the cap `--threads`
-/// has, else one per core; a value beyond it is warned of). The count is always given
+/// [`raylab_core::progressive::default_threads`] (`RAYON_NUM_THREADS` up to four threads a
+/// core, else one per core; a value beyond it is warned of). The count is always given
 /// explicitly, so rayon never reads `RAYON_NUM_THREADS` itself.
 fn thread_pool(what: &'static str, threads: Option<u16>) -> anyhow::Result<rayon::ThreadPool> {
     let threads = match threads {
@@ -1261,6 +1314,7 @@ fn thread_pool(what: &'static str, threads: Option<u16>) -> anyhow::Result<rayon
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(move |i| format!("raylab-{what}-{i}"))
+        .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
         .build()
         .with_context(|| format!("could not start the {what} threads"))
 }

@@ -4,8 +4,31 @@ mod app;
 mod cli;
 mod signals;
 
+/// Runs the program on a thread whose stack raylab sets ([`raylab_core::memory::MAIN_STACK_BYTES`])
+/// and waits for it: the first thread's stack is whatever `ulimit -s` says, and under
+/// `ulimit -s 64` parsing the arguments alone overflowed it. (On Linux only: elsewhere the
+/// window must run on the first thread, and does, as the rest of the program.)
 fn main() -> std::process::ExitCode {
-    cli::main()
+    if !cfg!(target_os = "linux") {
+        return cli::main();
+    }
+    // Before any thread starts: see `signals::block`.
+    signals::block();
+    let started = std::thread::Builder::new()
+        .name("raylab-main".to_owned())
+        .stack_size(raylab_core::memory::MAIN_STACK_BYTES)
+        .spawn(cli::main);
+    match started {
+        // Its panic was reported where it happened; it ends the program as it would have.
+        Ok(thread) => thread
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+        Err(e) => {
+            signals::unblock();
+            eprintln!("error: could not start raylab's main thread ({e}); running on this one");
+            cli::main()
+        }
+    }
 }
 
 /// `raylab` with no command: opens the workbench window on the lab's Cornell box (figure 7).

@@ -19,6 +19,23 @@
 
 use std::io::Write as _;
 
+/// Blocks the signals waited for in this thread and in every thread it starts from now on.
+/// `main` calls it first, before it starts the thread the program runs on
+/// (`memory::MAIN_STACK_BYTES`) and waits for that: a render's signals are then blocked in
+/// every thread, the waiting one too. A command other than render lets them act again
+/// ([`unblock`]).
+pub fn block() {
+    #[cfg(unix)]
+    unix::mask(nix::sys::signal::SigmaskHow::SIG_BLOCK);
+}
+
+/// Undoes [`block`] in this thread and those it starts: the signals end the program as by
+/// default.
+pub fn unblock() {
+    #[cfg(unix)]
+    unix::mask(nix::sys::signal::SigmaskHow::SIG_UNBLOCK);
+}
+
 /// Installs the handling described in the module docs. Call it before any other thread is
 /// started: threads inherit the blocked signals from the thread that starts them, and a
 /// thread started earlier would still die of them.
@@ -55,6 +72,17 @@ mod unix {
         Signal::SIGXCPU,
     ];
 
+    /// Blocks or unblocks [`WAITED_FOR`] in this thread.
+    pub fn mask(how: SigmaskHow) {
+        let mut set = SigSet::empty();
+        for s in WAITED_FOR {
+            set.add(s);
+        }
+        if let Err(e) = pthread_sigmask(how, Some(&set), None) {
+            note(&format!("SIGQUIT and the like are not handled: {e}"));
+        }
+    }
+
     pub fn install() {
         // SAFETY: ignoring a signal installs no handler; nothing else in the program sets
         // SIGXFSZ's disposition.
@@ -71,6 +99,7 @@ mod unix {
         }
         let spawned = std::thread::Builder::new()
             .name("raylab-signals".to_owned())
+            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 loop {
                     // Only fails on EINTR, a signal outside the set: wait again.

@@ -688,7 +688,7 @@ fn a_screenshot_whose_settings_inflate_without_end_is_refused() {
         &out,
         &[
             "bomb.png",
-            "raylab-settings text (iTXt) inflates to more than the 1 MiB settings may be",
+            "raylab-settings text (iTXt) inflates to more than the 1,048,576 bytes (1 MiB) settings may be",
         ],
     );
 }
@@ -1011,6 +1011,296 @@ fn save_scene_never_replaces_a_file_and_is_checked_first() {
     );
 }
 
+// ---------------------------------------------------------------------------------------------
+// Outputs that are inputs, and outputs with long names.
+
+/// A 32² lab-stage render written to `name` in `dir` (a student's render to check).
+fn render_into(dir: &std::path::Path, name: &str) {
+    let out = raylab_in(
+        dir,
+        &["render", "--width", "32", "--height", "32", "--out", name],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+/// The refusal of an output that is one of the inputs: a one-line error naming both, and the
+/// input left as it was.
+fn assert_input_kept(
+    out: &std::process::Output,
+    says: &[&str],
+    input: &std::path::Path,
+    was: &[u8],
+) {
+    assert_one_line_error(out, says);
+    assert_eq!(
+        std::fs::read(input).unwrap(),
+        was,
+        "{} was replaced",
+        input.display()
+    );
+}
+
+/// `check mine.png --diff-out mine.png` replaced the student's render with the difference
+/// picture (exit 0), and `--settings shot.png --diff-out shot.png` the screenshot. An output
+/// that is one of the inputs — the same name, another spelling of it, a hard or symbolic link
+/// to it — is refused before any work, and the input is kept.
+#[test]
+fn check_never_writes_its_difference_picture_over_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    render_into(d, "mine.png");
+    let mine = std::fs::read(d.join("mine.png")).unwrap();
+    std::fs::create_dir(d.join("sub")).unwrap();
+    std::fs::hard_link(d.join("mine.png"), d.join("hard.png")).unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink("mine.png", d.join("soft.png")).unwrap();
+    let mut names = vec!["mine.png", "./sub/../mine.png", "hard.png"];
+    if cfg!(unix) {
+        names.push("soft.png");
+    }
+    for name in names {
+        let out = raylab_in(d, &["check", "mine.png", "--diff-out", name]);
+        assert_input_kept(
+            &out,
+            &[&format!("--diff-out '{name}'"), "'mine.png'"],
+            &d.join("mine.png"),
+            &mine,
+        );
+    }
+    // The image checked through a link, the picture onto its target.
+    #[cfg(unix)]
+    {
+        let out = raylab_in(d, &["check", "soft.png", "--diff-out", "mine.png"]);
+        assert_input_kept(&out, &["--diff-out 'mine.png'"], &d.join("mine.png"), &mine);
+    }
+    // The screenshot whose settings are checked against.
+    std::fs::copy(d.join("mine.png"), d.join("shot.png")).unwrap();
+    let out = raylab_in(
+        d,
+        &[
+            "check",
+            "mine.png",
+            "--settings",
+            "shot.png",
+            "--diff-out",
+            "shot.png",
+        ],
+    );
+    assert_input_kept(
+        &out,
+        &["--diff-out 'shot.png'", "'shot.png'"],
+        &d.join("shot.png"),
+        &mine,
+    );
+    // Another name is written.
+    let out = raylab_in(d, &["check", "mine.png", "--diff-out", "diff.png"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(d.join("diff.png").is_file());
+    assert_eq!(std::fs::read(d.join("mine.png")).unwrap(), mine);
+}
+
+/// `render --scene-file s.toml --out nm.png` replaced the normal map the scene reads. No file a
+/// render reads is its output: a scene file's maps, a model's material library and the
+/// textures it names, the screenshot given to --settings.
+#[test]
+fn render_never_writes_over_a_file_its_scene_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A normal map tilting the back wall, as a PNG.
+    let map = {
+        let image = image::RgbImage::from_pixel(4, 4, image::Rgb([192, 128, 255]));
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        image.write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+        bytes.into_inner()
+    };
+    std::fs::write(d.join("nm.png"), &map).unwrap();
+    let mut spec = raylab_core::scene::SceneSpec::cornell("tilted wall");
+    spec.surfaces.push(raylab_core::scene::spec::PartRelief {
+        part: raylab_core::scene::spec::BoxPart::BackWall,
+        relief: raylab_core::scene::spec::ReliefSpec {
+            normal_map: Some(d.join("nm.png")),
+            ..Default::default()
+        },
+    });
+    let mut settings = common::settings(raylab_core::Stage::Lab, 16);
+    settings.scene = raylab_core::scene::SceneChoice::Custom(Box::new(spec));
+    raylab_core::scene_file::save(&settings, &d.join("s.toml")).unwrap();
+    for out_name in ["nm.png", "./nm.png"] {
+        let out = raylab_in(d, &["render", "--scene-file", "s.toml", "--out", out_name]);
+        assert_input_kept(
+            &out,
+            &[&format!("--out '{out_name}'"), "normal map", "nm.png"],
+            &d.join("nm.png"),
+            &map,
+        );
+    }
+    // A model's material library names its texture: --out onto the texture.
+    std::fs::write(d.join("tex.png"), &map).unwrap();
+    std::fs::write(d.join("m.mtl"), "newmtl glaze\nmap_Kd tex.png\n").unwrap();
+    std::fs::write(
+        d.join("m.obj"),
+        format!("mtllib m.mtl\nusemtl glaze\n{TETRAHEDRON}"),
+    )
+    .unwrap();
+    let out = raylab_in(
+        d,
+        &[
+            "render", "--obj", "m.obj", "--width", "16", "--height", "16", "--out", "tex.png",
+        ],
+    );
+    assert_input_kept(
+        &out,
+        &["--out 'tex.png'", "texture"],
+        &d.join("tex.png"),
+        &map,
+    );
+    // The screenshot whose settings are rendered again.
+    render_into(d, "shot.png");
+    let shot = std::fs::read(d.join("shot.png")).unwrap();
+    let out = raylab_in(
+        d,
+        &["render", "--settings", "shot.png", "--out", "shot.png"],
+    );
+    assert_input_kept(
+        &out,
+        &["--out 'shot.png'", "--settings"],
+        &d.join("shot.png"),
+        &shot,
+    );
+    // Another name is written, and the scene's files are kept.
+    let out = raylab_in(d, &["render", "--scene-file", "s.toml", "--out", "x.png"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(std::fs::read(d.join("nm.png")).unwrap(), map);
+}
+
+/// The longest file names a folder takes (255 bytes) are written: the temporary file beside
+/// them, `.NAME.XXXXXX.tmp`, made "File name too long" from a name of 250 bytes for --out and
+/// 246 for --diff-out and --save-scene. Nothing temporary is left.
+#[test]
+fn outputs_with_the_longest_names_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    render_into(d, "mine.png");
+    for length in [246, 250, 255] {
+        let png = format!("{}.png", "p".repeat(length - 4));
+        let toml = format!("{}.toml", "s".repeat(length - 5));
+        let out = raylab_in(
+            d,
+            &[
+                "render",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--out",
+                &png,
+                "--save-scene",
+                &toml,
+            ],
+        );
+        assert!(out.status.success(), "{length}: {}", stderr(&out));
+        assert!(
+            d.join(&png).is_file() && d.join(&toml).is_file(),
+            "{length}"
+        );
+        let diff = format!("{}.png", "d".repeat(length - 4));
+        let out = raylab_in(d, &["check", "mine.png", "--diff-out", &diff]);
+        assert!(out.status.success(), "{length}: {}", stderr(&out));
+        assert!(d.join(&diff).is_file(), "{length}");
+        let hidden: Vec<_> = common::files_in(d)
+            .into_iter()
+            .filter(|n| n.to_string_lossy().starts_with('.'))
+            .collect();
+        assert!(hidden.is_empty(), "{length}: left {hidden:?}");
+    }
+}
+
+/// A scene file 900 bytes over the 4 MiB cap was refused as "4 MiB, more than the 4 MiB a
+/// scene file may be": the exact sizes are said.
+#[test]
+fn a_scene_file_over_its_cap_is_refused_with_the_exact_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let size = (4 << 20) + 900;
+    std::fs::write(dir.path().join("big.toml"), vec![b'#'; size]).unwrap();
+    let out = raylab_in(
+        dir.path(),
+        &["render", "--scene-file", "big.toml", "--out", "x.png"],
+    );
+    assert_one_line_error(
+        &out,
+        &[
+            "big.toml",
+            "4,195,204 bytes",
+            "more than the 4,194,304 bytes (4 MiB) a scene file may be",
+        ],
+    );
+}
+
+/// Under `ulimit -s 64` (a 64 KiB stack for the main thread) every command overflowed its
+/// stack (exit code 134), `--help` too. The work runs on threads whose stacks raylab sets:
+/// the commands finish, and the window gets as far as looking for a display. The threads
+/// rayon and std would size from `RUST_MIN_STACK` are given their size too.
+#[cfg(unix)]
+#[test]
+fn a_small_stack_limit_is_no_overflow() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str], env: &[(&str, &str)]| {
+        let mut command = std::process::Command::new("sh");
+        command
+            .arg("-c")
+            .arg("ulimit -s 64; exec \"$0\" \"$@\"")
+            .arg(env!("CARGO_BIN_EXE_raylab"))
+            .args(args)
+            .current_dir(dir.path())
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY");
+        for (k, v) in env {
+            command.env(k, v);
+        }
+        command.output().unwrap()
+    };
+    let side = ["--width", "16", "--height", "16"];
+    for args in [
+        &["--help"][..],
+        &[&["render", "--out", "a.png"][..], &side].concat(),
+        &[
+            &[
+                "render",
+                "--stage",
+                "path",
+                "--samples",
+                "2",
+                "--out",
+                "b.png",
+            ][..],
+            &side,
+        ]
+        .concat(),
+        &[&["inspect", "--pixel", "3,4"][..], &side].concat(),
+        &["check", "a.png"],
+    ] {
+        let out = run(args, &[]);
+        assert!(
+            out.status.success(),
+            "{args:?}: {:?} {}",
+            out.status,
+            stderr(&out)
+        );
+        let out = run(args, &[("RUST_MIN_STACK", "16384")]);
+        assert!(
+            out.status.success(),
+            "RUST_MIN_STACK {args:?}: {:?} {}",
+            out.status,
+            stderr(&out)
+        );
+    }
+    // No display: the window's own error, not an overflow nor a panic.
+    let out = run(&[], &[]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("could not open the workbench window"), "{err}");
+}
+
 /// Scene-file arrays take exactly their length on the command line too: a fourth number in the
 /// camera's position is refused, naming the line.
 #[test]
@@ -1220,7 +1510,7 @@ fn a_full_stderr_or_stdout_is_no_panic() {
     assert_eq!(run(&["--help"], null(), null()).code(), Some(0));
 }
 
-/// `RAYON_NUM_THREADS` above the cap `--threads` has is capped, with a warning; a usable one is
+/// `RAYON_NUM_THREADS` above four threads a core is capped, with a warning; a usable one is
 /// taken as it is. `RAYLAB_ISA` naming no kernel set is warned of once, naming those accepted.
 #[test]
 fn thread_counts_and_kernel_names_from_the_environment() {
@@ -1233,13 +1523,21 @@ fn thread_counts_and_kernel_names_from_the_environment() {
             .output()
             .unwrap()
     };
+    // 2000 on a machine of a few cores started 1,024 threads, and a 64² render took seconds:
+    // at most four a core.
+    let cores = std::thread::available_parallelism().unwrap().get();
+    let cap = raylab_core::progressive::THREADS_PER_CORE * cores;
     let out = run("RAYON_NUM_THREADS", "2000");
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(
         stderr(&out),
-        "warning: RAYON_NUM_THREADS=2000 is more than 1024 threads: using 1024\n"
+        format!(
+            "warning: RAYON_NUM_THREADS=2000 is more than 4 threads a core: using {cap} ({cores} \
+             core{})\n",
+            if cores == 1 { "" } else { "s" }
+        )
     );
-    assert!(String::from_utf8_lossy(&out.stdout).contains(" on 1024 threads "));
+    assert!(String::from_utf8_lossy(&out.stdout).contains(&format!(" on {cap} threads ")));
     let out = run("RAYON_NUM_THREADS", "3");
     assert_eq!(stderr(&out), "");
     assert!(String::from_utf8_lossy(&out.stdout).contains(" on 3 threads "));

@@ -273,6 +273,7 @@ impl Compare {
         let repaint = ctx.clone();
         let spawned = std::thread::Builder::new()
             .name("raylab-difference".to_owned())
+            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 // A panic is sent as its message: the difference view says what went wrong
                 // rather than that the thread stopped.

@@ -75,9 +75,11 @@ pub fn scene_path(path: &Path) -> Result<PathBuf, String> {
 }
 
 /// Writes the settings as a scene file at `path` ([`scene_path`]). A file already there is
-/// replaced only when `replace` says so (the Save dialog asked); otherwise the scene goes to
-/// the first free name `NAME-1.toml`, `NAME-2.toml`, … as the command line's `--save-scene`
-/// does, and nothing is lost. Returns the path written.
+/// replaced only when `replace` says so (the Save dialog asked), and never when the scene
+/// reads it (a model or a map whose name ends in `.toml`; the scene file it was opened from is
+/// not one, and is saved over as any Save does); otherwise the scene goes to the first free
+/// name `NAME-1.toml`, `NAME-2.toml`, … as the command line's `--save-scene` does, and nothing
+/// is lost. Returns the path written.
 pub fn save_scene(
     settings: &RenderSettings,
     path: &Path,
@@ -85,6 +87,8 @@ pub fn save_scene(
 ) -> Result<PathBuf, String> {
     let path = scene_path(path)?;
     if replace {
+        let files = settings.scene.files_read();
+        raylab_core::inputs::refuse_output_onto("not saved:", &path, "the scene", &files)?;
         raylab_core::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
         return Ok(path);
     }
@@ -359,5 +363,28 @@ mod tests {
             Opened::Settings(loaded) => assert_eq!(loaded.settings.seed, 9),
             other => panic!("{other:?}"),
         }
+    }
+
+    /// Save over a file is refused when the scene reads that file: a model whose name ends in
+    /// `.toml` is kept, and saving over the scene file itself still replaces it.
+    #[test]
+    fn saving_never_replaces_a_file_the_scene_reads() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("model.toml");
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        std::fs::write(&model, obj).unwrap();
+        let mut settings = RenderSettings::default();
+        settings.scene = raylab_core::scene::SceneChoice::Obj(model.clone());
+        let e = save_scene(&settings, &model, true).unwrap_err();
+        assert!(e.starts_with("not saved: "), "{e}");
+        assert!(e.contains("(a model: "), "{e}");
+        assert_eq!(std::fs::read_to_string(&model).unwrap(), obj);
+        let scene = dir.path().join("scene.toml");
+        std::fs::write(&scene, "# the scene file opened\n").unwrap();
+        assert_eq!(save_scene(&settings, &scene, true).unwrap(), scene);
+        assert_ne!(
+            std::fs::read_to_string(&scene).unwrap(),
+            "# the scene file opened\n"
+        );
     }
 }

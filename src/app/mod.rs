@@ -309,6 +309,15 @@ pub fn run() -> anyhow::Result<()> {
             .with_inner_size([1180.0, 760.0])
             .with_min_inner_size([480.0, 320.0]),
         persistence_path,
+        // `main` runs the program on a thread of its own, with a stack raylab sets: winit is
+        // told the window's event loop may run there.
+        #[cfg(target_os = "linux")]
+        event_loop_builder: Some(Box::new(|builder| {
+            use winit::platform::wayland::EventLoopBuilderExtWayland;
+            use winit::platform::x11::EventLoopBuilderExtX11;
+            EventLoopBuilderExtX11::with_any_thread(builder, true);
+            EventLoopBuilderExtWayland::with_any_thread(builder, true);
+        })),
         ..Default::default()
     };
     eframe::run_native(
@@ -495,6 +504,7 @@ impl WorkbenchApp {
         let inject_panic = std::mem::take(&mut self.inject_loader_panic);
         let spawned = std::thread::Builder::new()
             .name("raylab-scene-loader".to_owned())
+            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 let cancelled = || job_cancel.load(std::sync::atomic::Ordering::SeqCst);
                 let report = |what: &str| {
@@ -1287,6 +1297,7 @@ impl WorkbenchApp {
         let repaint = ctx.clone();
         let spawned = std::thread::Builder::new()
             .name("raylab-screenshot".to_owned())
+            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 let result = screenshot::save(&request).map_err(|e| format!("{e:#}"));
                 let _ = sender.send(result);

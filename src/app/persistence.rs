@@ -173,8 +173,8 @@ pub fn state_file(folder: Option<&std::path::Path>) -> (Option<PathBuf>, Option<
         Ok(m) if !m.is_file() => Err("it is not a regular file".to_owned()),
         Ok(m) if m.len() > MAX_STATE_BYTES => Err(format!(
             "it is {}, more than the {} saved settings may be",
-            raylab_core::memory::format_bytes(m.len()),
-            raylab_core::memory::format_bytes(MAX_STATE_BYTES)
+            raylab_core::inputs::exact_size(m.len()),
+            raylab_core::inputs::exact_size(MAX_STATE_BYTES)
         )),
         Ok(_) => Ok(()),
     };

@@ -260,10 +260,21 @@ pub fn check_file_destination(path: &Path) -> Result<(), SaveError> {
     Ok(())
 }
 
+/// The longest file name the temporary files are given, in bytes: the limit of Linux's file
+/// systems and macOS's (`NAME_MAX`), whatever the name of the file they become.
+const MAX_NAME_BYTES: usize = 255;
+
+/// The random part of a temporary file's name: `XXXXXX`.
+const RANDOM_CHARS: usize = 6;
+
 /// A new, empty file in `path`'s folder named `.NAME.XXXXXX{suffix}` (`XXXXXX` random),
 /// created exclusively: never through a symbolic link, never an existing file. It is removed
 /// when dropped unless persisted. Its permissions are those `File::create` gives (0666 less
 /// the umask), so the file it becomes is like any other the user writes.
+///
+/// `NAME` is cut short, at a character's end, where the whole would pass [`MAX_NAME_BYTES`]:
+/// a destination's name may take all 255 bytes. The name stays unique by its random part and
+/// the file stays in the destination's folder, so the rename into place is still atomic.
 fn temporary_beside(path: &Path, suffix: &str) -> io::Result<tempfile::NamedTempFile> {
     let name = path
         .file_name()
@@ -272,17 +283,46 @@ fn temporary_beside(path: &Path, suffix: &str) -> io::Result<tempfile::NamedTemp
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
     };
+    let room = MAX_NAME_BYTES - ".".len() - ".".len() - RANDOM_CHARS - suffix.len();
     let mut prefix = std::ffi::OsString::from(".");
-    prefix.push(name);
+    prefix.push(name_cut_to(name, room));
     prefix.push(".");
     let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(suffix);
+    builder
+        .prefix(&prefix)
+        .rand_bytes(RANDOM_CHARS)
+        .suffix(suffix);
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt as _;
         builder.permissions(fs::Permissions::from_mode(0o666));
     }
     builder.tempfile_in(folder)
+}
+
+/// `name`'s first `bytes` bytes at most, ending where a character ends when it is UTF-8.
+fn name_cut_to(name: &std::ffi::OsStr, bytes: usize) -> std::ffi::OsString {
+    let whole = name.as_encoded_bytes();
+    if whole.len() <= bytes {
+        return name.to_owned();
+    }
+    let end = match name.to_str() {
+        Some(text) => text.floor_char_boundary(bytes),
+        None => bytes,
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt as _;
+        std::ffi::OsStr::from_bytes(&whole[..end]).to_owned()
+    }
+    #[cfg(not(unix))]
+    {
+        // Elsewhere names are Unicode: a name that is not is left as it is.
+        match name.to_str() {
+            Some(text) => text[..end].into(),
+            None => name.to_owned(),
+        }
+    }
 }
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it to `path`.
@@ -992,6 +1032,35 @@ mod tests {
         assert_eq!(back, want);
         // Only the two images: no temporary file is left.
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    /// A destination whose name takes all 255 bytes a name may have gets a temporary file
+    /// whose name fits too (its own name cut short at a character's end), and is written.
+    #[test]
+    fn the_temporary_name_fits_whatever_the_destinations_length() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in [
+            format!("{}.png", "a".repeat(251)),
+            format!("{}.png", "é".repeat(125)),
+            "x.png".to_owned(),
+        ] {
+            let out = dir.path().join(&name);
+            for suffix in [".tmp", ".check"] {
+                let tmp = temporary_beside(&out, suffix).unwrap();
+                let made = tmp.path().file_name().unwrap().to_str().unwrap().to_owned();
+                assert!(made.len() <= MAX_NAME_BYTES, "{} bytes", made.len());
+                assert!(made.ends_with(suffix), "{made}");
+                let kept = made.trim_start_matches('.').split('.').next().unwrap();
+                assert!(name.starts_with(kept), "{made}");
+            }
+            write_atomically(&out, b"image").unwrap();
+            assert_eq!(fs::read(&out).unwrap(), b"image");
+        }
+        assert_eq!(
+            fs::read_dir(dir.path()).unwrap().count(),
+            3,
+            "no temporary file left"
+        );
     }
 
     /// The temporary file an image is written to has a random name, made afresh for each

@@ -10,7 +10,7 @@
 
 use std::fs::File;
 use std::io::Read as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::memory::format_bytes;
 
@@ -57,12 +57,21 @@ pub fn open_regular(path: &Path) -> Result<(File, u64), String> {
     Ok((file, metadata.len()))
 }
 
-/// A size in words: bytes below a KiB, else as [`format_bytes`] gives it.
-fn size_of(bytes: u64) -> String {
+/// A size for a refusal, exact: `900 bytes`, or `4,195,204 bytes (4 MiB)` from a KiB on (the
+/// rounded size alone would call a file a few bytes over a cap the cap's size).
+pub fn exact_size(bytes: u64) -> String {
+    let digits = bytes.to_string();
+    let mut grouped = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, digit) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            grouped.push(',');
+        }
+        grouped.push(digit);
+    }
     if bytes < 1024 {
-        format!("{bytes} bytes")
+        format!("{grouped} bytes")
     } else {
-        format_bytes(bytes)
+        format!("{grouped} bytes ({})", format_bytes(bytes))
     }
 }
 
@@ -109,11 +118,11 @@ pub fn read_open(
     let too_large = |size: &str| {
         format!(
             "it is {size}, more than the {} {what} may be",
-            size_of(limit)
+            exact_size(limit)
         )
     };
     if len > limit {
-        return Err(too_large(&size_of(len)));
+        return Err(too_large(&exact_size(len)));
     }
     let mut bytes = Vec::new();
     bytes.try_reserve_exact(len as usize).map_err(|_| {
@@ -130,6 +139,73 @@ pub fn read_open(
         return Err(too_large("growing"));
     }
     Ok(bytes)
+}
+
+/// A file a render or a check reads, and what it is to it ("a model", "the image to check"):
+/// what no output of theirs may replace ([`refuse_output_onto`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Input {
+    pub path: PathBuf,
+    pub what: &'static str,
+}
+
+impl Input {
+    pub fn new(path: &Path, what: &'static str) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            what,
+        }
+    }
+}
+
+/// Whether `a` and `b` name one file: the same device and inode (symbolic links followed, so
+/// a link and its target, and two hard links, are one file) when both exist; otherwise the
+/// same entry of the same folder, each folder resolved (`./x.png` and `sub/../x.png` are one).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt as _;
+            return x.dev() == y.dev() && x.ino() == y.ino();
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = (x, y);
+            return std::fs::canonicalize(a).ok() == std::fs::canonicalize(b).ok();
+        }
+    }
+    let entry = |p: &Path| -> Option<PathBuf> {
+        let folder = match p.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        Some(std::fs::canonicalize(folder).ok()?.join(p.file_name()?))
+    };
+    match (entry(a), entry(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// Refuses to write `output` (given as `option`: `--out`) where it would replace, or write
+/// through, one of `inputs` ([`same_file`]): `reader` ("the render") would destroy a file it
+/// reads. The error names the option, the file and what it is.
+pub fn refuse_output_onto(
+    option: &str,
+    output: &Path,
+    reader: &str,
+    inputs: &[Input],
+) -> Result<(), String> {
+    match inputs.iter().find(|input| same_file(output, &input.path)) {
+        None => Ok(()),
+        Some(input) => Err(format!(
+            "{option} '{}' is a file {reader} reads ({}: '{}'); writing there would replace it, \
+             so choose another name",
+            output.display(),
+            input.what,
+            input.path.display()
+        )),
+    }
 }
 
 /// Makes a FIFO at `path`, for tests of what refuses one.
@@ -191,6 +267,17 @@ mod tests {
             read_capped(&file, 4, "a test file").unwrap_err(),
             "it is 5 bytes, more than the 4 bytes a test file may be"
         );
+        // A few bytes over a cap of MiBs: the exact sizes, not "4 MiB, more than the 4 MiB".
+        let over = dir.path().join("over.toml");
+        std::fs::write(&over, vec![b'#'; (4 << 20) + 900]).unwrap();
+        assert_eq!(
+            read_capped(&over, MAX_SCENE_FILE_BYTES, "a scene file").unwrap_err(),
+            "it is 4,195,204 bytes (4 MiB), more than the 4,194,304 bytes (4 MiB) a scene \
+             file may be"
+        );
+        assert_eq!(exact_size(1023), "1,023 bytes");
+        assert_eq!(exact_size(1024), "1,024 bytes (1 KiB)");
+        assert_eq!(exact_size(123_456_789), "123,456,789 bytes (118 MiB)");
         assert_eq!(
             read_capped(dir.path(), 4, "x").unwrap_err(),
             "it is not a regular file (a folder)"

@@ -25,6 +25,17 @@ use std::thread::LocalKey;
 /// One gibibyte, the unit sizes are given in.
 pub const GIB: u64 = 1 << 30;
 
+/// The stack of each worker thread raylab starts (the render pools', the render controller's,
+/// the window's loaders): set here rather than left to `RUST_MIN_STACK`, which std's and
+/// rayon's threads otherwise take it from. A render's rows need under 512 KiB
+/// (`render::tests::a_tall_image_fits_in_a_small_stack`).
+pub const WORKER_STACK_BYTES: usize = 4 << 20;
+
+/// The stack of the thread the command line and the window run on: what Linux gives a first
+/// thread by default, set here rather than taken from `ulimit -s` (a debug build's argument
+/// parsing alone needs more than 64 KiB).
+pub const MAIN_STACK_BYTES: usize = 8 << 20;
+
 /// What the process can still get, and the limit that says so.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Available {

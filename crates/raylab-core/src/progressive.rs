@@ -321,6 +321,7 @@ impl Controller {
         let worker_shared = Arc::clone(&shared);
         let worker = std::thread::Builder::new()
             .name("raylab-progressive".to_owned())
+            .stack_size(crate::memory::WORKER_STACK_BYTES)
             .spawn(move || Worker::new(worker_shared, receiver, pool).run())
             .map_err(|e| ControllerError::Spawn(e.to_string()))?;
         Ok(Self {
@@ -521,16 +522,22 @@ fn resolve_threads(threads: usize) -> usize {
 /// any machine's cores, and few enough that starting them is quick.
 pub const MAX_THREADS: usize = 1024;
 
+/// The most threads a core `RAYON_NUM_THREADS` may ask for. More only wait for a core, and
+/// starting a thousand of them costs more than a small render (an explicit `--threads` is
+/// taken up to [`MAX_THREADS`]).
+pub const THREADS_PER_CORE: usize = 4;
+
 /// The render threads when none are asked for: `RAYON_NUM_THREADS` if it is set to a number
-/// (at most [`MAX_THREADS`]), else one per core. Every pool raylab builds is given its count
-/// explicitly, so rayon's own reading of `RAYON_NUM_THREADS`, which has no cap, never applies.
+/// (at most [`THREADS_PER_CORE`] a core), else one per core. Every pool raylab builds is given
+/// its count explicitly, so rayon's own reading of `RAYON_NUM_THREADS`, which has no cap,
+/// never applies.
 pub fn default_threads() -> usize {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     threads_from(std::env::var("RAYON_NUM_THREADS").ok().as_deref(), cores).0
 }
 
 /// What `RAYON_NUM_THREADS` set to something unusable makes of [`default_threads`], for a
-/// warning: `None` when it is unset or a number from 1 to [`MAX_THREADS`].
+/// warning: `None` when it is unset or a number from 1 to [`THREADS_PER_CORE`] a core.
 pub fn default_threads_note() -> Option<String> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     threads_from(std::env::var("RAYON_NUM_THREADS").ok().as_deref(), cores).1
@@ -540,18 +547,21 @@ pub fn default_threads_note() -> Option<String> {
 /// the value was not used as it stands.
 fn threads_from(variable: Option<&str>, cores: usize) -> (usize, Option<String>) {
     let cores = cores.clamp(1, MAX_THREADS);
+    let cap = (THREADS_PER_CORE * cores).min(MAX_THREADS);
     let Some(text) = variable else {
         return (cores, None);
     };
     match text.trim().parse::<u128>() {
         // rayon's own meaning of 0: one per core.
         Ok(0) => (cores, None),
-        Ok(n) if n <= MAX_THREADS as u128 => (n as usize, None),
+        Ok(n) if n <= cap as u128 => (n as usize, None),
         Ok(_) => (
-            MAX_THREADS,
+            cap,
             Some(format!(
-                "RAYON_NUM_THREADS={} is more than {MAX_THREADS} threads: using {MAX_THREADS}",
-                text.trim()
+                "RAYON_NUM_THREADS={} is more than {THREADS_PER_CORE} threads a core: using \
+                 {cap} ({cores} core{})",
+                text.trim(),
+                if cores == 1 { "" } else { "s" }
             )),
         ),
         Err(_) => (
@@ -568,6 +578,7 @@ fn build_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("raylab-render-{i}"))
+        .stack_size(crate::memory::WORKER_STACK_BYTES)
         .build()
         .map_err(|e| e.to_string())
 }
@@ -1610,29 +1621,35 @@ mod tests {
         assert_eq!(controller.passes_traced(), passes);
     }
 
-    /// `RAYON_NUM_THREADS` gives the default thread count up to the cap that `--threads` has;
-    /// beyond it, or unreadable, it is not used as it stands, and a note says so.
+    /// `RAYON_NUM_THREADS` gives the default thread count up to four a core; beyond it, or
+    /// unreadable, it is not used as it stands, and a note says so. An explicit count is
+    /// taken up to [`MAX_THREADS`].
     #[test]
     fn the_thread_count_from_the_environment_is_capped() {
         assert_eq!(threads_from(None, 2), (2, None));
         assert_eq!(threads_from(Some("3"), 2), (3, None));
         assert_eq!(threads_from(Some("0"), 2), (2, None));
-        assert_eq!(threads_from(Some("1024"), 2), (1024, None));
+        assert_eq!(threads_from(Some("8"), 2), (8, None));
         let (n, note) = threads_from(Some("2000"), 2);
-        assert_eq!(n, MAX_THREADS);
+        assert_eq!(n, 8);
         assert_eq!(
             note.unwrap(),
-            "RAYON_NUM_THREADS=2000 is more than 1024 threads: using 1024"
+            "RAYON_NUM_THREADS=2000 is more than 4 threads a core: using 8 (2 cores)"
+        );
+        let (n, note) = threads_from(Some("9"), 1);
+        assert_eq!(n, 4);
+        assert_eq!(
+            note.unwrap(),
+            "RAYON_NUM_THREADS=9 is more than 4 threads a core: using 4 (1 core)"
         );
         let (n, note) = threads_from(Some("lots"), 4);
         assert_eq!(n, 4);
         assert!(note.unwrap().contains("\"lots\" is not a number"));
-        assert_eq!(
-            threads_from(Some("99999999999999999999999"), 2).0,
-            MAX_THREADS
-        );
+        assert_eq!(threads_from(Some("99999999999999999999999"), 2).0, 8);
+        assert_eq!(threads_from(Some("5000"), 300).0, MAX_THREADS);
         assert_eq!(threads_from(None, 5000).0, MAX_THREADS);
         assert_eq!(resolve_threads(100_000), MAX_THREADS);
+        assert_eq!(resolve_threads(100), 100);
     }
 
     #[test]

@@ -16,7 +16,6 @@ use std::io::{BufRead, Read, Seek};
 use std::path::{Path, PathBuf};
 
 use crate::inputs::{self, MAX_SCENE_FILE_BYTES, MAX_SETTINGS_TEXT_BYTES};
-use crate::memory::format_bytes;
 use crate::settings::RenderSettings;
 pub use crate::settings::{Loaded, from_json};
 
@@ -165,8 +164,8 @@ pub fn png_text(mut png: impl Read + Seek, keyword: &str) -> Result<Option<Strin
                 if length > MAX_SETTINGS_TEXT_BYTES {
                     return Err(format!(
                         "its {keyword} chunk is {}, more than the {} settings may be",
-                        format_bytes(length),
-                        format_bytes(MAX_SETTINGS_TEXT_BYTES)
+                        inputs::exact_size(length),
+                        inputs::exact_size(MAX_SETTINGS_TEXT_BYTES)
                     ));
                 }
                 let mut data = head;
@@ -207,7 +206,7 @@ fn text_chunk(kind: &[u8; 4], rest: &[u8]) -> Result<String, String> {
         fdeflate::decompress_to_vec_bounded(data, limit).map_err(|e| match e {
             fdeflate::BoundedDecompressionError::OutputTooLarge { .. } => format!(
                 "inflates to more than the {} settings may be",
-                format_bytes(MAX_SETTINGS_TEXT_BYTES)
+                inputs::exact_size(MAX_SETTINGS_TEXT_BYTES)
             ),
             fdeflate::BoundedDecompressionError::DecompressionError { .. } => {
                 "is compressed but does not inflate (its data is damaged)".to_owned()
@@ -370,14 +369,18 @@ mod tests {
         assert!(png.len() < 64 << 10, "{} bytes", png.len());
         assert_eq!(
             text_of(&png).unwrap_err(),
-            "its raylab-settings text (iTXt) inflates to more than the 1 MiB settings may be"
+            "its raylab-settings text (iTXt) inflates to more than the 1,048,576 bytes (1 MiB) settings may be"
         );
         let big = png_with(|w| {
             w.write_text_chunk(&itxt(&" ".repeat(2 << 20), false))
                 .unwrap();
             w.write_image_data(&DATA).unwrap();
         });
-        assert!(text_of(&big).unwrap_err().contains("more than the 1 MiB"));
+        assert!(
+            text_of(&big)
+                .unwrap_err()
+                .contains("more than the 1,048,576 bytes (1 MiB)")
+        );
         // Other text chunks of any size are skipped over.
         let other = png_with(|w| {
             let chunk = png::text_metadata::ITXtChunk::new("Comment", " ".repeat(2 << 20));

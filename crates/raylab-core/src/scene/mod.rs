@@ -455,6 +455,11 @@ impl SceneChoice {
         self.spec().memory_estimate()
     }
 
+    /// The files loading the scene reads ([`SceneSpec::files_read`]).
+    pub fn files_read(&self) -> Vec<crate::inputs::Input> {
+        self.spec().files_read()
+    }
+
     /// Builds the scene and its acceleration structure (on the current rayon pool).
     pub fn load(&self) -> Result<Scene, SceneError> {
         self.load_with_warnings().map(|(scene, _)| scene)

@@ -24,7 +24,7 @@ use rayon::prelude::*;
 
 use super::{Material, Scene, SceneError};
 use crate::geometry::Triangle;
-use crate::inputs::{self, MAX_MTL_BYTES, MAX_OBJ_BYTES};
+use crate::inputs::{self, Input, MAX_MTL_BYTES, MAX_OBJ_BYTES};
 use crate::relief::{NormalMap, Relief};
 use crate::texture::{Decoding, Texture, TextureError, TextureImage};
 
@@ -395,24 +395,106 @@ pub const OBJ_BYTES_FACTOR: u64 = 8;
 /// 0 for a file that cannot be read or is too large to be: loading it fails anyway. The OBJ
 /// file is read through once, looking only at its `mtllib` lines.
 pub fn memory_estimate(path: &Path) -> u64 {
-    let Ok((file, len)) = inputs::open_regular(path) else {
+    let Some(named) = named_by(path) else {
         return 0;
     };
-    if len > MAX_OBJ_BYTES {
-        return 0;
+    let mut total = OBJ_BYTES_FACTOR * named.obj_bytes;
+    for library in &named.libraries {
+        if let Some((bytes, materials)) = library.read {
+            total += library_bytes(bytes, materials);
+        }
     }
-    let folder = path.parent().unwrap_or(Path::new(""));
-    let mut total = OBJ_BYTES_FACTOR * len;
     let mut largest_texture = 0;
     let mut largest_normal_map = 0;
-    let mut textures = std::collections::HashSet::new();
+    for (texture, normal) in &named.textures {
+        if let Some((w, h)) = TextureImage::dimensions(texture) {
+            let file = std::fs::metadata(texture).map_or(0, |m| m.len());
+            let bytes = TextureImage::decoding_bytes(w, h) + file;
+            let largest = if *normal {
+                &mut largest_normal_map
+            } else {
+                &mut largest_texture
+            };
+            *largest = (*largest).max(bytes);
+        }
+    }
+    total + largest_texture + largest_normal_map
+}
+
+/// The files an OBJ file reads beside itself — its material libraries and the textures and
+/// normal maps they name — with the file itself first, as [`Input`]s: what no output of a
+/// render of it may replace. Read as [`memory_estimate`] reads them, without loading anything;
+/// a library that cannot be read is listed all the same (it is the user's file).
+pub fn files_read(path: &Path) -> Vec<Input> {
+    let mut files = vec![Input::new(path, "a model")];
+    if let Some(named) = named_by(path) {
+        files.extend(
+            named
+                .libraries
+                .into_iter()
+                .map(|l| Input::new(&l.path, "a material library")),
+        );
+        files.extend(named.textures.into_iter().map(|(texture, normal)| {
+            Input::new(
+                &texture,
+                if normal {
+                    "a normal map of a model"
+                } else {
+                    "a texture of a model"
+                },
+            )
+        }));
+    }
+    files
+}
+
+/// What an OBJ file names beside itself, read from its `mtllib` lines and its libraries' map
+/// statements.
+struct Named {
+    /// The OBJ file's length.
+    obj_bytes: u64,
+    /// Each library its `mtllib` lines name, once.
+    libraries: Vec<NamedLibrary>,
+    /// Each texture (`false`) and normal map (`true`) the libraries name, once.
+    textures: Vec<(PathBuf, bool)>,
+}
+
+struct NamedLibrary {
+    path: PathBuf,
+    /// Its length and material count, if it could be read.
+    read: Option<(u64, u64)>,
+}
+
+/// [`Named`] for the OBJ file at `path`; `None` for a file that cannot be read or is too
+/// large to be. The OBJ file is read through once, looking only at its `mtllib` lines; a
+/// texture's name is taken relative to the library that names it.
+fn named_by(path: &Path) -> Option<Named> {
+    let (file, len) = inputs::open_regular(path).ok()?;
+    if len > MAX_OBJ_BYTES {
+        return None;
+    }
+    let folder = path.parent().unwrap_or(Path::new(""));
+    let mut named = Named {
+        obj_bytes: len,
+        libraries: Vec::new(),
+        textures: Vec::new(),
+    };
+    let mut seen = std::collections::HashSet::new();
     let libraries = library_names(std::io::BufReader::new(file)).unwrap_or_default();
     for library in libraries {
-        let Ok(bytes) = inputs::read_capped(&folder.join(&library), MAX_MTL_BYTES, "") else {
+        let library_path = folder.join(&library);
+        let Ok(bytes) = inputs::read_capped(&library_path, MAX_MTL_BYTES, "") else {
+            named.libraries.push(NamedLibrary {
+                path: library_path,
+                read: None,
+            });
             continue;
         };
         let (materials, names, normal_names) = scan_library(&bytes);
-        total += library_bytes(bytes.len() as u64, materials);
+        named.libraries.push(NamedLibrary {
+            path: library_path,
+            read: Some((bytes.len() as u64, materials)),
+        });
         let beside = Path::new(&library).parent().unwrap_or(Path::new(""));
         for (name, normal) in names
             .into_iter()
@@ -420,22 +502,12 @@ pub fn memory_estimate(path: &Path) -> u64 {
             .chain(normal_names.into_iter().map(|n| (n, true)))
         {
             let texture = folder.join(beside).join(name);
-            if !textures.insert((texture.clone(), normal)) {
-                continue;
-            }
-            if let Some((w, h)) = TextureImage::dimensions(&texture) {
-                let file = std::fs::metadata(&texture).map_or(0, |m| m.len());
-                let bytes = TextureImage::decoding_bytes(w, h) + file;
-                let largest = if normal {
-                    &mut largest_normal_map
-                } else {
-                    &mut largest_texture
-                };
-                *largest = (*largest).max(bytes);
+            if seen.insert((texture.clone(), normal)) {
+                named.textures.push((texture, normal));
             }
         }
     }
-    total + largest_texture + largest_normal_map
+    Some(named)
 }
 
 /// The memory a material library of `bytes` bytes and `materials` materials takes loaded: each

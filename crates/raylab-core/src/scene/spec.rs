@@ -12,6 +12,7 @@ use super::obj::{self, Mesh, Placement};
 use super::terrain::{self, TerrainSpec};
 use super::water::{self, WaterSpec};
 use super::{Material, MaterialKind, Scene, SceneError, cornell_box};
+use crate::inputs::Input;
 use crate::invalid::SettingsError;
 use crate::relief::{Decoding, HeightMap, NormalMap, Relief};
 use crate::texture::TextureImage;
@@ -173,6 +174,13 @@ impl ReliefSpec {
             ));
         }
         Ok(())
+    }
+
+    /// The maps' files, each with what it is (`normal`, `height`).
+    fn files_read(&self, normal: &'static str, height: &'static str) -> Vec<Input> {
+        let normal = self.normal_map.iter().map(|f| Input::new(f, normal));
+        let height = self.height_map.iter().map(|f| Input::new(f, height));
+        normal.chain(height).collect()
     }
 
     /// The memory decoding the maps takes, as their headers give their sizes (0 for a file
@@ -484,6 +492,30 @@ impl SceneSpec {
             (320u64 << 20) * u64::from(t.grid).pow(2) / default
         });
         models + surfaces + terrain
+    }
+
+    /// The files building the scene reads: each model's OBJ file with its material libraries
+    /// and their textures ([`obj::files_read`]), and every normal and height map a model or a
+    /// part of the box is given. What no output may replace
+    /// ([`crate::inputs::refuse_output_onto`]).
+    pub fn files_read(&self) -> Vec<Input> {
+        let mut files = Vec::new();
+        for m in &self.models {
+            if m.built_in().is_none() {
+                files.extend(obj::files_read(&m.file));
+            }
+            files.extend(
+                m.relief
+                    .files_read("a normal map of a model", "a height map of a model"),
+            );
+        }
+        for s in &self.surfaces {
+            files.extend(
+                s.relief
+                    .files_read("a normal map of the box", "a height map of the box"),
+            );
+        }
+        files
     }
 
     /// Builds the scene and its acceleration structure (on the current rayon pool), with a
