@@ -7,7 +7,8 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use raylab_core::render::render;
-use raylab_core::scene::obj::{Placement, model_in_box, parse_obj};
+use raylab_core::scene::obj::{Placement, parse_obj};
+use raylab_core::scene::spec::model_in_box;
 use raylab_core::scene::{Scene, cornell_box};
 use raylab_core::view::render_view;
 use raylab_core::{RenderSettings, Shading, Stage};
