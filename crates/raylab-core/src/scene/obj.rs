@@ -1098,7 +1098,7 @@ pub fn builtin(text: &str, name: &str) -> Result<Mesh, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::SceneChoice;
+    use crate::scene::{Scene, SceneChoice};
     use crate::scene::spec::{builtin_textured, model_in_box, obj_scene, obj_scene_with_warnings};
 
     #[test]
