@@ -465,7 +465,7 @@ impl Crate {
     /// through a name that module imports.
     fn target(&self, path: &[String], depth: usize) -> Module {
         let mut k = path.len();
-        while !self.modules.contains(&path[..k].to_vec()) {
+        while !self.modules.contains(&path[..k]) {
             k -= 1;
         }
         let module = path[..k].to_vec();

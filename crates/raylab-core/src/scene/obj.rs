@@ -1098,8 +1098,8 @@ pub fn builtin(text: &str, name: &str) -> Result<Mesh, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Scene, SceneChoice};
     use crate::scene::spec::{builtin_textured, model_in_box, obj_scene, obj_scene_with_warnings};
+    use crate::scene::{Scene, SceneChoice};
 
     #[test]
     fn the_built_in_models_load() {
