@@ -8,7 +8,8 @@ use std::sync::{Arc, OnceLock};
 
 use raylab_core::check::{self, Rgb8};
 use raylab_core::render::render;
-use raylab_core::scene::obj::{Placement, model_in_box, parse_obj};
+use raylab_core::scene::obj::{Placement, parse_obj};
+use raylab_core::scene::spec::model_in_box;
 use raylab_core::scene::{Scene, SceneChoice, cornell_box};
 use raylab_core::view::render_view;
 use raylab_core::{RenderSettings, Shading, Stage};

@@ -184,7 +184,7 @@ fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     text.push_str("f 1 2 4\nf 3 1 2\n");
     std::fs::write(&obj, &text).unwrap();
 
-    let (scene, warnings) = raylab_core::scene::obj::obj_scene_with_warnings(&obj).unwrap();
+    let (scene, warnings) = raylab_core::scene::spec::obj_scene_with_warnings(&obj).unwrap();
     // The box's 30 triangles and the one face.
     assert_eq!(
         scene.triangles.len(),

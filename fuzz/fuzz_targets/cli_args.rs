@@ -16,9 +16,14 @@ use std::os::unix::ffi::OsStringExt as _;
 use clap::Parser as _;
 use libfuzzer_sys::fuzz_target;
 
+// src/cli.rs is loaded as the binary loads it, as a file of the folder src/, so that its own
+// submodules (src/cli/*.rs) are found where they are.
 #[allow(dead_code)]
-#[path = "../../src/cli.rs"]
-mod cli;
+#[path = "../../src"]
+mod src {
+    pub mod cli;
+}
+use src::cli;
 
 use cli::{Cli, Command, RenderOptions};
 
@@ -30,6 +35,9 @@ fn start_workbench() -> anyhow::Result<()> {
 /// src/main.rs's signal handling, which src/cli.rs starts before a render; never called here.
 mod signals {
     pub fn remove_temporary_files_when_stopped() {
+        unreachable!("the fuzz target never runs a command")
+    }
+    pub fn unblock() {
         unreachable!("the fuzz target never runs a command")
     }
 }

@@ -106,7 +106,11 @@ fn degenerate(c: &mut Criterion) {
     group.bench_function("load_an_obj_of_a_million_copies", |b| {
         b.iter(|| {
             let mesh = obj::parse_obj(black_box(text.as_bytes()), std::path::Path::new("c.obj"));
-            obj::model_in_box(&mesh.unwrap(), &obj::Placement::FRONT_LEFT, "copies")
+            raylab_core::scene::spec::model_in_box(
+                &mesh.unwrap(),
+                &obj::Placement::FRONT_LEFT,
+                "copies",
+            )
         })
     });
     // A fan of 100,000 faces around the origin, each turned a little further.

@@ -355,10 +355,22 @@ pub fn write_atomically_with(
         write(&mut file)?;
         file.flush().map_err(wrap)?;
     }
+    pause_for_tests();
     tmp.as_file().sync_all().map_err(wrap)?;
     // On failure the temporary file comes back in the error, and is removed when dropped.
     tmp.persist(path).map_err(|e| wrap(e.error))?;
     Ok(())
+}
+
+/// Test hook: where the environment variable `RAYLAB_TEST_PAUSE_WRITE` names a file, a write
+/// stops once its bytes are in the temporary file, before the rename: it creates that file
+/// (the sign a test waits for) and sleeps for a minute. So `tests/interrupt.rs` stops a write
+/// in progress every time, not when a sleep happens to land in it.
+fn pause_for_tests() {
+    if let Some(sign) = std::env::var_os("RAYLAB_TEST_PAUSE_WRITE") {
+        let _ = fs::write(sign, b"");
+        std::thread::sleep(std::time::Duration::from_secs(60));
+    }
 }
 
 /// Writes `bytes` to a file that did not exist: at `path`, or, if something is there, at the

@@ -233,6 +233,10 @@ struct Shared {
     generation: AtomicU64,
     /// The newest published frame, until the UI takes it.
     slot: Mutex<Option<Frame>>,
+    /// Test hook: the worker waits for the frame in `slot` to be taken before it puts the
+    /// next one there ([`Controller::keep_every_frame`]); `taken` wakes it.
+    keep_every_frame: AtomicBool,
+    taken: Condvar,
     /// The newest generation the worker has finished (target reached), for [`Controller::wait_idle`].
     done: Mutex<u64>,
     done_changed: Condvar,
@@ -306,6 +310,8 @@ impl Controller {
         let shared = Arc::new(Shared {
             generation: AtomicU64::new(0),
             slot: Mutex::new(None),
+            keep_every_frame: AtomicBool::new(false),
+            taken: Condvar::new(),
             done: Mutex::new(0),
             done_changed: Condvar::new(),
             abandoned_jobs: AtomicU64::new(0),
@@ -428,11 +434,24 @@ impl Controller {
     /// The newest frame published since the last call, if any. Never waits: if the worker
     /// happens to hold the lock this instant, returns `None` (the worker's notify follows).
     pub fn take_frame(&self) -> Option<Frame> {
-        match self.shared.slot.try_lock() {
+        let frame = match self.shared.slot.try_lock() {
             Ok(mut slot) => slot.take(),
             Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner().take(),
             Err(std::sync::TryLockError::WouldBlock) => None,
+        };
+        if frame.is_some() {
+            self.shared.taken.notify_all();
         }
+        frame
+    }
+
+    /// Test hook: from now on the worker puts a frame in the slot only once the one before it
+    /// was taken ([`Controller::take_frame`]) or went stale, so a test taking frames sees every
+    /// frame a job publishes, however slowly it takes them. The window never sets it: the
+    /// renderer would wait for its repaints.
+    #[doc(hidden)]
+    pub fn keep_every_frame(&self) {
+        self.shared.keep_every_frame.store(true, Ordering::SeqCst);
     }
 
     /// A problem the worker met since the last call. Never waits (a held lock is tried again
@@ -1196,6 +1215,22 @@ impl Worker {
                 .slot
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner);
+            // With `keep_every_frame`, wait for the last frame to be taken. The wait is woken
+            // by `take_frame`, and ends within its timeout once a submission or the
+            // controller's drop made this frame stale.
+            while slot.is_some()
+                && self.shared.keep_every_frame.load(Ordering::SeqCst)
+                && self.shared.current() == frame.generation
+            {
+                slot = match self
+                    .shared
+                    .taken
+                    .wait_timeout(slot, Duration::from_millis(10))
+                {
+                    Ok((guard, _)) => guard,
+                    Err(p) => p.into_inner().0,
+                };
+            }
             // `submit` bumps the generation under this lock: checked here, no newer submission
             // can slip in before the frame is in place.
             if self.shared.current() != frame.generation {
@@ -1576,13 +1611,14 @@ mod tests {
     }
 
     /// With the denoiser on, a frame that doubles the samples (2, 4, 8, 16) shows the image
-    /// denoised from exactly those samples: the sixteenth pass's frame is `render_denoised`'s
-    /// image of 16 samples, bit for bit.
+    /// denoised from exactly those samples: each is `render_denoised`'s image of that many
+    /// samples, bit for bit. Every frame is kept for the test to take, so none is missed.
     #[test]
     fn each_doubling_of_the_samples_is_shown_denoised() {
         let scene = Arc::new(cornell_box());
         let controller = Controller::new(2, quiet()).unwrap();
         controller.set_denoise(true);
+        controller.keep_every_frame();
         let mut settings = small_path(96, 64, 20);
         let generation = controller.submit(&scene, &settings).unwrap();
         let frames = every_frame(&controller, generation);
@@ -1590,15 +1626,18 @@ mod tests {
             .iter()
             .filter(|f| !f.is_preview && [2, 4, 8, 16].contains(&f.samples))
             .collect();
-        // Taken as they come, a frame may be missed; most are not.
-        assert!(!doublings.is_empty(), "{} frames", frames.len());
+        let samples: Vec<u32> = doublings.iter().map(|f| f.samples).collect();
+        assert_eq!(samples, [2, 4, 8, 16], "{} frames", frames.len());
         for frame in doublings {
             assert_eq!(frame.denoised_samples, frame.samples);
-            if frame.samples == 16 {
-                settings.samples_per_pixel = 16;
-                let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
-                assert_eq!(frame.denoised.as_deref(), denoised.as_ref());
-            }
+            settings.samples_per_pixel = frame.samples;
+            let (_, denoised) = crate::denoise::render_denoised(&scene, &settings);
+            assert_eq!(
+                frame.denoised.as_deref(),
+                denoised.as_ref(),
+                "{} samples",
+                frame.samples
+            );
         }
     }
 

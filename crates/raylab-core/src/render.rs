@@ -764,14 +764,33 @@ mod tests {
         assert_eq!(images[0], images[2]);
     }
 
+    /// The address of a local of this call: how deep the calling thread's stack is, for
+    /// [`a_tall_image_fits_in_a_small_stack`].
+    #[inline(never)]
+    fn stack_address() -> usize {
+        let here = 0u8;
+        std::hint::black_box(&here) as *const u8 as usize
+    }
+
     /// Rows a job each nest rayon's splitting a level a halving (thirteen for 8,192 rows), a
     /// stack frame a level, and a thread waiting on a job runs others on its stack: a tall
     /// image on two threads with half a mebibyte of stack each traces every row, in a pass, a
-    /// film's pass and a render. (Built for release, with each level's frame holding room for
-    /// two row memories, 110 KB, the test overflowed its stack; the test build inlines less
-    /// and passed either way.)
+    /// film's pass and a render.
+    ///
+    /// Running out of stack depends on how the build inlines: a release build once kept room
+    /// for two row memories (110 KB) in each level's frame and overflowed here, where the test
+    /// build, inlining less, passed. So the depth is also measured, in any build: the stack
+    /// each row starts on (asked at every row's cancellation check, against the address its
+    /// thread started at) must be under a quarter of the stack, leaving three quarters to
+    /// the row's own tracing. That catches a level's frame growing (by a few kilobytes a
+    /// level, in the profile the test runs in), not the tracing's own depth, nor what only
+    /// another profile's inlining adds: that the release build's run of the test shows.
     #[test]
     fn a_tall_image_fits_in_a_small_stack() {
+        thread_local! {
+            static STARTED_AT: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+        }
+        const STACK: usize = 512 * 1024;
         let scene = cornell_box();
         let mut settings = small();
         settings.shading = crate::Shading::for_stage(crate::Stage::Path);
@@ -779,19 +798,36 @@ mod tests {
         settings.samples_per_pixel = 2;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
-            .stack_size(512 * 1024)
+            .stack_size(STACK)
+            .start_handler(|_| STARTED_AT.with(|s| s.set(stack_address())))
             .build()
             .unwrap();
+        let deepest = AtomicUsize::new(0);
+        let rows = AtomicUsize::new(0);
+        let measure = || {
+            let top = STARTED_AT.with(std::cell::Cell::get);
+            assert_ne!(top, 0, "a row traced outside the pool");
+            deepest.fetch_max(top - stack_address(), Ordering::Relaxed);
+            rows.fetch_add(1, Ordering::Relaxed);
+            false
+        };
         let (pass, film, image) = pool.install(|| {
-            let pass = render_pass(&scene, &settings, 0, &|| false).unwrap();
+            let pass = render_pass(&scene, &settings, 0, &measure).unwrap();
             let mut film = Film::new(2, 8192);
-            accumulate_pass(&scene, &settings, 0, &mut film, &|| false).unwrap();
+            accumulate_pass(&scene, &settings, 0, &mut film, &measure).unwrap();
             (pass, film, render(&scene, &settings))
         });
         assert_eq!(pass.pixels.len(), 2 * 8192);
         assert_eq!(film.resolve(), pass);
         assert!(image.pixels.iter().all(|p| p.is_finite()));
         assert!(image.pixels.iter().any(|p| p.max_element() > 0.0));
+        assert_eq!(rows.load(Ordering::Relaxed), 2 * 8192, "every row measured");
+        let deepest = deepest.load(Ordering::Relaxed);
+        eprintln!("rows start {deepest} bytes deep");
+        assert!(
+            deepest < STACK / 4,
+            "rows start {deepest} bytes deep in a stack of {STACK}"
+        );
     }
 
     #[test]

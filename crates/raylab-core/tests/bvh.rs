@@ -86,7 +86,7 @@ fn teapot_equals_brute_force_on_100k_rays() {
 #[test]
 fn small_terrain_equals_brute_force() {
     // The same generator as the full terrain, ~20,000 triangles.
-    let scene = terrain::terrain_scene(&terrain::TerrainSpec {
+    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 100,
         ..terrain::TerrainSpec::default()
     });
@@ -184,7 +184,7 @@ fn huge_coordinates() {
 
 #[test]
 fn wide_tree_over_many_small_triangles_is_shallow_and_fits_the_inline_stack() {
-    let scene = terrain::terrain_scene(&terrain::TerrainSpec {
+    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 100,
         ..terrain::TerrainSpec::default()
     });
@@ -210,7 +210,7 @@ fn wide_tree_over_many_small_triangles_is_shallow_and_fits_the_inline_stack() {
 fn trees_are_the_same_on_any_number_of_threads() {
     use raylab_core::accel::bvh::Bvh;
     use raylab_core::accel::wide::Bvh8Big;
-    let scene = terrain::terrain_scene(&terrain::TerrainSpec {
+    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 200,
         ..terrain::TerrainSpec::default()
     });

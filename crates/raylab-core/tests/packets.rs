@@ -149,7 +149,7 @@ fn cornell_default_view_equals_brute_force() {
 fn small_terrain_default_view_equals_brute_force() {
     // The full terrain's generator at 20,000 triangles (the brute-force loop over a million
     // triangles for every pixel would take hours).
-    let scene = terrain::terrain_scene(&terrain::TerrainSpec {
+    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 100,
         ..terrain::TerrainSpec::default()
     });

@@ -204,7 +204,7 @@ impl Cone {
     }
 
     /// Whether a ray of the batch may hit the triangle with corners `corners` and size `size`
-    /// (its longest edge along an axis, [`triangle_size`]); `false` only when all three
+    /// (its longest edge along an axis, [`super::wide::triangle_size`]); `false` only when all three
     /// corners lie beyond one side of the cone (or behind its apex) by more than δ and the
     /// margins. The readable form of the SIMD test ([`Cone::may_hit_lanes`]).
     pub fn may_hit(&self, corners: [Vec3; 3], size: f32) -> bool {
@@ -225,44 +225,6 @@ impl Cone {
     }
 }
 
-/// A triangle's size for [`Cone::may_hit`]: its longest edge extent along an axis.
-pub fn triangle_size(v0: Vec3, v1: Vec3, v2: Vec3) -> f32 {
-    (v1 - v0)
-        .abs()
-        .max_element()
-        .max((v2 - v0).abs().max_element())
-}
-
-/// The corners of up to sixteen triangles, structure of arrays (corner, axis, lane), and their
-/// sizes: what [`Cone::may_hit_lanes`] tests a lane at a time.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-pub struct Corners {
-    pub at: [[[f32; 16]; 3]; 3],
-    pub size: [f32; 16],
-}
-
-impl Corners {
-    /// The corners of `triangles` (at most sixteen); unused lanes repeat the last.
-    pub fn new(triangles: &[[Vec3; 3]]) -> Self {
-        debug_assert!(!triangles.is_empty() && triangles.len() <= 16);
-        let mut c = Corners {
-            at: [[[0.0; 16]; 3]; 3],
-            size: [0.0; 16],
-        };
-        for lane in 0..16 {
-            let t = triangles[lane.min(triangles.len() - 1)];
-            for (corner, v) in t.iter().enumerate() {
-                for axis in 0..3 {
-                    c.at[corner][axis][lane] = v[axis];
-                }
-            }
-            c.size[lane] = triangle_size(t[0], t[1], t[2]);
-        }
-        c
-    }
-}
-
 #[cfg(target_arch = "x86_64")]
 mod lanes {
     use std::arch::x86_64::*;
@@ -271,7 +233,8 @@ mod lanes {
     use crate::lanes::Real;
 
     use super::super::SegmentLanes;
-    use super::{Cone, Corners, MARGIN, MAX_SLOPE, MIN_RAYS, Slopes};
+    use super::super::wide::Corners;
+    use super::{Cone, MARGIN, MAX_SLOPE, MIN_RAYS, Slopes};
     use crate::geometry::Ray;
 
     /// Lane-wise slope bounds: `lo`/`hi` of x and y, and whether every lane so far is valid.
@@ -567,6 +530,7 @@ pub(super) use lanes::kept;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::wide::{Corners, triangle_size};
     use crate::bench::{lab_settings, primary_rays, shadow_rays};
     use crate::geometry::Triangle;
     use crate::intersect::intersect_triangle;

@@ -14,7 +14,6 @@ use glam::Vec3;
 use crate::geometry::{Ray, Triangle};
 
 use super::bvh::{BOX_T_SLACK, Bvh};
-use super::cull::Corners;
 use super::simd::{Avx2, Avx512, Kernels, LANES, LaneHit, Node8, Packet8, Packet16, RayK, Scalar};
 use super::{Hit, TraversalCost};
 
@@ -63,6 +62,44 @@ pub struct Flat {
 /// The most triangles a list may hold to be culled per batch: what a batch keeps is a bit a
 /// triangle in a `u64` ([`super::cull::kept`]).
 pub const CULL_MAX_TRIANGLES: usize = 64;
+
+/// A triangle's size for [`super::cull::Cone::may_hit`]: its longest edge extent along an axis.
+pub fn triangle_size(v0: Vec3, v1: Vec3, v2: Vec3) -> f32 {
+    (v1 - v0)
+        .abs()
+        .max_element()
+        .max((v2 - v0).abs().max_element())
+}
+
+/// The corners of up to sixteen triangles, structure of arrays (corner, axis, lane), and their
+/// sizes: what `Cone::may_hit_lanes` ([`super::cull`]) tests a lane at a time.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Corners {
+    pub at: [[[f32; 16]; 3]; 3],
+    pub size: [f32; 16],
+}
+
+impl Corners {
+    /// The corners of `triangles` (at most sixteen); unused lanes repeat the last.
+    pub fn new(triangles: &[[Vec3; 3]]) -> Self {
+        debug_assert!(!triangles.is_empty() && triangles.len() <= 16);
+        let mut c = Corners {
+            at: [[[0.0; 16]; 3]; 3],
+            size: [0.0; 16],
+        };
+        for lane in 0..16 {
+            let t = triangles[lane.min(triangles.len() - 1)];
+            for (corner, v) in t.iter().enumerate() {
+                for axis in 0..3 {
+                    c.at[corner][axis][lane] = v[axis];
+                }
+            }
+            c.size[lane] = triangle_size(t[0], t[1], t[2]);
+        }
+        c
+    }
+}
 
 impl Flat {
     pub fn build(triangles: &[Triangle]) -> Self {

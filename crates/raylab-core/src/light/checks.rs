@@ -182,3 +182,34 @@ pub fn power_through_sphere(
         }
     }))
 }
+
+/// The light's exitance from a side of its surface whose outward normal is `normal` (physical
+/// power per area, per channel), from [`Light::le`] alone: `∫ L(ω) cos θ dω` over the
+/// hemisphere of directions ω leaving that side, `L = le / π` seen along `−ω` (a viewer
+/// looking back at the surface). A midpoint rule over `strata × strata` cells even in cos θ
+/// and φ: exact for a radiance the same in every direction (cos θ is linear in each cell), as
+/// a Lambertian emitter's is.
+pub fn exitance(light: &dyn Light, normal: Vec3, strata: usize) -> [f64; 3] {
+    let (t1, t2) = orthonormal_basis(normal);
+    let n = strata as f64;
+    let cell = (1.0 / n) * (2.0 * PI / n);
+    let mut sum = [0.0f64; 3];
+    for i in 0..strata {
+        let cos = (i as f64 + 0.5) / n;
+        let sin = (1.0 - cos * cos).sqrt();
+        for j in 0..strata {
+            let phi = (j as f64 + 0.5) * 2.0 * PI / n;
+            let local = Vec3::new(
+                (sin * phi.cos()) as f32,
+                (sin * phi.sin()) as f32,
+                cos as f32,
+            );
+            let w = local.x * t1 + local.y * t2 + local.z * normal;
+            let le = light.le(-w);
+            for (s, c) in sum.iter_mut().zip([le.x, le.y, le.z]) {
+                *s += f64::from(c) / PI * cos * cell;
+            }
+        }
+    }
+    sum
+}

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::{Ray, Triangle};
 use crate::lanes::{Mask, MaskOf, Real, Vector, select_lazy};
+use crate::named::named_enum;
 use crate::sampling::{orthonormal_basis, uniform_cone};
 
 #[cfg(test)]
@@ -19,8 +20,27 @@ mod sphere;
 
 pub use interface::{Light, LightSample};
 pub use quad::QuadLight;
-pub use shape::{AnyLight, LightShape, emitter};
+pub use shape::{AnyLight, emitter};
 pub use sphere::SphereLight;
+
+/// The shape of the emitter the lab's light is turned into by [`emitter`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LightShape {
+    /// The lab's point light (hard shadows). The default.
+    #[default]
+    Point,
+    /// A sphere emitting from its surface ([`SphereLight`]): soft shadows from every side.
+    Sphere,
+    /// A square panel facing the floor ([`QuadLight`]): a Cornell box's ceiling light.
+    Quad,
+}
+
+named_enum!(LightShape as "light shape" {
+    Point => "point", "Point (the lab)";
+    Sphere => "sphere", "Sphere";
+    Quad => "quad", "Square (quad)";
+});
 
 /// The sphere light's radius when only its shape is chosen.
 pub const DEFAULT_SPHERE_RADIUS: f32 = 0.1;

@@ -279,9 +279,19 @@ mod tests {
     #[test]
     fn quad_emits_its_power() {
         let light = quad(0.5);
-        let le = light.le(-Vec3::Y);
-        assert!((le * 0.25 - light.power).abs().max_element() < 1e-5, "{le}");
-        assert_eq!(light.power(), light.power);
+        // Φ = ∫∫ L cos θ dω dA over both faces: each face's exitance (π L in front, nothing
+        // behind), from `le`, times the area S², is what `power()` says.
+        let checks = crate::light::checks::exitance;
+        let (front, back) = (checks(&light, Vec3::Y, 64), checks(&light, -Vec3::Y, 64));
+        let area = f64::from(light.side).powi(2);
+        for (c, p) in light.power().to_array().into_iter().enumerate() {
+            let emitted = (front[c] + back[c]) * area;
+            let p = f64::from(p);
+            assert!(
+                (emitted - p).abs() <= 1e-5 * p,
+                "channel {c}: {emitted} {p}"
+            );
+        }
         let e = power_through_sphere(&light, light.centre, light.side, 400_000, 9);
         eprintln!("quad power {e:?}");
         assert!(e.agrees_with(14.0, AGREEMENT), "{e:?}");

@@ -1,30 +1,9 @@
 //! Which emitter the lab's light is: a point, a sphere or a square, and the light that makes.
 
 use glam::{Vec2, Vec3};
-use serde::{Deserialize, Serialize};
 
-use super::{Light, LightSample, PointLight, QuadLight, SphereLight};
+use super::{Light, LightSample, LightShape, PointLight, QuadLight, SphereLight};
 use crate::geometry::Ray;
-use crate::named::named_enum;
-
-/// The shape of the emitter the lab's light is turned into by [`emitter`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LightShape {
-    /// The lab's point light (hard shadows). The default.
-    #[default]
-    Point,
-    /// A sphere emitting from its surface ([`SphereLight`]): soft shadows from every side.
-    Sphere,
-    /// A square panel facing the floor ([`QuadLight`]): a Cornell box's ceiling light.
-    Quad,
-}
-
-named_enum!(LightShape as "light shape" {
-    Point => "point", "Point (the lab)";
-    Sphere => "sphere", "Sphere";
-    Quad => "quad", "Square (quad)";
-});
 
 /// One of the lab's lights, whichever its shape: enum dispatch, so a light is a plain `Copy`
 /// value (no allocation, no virtual call, `Send + Sync` for the render threads) and each call

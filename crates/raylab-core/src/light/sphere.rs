@@ -266,10 +266,20 @@ mod tests {
     #[test]
     fn sphere_emits_its_power() {
         let light = sphere();
-        let area = 4.0 * PI * light.radius * light.radius;
-        let le = light.le(Vec3::X);
-        assert!((le * area - light.power).abs().max_element() < 1e-5, "{le}");
-        assert_eq!(light.power(), light.power);
+        // Φ = ∫∫ L cos θ dω dA: the exitance of the surface (π L, from `le`, the same at every
+        // point and about every outward normal) times the area 4πR² is what `power()` says.
+        let area = 4.0 * std::f64::consts::PI * f64::from(light.radius).powi(2);
+        for normal in [Vec3::X, -Vec3::Y, Vec3::new(0.48, 0.6, -0.64)] {
+            let m = crate::light::checks::exitance(&light, normal, 64);
+            for (c, p) in light.power().to_array().into_iter().enumerate() {
+                let emitted = m[c] * area;
+                let p = f64::from(p);
+                assert!(
+                    (emitted - p).abs() <= 1e-5 * p,
+                    "{normal}, channel {c}: {emitted} {p}"
+                );
+            }
+        }
         let e = power_through_sphere(&light, light.centre, 2.0 * light.radius, 400_000, 8);
         eprintln!("sphere power {e:?}");
         assert!(e.agrees_with(14.0, AGREEMENT), "{e:?}");

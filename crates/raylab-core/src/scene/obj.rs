@@ -8,9 +8,9 @@
 //!
 //! A placed model also carries what smooth shading and textures need, per triangle corner:
 //! a normal (the file's `vn`, else [`smooth_normals`] of the faces around the corner) and,
-//! when the file has `vt`, texture coordinates. A model read from disk ([`obj_scene`]) takes
+//! when the file has `vt`, texture coordinates. A model read from disk ([`obj_scene`](super::spec::obj_scene)) takes
 //! the diffuse texture (`map_Kd`) of its material library; a missing or broken library or
-//! image is a warning, not an error ([`obj_scene_with_warnings`]): the model is still worth
+//! image is a warning, not an error ([`obj_scene_with_warnings`](super::spec::obj_scene_with_warnings)): the model is still worth
 //! seeing untextured.
 
 use std::cell::RefCell;
@@ -22,7 +22,7 @@ use std::sync::Arc;
 use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::{Material, Scene, SceneError};
+use super::SceneError;
 use crate::geometry::Triangle;
 use crate::inputs::{self, Input, MAX_MTL_BYTES, MAX_OBJ_BYTES};
 use crate::relief::{NormalMap, Relief};
@@ -96,7 +96,7 @@ impl Placement {
 }
 
 /// Parses OBJ text; `path` names the source in errors. Material libraries are not read (see
-/// [`obj_scene_with_warnings`] for a model with its texture).
+/// [`obj_scene_with_warnings`](super::spec::obj_scene_with_warnings) for a model with its texture).
 pub fn parse_obj(text: &[u8], path: &Path) -> Result<Mesh, SceneError> {
     let parsed = parse_with_materials(text, path, |_| Err(tobj::LoadError::OpenFileFailed))?;
     Ok(parsed.mesh)
@@ -859,46 +859,8 @@ impl Fan {
     }
 }
 
-/// The Cornell box with `mesh` standing in it. The model's triangles carry their corners'
-/// normals and (when the file has them) texture coordinates; the box's own stay flat, the
-/// lab's look.
-pub fn model_in_box(mesh: &Mesh, placement: &Placement, name: &str) -> Scene {
-    scene_with_model(
-        mesh,
-        placement,
-        Material::diffuse(name, placement.reflectance),
-    )
-}
-
-fn scene_with_model(mesh: &Mesh, placement: &Placement, material: Material) -> Scene {
-    let models = [(mesh.clone(), *placement, material)];
-    super::spec::assemble(true, true, &models, None, None, &|| false, &|_| {})
-        .expect("the box is never empty")
-}
-
-/// An OBJ file standing in the box at [`Placement::FRONT_LEFT`] (warnings dropped; see
-/// [`obj_scene_with_warnings`]).
-pub fn obj_scene(path: &Path) -> Result<Scene, SceneError> {
-    obj_scene_with_warnings(path).map(|(scene, _)| scene)
-}
-
-/// An OBJ file standing in the box at [`Placement::FRONT_LEFT`], textured with its material's
-/// diffuse texture (`map_Kd`) when it has one, and what went wrong on the way.
-///
-/// Material libraries and textures are found relative to the OBJ file's folder. A library or
-/// image that cannot be read leaves the model untextured and adds a warning naming the file;
-/// only the OBJ file itself failing is an error.
-pub fn obj_scene_with_warnings(path: &Path) -> Result<(Scene, Vec<String>), SceneError> {
-    let (mesh, maps, warnings) = load_textured(path)?;
-    let name = path
-        .file_stem()
-        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
-    let scene = textured_scene(&mesh, &Placement::FRONT_LEFT, &name, maps);
-    Ok((scene, warnings))
-}
-
 /// An OBJ file's mesh and the diffuse texture its material library names, with a warning for
-/// each library or image that could not be used (see [`obj_scene_with_warnings`]).
+/// each library or image that could not be used (see [`obj_scene_with_warnings`](super::spec::obj_scene_with_warnings)).
 ///
 /// Each material library is read once, however many `mtllib` lines name it (a file naming one
 /// library of thousands of materials 8,000 times asked for 5 GB), and a texture's name is taken
@@ -1117,25 +1079,8 @@ fn read_library(file: &Path, library: &Path) -> Result<Vec<tobj::Material>, Stri
     Ok(materials)
 }
 
-/// A model compiled into the binary (`include_str!`/`include_bytes!`) standing in the box,
-/// textured: its OBJ text, its material library's text (whatever name the OBJ's `mtllib`
-/// gives), and the encoded image its material's `map_Kd` names. `name` names the model (its
-/// material, and `assets/models/{name}.obj` in messages).
-///
-/// Like [`obj_scene_with_warnings`], an unusable library or image is a warning and the model
-/// is untextured; bad OBJ text is an error.
-pub fn builtin_textured(
-    obj_text: &str,
-    mtl_text: &str,
-    texture_png: &[u8],
-    name: &str,
-    placement: &Placement,
-) -> Result<(Scene, Vec<String>), SceneError> {
-    let (mesh, maps, warnings) = builtin_textured_mesh(obj_text, mtl_text, texture_png, name)?;
-    Ok((textured_scene(&mesh, placement, name, maps), warnings))
-}
-
-/// The mesh and texture of [`builtin_textured`], before it is placed.
+/// The mesh and texture of [`builtin_textured`](super::spec::builtin_textured), before it is
+/// placed.
 pub fn builtin_textured_mesh(
     obj_text: &str,
     mtl_text: &str,
@@ -1210,13 +1155,6 @@ fn image_or_warning(
     }
 }
 
-fn textured_scene(mesh: &Mesh, placement: &Placement, name: &str, maps: Maps) -> Scene {
-    let mut material = Material::diffuse(name, placement.reflectance);
-    material.texture = maps.texture;
-    material.relief = maps.relief;
-    scene_with_model(mesh, placement, material)
-}
-
 fn builtin_path(name: &str) -> PathBuf {
     PathBuf::from(format!("assets/models/{name}.obj"))
 }
@@ -1229,7 +1167,8 @@ pub fn builtin(text: &str, name: &str) -> Result<Mesh, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::SceneChoice;
+    use crate::scene::spec::{builtin_textured, model_in_box, obj_scene, obj_scene_with_warnings};
+    use crate::scene::{Scene, SceneChoice};
 
     #[test]
     fn the_built_in_models_load() {

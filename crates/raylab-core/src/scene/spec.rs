@@ -734,3 +734,74 @@ pub fn path_relative_to(path: &Path, folder: &Path) -> PathBuf {
     }
     relative
 }
+// Scenes of one part: a model, or a terrain, in the lab's box. Here, above the parts' own
+// modules, as every scene is put together by `assemble`.
+
+/// The Cornell box with `mesh` standing in it. The model's triangles carry their corners'
+/// normals and (when the file has them) texture coordinates; the box's own stay flat, the
+/// lab's look.
+pub fn model_in_box(mesh: &Mesh, placement: &Placement, name: &str) -> Scene {
+    scene_with_model(
+        mesh,
+        placement,
+        Material::diffuse(name, placement.reflectance),
+    )
+}
+
+fn scene_with_model(mesh: &Mesh, placement: &Placement, material: Material) -> Scene {
+    let models = [(mesh.clone(), *placement, material)];
+    assemble(true, true, &models, None, None, &|| false, &|_| {}).expect("the box is never empty")
+}
+
+/// An OBJ file standing in the box at [`Placement::FRONT_LEFT`] (warnings dropped; see
+/// [`obj_scene_with_warnings`]).
+pub fn obj_scene(path: &Path) -> Result<Scene, SceneError> {
+    obj_scene_with_warnings(path).map(|(scene, _)| scene)
+}
+
+/// An OBJ file standing in the box at [`Placement::FRONT_LEFT`], textured with its material's
+/// diffuse texture (`map_Kd`) when it has one, and what went wrong on the way.
+///
+/// Material libraries and textures are found relative to the OBJ file's folder. A library or
+/// image that cannot be read leaves the model untextured and adds a warning naming the file;
+/// only the OBJ file itself failing is an error.
+pub fn obj_scene_with_warnings(path: &Path) -> Result<(Scene, Vec<String>), SceneError> {
+    let (mesh, maps, warnings) = obj::load_textured(path)?;
+    let name = path
+        .file_stem()
+        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
+    let scene = textured_scene(&mesh, &Placement::FRONT_LEFT, &name, maps);
+    Ok((scene, warnings))
+}
+
+fn textured_scene(mesh: &Mesh, placement: &Placement, name: &str, maps: obj::Maps) -> Scene {
+    let mut material = Material::diffuse(name, placement.reflectance);
+    material.texture = maps.texture;
+    material.relief = maps.relief;
+    scene_with_model(mesh, placement, material)
+}
+
+/// A model compiled into the binary (`include_str!`/`include_bytes!`) standing in the box,
+/// textured: its OBJ text, its material library's text (whatever name the OBJ's `mtllib`
+/// gives), and the encoded image its material's `map_Kd` names. `name` names the model (its
+/// material, and `assets/models/{name}.obj` in messages).
+///
+/// Like [`obj_scene_with_warnings`], an unusable library or image is a warning and the model
+/// is untextured; bad OBJ text is an error.
+pub fn builtin_textured(
+    obj_text: &str,
+    mtl_text: &str,
+    texture_png: &[u8],
+    name: &str,
+    placement: &Placement,
+) -> Result<(Scene, Vec<String>), SceneError> {
+    let (mesh, maps, warnings) = obj::builtin_textured_mesh(obj_text, mtl_text, texture_png, name)?;
+    Ok((textured_scene(&mesh, placement, name, maps), warnings))
+}
+
+/// The Cornell box with the blocks replaced by a terrain covering the floor, shaded smoothly
+/// (the room's walls stay flat).
+pub fn terrain_scene(spec: &TerrainSpec) -> Scene {
+    let no = || false;
+    assemble(true, false, &[], Some(spec), None, &no, &|_| {}).expect("the room alone is a scene")
+}

@@ -6,7 +6,6 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::Scene;
 use crate::geometry::Triangle;
 use crate::material::Material;
 use crate::noise::{Fbm, value_noise};
@@ -202,14 +201,6 @@ fn coord(n: usize, i: usize) -> f32 {
     -1.0 + 2.0 * i as f32 / n as f32
 }
 
-/// The Cornell box with the blocks replaced by a terrain covering the floor, shaded smoothly
-/// (the room's walls stay flat).
-pub fn terrain_scene(spec: &TerrainSpec) -> Scene {
-    let no = || false;
-    super::spec::assemble(true, false, &[], Some(spec), None, &no, &|_| {})
-        .expect("the room alone is a scene")
-}
-
 /// Appends the terrain's triangles to `triangles` and their corners' normals to `normals`
 /// (what [`terrain_surface`] returns, without a second copy of a million triangles).
 pub(super) fn extend_with_terrain(
@@ -226,6 +217,7 @@ pub(super) fn extend_with_terrain(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::spec::terrain_scene;
 
     #[test]
     fn deterministic_from_the_seed_and_inside_the_box() {
