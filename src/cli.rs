@@ -1008,7 +1008,7 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.diff_out {
         let mut files = files_read(&args.options, &settings);
         files.push(raylab_core::inputs::Input::new(
-            &args.image,
+            &args.images[0],
             "the image to check",
         ));
         refuse_output_onto("--diff-out", path, "the check", files)?;

@@ -424,11 +424,11 @@ fn pushed_to_its_neighbours(scene: &Scene, s: &RenderSettings) -> Rgb8 {
     for y in 0..figure.height {
         for x in 0..figure.width {
             let f = figure.get(x, y);
-            for c in 0..3 {
+            for (c, fc) in f.into_iter().enumerate() {
                 let around = (0..3).flat_map(|dy| (0..3).map(move |dx| (x + dx, y + dy)));
                 let values: Vec<u8> = around.map(|(mx, my)| margin.get(mx, my)[c]).collect();
                 let (lo, hi) = (*values.iter().min().unwrap(), *values.iter().max().unwrap());
-                let far = if f[c].abs_diff(lo) > f[c].abs_diff(hi) {
+                let far = if fc.abs_diff(lo) > fc.abs_diff(hi) {
                     lo
                 } else {
                     hi
