@@ -213,13 +213,17 @@ pub fn check(
 
 /// An image not the size of the figure `settings` render is refused ([`CheckError::Size`]).
 fn same_size(settings: &RenderSettings, image: &Rgb8) -> Result<(), CheckError> {
-    let c = &settings.camera;
-    if (c.width, c.height) != (image.width, image.height) {
+    size_is(settings.camera.width, settings.camera.height, image)
+}
+
+/// An image not `width × height` is refused ([`CheckError::Size`]).
+fn size_is(width: u32, height: u32, image: &Rgb8) -> Result<(), CheckError> {
+    if (width, height) != (image.width, image.height) {
         return Err(CheckError::Size {
             image_width: image.width,
             image_height: image.height,
-            width: c.width,
-            height: c.height,
+            width,
+            height,
         });
     }
     Ok(())
@@ -302,14 +306,7 @@ impl Figures {
     /// mistake's share, the verdict (see the module docs).
     pub fn judge(&self, image: &Rgb8) -> Result<Report, CheckError> {
         let figure = &self.figure;
-        if (figure.width, figure.height) != (image.width, image.height) {
-            return Err(CheckError::Size {
-                image_width: image.width,
-                image_height: image.height,
-                width: figure.width,
-                height: figure.height,
-            });
-        }
+        size_is(figure.width, figure.height, image)?;
         let match_share = share_within(image, figure);
         let mut candidates: Vec<Candidate> = self
             .looks
