@@ -2,9 +2,10 @@
 //! figure, written as a file as a student's tracer would write it and read back, is named as
 //! the mistake; the exact figure is `none`, anti-aliased too; noise is `unknown`.
 
+#[path = "common/class_folder.rs"]
+mod class_folder;
 mod common;
 
-use std::io::Cursor;
 use std::path::Path;
 
 use common::{assert_same_image, settings};
@@ -19,16 +20,8 @@ use raylab_core::{RenderSettings, Stage};
 /// Writes `image` to `dir/name` in `format` (JPEG at quality 95), as a student's program
 /// would save it, and reads it back as `check` does.
 fn written(image: &Rgb8, dir: &Path, name: &str, format: ImageFormat) -> Rgb8 {
-    let rgb = image::RgbImage::from_raw(image.width, image.height, image.data.clone()).unwrap();
-    let mut bytes = Cursor::new(Vec::new());
-    if format == ImageFormat::Jpeg {
-        let encoder = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95);
-        rgb.write_with_encoder(encoder).unwrap();
-    } else {
-        rgb.write_to(&mut bytes, format).unwrap();
-    }
     let path = dir.join(name);
-    std::fs::write(&path, bytes.into_inner()).unwrap();
+    std::fs::write(&path, class_folder::encoded(image, format)).unwrap();
     read_image(&path).unwrap()
 }
 
