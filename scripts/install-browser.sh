@@ -9,16 +9,6 @@ command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 dpkg-query -W -f='${Status}' fonts-dejavu-core 2>/dev/null | grep -q "install ok installed" ||
   packages+=(fonts-dejavu-core)
 
-if [ ${#packages[@]} -eq 0 ]; then
-  echo "install-browser: everything is already installed"
-  exit 0
-fi
-
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then
-  SUDO="sudo"
-fi
-echo "install-browser: installing with apt-get: ${packages[*]}"
-$SUDO apt-get update
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${packages[@]}"
-echo "install-browser: installed ${packages[*]}"
+# shellcheck source=apt-install.sh
+. "$(dirname "$0")/apt-install.sh"
+apt_install install-browser "${packages[@]}"

@@ -23,16 +23,6 @@ for p in libgl1-mesa-dri libgl1 libegl1; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || packages+=("$p")
 done
 
-if [ ${#packages[@]} -eq 0 ]; then
-  echo "install-display-tools: everything is already installed"
-  exit 0
-fi
-
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then
-  SUDO="sudo"
-fi
-echo "install-display-tools: installing with apt-get: ${packages[*]}"
-$SUDO apt-get update
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${packages[@]}"
-echo "install-display-tools: installed ${packages[*]}"
+# shellcheck source=apt-install.sh
+. "$(dirname "$0")/apt-install.sh"
+apt_install install-display-tools "${packages[@]}"
