@@ -1,5 +1,5 @@
-//! Makes a class's folder of submissions for `raylab check FOLDER` (README: "Check a whole
-//! class"): every mistake of the catalogue, right, anti-aliased and JPEG images, a truncated
+//! Makes a class's folder of submissions for `raylab check FOLDER` (docs/check.md, "A whole
+//! class at once"): every mistake of the catalogue, right, anti-aliased and JPEG images, a truncated
 //! PNG, an empty file, a text file, an image of the wrong size, a file the list leaves out and
 //! identical images, with the list of what each is checked against.
 //!

@@ -1,5 +1,5 @@
 //! Renders the lab's figure as a classic mistake would, to see what the mistake looks like or
-//! to try `raylab check` on (README: "Check your lab image").
+//! to try `raylab check` on (docs/check.md).
 //!
 //! ```text
 //! cargo run --release -p raylab-core --example mistake -- NAME OUT.png [STAGE] [W H]

@@ -6,7 +6,7 @@
 //!
 //! `cargo test --test soak` runs 1,000 changes (a few seconds in the debug build);
 //! `cargo test --release --test soak -- --ignored --nocapture` runs the full 10,000 and prints
-//! the figures (README, "Testing").
+//! the figures (docs/testing.md, "Soak").
 
 mod common;
 
@@ -367,7 +367,7 @@ fn a_thousand_random_changes_end_on_the_last_settings_exactly() {
     assert!(report.abandoned > 0, "{report:?}");
 }
 
-/// The full soak (README, "Testing"): `cargo test --release --test soak -- --ignored --nocapture`.
+/// The full soak (docs/testing.md, "Soak"): `cargo test --release --test soak -- --ignored --nocapture`.
 /// `RAYLAB_SOAK_CHANGES=N` runs N changes instead (a million take about a minute in release).
 #[test]
 #[ignore = "10,000 changes: run in release with --ignored"]

@@ -95,8 +95,7 @@ pub enum CheckError {
     },
 }
 
-/// What the check found (its JSON is `raylab check --json`'s output; README: "Check your lab
-/// image").
+/// What the check found (its JSON is `raylab check --json`'s output; docs/check.md).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
     pub stage: Stage,

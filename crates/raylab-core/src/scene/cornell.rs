@@ -2,7 +2,7 @@
 //!
 //! The vertices are given in the original box's units (side `L = 555`) and transformed exactly
 //! as the lab's helper does: scaled into [-1, 1]³ and mirrored in x and y, so **y points down**.
-//! The README's section on the lab's stages lists the constants this scene comes with.
+//! docs/rendering.md ("The lab's stages") lists the constants this scene comes with.
 
 use glam::Vec3;
 
