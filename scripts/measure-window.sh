@@ -80,7 +80,7 @@ start_app() {
   printf '{"raylab-workbench": "%s"}\n' "${workbench//\"/\\\"}" >"$out/xdg/data/raylab/app.ron"
   RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
   app_pid=$!
-  window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' | head -n 1)
+  window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab( |$)' | head -n 1)
   for _ in $(seq 600); do
     grep -Eq "$pattern" "$log" && break
     sleep 0.1

@@ -48,7 +48,7 @@ log="$out/app.log"
 RAYLAB_LOG_FRAMES=1 "$bin" >"$log" 2>&1 &
 app_pid=$!
 
-window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab$' | head -n 1) || {
+window=$(timeout 30 xdotool search --sync --onlyvisible --name '^raylab( |$)' | head -n 1) || {
   echo "smoke-window: no window titled 'raylab' within 30 s; the app's log:" >&2
   tail -n 20 "$log" >&2
   exit 1

@@ -28,6 +28,15 @@ pub enum Opened {
 /// The extensions of the images `raylab check` reads besides PNG.
 pub const CHECKED_IMAGES: [&str; 6] = ["bmp", "ppm", "pgm", "pnm", "jpg", "jpeg"];
 
+/// Whether `path` names an image (by its extension): what Check reads, a PNG screenshot
+/// included.
+pub fn is_image(path: &Path) -> bool {
+    path.extension().is_some_and(|e| {
+        let e = e.to_string_lossy().to_ascii_lowercase();
+        e == "png" || CHECKED_IMAGES.contains(&e.as_str())
+    })
+}
+
 /// Reads what `path` holds. Settings are validated here, so a file with a bad value changes
 /// nothing: the error names the file and the value.
 pub fn open(path: &Path) -> Result<Opened, String> {

@@ -208,6 +208,8 @@ pub struct WorkbenchApp {
     /// The effects in force that average random points ([`Sampled`]), as of the last frame:
     /// one turned on raises the sample target ([`WorkbenchApp::refine_sampled_effects`]).
     sampled: Sampled,
+    /// The window's title as last sent: the figure or stage shown ([`window_title`]).
+    window_title: String,
     /// Test hook: the next scene load panics on its thread.
     #[cfg(test)]
     inject_loader_panic: bool,
@@ -263,6 +265,12 @@ const CENTRAL_MARGINS: f32 = 20.0;
 fn repaint_for_frames(ctx: &egui::Context) -> raylab_core::progressive::Notify {
     let ctx = ctx.clone();
     Box::new(move || ctx.request_repaint_after(std::time::Duration::from_millis(1)))
+}
+
+/// The window's title for `settings`: raylab, then the figure shown, or the stage when the
+/// settings are not a lab figure's ([`panels::figure_heading`]).
+pub fn window_title(settings: &RenderSettings) -> String {
+    format!("{TITLE} — {}", panels::figure_heading(settings))
 }
 
 /// How many scenes besides the one on screen stay loaded for switching back.
@@ -398,6 +406,7 @@ impl WorkbenchApp {
             restore_on_failure: None,
             saved_scene_loading: saved_scene,
             sampled,
+            window_title: TITLE.to_owned(),
             #[cfg(test)]
             inject_loader_panic: false,
         }
@@ -704,14 +713,14 @@ impl WorkbenchApp {
         }
     }
 
-    /// The dialog's folder: the typed path's, else the screenshot folder.
-    fn dialog_folder(&self) -> (std::path::PathBuf, String) {
+    /// The dialog's folder: the typed path's, else the screenshot folder. Its name field starts
+    /// empty (the Save dialog's suggests a name): the typed file's name there would be chosen
+    /// by a press of Enter, though the user came to the dialog to pick another.
+    fn dialog_folder(&self) -> std::path::PathBuf {
         let typed = std::path::Path::new(self.state.obj_path.trim());
-        match (typed.parent(), typed.file_name()) {
-            (Some(dir), Some(name)) if dir.is_dir() => {
-                (dir.to_path_buf(), name.to_string_lossy().into_owned())
-            }
-            _ => (self.state.screenshot_folder.clone(), String::new()),
+        match typed.parent() {
+            Some(dir) if typed.file_name().is_some() && dir.is_dir() => dir.to_path_buf(),
+            _ => self.state.screenshot_folder.clone(),
         }
     }
 
@@ -1103,7 +1112,21 @@ impl WorkbenchApp {
                 self.state.walk_step = step;
                 match step {
                     Some(n) => {
-                        raylab_core::walkthrough::STEPS[n].apply(&mut self.state.settings);
+                        let s = &raylab_core::walkthrough::STEPS[n];
+                        s.apply(&mut self.state.settings);
+                        // The status line follows the step: a message from before the walk (a
+                        // reset, a save) no longer describes what is shown. An error stays.
+                        if self
+                            .status
+                            .as_ref()
+                            .is_none_or(|s| s.kind != StatusKind::Error)
+                        {
+                            let of = raylab_core::walkthrough::STEPS.len();
+                            self.set_status(
+                                StatusKind::Info,
+                                format!("Walk-through, step {} of {of}: {}", n + 1, s.title),
+                            );
+                        }
                     }
                     None => {
                         if let Some(before) = self.state.walk_restore.take() {
@@ -1133,6 +1156,11 @@ impl WorkbenchApp {
                 let typed = self.state.obj_path.trim().to_owned();
                 if typed.is_empty() {
                     self.set_status(StatusKind::Notice, "Type a file's path to open it");
+                } else if self.check.is_some() && files::is_image(std::path::Path::new(&typed)) {
+                    // While checking, an image typed is the next one to check: a screenshot's
+                    // settings are never loaded under a check, which would change what the
+                    // image on screen is held against.
+                    self.start_check(ctx, typed.into());
                 } else {
                     self.open_path(std::path::Path::new(&typed), ctx);
                 }
@@ -1151,26 +1179,26 @@ impl WorkbenchApp {
                 } else {
                     files::DialogMode::OpenScreenshot
                 };
-                let (folder, name) = if mode == files::DialogMode::OpenScreenshot {
-                    (self.state.screenshot_folder.clone(), String::new())
+                let folder = if mode == files::DialogMode::OpenScreenshot {
+                    self.state.screenshot_folder.clone()
                 } else {
                     self.dialog_folder()
                 };
-                self.file_dialog = Some(files::FileDialog::new(mode, &folder, &name));
+                self.file_dialog = Some(files::FileDialog::new(mode, &folder, ""));
             }
             Command::ShowSaveSceneDialog => {
-                let (folder, _) = self.dialog_folder();
+                let folder = self.dialog_folder();
                 let name = format!("{}.toml", self.scene_choice.name().replace(' ', "-"));
                 let dialog = files::FileDialog::new(files::DialogMode::SaveScene, &folder, &name);
                 self.file_dialog = Some(dialog);
             }
             Command::CancelLoading => self.cancel_loading(),
             Command::ShowCheckDialog => {
-                let (folder, name) = self.dialog_folder();
+                let folder = self.dialog_folder();
                 self.file_dialog = Some(files::FileDialog::new(
                     files::DialogMode::CheckImage,
                     &folder,
-                    &name,
+                    "",
                 ));
             }
             Command::CheckTyped => {
@@ -1362,43 +1390,58 @@ impl WorkbenchApp {
         }
     }
 
+    /// The bottom bar: the status on the left, the stats' summary on the right. The summary
+    /// takes its width (at most half the bar), the status what is left; each is one line, cut
+    /// with "…" when longer and whole in its tooltip, so neither is ever drawn over the other.
     fn status_ui(&self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            match &self.status {
-                Some(status) => {
-                    let color = match status.kind {
-                        StatusKind::Info => ui.visuals().text_color(),
-                        StatusKind::Notice => ui.visuals().warn_fg_color,
-                        StatusKind::Error => ui.visuals().error_fg_color,
-                    };
-                    if let Some(details) = &status.details
-                        && ui
-                            .small_button("Copy details")
-                            .on_hover_text(
-                                "Copy the settings of the render that failed, as JSON: \
-                                 `raylab render --settings FILE` reproduces it",
-                            )
-                            .clicked()
-                    {
-                        ui.ctx().copy_text(details.clone());
-                    }
-                    ui.label(egui::RichText::new(&status.text).color(color));
-                }
-                None => {
-                    ui.label("Ready. F1 lists the keys.");
-                }
-            }
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-                ui.label(self.stats.summary());
+                let room = egui::vec2(ui.available_width() / 2.0, ui.available_height());
+                ui.allocate_ui_with_layout(room, *ui.layout(), |ui| {
+                    ui.add(egui::Label::new(self.stats.summary()).truncate());
+                });
+                ui.with_layout(egui::Layout::left_to_right(egui::Align::Center), |ui| {
+                    self.status_line_ui(ui);
+                });
             });
         });
     }
 
+    /// The status message, one line (see [`Self::status_ui`]).
+    fn status_line_ui(&self, ui: &mut egui::Ui) {
+        let Some(status) = &self.status else {
+            ui.add(egui::Label::new("Ready. F1 lists the keys.").truncate());
+            return;
+        };
+        let color = match status.kind {
+            StatusKind::Info => ui.visuals().text_color(),
+            StatusKind::Notice => ui.visuals().warn_fg_color,
+            StatusKind::Error => ui.visuals().error_fg_color,
+        };
+        if let Some(details) = &status.details
+            && ui
+                .small_button("Copy details")
+                .on_hover_text(
+                    "Copy the settings of the render that failed, as JSON: \
+                     `raylab render --settings FILE` reproduces it",
+                )
+                .clicked()
+        {
+            ui.ctx().copy_text(details.clone());
+        }
+        // A label cut short shows its whole text when hovered.
+        ui.add(egui::Label::new(egui::RichText::new(&status.text).color(color)).truncate());
+    }
+
     fn help_ui(&mut self, ctx: &egui::Context) {
+        // Over the image, not the top of the side panel, whose buttons (Help among them)
+        // stay within reach.
         egui::Window::new("Help")
             .open(&mut self.show_help)
             .resizable(false)
             .collapsible(false)
+            .pivot(egui::Align2::CENTER_CENTER)
+            .default_pos(ctx.content_rect().center())
             .show(ctx, |ui| {
                 egui::Grid::new("help-keys")
                     .striped(true)
@@ -1563,6 +1606,11 @@ impl eframe::App for WorkbenchApp {
         self.help_ui(&ctx);
         self.sync_scene(&ctx);
         self.sync_render();
+        let title = window_title(&self.state.settings);
+        if title != self.window_title {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.window_title = title;
+        }
 
         self.stats.ui_frame_ms = start.elapsed().as_secs_f64() * 1e3;
         self.stats.frame_cpu_ms = frame.info().cpu_usage.map(|s| f64::from(s) * 1e3);

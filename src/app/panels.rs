@@ -90,6 +90,10 @@ pub fn controls_ui(
     check: Option<&mut super::check::StudentCheck>,
 ) -> Vec<Command> {
     let mut commands = Vec::new();
+    // What is shown comes first: which figure (or stage), the stage selector and what it
+    // computes, in a block of fixed height so nothing below moves as the text changes.
+    stage_ui(ui, &state.settings, &mut commands);
+    ui.separator();
     ui.horizontal_wrapped(|ui| {
         if ui
             .button("Save screenshot")
@@ -166,7 +170,6 @@ pub fn controls_ui(
                     &mut state.settings,
                     &mut state.limited_bounces,
                     stats.legend.as_ref(),
-                    &mut commands,
                 )
             });
         egui::CollapsingHeader::new("Image")
@@ -199,6 +202,95 @@ pub fn controls_ui(
             .show(ui, |ui| screenshot_ui(ui, &mut state.screenshot_folder));
     });
     commands
+}
+
+/// Rows of text the "Computes" block keeps room for; a longer text scrolls within it.
+const COMPUTES_ROWS: f32 = 3.0;
+
+/// The top of the side panel: the figure shown (or the stage, when the settings are not a lab
+/// figure's), the stage selector with the figures' numbers, and what the settings compute.
+fn stage_ui(ui: &mut egui::Ui, settings: &RenderSettings, commands: &mut Vec<Command>) {
+    let heading = figure_heading(settings);
+    ui.add(egui::Label::new(egui::RichText::new(&heading).strong()).truncate())
+        .on_hover_text(&heading);
+    // A stage chosen is a command: it also sets the stage's switches.
+    let stage = settings.shading.stage;
+    let (_, chosen) = choice(ui, "stage", "Stage", stage, Some(Stage::equation));
+    if let Some(stage) = chosen {
+        commands.push(Command::SetStage(stage));
+    }
+    // What the settings compute, as they are now: the one text the library keeps true. Its
+    // block has one height whatever the text's length, so the controls below stay in place
+    // (the walk-through's buttons among them) as the stage changes.
+    let row = ui.text_style_height(&egui::TextStyle::Body) + ui.spacing().item_spacing.y;
+    egui::ScrollArea::vertical()
+        .id_salt("computes")
+        .max_height(COMPUTES_ROWS * row)
+        .auto_shrink([false, false])
+        .show(ui, |ui| {
+            ui.horizontal_wrapped(|ui| {
+                ui.weak("Computes");
+                ui.label(settings.description());
+            });
+        });
+}
+
+/// How `settings` differ from the lab figure of their stage, in a few words each: its switches
+/// as the lab has them, N the lab's, on the lab's box with its materials, the shaded view and
+/// the point light through a pinhole. The camera, the light's place and power and the samples
+/// may be the user's: they change the view, not what is computed.
+fn figure_differences(settings: &RenderSettings) -> Vec<String> {
+    let s = &settings.shading;
+    let on = |b: bool| if b { "on" } else { "off" };
+    let (shadows, indirect) = s.stage.preset_switches();
+    let mut differs = Vec::new();
+    if s.stage != Stage::Flat {
+        if s.shadows != shadows {
+            differs.push(format!("shadows {}", on(s.shadows)));
+        }
+        if s.indirect != indirect {
+            differs.push(format!("N {}", on(s.indirect)));
+        } else if s.indirect && s.indirect_light != raylab_core::Shading::LAB_INDIRECT_LIGHT {
+            differs.push("another N".to_owned());
+        }
+        if settings.light.is_area() {
+            differs.push("an area light".to_owned());
+        }
+    }
+    if settings.scene != SceneChoice::Cornell {
+        differs.push(format!("the {} scene", settings.scene.label()));
+    }
+    if settings.material_preset != MaterialPreset::None {
+        differs.push(settings.material_preset.label().to_lowercase());
+    }
+    if settings.texture_preset != TexturePreset::None {
+        differs.push("textures".to_owned());
+    }
+    if settings.view != View::Shaded {
+        differs.push(format!("the {} view", settings.view.label().to_lowercase()));
+    }
+    if settings.camera.aperture > 0.0 {
+        differs.push("depth of field".to_owned());
+    }
+    differs
+}
+
+/// One line naming what is shown: "Figure 7: ρ·(D + N) with shadows (eq. 30)" for a lab
+/// figure ([`figure_differences`] finds none); otherwise the stage, and how it differs from its figure, without
+/// claiming one.
+pub fn figure_heading(settings: &RenderSettings) -> String {
+    let stage = settings.shading.stage;
+    let Some(figure) = stage.figure() else {
+        return "Path tracing: beyond the lab's figures".to_owned();
+    };
+    let differs = figure_differences(settings);
+    if differs.is_empty() {
+        format!("Figure {figure}: {}", stage.equation())
+    } else {
+        let name = stage.label();
+        let name = name.split(" (").next().unwrap_or(name);
+        format!("{name} stage, not figure {figure}: {}", differs.join(", "))
+    }
 }
 
 /// The pool's waves, when the scene has water: their amplitude and the time they are seen at.
@@ -581,9 +673,7 @@ pub fn walkthrough_ui(ui: &mut egui::Ui, step: Option<usize>, commands: &mut Vec
         return;
     };
     let s = &STEPS[n];
-    ui.strong(format!("Step {} of {}: {}", n + 1, STEPS.len(), s.title));
-    ui.label(egui::RichText::new(s.equation).monospace());
-    ui.label(s.text);
+    // The buttons first, so they stay in place whatever the length of the step's text below.
     ui.horizontal(|ui| {
         if ui
             .add_enabled(n > 0, egui::Button::new("Previous"))
@@ -601,6 +691,9 @@ pub fn walkthrough_ui(ui: &mut egui::Ui, step: Option<usize>, commands: &mut Vec
             commands.push(Command::WalkTo(None));
         }
     });
+    ui.strong(format!("Step {} of {}: {}", n + 1, STEPS.len(), s.title));
+    ui.label(egui::RichText::new(s.equation).monospace());
+    ui.label(s.text);
 }
 
 /// The map's size in points.
@@ -771,20 +864,13 @@ pub fn shading_ui(
     settings: &mut RenderSettings,
     limited_bounces: &mut u32,
     legend: Option<&Legend>,
-    commands: &mut Vec<Command>,
 ) {
-    let computes = settings.description();
     let view = &mut settings.view;
     let roughness = &mut settings.roughness;
     let materials = &mut settings.material_preset;
     let textures = &mut settings.texture_preset;
     let shading = &mut settings.shading;
     let path = shading.stage == Stage::Path;
-    // A stage chosen is a command: it also sets the stage's switches.
-    let (_, stage) = choice(ui, "stage", "Stage", shading.stage, Some(Stage::equation));
-    if let Some(stage) = stage {
-        commands.push(Command::SetStage(stage));
-    }
     view_ui(ui, view, legend);
     ui.horizontal_wrapped(|ui| {
         choice_ui(
@@ -826,11 +912,6 @@ pub fn shading_ui(
                  floor is lit as if nothing stood in the way.",
             );
     }
-    // What the settings compute, as they are now: the one text the library keeps true.
-    ui.horizontal_wrapped(|ui| {
-        ui.weak("Computes");
-        ui.label(computes);
-    });
     // The flat stage shows ρ alone: no light is computed, so neither switch changes anything.
     let flat = shading.stage == Stage::Flat;
     let flat_why = "The flat stage shows the reflectance ρ alone: it computes no light, so \

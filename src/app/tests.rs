@@ -27,6 +27,7 @@ mod denoise_ui;
 mod files_ui;
 mod panels_ui;
 mod relief_ui;
+mod top_ui;
 mod water_ui;
 
 const DEADLINE: Duration = Duration::from_secs(90);
@@ -978,7 +979,10 @@ fn the_walkthrough_steps_through_the_figures() {
         );
         assert_eq!(*shown(&h).image, render(&cornell_box(), &s));
     }
-    assert!(h.query_by_label_contains("figure 7").is_some());
+    assert!(
+        h.query_by_label(&format!("Step 5 of {of}: Indirect light (figure 7)"))
+            .is_some()
+    );
     h.get_by_role_and_label(Role::Button, "Previous").click();
     settle(&mut h);
     assert_eq!(settings(&h).shading.stage, Stage::Shadows);
