@@ -855,7 +855,11 @@ fn check_names_another_stage_and_a_factor() {
     assert_eq!(json["best"]["stage"]["name"], "figure 6");
     // With the stage it was made at, it is the exact figure.
     let out = raylab(&["check", &six, "--stage", "shadows"]);
-    assert!(String::from_utf8(out.stdout).unwrap().contains("verdict: none"));
+    assert!(
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .contains("verdict: none")
+    );
 
     // Figure 7 as linear light (EXR), × 0.6, written as the lab's display writes it.
     let exr = path("seven.exr");
@@ -884,8 +888,15 @@ fn check_names_another_stage_and_a_factor() {
     assert!(text.contains("power P"), "{text}");
     let written = image::open(&diff).unwrap().to_rgb8().into_raw();
     let white = written.iter().filter(|v| **v == 255).count();
-    assert!(white * 10 < written.len(), "{white} of {} white", written.len());
-    assert!(written.iter().any(|v| *v > 100), "the difference is visible");
+    assert!(
+        white * 10 < written.len(),
+        "{white} of {} white",
+        written.len()
+    );
+    assert!(
+        written.iter().any(|v| *v > 100),
+        "the difference is visible"
+    );
 }
 
 /// `raylab check` on raylab's own renders of scenes with water and glass: the pool in every lab

@@ -73,9 +73,8 @@ impl StudentCheck {
         let (tx, rx) = mpsc::channel();
         let (file, repaint) = (path.clone(), ctx.clone());
         std::thread::spawn(move || {
-            let read =
-                catch_panic(|| check::read_image_encoded(&file).map_err(|e| e.to_string()))
-                    .and_then(|r| r);
+            let read = catch_panic(|| check::read_image_encoded(&file).map_err(|e| e.to_string()))
+                .and_then(|r| r);
             let _ = tx.send(read);
             repaint.request_repaint();
         });
@@ -415,11 +414,17 @@ fn report_ui(ui: &mut egui::Ui, report: &check::Report, commands: &mut Vec<Comma
             if let Some(stage) = &best.stage
                 && ui
                     .button(format!("Switch to {}", stage.name))
-                    .on_hover_text(format!(
-                        "Set the stage and switches to {} ({}): the check then follows them",
-                        stage.name,
-                        stage.switches.options()
-                    ))
+                    .on_hover_text({
+                        let on = |b: bool| if b { "on" } else { "off" };
+                        let s = stage.switches;
+                        format!(
+                            "Set the stage to {}, shadows {}, indirect N {}: the settings your \
+                             image was made with; the check follows them",
+                            s.stage.label(),
+                            on(s.shadows),
+                            on(s.indirect)
+                        )
+                    })
                     .clicked()
             {
                 commands.push(Command::SetStageSwitches(stage.switches));

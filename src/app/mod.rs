@@ -1061,7 +1061,11 @@ impl WorkbenchApp {
                 settings.shading = switches.shading(&settings.shading);
                 self.set_status(
                     StatusKind::Info,
-                    format!("Switched to {}: {}", switches.name(), switches.stage.label()),
+                    format!(
+                        "Switched to {}: {}",
+                        switches.name(),
+                        switches.stage.label()
+                    ),
                 );
             }
             Command::ResetToLabDefaults => {

@@ -151,7 +151,11 @@ fn the_exact_figure_is_none() {
             .unwrap()
             .report;
         assert_eq!(r.best.mistake, "none", "{stage}: {r:?}");
-        assert!(r.notes[0].starts_with("the image is a JPEG"), "{:?}", r.notes);
+        assert!(
+            r.notes[0].starts_with("the image is a JPEG"),
+            "{:?}",
+            r.notes
+        );
     }
 }
 

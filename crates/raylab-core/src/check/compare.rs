@@ -174,11 +174,7 @@ pub fn difference_gain(a: &Rgb8, b: &Rgb8) -> f64 {
         .zip(&b.data)
         .map(|(a, b)| {
             let d = u32::from(a.abs_diff(*b));
-            (
-                usize::from(d > 0),
-                usize::from(d * DIFF_GAIN >= 255),
-                d,
-            )
+            (usize::from(d > 0), usize::from(d * DIFF_GAIN >= 255), d)
         })
         .reduce(|| (0, 0, 0), |x, y| (x.0 + y.0, x.1 + y.1, x.2.max(y.2)));
     if 2 * white > differing {
@@ -378,7 +374,11 @@ mod tests {
             data: vec![100, 100, 100, 200, 200, 200, 50, 50, 50, 0, 0, 0],
         };
         let b = Rgb8 {
-            data: a.data.iter().map(|v| (f64::from(*v) * 0.6).round() as u8).collect(),
+            data: a
+                .data
+                .iter()
+                .map(|v| (f64::from(*v) * 0.6).round() as u8)
+                .collect(),
             ..a.clone()
         };
         assert_eq!(difference_gain(&a, &b), 255.0 / 80.0);

@@ -106,7 +106,10 @@ mod tests {
         for k in [0.6f32, 1.5] {
             let image = scaled(&linear, Vec3::splat(k));
             let got = fit(&image, &linear).unwrap();
-            assert!((got - Vec3::splat(k)).abs().max_element() < 0.01, "{k}: {got}");
+            assert!(
+                (got - Vec3::splat(k)).abs().max_element() < 0.01,
+                "{k}: {got}"
+            );
             assert_eq!(scaled(&linear, got), image);
         }
         assert_eq!(describe([0.6, 0.6, 0.601]), "× 0.60 everywhere");

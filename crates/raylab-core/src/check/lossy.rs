@@ -70,9 +70,9 @@ pub fn within_any_blocks(image: &Rgb8, looks: &[&Rgb8]) -> Vec<bool> {
     let theirs: Vec<Vec<[f64; 3]>> = looks.iter().map(|l| block_means(l)).collect();
     let explained: Vec<bool> = (0..mine.len())
         .map(|b| {
-            theirs.iter().any(|t| {
-                (0..3).all(|c| (mine[b][c] - t[b][c]).abs() <= JPEG_TOLERANCE)
-            })
+            theirs
+                .iter()
+                .any(|t| (0..3).all(|c| (mine[b][c] - t[b][c]).abs() <= JPEG_TOLERANCE))
         })
         .collect();
     let (w, columns) = (image.width, image.width.div_ceil(JPEG_BLOCK));

@@ -469,14 +469,14 @@ impl Figures {
         let factor = fitted.and_then(|k| {
             let look = factor::scaled(&self.linear, k);
             compare::differs(&look, figure).then(|| FactorCandidate {
-                factor: k.to_array().map(|c| (f64::from(c) * 1000.0).round() / 1000.0),
+                factor: k
+                    .to_array()
+                    .map(|c| (f64::from(c) * 1000.0).round() / 1000.0),
                 explains: explains(&[&look]),
             })
         });
         let with_edges = match encoding {
-            Encoding::Lossless => {
-                compare::share_explained_with_edges(image, figure, &self.margin)
-            }
+            Encoding::Lossless => compare::share_explained_with_edges(image, figure, &self.margin),
             // A JPEG's blocks are compared by their means, which anti-aliasing hardly moves.
             Encoding::Jpeg => match_share,
         };
@@ -671,7 +671,9 @@ fn verdict(
         .chain(factor.map(|f| (Explanation::Factor(f), f.explains)))
         .collect();
     ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let best = ranked.first().filter(|(_, explains)| *explains > match_share);
+    let best = ranked
+        .first()
+        .filter(|(_, explains)| *explains > match_share);
     let named = |(what, explains): &(Explanation, f64), notes: &mut Vec<String>| {
         let tied: Vec<String> = ranked[1..]
             .iter()
@@ -905,10 +907,14 @@ mod tests {
         let stage = r.best.stage.as_ref().unwrap();
         assert_eq!(stage.name, "figure 6");
         assert_eq!(
-            (stage.switches.stage, stage.switches.shadows, stage.switches.indirect),
+            (
+                stage.switches.stage,
+                stage.switches.shadows,
+                stage.switches.indirect
+            ),
             (Stage::Shadows, true, false)
         );
-        assert!(r.best.fix.contains("R = ρ∗(D + N)"), "{}", r.best.fix);
+        assert!(r.best.fix.contains("R = ρ·(D + N)"), "{}", r.best.fix);
         assert!(r.best.fix.contains("--stage shadows"), "{}", r.best.fix);
         let text = r.to_text();
         assert!(
@@ -985,11 +991,17 @@ mod tests {
             r.to_text().lines().next().unwrap().to_owned()
         };
         let all = header(true, true);
-        assert!(all.contains("ρ·(D + N)") && all.contains("with shadows"), "{all}");
+        assert!(
+            all.contains("ρ·(D + N)") && all.contains("with shadows"),
+            "{all}"
+        );
         assert!(all.contains("figure 7,"), "{all}");
         let no_shadows = header(false, true);
         assert!(!no_shadows.contains("shadows (§"), "{no_shadows}");
-        assert!(no_shadows.contains("figure 7 without shadows"), "{no_shadows}");
+        assert!(
+            no_shadows.contains("figure 7 without shadows"),
+            "{no_shadows}"
+        );
         let no_n = header(true, false);
         assert!(!no_n.contains('N'), "{no_n}");
         assert!(no_n.contains("figure 6,"), "{no_n}");
@@ -1007,12 +1019,17 @@ mod tests {
         let (best, _) = verdict([64, 64], 0.96, 0.96, &candidates, &[], None, own);
         assert_eq!(best.mistake, "unknown");
         assert!(
-            best.fix
-                .contains("pixel-corner, explains 95.0 %, but the exact figure itself explains 96.0 %"),
+            best.fix.contains(
+                "pixel-corner, explains 95.0 %, but the exact figure itself explains 96.0 %"
+            ),
             "{}",
             best.fix
         );
-        assert!(best.fix.contains("no mistake explains it better"), "{}", best.fix);
+        assert!(
+            best.fix.contains("no mistake explains it better"),
+            "{}",
+            best.fix
+        );
         assert!(!best.fix.contains("90.0 % are needed"), "{}", best.fix);
     }
 

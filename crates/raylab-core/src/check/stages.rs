@@ -117,21 +117,32 @@ impl StageSwitches {
         }
     }
 
-    /// The command line's options that select them: `--stage shadows --shadows on --indirect
-    /// off` (both switches always given: a stage's defaults are its figure's).
+    /// The command line's options that select them: `--stage shadows`, with a switch only
+    /// where it differs from the stage's figure (`--stage lab --shadows off`; N on is the
+    /// lab's N, 0.5).
     pub fn options(self) -> String {
-        let on = |b: bool| if b { "on" } else { "off" };
-        format!(
-            "--stage {} --shadows {} --indirect {}",
-            self.stage,
-            on(self.shadows),
-            on(self.indirect)
-        )
+        let preset = Self::preset(self.stage);
+        let mut options = format!("--stage {}", self.stage);
+        if self.shadows != preset.shadows {
+            options += if self.shadows {
+                " --shadows on"
+            } else {
+                " --shadows off"
+            };
+        }
+        if self.indirect != preset.indirect {
+            options += &if self.indirect {
+                format!(" --indirect {}", Shading::LAB_INDIRECT_LIGHT.x)
+            } else {
+                " --indirect off".to_owned()
+            };
+        }
+        options
     }
 
     /// What an image computed with `self` lacks or adds against `against`, as clauses
-    /// ("the constant indirect term N is missing"), and a sentence on how to get from `self`
-    /// to `against`.
+    /// ("the constant indirect term N is missing"), and for each what to do to get from
+    /// `self` to `against`.
     pub fn differences(self, against: StageSwitches) -> (Vec<&'static str>, Vec<&'static str>) {
         let (mine, theirs) = (self.terms(), against.terms());
         let mut clauses = Vec::new();
@@ -163,7 +174,7 @@ impl StageSwitches {
                 [
                     "the constant indirect term N is missing",
                     "add the constant indirect term N to D before multiplying by ρ: \
-                     R = ρ∗(D + N) (section 5.2, equation 30)",
+                     R = ρ·(D + N) (section 5.2, equation 30)",
                     "the constant indirect term N is added",
                     "leave the indirect term N out",
                 ],
@@ -252,13 +263,25 @@ mod tests {
         assert_eq!(s(Stage::Shadows, true, false).name(), "figure 6");
         // The direct stage with shadows on computes figure 6's terms.
         assert_eq!(s(Stage::Direct, true, false).name(), "figure 6");
-        assert_eq!(s(Stage::Lab, false, true).name(), "figure 7 without shadows");
+        assert_eq!(
+            s(Stage::Lab, false, true).name(),
+            "figure 7 without shadows"
+        );
         assert_eq!(s(Stage::Incoming, false, true).name(), "figure 3 with N");
         assert_eq!(s(Stage::Flat, true, true).name(), "figure 2");
         let (clauses, _) = s(Stage::Shadows, true, false).differences(s(Stage::Lab, true, true));
         assert_eq!(clauses, ["the constant indirect term N is missing"]);
         let (clauses, _) = s(Stage::Lab, false, true).differences(s(Stage::Lab, true, true));
         assert_eq!(clauses, ["shadows are missing"]);
+        assert_eq!(s(Stage::Shadows, true, false).options(), "--stage shadows");
+        assert_eq!(
+            s(Stage::Lab, false, true).options(),
+            "--stage lab --shadows off"
+        );
+        assert_eq!(
+            s(Stage::Direct, false, true).options(),
+            "--stage direct --indirect 0.5"
+        );
     }
 
     /// Figure 7's settings are offered figures 2, 3, 5 and 6, and figure 7 without shadows
