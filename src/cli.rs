@@ -997,7 +997,7 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
         }
         raylab_core::film::check_file_destination(path)?;
     }
-    let image = check::read_image(path)?;
+    let (image, encoding) = check::read_image_encoded(path)?;
     // The figure at the image's size: settings from a file keep their own camera (a size
     // that differs is refused by name), the arguments get the image's width and height.
     let settings = if args.options.settings.is_some() || args.options.scene_file.is_some() {
@@ -1019,15 +1019,13 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
         check::memory_estimate(image.width, image.height) + settings.scene.memory_estimate(),
     )?;
     let pool = thread_pool("check", args.options.threads)?;
-    let mut checked = pool.install(|| -> anyhow::Result<check::Checked> {
+    let checked = pool.install(|| -> anyhow::Result<check::Checked> {
         let scene = settings.scene.load()?;
-        Ok(check::check(&scene, &settings, &image)?)
+        Ok(check::check_encoded(&scene, &settings, &image, encoding)?)
     })?;
-    if let Some(note) = check::lossy_note(path) {
-        checked.report.notes.push(note.to_owned());
-    }
+    let gain = check::compare::difference_gain(&image, &checked.figure);
     if let Some(path) = &args.diff_out {
-        check::compare::difference_picture(&image, &checked.figure)
+        check::compare::difference_picture_with_gain(&image, &checked.figure, gain)
             .to_image()
             .save(path)?;
     }
@@ -1037,7 +1035,11 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     } else {
         write!(out, "{}", printable_lines(&checked.report.to_text()))?;
         if let Some(path) = &args.diff_out {
-            writeln!(out, "difference picture: {}", path.display())?;
+            writeln!(
+                out,
+                "difference picture: {} (|image − figure| × {gain:.1})",
+                path.display()
+            )?;
         }
     }
     Ok(())

@@ -826,6 +826,79 @@ fn the_check_command() {
     }
 }
 
+/// `raylab check` with the defaults (figure 7) on a figure 6 render says it is figure 6 with N
+/// missing and how to check it as figure 6; on the figure × 0.6 it names the factor, and the
+/// difference picture is scaled so that it is not white all over.
+#[test]
+fn check_names_another_stage_and_a_factor() {
+    use raylab_core::check::Rgb8;
+    use raylab_core::film::Image;
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let six = path("six.png");
+    let render = raylab(&[
+        "render", "--stage", "shadows", "--width", "64", "--height", "48", "--out", &six,
+    ]);
+    assert!(render.status.success(), "{}", stderr(&render));
+    let out = raylab(&["check", &six]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("verdict: other-stage"), "{text}");
+    assert!(
+        text.contains("this is figure 6: the constant indirect term N is missing"),
+        "{text}"
+    );
+    assert!(text.contains("--stage shadows"), "{text}");
+    let out = raylab(&["check", &six, "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["best"]["mistake"], "other-stage");
+    assert_eq!(json["best"]["stage"]["name"], "figure 6");
+    // With the stage it was made at, it is the exact figure.
+    let out = raylab(&["check", &six, "--stage", "shadows"]);
+    assert!(
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .contains("verdict: none")
+    );
+
+    // Figure 7 as linear light (EXR), × 0.6, written as the lab's display writes it.
+    let exr = path("seven.exr");
+    let render = raylab(&["render", "--width", "64", "--height", "48", "--out", &exr]);
+    assert!(render.status.success(), "{}", stderr(&render));
+    let linear = image::open(&exr).unwrap().to_rgb32f();
+    let dimmed = Rgb8::from_linear(&Image {
+        width: 64,
+        height: 48,
+        pixels: linear
+            .pixels()
+            .map(|p| glam::Vec3::from_array(p.0) * 0.6)
+            .collect(),
+    });
+    let png = path("dimmed.png");
+    image::RgbImage::from_raw(64, 48, dimmed.data.clone())
+        .unwrap()
+        .save(&png)
+        .unwrap();
+    let diff = path("diff.png");
+    let out = raylab(&["check", &png, "--diff-out", &diff]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("verdict: factor"), "{text}");
+    assert!(text.contains("× 0.60 everywhere"), "{text}");
+    assert!(text.contains("power P"), "{text}");
+    let written = image::open(&diff).unwrap().to_rgb8().into_raw();
+    let white = written.iter().filter(|v| **v == 255).count();
+    assert!(
+        white * 10 < written.len(),
+        "{white} of {} white",
+        written.len()
+    );
+    assert!(
+        written.iter().any(|v| *v > 100),
+        "the difference is visible"
+    );
+}
+
 /// `raylab check` on raylab's own renders of scenes with water and glass: the pool in every lab
 /// stage, a scene file with `[scene.water]` and a glass model, and a pool screenshot given to
 /// `--settings`; each is `none` at a 100 % match (once a panic in the figures' recombination).

@@ -16,7 +16,7 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use eframe::egui;
 use raylab_core::RenderSettings;
-use raylab_core::check::{self, Checked, Rgb8, compare::DIFF_GAIN};
+use raylab_core::check::{self, Checked, Encoding, Rgb8};
 use raylab_core::display::Display;
 use raylab_core::progressive::catch_panic;
 use raylab_core::scene::Scene;
@@ -38,7 +38,9 @@ pub enum Event {
 pub struct StudentCheck {
     pub path: PathBuf,
     image: Option<Arc<Rgb8>>,
-    reading: Option<Receiver<Result<Rgb8, String>>>,
+    /// How the image was stored (a JPEG is compared by its blocks).
+    encoding: Encoding,
+    reading: Option<Receiver<Result<(Rgb8, Encoding), String>>>,
     /// The check running, and the settings it was started for.
     running: Option<(RenderSettings, Receiver<Result<Checked, String>>)>,
     /// The newest check's result and the settings it was made for.
@@ -46,6 +48,8 @@ pub struct StudentCheck {
     student: Texture,
     figure: Texture,
     difference_picture: Texture,
+    /// How much the difference picture amplifies |yours − figure|.
+    difference_gain: f64,
     pub divider: Divider,
     /// Show the difference picture instead of the wipe.
     pub difference: bool,
@@ -69,20 +73,22 @@ impl StudentCheck {
         let (tx, rx) = mpsc::channel();
         let (file, repaint) = (path.clone(), ctx.clone());
         std::thread::spawn(move || {
-            let read =
-                catch_panic(|| check::read_image(&file).map_err(|e| e.to_string())).and_then(|r| r);
+            let read = catch_panic(|| check::read_image_encoded(&file).map_err(|e| e.to_string()))
+                .and_then(|r| r);
             let _ = tx.send(read);
             repaint.request_repaint();
         });
         Self {
             path,
             image: None,
+            encoding: Encoding::Lossless,
             reading: Some(rx),
             running: None,
             done: None,
             student: Texture::default(),
             figure: Texture::default(),
             difference_picture: Texture::default(),
+            difference_gain: f64::from(check::compare::DIFF_GAIN),
             divider: Divider::default(),
             difference: false,
         }
@@ -115,8 +121,9 @@ impl StudentCheck {
             };
             match read {
                 None => {}
-                Some(Ok(image)) => {
+                Some(Ok((image, encoding))) => {
                     self.reading = None;
+                    self.encoding = encoding;
                     self.student
                         .set(ctx, "raylab-check-student", color_image(&image));
                     event = Some(Event::Read {
@@ -141,7 +148,12 @@ impl StudentCheck {
                 if let (Ok(checked), Some(image)) = (&result, &self.image) {
                     self.figure
                         .set(ctx, "raylab-check-figure", color_image(&checked.figure));
-                    let picture = check::compare::difference_picture(image, &checked.figure);
+                    self.difference_gain = check::compare::difference_gain(image, &checked.figure);
+                    let picture = check::compare::difference_picture_with_gain(
+                        image,
+                        &checked.figure,
+                        self.difference_gain,
+                    );
                     self.difference_picture.set(
                         ctx,
                         "raylab-check-difference",
@@ -161,13 +173,11 @@ impl StudentCheck {
         {
             let (tx, rx) = mpsc::channel();
             let (scene, image, settings) = (Arc::clone(scene), Arc::clone(image), wanted.clone());
-            let (repaint, lossy) = (ctx.clone(), check::lossy_note(&self.path));
+            let (repaint, encoding) = (ctx.clone(), self.encoding);
             std::thread::spawn(move || {
                 let result = catch_panic(|| {
-                    let mut checked =
-                        check::check(&scene, &settings, &image).map_err(|e| e.to_string())?;
-                    checked.report.notes.extend(lossy.map(str::to_owned));
-                    Ok(checked)
+                    check::check_encoded(&scene, &settings, &image, encoding)
+                        .map_err(|e| e.to_string())
                 })
                 .and_then(|r| r);
                 let _ = tx.send(result);
@@ -223,7 +233,7 @@ impl StudentCheck {
                 &painter,
                 rect.left_top(),
                 egui::Align2::LEFT_TOP,
-                &format!("|yours − figure| × {DIFF_GAIN}"),
+                &format!("|yours − figure| × {:.1}", self.difference_gain),
             );
             return;
         }
@@ -351,7 +361,10 @@ pub fn check_ui(
     ui.checkbox(&mut check.difference, "Difference |yours − figure|")
         .on_hover_text(format!(
             "Where your image differs from the exact figure: |yours − figure| per channel, \
-             {DIFF_GAIN}× brighter; black where they agree"
+             {:.1}× brighter (less than {}× where that would be white nearly everywhere, so \
+             the largest difference is white); black where they agree",
+            check.difference_gain,
+            check::compare::DIFF_GAIN
         ));
     ui.weak("Set the stage, camera and light your image was made with: the check follows them.");
     match check.checked(live) {
@@ -364,17 +377,23 @@ pub fn check_ui(
         Some(Err(e)) => {
             ui.colored_label(ui.visuals().error_fg_color, e);
         }
-        Some(Ok(checked)) => report_ui(ui, &checked.report),
+        Some(Ok(checked)) => report_ui(ui, &checked.report, commands),
     }
 }
 
 /// The diagnosis, as `raylab check` prints it.
-fn report_ui(ui: &mut egui::Ui, report: &check::Report) {
+fn report_ui(ui: &mut egui::Ui, report: &check::Report, commands: &mut Vec<Command>) {
     let percent = |s: f64| format!("{:.1} %", 100.0 * s);
-    ui.label(format!(
-        "Match: {} of pixels within 2/255 of the figure",
-        percent(report.match_share)
-    ));
+    ui.label(match report.encoding {
+        Encoding::Lossless => format!(
+            "Match: {} of pixels within 2/255 of the figure",
+            percent(report.match_share)
+        ),
+        Encoding::Jpeg => format!(
+            "Match: {} of pixels in 8×8 blocks whose mean is the figure's (a JPEG)",
+            percent(report.match_share)
+        ),
+    });
     let best = &report.best;
     match best.mistake.as_str() {
         "none" => {
@@ -389,11 +408,27 @@ fn report_ui(ui: &mut egui::Ui, report: &check::Report) {
                 "Verdict: {name} — explains {} of pixels",
                 percent(best.explains)
             ));
-            if let Ok(m) = name.parse::<check::Mistake>() {
-                ui.label(m.what());
-            }
+            ui.label(best.what());
             ui.label(format!("Lab: {}", best.equation));
             ui.label(format!("Fix: {}", best.fix));
+            if let Some(stage) = &best.stage
+                && ui
+                    .button(format!("Switch to {}", stage.name))
+                    .on_hover_text({
+                        let on = |b: bool| if b { "on" } else { "off" };
+                        let s = stage.switches;
+                        format!(
+                            "Set the stage to {}, shadows {}, indirect N {}: the settings your \
+                             image was made with; the check follows them",
+                            s.stage.label(),
+                            on(s.shadows),
+                            on(s.indirect)
+                        )
+                    })
+                    .clicked()
+            {
+                commands.push(Command::SetStageSwitches(stage.switches));
+            }
         }
     }
     if let Some(b) = &report.worst_block

@@ -52,6 +52,8 @@ pub enum Command {
     LookAtBoxCentre,
     /// Switch stage, with the shadows and indirect switches its figure uses.
     SetStage(Stage),
+    /// Switch to a stage with these switches: the one Check found the image to be.
+    SetStageSwitches(raylab_core::check::StageSwitches),
     ResetToLabDefaults,
     SaveScreenshot,
     ToggleHelp,
@@ -1063,6 +1065,17 @@ impl WorkbenchApp {
                         ),
                     );
                 }
+            }
+            Command::SetStageSwitches(switches) => {
+                settings.shading = switches.shading(&settings.shading);
+                self.set_status(
+                    StatusKind::Info,
+                    format!(
+                        "Switched to {}: {}",
+                        switches.name(),
+                        switches.stage.label()
+                    ),
+                );
             }
             Command::ResetToLabDefaults => {
                 let scene_before = settings.scene.clone();

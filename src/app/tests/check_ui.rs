@@ -218,3 +218,37 @@ fn a_render_of_the_pool_is_the_exact_figure() {
             .is_some()
     );
 }
+
+/// A figure 6 render (no N) checked with the window at figure 7: the panel says it is figure
+/// 6 with N missing and offers "Switch to figure 6", which sets the stage and its switches;
+/// the check follows them to `none`.
+#[test]
+fn another_stage_is_named_and_offered_as_a_switch() {
+    let dir = tempfile::tempdir().unwrap();
+    let state = small_state();
+    assert_eq!(state.settings.shading.stage, Stage::Lab);
+    let mut six = figure_settings(&state.settings);
+    six.shading = Shading::for_stage(Stage::Shadows);
+    let path = write(
+        &Rgb8::from_linear(&render(&cornell_box(), &six)),
+        dir.path(),
+        "figure6.png",
+    );
+    let mut h = harness(state);
+    drop_file(&mut h, &path);
+    settle(&mut h);
+    assert_eq!(verdict(&h), core_check::OTHER_STAGE);
+    assert!(
+        h.query_by_label_contains("this is figure 6: the constant indirect term N is missing")
+            .is_some()
+    );
+    click(&mut h, "Switch to figure 6");
+    settle(&mut h);
+    let shading = settings(&h).shading;
+    assert_eq!(
+        (shading.stage, shading.shadows, shading.indirect),
+        (Stage::Shadows, true, false)
+    );
+    assert_eq!(verdict(&h), "none");
+    assert!(h.query_by_label_contains("Switch to figure").is_none());
+}

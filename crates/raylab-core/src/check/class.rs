@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 
 use super::compare::Rgb8;
-use super::{Figures, Report, check_settings, lossy_note, read_image, ssim};
+use super::{Figures, Report, check_settings, read_image, read_image_encoded, ssim};
 use crate::scene::{Scene, SceneChoice};
 use crate::settings::RenderSettings;
 
@@ -301,11 +301,10 @@ fn judge(
     row: usize,
     keep: &dyn Keep,
 ) -> Result<Judged, String> {
-    let image = read_image(&submission.path).map_err(|e| e.reason)?;
-    let mut report = figures.judge(&image).map_err(|e| e.to_string())?;
-    if let Some(note) = lossy_note(&submission.path) {
-        report.notes.push(note.to_owned());
-    }
+    let (image, encoding) = read_image_encoded(&submission.path).map_err(|e| e.reason)?;
+    let report = figures
+        .judge_encoded(&image, encoding)
+        .map_err(|e| e.to_string())?;
     let ssim = ssim::ssim(&image, &figures.figure);
     keep.image(row, &image, figures);
     Ok(Judged { report, ssim })

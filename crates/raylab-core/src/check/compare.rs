@@ -162,8 +162,36 @@ pub fn worst_block(a: &Rgb8, b: &Rgb8) -> Option<WorstBlock> {
     })
 }
 
-/// |A − B| per channel, times [`DIFF_GAIN`], clamped at 255: black where the images agree.
+/// How much the difference picture of `a` and `b` amplifies |A − B|: [`DIFF_GAIN`], unless
+/// more than half of the channels that differ would be white at that
+/// gain (a factor, a missing term: differences everywhere of tens of levels); then the largest
+/// difference is shown white (a gain of 255 / max, at least 1), so the difference's structure
+/// stays visible.
+pub fn difference_gain(a: &Rgb8, b: &Rgb8) -> f64 {
+    let (differing, white, max) = a
+        .data
+        .par_iter()
+        .zip(&b.data)
+        .map(|(a, b)| {
+            let d = u32::from(a.abs_diff(*b));
+            (usize::from(d > 0), usize::from(d * DIFF_GAIN >= 255), d)
+        })
+        .reduce(|| (0, 0, 0), |x, y| (x.0 + y.0, x.1 + y.1, x.2.max(y.2)));
+    if 2 * white > differing {
+        (255.0 / f64::from(max)).max(1.0)
+    } else {
+        f64::from(DIFF_GAIN)
+    }
+}
+
+/// |A − B| per channel, times [`difference_gain`] (and rounded), clamped at 255: black where
+/// the images agree.
 pub fn difference_picture(a: &Rgb8, b: &Rgb8) -> Rgb8 {
+    difference_picture_with_gain(a, b, difference_gain(a, b))
+}
+
+/// |A − B| per channel, times `gain` (and rounded), clamped at 255.
+pub fn difference_picture_with_gain(a: &Rgb8, b: &Rgb8, gain: f64) -> Rgb8 {
     Rgb8 {
         width: a.width,
         height: a.height,
@@ -171,7 +199,7 @@ pub fn difference_picture(a: &Rgb8, b: &Rgb8) -> Rgb8 {
             .data
             .par_iter()
             .zip(&b.data)
-            .map(|(a, b)| (u32::from(a.abs_diff(*b)) * DIFF_GAIN).min(255) as u8)
+            .map(|(a, b)| (f64::from(a.abs_diff(*b)) * gain).round().min(255.0) as u8)
             .collect(),
     }
 }
@@ -334,6 +362,28 @@ mod tests {
             data: (0..=255u8).flat_map(|k| [k, k, k]).collect(),
         };
         assert_eq!(Rgb8::from_linear(&all.to_image()), all);
+    }
+
+    /// An image that differs by tens of levels nearly everywhere (the figure × 0.6) is not
+    /// white all over: its largest difference is shown white, the rest in proportion.
+    #[test]
+    fn a_difference_everywhere_is_scaled_to_its_largest() {
+        let a = Rgb8 {
+            width: 4,
+            height: 1,
+            data: vec![100, 100, 100, 200, 200, 200, 50, 50, 50, 0, 0, 0],
+        };
+        let b = Rgb8 {
+            data: a
+                .data
+                .iter()
+                .map(|v| (f64::from(*v) * 0.6).round() as u8)
+                .collect(),
+            ..a.clone()
+        };
+        assert_eq!(difference_gain(&a, &b), 255.0 / 80.0);
+        let d = difference_picture(&a, &b);
+        assert_eq!(d.data, [128, 128, 128, 255, 255, 255, 64, 64, 64, 0, 0, 0]);
     }
 
     /// A figure with a vertical edge between columns 1 and 2 (red | blue): a pixel of the

@@ -12,6 +12,7 @@ use std::path::Path;
 use image::{ColorType, ImageDecoder as _, ImageFormat};
 
 use super::compare::Rgb8;
+use super::lossy::Encoding;
 
 /// The largest image file read: 256 MiB, beyond a 4096² BMP (48 MiB) or a PPM written as text.
 pub const MAX_IMAGE_FILE_BYTES: u64 = 256 << 20;
@@ -28,46 +29,47 @@ pub struct ReadError {
     pub reason: String,
 }
 
-/// The note a check of a JPEG gets: its compression moves pixels by a few levels, so even the
-/// exact figure saved as JPEG leaves some of them beyond 2/255.
-pub const LOSSY_NOTE: &str = "the image is a JPEG: its compression moves pixels by a few levels, \
-     so the match is lower than the tracer's own; save PNG, BMP or PPM for an exact check";
-
-/// [`LOSSY_NOTE`] when `path` names a JPEG.
-pub fn lossy_note(path: &Path) -> Option<&'static str> {
-    let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
-    matches!(ext.as_str(), "jpg" | "jpeg").then_some(LOSSY_NOTE)
-}
-
 /// The image at `path`, as 8-bit RGB (grey images made RGB, alpha dropped: SDL's 32-bit BMPs
 /// carry an unused fourth byte).
 pub fn read_image(path: &Path) -> Result<Rgb8, ReadError> {
+    read_image_encoded(path).map(|(image, _)| image)
+}
+
+/// The image at `path` as [`read_image`] reads it, and how it was stored (JPEG is lossy:
+/// [`Encoding`]), from its contents, whatever its name.
+pub fn read_image_encoded(path: &Path) -> Result<(Rgb8, Encoding), ReadError> {
     let error = |reason: String| ReadError {
         path: path.display().to_string(),
         reason,
     };
     let bytes = crate::inputs::read_capped(path, MAX_IMAGE_FILE_BYTES, "an image to check")
         .map_err(error)?;
-    decode(&bytes).map_err(error)
+    decode_encoded(&bytes).map_err(error)
 }
 
 /// An image file's bytes as 8-bit RGB; the error is the reason alone.
 pub fn decode(bytes: &[u8]) -> Result<Rgb8, String> {
+    decode_encoded(bytes).map(|(image, _)| image)
+}
+
+/// An image file's bytes as 8-bit RGB, and how they were stored.
+pub fn decode_encoded(bytes: &[u8]) -> Result<(Rgb8, Encoding), String> {
     if bytes.is_empty() {
         return Err("the file is empty (0 bytes)".into());
     }
     let reader = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
-    match reader.format() {
-        Some(ImageFormat::Png | ImageFormat::Bmp | ImageFormat::Pnm | ImageFormat::Jpeg) => {}
+    let encoding = match reader.format() {
+        Some(ImageFormat::Jpeg) => Encoding::Jpeg,
+        Some(ImageFormat::Png | ImageFormat::Bmp | ImageFormat::Pnm) => Encoding::Lossless,
         Some(other) => {
             return Err(format!(
                 "it is a {other:?} image; check reads PNG, BMP, PPM or JPEG"
             ));
         }
         None => return Err("it is not a PNG, BMP, PPM or JPEG image".into()),
-    }
+    };
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
     let (width, height) = decoder.dimensions();
     if width == 0 || height == 0 {
@@ -95,11 +97,12 @@ pub fn decode(bytes: &[u8]) -> Result<Rgb8, String> {
     let rgb = image::DynamicImage::from_decoder(decoder)
         .map_err(decoding_failed)?
         .into_rgb8();
-    Ok(Rgb8 {
+    let image = Rgb8 {
         width: rgb.width(),
         height: rgb.height(),
         data: rgb.into_raw(),
-    })
+    };
+    Ok((image, encoding))
 }
 
 /// Why the image's data could not be decoded; a file that ends before its image does says so.

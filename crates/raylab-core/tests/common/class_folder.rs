@@ -20,7 +20,7 @@ use raylab_core::{Camera, RenderSettings, Shading, Stage};
 pub struct Expected {
     /// Its name below the folder.
     pub file: String,
-    /// The verdicts it may get (a JPEG's is `none` or `unknown`).
+    /// The verdicts it may get.
     pub verdicts: Vec<&'static str>,
     /// What the reason of a refused one holds.
     pub reason: Option<&'static str>,
@@ -220,7 +220,7 @@ fn round(side: u32, prefix: &str, seed: u64) -> Vec<Made> {
         line: Some(lab_line.clone()),
         expected: Expected {
             note: Some("the image is a JPEG"),
-            ..expected(&file, &["none", "unknown"])
+            ..expected(&file, &["none"])
         },
     });
     // One student's two files, the same pixels (the shadows stage, which no one else hands

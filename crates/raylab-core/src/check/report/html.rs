@@ -245,11 +245,9 @@ fn table_row(i: usize, row: &Row) -> String {
             } else {
                 format!("<span class=\"fix\">{}</span>", escape(&r.best.fix))
             };
-            let what = match verdict {
-                "none" | "unknown" => String::new(),
-                m => m
-                    .parse::<Mistake>()
-                    .map_or(String::new(), |m| format!(": {}", escape(m.what()))),
+            let what = match r.best.what() {
+                w if w.is_empty() => String::new(),
+                w => format!(": {}", escape(&w)),
             };
             let notes: String = r
                 .notes
@@ -310,7 +308,7 @@ fn detail(class: &Class, i: usize, row: &Row) -> String {
     let verdict_line = match verdict {
         "none" => "right: the image is the exact figure".to_owned(),
         "unknown" => "unknown: no classic mistake explains it".to_owned(),
-        m => format!("{m}: {}", m.parse::<Mistake>().map_or("", |m| m.what())),
+        m => format!("{m}: {}", r.best.what()),
     };
     let _ = write!(
         t,
@@ -376,7 +374,8 @@ fn detail(class: &Class, i: usize, row: &Row) -> String {
     let _ = write!(
         t,
         "<figure style=\"width:{dw}px\"><div class=\"marked\" style=\"width:{dw}px;height:{dh}px\">{diff}{boxed}</div>\
-         <figcaption>|submission − figure| per channel, ×{DIFF_GAIN}: black where they agree; \
+         <figcaption>|submission − figure| per channel, ×{DIFF_GAIN} (less where that would be white \
+         nearly everywhere: the largest difference white): black where they agree; \
          the worst {b}-pixel block outlined.</figcaption></figure></div>",
         diff = img(&files.difference, "the difference, amplified", dw, dh, px),
         b = crate::check::compare::BLOCK,

@@ -193,12 +193,12 @@ impl Keep for ReportFolder {
 }
 
 /// The verdicts of the class, in the order the page shows them (right first, then the
-/// mistakes in the catalogue's order, unknown, refused), with how many submissions got each;
-/// only those some submission got.
+/// mistakes in the catalogue's order, another stage, a factor, unknown, refused), with how many
+/// submissions got each; only those some submission got.
 pub fn verdict_counts(class: &Class) -> Vec<(String, usize)> {
     let mut order: Vec<&str> = vec!["none"];
     order.extend(super::Mistake::catalogue().map(|m| m.name()));
-    order.extend(["unknown", REFUSED]);
+    order.extend([super::OTHER_STAGE, super::FACTOR, "unknown", REFUSED]);
     order
         .into_iter()
         .map(|v| {
