@@ -120,14 +120,14 @@ impl Mistake {
                 "equation 27: n̂ is the normal pointing out from the surface (section 1; the test \
                  model's normalize(cross(e2, e1)))"
             }
-            NoRho => "equation 28: R = ρ∗D (equation 30 with N: R = ρ∗(D + N))",
-            IndirectOutsideRho => "equation 30: R = ρ∗(D + N)",
+            NoRho => "equation 28: R = ρ·D (equation 30 with N: R = ρ·(D + N))",
+            IndirectOutsideRho => "equation 30: R = ρ·(D + N)",
             ShadowAcne => "section 5.1 (direct shadows): the ray from the surface to the light",
             ShadowBeyondLight => {
                 "section 5.1: in shadow only if the closest hit is closer than the light"
             }
             ShadowDropsIndirect => {
-                "section 5.2, equation 30: in shadow D = 0, but R = ρ∗(0 + N) remains"
+                "section 5.2, equation 30: in shadow D = 0, but R = ρ·(0 + N) remains"
             }
             FocalHalf => "equation 24 and section 3: f = W, a 53.13° field of view",
             YawSign => "section 4: the rotation R about the y axis by the yaw",
@@ -162,12 +162,12 @@ impl Mistake {
                  e1 = v1 − v0 and e2 = v2 − v0, or negate yours."
             }
             NoRho => {
-                "Multiply the light by the triangle's colour ρ, channel by channel: R = ρ∗D, or \
-                 ρ∗(D + N) with indirect light."
+                "Multiply the light by the triangle's colour ρ, channel by channel: R = ρ·D, or \
+                 ρ·(D + N) with indirect light."
             }
             IndirectOutsideRho => {
                 "Add N to D before multiplying by ρ: the surface reflects the indirect light too, \
-                 R = ρ∗(D + N)."
+                 R = ρ·(D + N)."
             }
             ShadowAcne => {
                 "Start the shadow ray a little off the surface (p + 1e-4·n̂ on the light's side), \
@@ -178,7 +178,7 @@ impl Mistake {
                  between the point and the light casts a shadow."
             }
             ShadowDropsIndirect => {
-                "In shadow set only D to 0 and still add N: R = ρ∗(0 + N), so shadows are dim, not \
+                "In shadow set only D to 0 and still add N: R = ρ·(0 + N), so shadows are dim, not \
                  black."
             }
             FocalHalf => "Set the focal length f to the image width W in pixels, not W/2.",
