@@ -27,6 +27,7 @@ mod denoise_ui;
 mod files_ui;
 mod panels_ui;
 mod relief_ui;
+mod steps_ui;
 mod water_ui;
 
 const DEADLINE: Duration = Duration::from_secs(90);
