@@ -88,7 +88,6 @@ impl Viewport {
     }
 
     /// Where the image was drawn last, in points.
-    #[cfg(test)]
     pub fn shown_rect(&self) -> Option<egui::Rect> {
         self.shown_rect
     }
