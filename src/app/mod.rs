@@ -1069,6 +1069,10 @@ impl WorkbenchApp {
         self.stats.noise = frame.noise;
         self.stats.denoised = (frame.denoise && frame.denoised.is_some())
             .then_some((frame.denoised_samples, frame.denoise_ms));
+        self.stats.denoised_error = frame
+            .denoised_error
+            .filter(|_| self.stats.denoised.is_some());
+        self.stats.stochastic = frame.settings.is_stochastic();
         self.stats.elapsed_ms = frame.since_submit_ms;
         self.stats.legend = frame.legend.clone();
         if !frame.is_preview {
