@@ -405,6 +405,8 @@ fn rail_drag(ui: &egui::Ui, response: &egui::Response) -> Option<f64> {
         return None;
     }
     let (delta, shift) = ui.input(|i| (i.pointer.delta().x, i.modifiers.shift_only()));
+    // The press's own frame moves nothing: its delta may be the pointer's jump onto the rail.
+    let delta = if moved.is_some() { delta } else { 0.0 };
     let total = moved.unwrap_or(0.0) + delta.abs();
     if held {
         ui.data_mut(|d| d.insert_temp(moved_id, total));
