@@ -7,6 +7,7 @@
 //! | W / S, A / D, Q / E | light forward / back, left / right, up / down ([`LIGHT_STEP`]) |
 //! | drag on the image | turn the camera (yaw, and pitch) |
 //! | wheel on the image | focal length (zoom) |
+//! | Shift with a drag or the wheel | a tenth as far ([`FINE_POINTER`]) |
 //! | F1 | help; Ctrl+S: screenshot; Ctrl+O: open; Ctrl+Shift+S: save scene |
 //!
 //! Each key press (and each auto-repeat while a key is held) is one step. Keys do nothing while
@@ -27,8 +28,14 @@ pub const YAW_STEP_DEGREES: f32 = 5.0;
 pub const LIGHT_STEP: f32 = 0.1;
 /// Camera turn per point dragged on the image.
 pub const DRAG_DEGREES_PER_POINT: f32 = 0.25;
-/// Focal length factor per point of wheel scroll: `f · exp(scroll · this)`.
-pub const WHEEL_ZOOM_PER_POINT: f32 = 0.002;
+/// Focal length factor per point of wheel scroll: `f · exp(scroll · this)`. A wheel's notch
+/// on X11 arrives as two lines of egui's `line_scroll_speed`, 40 points each (measured under
+/// Xvfb: `xdotool click 4` scrolls 80 points): ln(1.05)/80 zooms 5 % a notch (a platform that
+/// reports one line a notch, 2.5 %).
+pub const WHEEL_ZOOM_PER_POINT: f32 = 0.000_61;
+/// Shift divides a drag's turn and the wheel's zoom on the image by this (fine control, as in
+/// Blender; the panel's controls do the same).
+pub const FINE_POINTER: f32 = 10.0;
 /// Focal length limits, as multiples of the image width.
 pub const FOCAL_RANGE_WIDTHS: (f32, f32) = (0.1, 10.0);
 
@@ -48,7 +55,11 @@ pub const HELP: &[(&str, &str)] = &[
         "Drag on the image",
         "turn the camera (left/right: yaw, up/down: pitch)",
     ),
-    ("Wheel on the image", "zoom (focal length)"),
+    ("Wheel on the image", "zoom (focal length), 5 % a notch"),
+    (
+        "Shift + drag or wheel",
+        "a tenth as far: fine control (on the panel's sliders too)",
+    ),
     (
         "I",
         "inspect pixels on / off: a click pins a pixel, its equations show on the right",
@@ -155,8 +166,9 @@ fn light_move(camera: &Camera, forward: f32, right: f32, down: f32) -> Vec3 {
 
 /// Applies a drag and wheel on the image to the camera.
 pub fn pointer(input: &ViewportInput, camera: &mut Camera) {
+    let scale = if input.fine { 1.0 / FINE_POINTER } else { 1.0 };
     if input.drag_delta != egui::Vec2::ZERO {
-        let d = input.drag_delta * DRAG_DEGREES_PER_POINT;
+        let d = input.drag_delta * DRAG_DEGREES_PER_POINT * scale;
         camera.yaw = wrap_angle(camera.yaw + d.x.to_radians());
         // Dragging up looks up (positive pitch), never past straight up or down.
         let limit = 89f32.to_radians();
@@ -165,8 +177,8 @@ pub fn pointer(input: &ViewportInput, camera: &mut Camera) {
     if input.scroll_y != 0.0 {
         let w = camera.width as f32;
         let (lo, hi) = FOCAL_RANGE_WIDTHS;
-        camera.focal_length = (camera.focal_length * (input.scroll_y * WHEEL_ZOOM_PER_POINT).exp())
-            .clamp(lo * w, hi * w);
+        let zoom = (input.scroll_y * WHEEL_ZOOM_PER_POINT * scale).exp();
+        camera.focal_length = (camera.focal_length * zoom).clamp(lo * w, hi * w);
     }
 }
 

@@ -186,6 +186,16 @@ pub struct WorkbenchApp {
     screenshots_saving: Vec<Receiver<Result<screenshot::Saved, String>>>,
     /// The inspector's last result: the settings and pixel it is for.
     inspection: Option<(RenderSettings, [u32; 2], Result<Inspected, String>)>,
+    /// The inspector's width as it opens ([`WorkbenchApp::make_room_for_inspector`]), and how
+    /// often it was opened: each opening is a panel of its own id, which opens at that width
+    /// (not at what the last one was dragged to).
+    inspector_width: f32,
+    inspector_opened: u32,
+    /// What opening the inspector added to the window's width, and the width it made: given
+    /// back on closing if the window still has it.
+    inspector_grew: Option<(f32, f32)>,
+    /// The central panel's width last frame, in points: the image and what it leaves.
+    central_width: f32,
     /// While the light's marker is dragged: the light's depth when the drag started.
     dragging_light: Option<f32>,
     /// When the newest job was submitted, and UI frames since.
@@ -253,10 +263,13 @@ impl Sampled {
     }
 }
 
-/// The inspector panel's width when there is room, and its least (its lines then scroll
-/// sideways).
-const INSPECTOR_WIDTH: f32 = 420.0;
+/// The inspector panel's width when there is room (an equation's line then wraps over two or
+/// three rows), the least it opens at when the window cannot make that room (the image gives
+/// up the rest), and the least it can be dragged to.
+const INSPECTOR_WIDTH: f32 = 520.0;
+const INSPECTOR_OPEN_MIN_WIDTH: f32 = 320.0;
 const INSPECTOR_MIN_WIDTH: f32 = 200.0;
+
 /// The central panel's margins either side of the image, and the panels' separator.
 const CENTRAL_MARGINS: f32 = 20.0;
 
@@ -291,8 +304,8 @@ struct SceneLoad {
 
 /// An inspection as the inspector panel shows it: its lines, and the same as text to copy.
 struct Inspected {
+    inspection: raylab_core::inspect::Inspection,
     lines: Vec<raylab_core::inspect::InspectLine>,
-    text: String,
 }
 
 /// Where the light appears in the image, as a fraction of its width and height, or `None` when
@@ -398,6 +411,10 @@ impl WorkbenchApp {
             screenshots_saving: Vec::new(),
             dragging_light: None,
             inspection: None,
+            inspector_width: INSPECTOR_WIDTH,
+            inspector_opened: 0,
+            inspector_grew: None,
+            central_width: 0.0,
             change: None,
             log_frames: std::env::var_os("RAYLAB_LOG_FRAMES").is_some(),
             started: Instant::now(),
@@ -854,12 +871,67 @@ impl WorkbenchApp {
             )
             .map(|inspection| Inspected {
                 lines: inspection.lines(),
-                text: inspection.to_text(),
+                inspection,
             })
             .map_err(|e| e.to_string());
             self.inspection = Some((self.state.settings.clone(), pixel, result));
         }
         self.inspection.as_ref().map(|(_, _, r)| r)
+    }
+
+    /// Opens the inspector beside the image without shrinking it, as far as the screen allows:
+    /// the window grows by what the inspector needs beyond the room the image leaves (up to
+    /// the screen's right edge); the inspector opens [`INSPECTOR_WIDTH`] wide, or as wide as
+    /// that makes room for but at least [`INSPECTOR_OPEN_MIN_WIDTH`] (its equations readable;
+    /// the image then gives up the difference).
+    fn make_room_for_inspector(&mut self, ctx: &egui::Context) {
+        let image = self.viewport.shown_rect().map_or(0.0, |r| r.width());
+        let free = (self.central_width - image - CENTRAL_MARGINS).max(0.0);
+        let window = ctx.content_rect().size();
+        let (monitor, outer) = ctx.input(|i| (i.viewport().monitor_size, i.viewport().outer_rect));
+        // Unknown (no monitor reported): the window manager keeps the window on screen.
+        let spare = monitor.map_or(f32::INFINITY, |m| {
+            (m.x - outer.map_or(window.x, |o| o.max.x)).max(0.0)
+        });
+        let grow = (INSPECTOR_WIDTH - free).clamp(0.0, spare).floor();
+        self.inspector_width = (free + grow).clamp(INSPECTOR_OPEN_MIN_WIDTH, INSPECTOR_WIDTH);
+        self.inspector_opened = self.inspector_opened.wrapping_add(1);
+        if grow > 0.0 {
+            let size = window + egui::vec2(grow, 0.0);
+            ctx.send_viewport_cmd(egui::ViewportCommand::InnerSize(size));
+            self.inspector_grew = Some((grow, size.x));
+        }
+    }
+
+    /// Closing the inspector gives back the width opening it added, unless the window was
+    /// resized since.
+    fn give_back_inspector_room(&mut self, ctx: &egui::Context) {
+        let Some((grew, width)) = self.inspector_grew.take() else {
+            return;
+        };
+        let window = ctx.content_rect().size();
+        if (window.x - width).abs() < 1.0 {
+            let size = egui::vec2(window.x - grew, window.y);
+            ctx.send_viewport_cmd(egui::ViewportCommand::InnerSize(size));
+        }
+    }
+
+    /// What the screen shows at the pinned pixel, when an image of the settings in force is
+    /// there: the denoised image's value, or the film's mean.
+    fn shown_pixel(&self, [x, y]: [u32; 2]) -> Option<raylab_core::inspect::ShownPixel> {
+        let shown = self
+            .shown
+            .as_ref()
+            .filter(|s| !s.is_preview && s.settings.renders_like(&self.state.settings))?;
+        let (image, samples, denoised) = match &shown.denoised {
+            Some((image, samples)) => (image, *samples, true),
+            None => (&shown.image, shown.samples, false),
+        };
+        (x < image.width && y < image.height).then(|| raylab_core::inspect::ShownPixel {
+            value: image.get(x, y),
+            samples,
+            denoised,
+        })
     }
 
     /// The inspector: the pinned pixel's lines, each beside the lab equation it evaluates.
@@ -870,6 +942,8 @@ impl WorkbenchApp {
             (Some(check), Some([x, y])) => check.pixel_line(&self.state.settings, x, y),
             _ => None,
         };
+        let shown = self.state.pinned.and_then(|pixel| self.shown_pixel(pixel));
+        let display = self.state.settings.display;
         match self.inspection() {
             None => {
                 ui.label("Click a pixel of the image to see how its value is computed.");
@@ -878,13 +952,17 @@ impl WorkbenchApp {
                 ui.colored_label(ui.visuals().error_fg_color, e);
             }
             Some(Ok(inspected)) => {
+                // The display's lines change as samples come in: made each frame (no tracing).
+                let shown_lines = inspected.inspection.display_lines(&display, shown);
                 ui.horizontal(|ui| {
                     if ui
                         .button("Copy as text")
                         .on_hover_text("The lines below, for a report or a question")
                         .clicked()
                     {
-                        ui.ctx().copy_text(inspected.text.clone());
+                        let mut lines = inspected.lines.clone();
+                        lines.extend(shown_lines.iter().cloned());
+                        ui.ctx().copy_text(raylab_core::inspect::lines_text(&lines));
                         copied = true;
                     }
                     unpin = ui.button("Unpin").clicked();
@@ -893,17 +971,21 @@ impl WorkbenchApp {
                 if let Some(line) = check_line {
                     ui.strong(line);
                 }
-                egui::ScrollArea::both().show(ui, |ui| {
-                    egui::Grid::new("inspector-lines")
-                        .num_columns(2)
-                        .striped(true)
-                        .show(ui, |ui| {
-                            for line in &inspected.lines {
-                                ui.weak(&line.equation);
-                                ui.add(egui::Label::new(&line.text).wrap());
-                                ui.end_row();
-                            }
-                        });
+                // Each line's equation (dimmed) leads its text, which wraps under it across the
+                // whole width: no column of equations narrows every line.
+                let font = egui::TextStyle::Body.resolve(ui.style());
+                let (weak, strong) = (ui.visuals().weak_text_color(), ui.visuals().text_color());
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    for line in inspected.lines.iter().chain(&shown_lines) {
+                        let mut job = egui::text::LayoutJob::default();
+                        let format = |color| egui::TextFormat::simple(font.clone(), color);
+                        if !line.equation.is_empty() {
+                            job.append(&line.equation, 0.0, format(weak));
+                        }
+                        job.append(&line.text, 8.0, format(strong));
+                        ui.add(egui::Label::new(job).wrap());
+                        ui.add_space(2.0);
+                    }
                 });
             }
         }
@@ -998,6 +1080,10 @@ impl WorkbenchApp {
         self.stats.noise = frame.noise;
         self.stats.denoised = (frame.denoise && frame.denoised.is_some())
             .then_some((frame.denoised_samples, frame.denoise_ms));
+        self.stats.denoised_error = frame
+            .denoised_error
+            .filter(|_| self.stats.denoised.is_some());
+        self.stats.stochastic = frame.settings.is_stochastic();
         self.stats.elapsed_ms = frame.since_submit_ms;
         self.stats.legend = frame.legend.clone();
         if !frame.is_preview {
@@ -1106,6 +1192,9 @@ impl WorkbenchApp {
                 self.state.inspect_mode = !self.state.inspect_mode;
                 if self.state.inspect_mode {
                     self.state.focus_mode = false;
+                    self.make_room_for_inspector(ctx);
+                } else {
+                    self.give_back_inspector_room(ctx);
                 }
             }
             Command::MovePinned([dx, dy]) => {
@@ -1538,25 +1627,24 @@ impl eframe::App for WorkbenchApp {
                 ));
             });
         if self.state.inspect_mode {
-            // The inspector takes what the image leaves at 1:1 (between its least and its
-            // widest), so at the default window size the 512² image is not scaled down; its
-            // lines scroll sideways when it is narrow.
-            let image = self.state.settings.camera.width as f32 / ctx.pixels_per_point();
-            let room = ui.available_width() - image - CENTRAL_MARGINS;
-            egui::Panel::right("inspector")
+            // As wide as opening it made room for ([`WorkbenchApp::make_room_for_inspector`]).
+            egui::Panel::right(("inspector", self.inspector_opened))
                 .resizable(true)
                 .min_size(INSPECTOR_MIN_WIDTH)
-                .default_size(room.clamp(INSPECTOR_MIN_WIDTH, INSPECTOR_WIDTH))
+                .default_size(self.inspector_width)
                 .show(ui, |ui| {
                     let title = match self.state.pinned {
                         Some([x, y]) => format!("Inspector: pixel ({x}, {y})"),
                         None => "Inspector".to_owned(),
                     };
+                    // The panel keeps its width (else it shrinks to its widest line).
+                    ui.set_min_width(ui.available_width());
                     ui.heading(title);
                     self.inspector_ui(ui);
                 });
         }
         egui::CentralPanel::default_margins().show(ui, |ui| {
+            self.central_width = ui.available_width() + CENTRAL_MARGINS;
             self.viewport.pinned =
                 self.state
                     .pinned

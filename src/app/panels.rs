@@ -37,6 +37,23 @@ pub const MAX_EXPOSURE_UI: f32 = 10.0;
 /// The most render threads the panel offers.
 pub const MAX_THREADS_UI: usize = 64;
 
+/// What a point dragged on a control moves, on its rail or its number alike (egui's own rail
+/// follows the pointer: on a 100-point rail Yaw's 360° would be 3.6° a point). Holding Shift
+/// moves a tenth of it ([`FINE_DRAG`]), as in Blender.
+/// Yaw and pitch, in degrees a point.
+pub const DEGREES_PER_POINT: f64 = 0.5;
+/// Camera and light coordinates, in scene units a point (the box, 2 units wide, in 400 points).
+pub const UNITS_PER_POINT: f64 = 0.005;
+/// The focal length, as a factor a point: `f · exp(points · this)`, 0.5 % a point.
+pub const FOCAL_PER_POINT: f64 = 0.005;
+/// The light's power, in watts a point.
+pub const WATTS_PER_POINT: f64 = 0.1;
+/// Shift divides a drag's movement by this (egui's number fields do the same).
+pub const FINE_DRAG: f64 = 10.0;
+/// A press on a rail that moves less than this, in points, is a click: the value goes where it
+/// was clicked, as a slider's does.
+const CLICK_POINTS: f32 = 3.0;
+
 /// A selector of one of `T`'s values by their labels ([`NamedEnum::label`]), showing
 /// `current`: its response (for its own tooltip) and the value clicked, if any. `hover` gives
 /// each value's tooltip.
@@ -414,14 +431,20 @@ pub fn camera_ui(ui: &mut egui::Ui, camera: &mut Camera, commands: &mut Vec<Comm
     degrees_slider(ui, &mut camera.yaw, -180.0..=180.0, "Yaw");
     degrees_slider(ui, &mut camera.pitch, -89.0..=89.0, "Pitch");
     let w = camera.width as f32;
-    ui.add(
+    let before = f64::from(camera.focal_length);
+    let response = ui.add(
         egui::Slider::new(&mut camera.focal_length, 0.1 * w..=10.0 * w)
             .custom_parser(typed_number("Focal length", 0.1 * w, 10.0 * w))
             .logarithmic(true)
             .max_decimals(1)
             .suffix(" px")
+            .drag_value_speed(before * FOCAL_PER_POINT)
             .text("Focal length"),
     );
+    if let Some(points) = rail_drag(ui, &response) {
+        let f = before * (points * FOCAL_PER_POINT).exp();
+        camera.focal_length = f.clamp(0.1 * f64::from(w), 10.0 * f64::from(w)) as f32;
+    }
     ui.label(format!(
         "Field of view: {:.1}° horizontal, {:.1}° vertical",
         camera.horizontal_fov_degrees(),
@@ -445,13 +468,48 @@ fn position_slider(
     range: std::ops::RangeInclusive<f32>,
     label: &str,
 ) {
-    ui.add(
+    let before = f64::from(*value);
+    let response = ui.add(
         egui::Slider::new(value, range.clone())
             .custom_parser(typed_number(label, *range.start(), *range.end()))
             .clamping(egui::SliderClamping::Edits)
             .custom_formatter(|v, _| fixed(v, 2))
+            .drag_value_speed(UNITS_PER_POINT)
             .text(label),
     );
+    if let Some(points) = rail_drag(ui, &response) {
+        let (lo, hi) = (f64::from(*range.start()), f64::from(*range.end()));
+        *value = (before + points * UNITS_PER_POINT).clamp(lo.min(before), hi.max(before)) as f32;
+    }
+}
+
+/// The points a slider's rail was dragged this frame (a tenth with Shift: [`FINE_DRAG`]),
+/// while its drag goes on and on the frame it ends, or `None` when the rail is not dragged (or
+/// the press was a click, which leaves the value where egui put it). The caller sets the value
+/// from its value before the frame: the rail then moves its value by a fixed amount a point
+/// ([`DEGREES_PER_POINT`] …) from where it was, not to where the pointer is on the rail.
+fn rail_drag(ui: &egui::Ui, response: &egui::Response) -> Option<f64> {
+    // While the number beside the rail has the focus, the response is the number's.
+    let held = !response.has_focus() && ui.ctx().is_being_dragged(response.id);
+    let moved_id = response.id.with("rail drag");
+    let moved: Option<f32> = ui.data(|d| d.get_temp(moved_id));
+    if !held && moved.is_none() {
+        return None;
+    }
+    let (delta, shift) = ui.input(|i| (i.pointer.delta().x, i.modifiers.shift_only()));
+    // The press's own frame moves nothing: its delta may be the pointer's jump onto the rail.
+    let delta = if moved.is_some() { delta } else { 0.0 };
+    let total = moved.unwrap_or(0.0) + delta.abs();
+    if held {
+        ui.data_mut(|d| d.insert_temp(moved_id, total));
+    } else {
+        ui.data_mut(|d| d.remove::<f32>(moved_id));
+        if total < CLICK_POINTS {
+            return None;
+        }
+    }
+    let scale = if shift { 1.0 / FINE_DRAG } else { 1.0 };
+    Some(f64::from(delta) * scale)
 }
 
 /// What the newest text typed into a number field came to, for the status line.
@@ -557,14 +615,20 @@ fn degrees_slider(
     label: &str,
 ) {
     let mut degrees = radians.to_degrees();
+    let before = f64::from(degrees);
     let response = ui.add(
         egui::Slider::new(&mut degrees, range.clone())
             .custom_parser(typed_number(label, *range.start(), *range.end()))
             .suffix("°")
             .custom_formatter(|v, _| fixed(v, 1))
+            .drag_value_speed(DEGREES_PER_POINT)
             .text(label),
     );
-    if response.changed() {
+    if let Some(points) = rail_drag(ui, &response) {
+        let (lo, hi) = (f64::from(*range.start()), f64::from(*range.end()));
+        degrees = (before + points * DEGREES_PER_POINT).clamp(lo, hi) as f32;
+    }
+    if degrees != before as f32 {
         *radians = degrees.to_radians();
     }
 }
@@ -601,13 +665,19 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
     position_slider(ui, &mut light.position.x, -1.0..=1.0, "Light x");
     position_slider(ui, &mut light.position.y, -1.0..=1.0, "Light y");
     position_slider(ui, &mut light.position.z, -1.0..=1.0, "Light z");
-    ui.add(
-        egui::Slider::new(&mut light.power, 0.0..=100.0)
-            .custom_parser(typed_number("Light power", 0.0, 100.0))
-            .suffix(" W")
-            .text("Light power"),
-    )
-    .on_hover_text("The total power P; each channel gets P times the colour");
+    let before = f64::from(light.power);
+    let response = ui
+        .add(
+            egui::Slider::new(&mut light.power, 0.0..=100.0)
+                .custom_parser(typed_number("Light power", 0.0, 100.0))
+                .suffix(" W")
+                .drag_value_speed(WATTS_PER_POINT)
+                .text("Light power"),
+        )
+        .on_hover_text("The total power P; each channel gets P times the colour");
+    if let Some(points) = rail_drag(ui, &response) {
+        light.power = (before + points * WATTS_PER_POINT).clamp(0.0, 100.0) as f32;
+    }
     ui.horizontal(|ui| {
         let mut rgb = light.colour.to_array();
         let label = ui.label("Light colour");

@@ -37,7 +37,24 @@ pub struct Stats {
     /// When the shown image is denoised: the samples it was denoised from and the time it
     /// took, in ms.
     pub denoised: Option<(u32, f64)>,
+    /// The shown denoised image's estimated error, relative as the noise is (from 2 samples
+    /// on).
+    pub denoised_error: Option<f64>,
+    /// Whether anything in the render is random ([`raylab_core::RenderSettings::is_stochastic`]):
+    /// otherwise each pass is exact, and its samples differ only in where they fall in the pixel.
+    pub stochastic: bool,
 }
+
+/// What the denoised image's error means, for its hover text.
+const DENOISED_ERROR_HOVER: &str = "How far the denoised image on screen may be from the \
+    converged one, as an RMS over the image relative to its brightness: estimated from the raw \
+    image, its noise and a second filtering (Stein's unbiased risk estimate), so the blur the \
+    filter adds counts as well as the noise it leaves.";
+
+/// What a render with nothing random shows instead of a noise figure.
+const EXACT_HOVER: &str = "Nothing in this render is random (no path tracing, soft shadows or \
+    depth of field): one sample is the exact image, and more samples only move each ray within \
+    its pixel, which smooths the edges (anti-aliasing). There is no noise to estimate.";
 
 /// What the denoiser does, for the stats line and the switch.
 pub const DENOISE_HOVER: &str = "An edge-avoiding filter guided by each pixel's albedo, normal, \
@@ -84,7 +101,7 @@ pub enum ToClean {
 impl Stats {
     /// The way to a clean image, once there is a noise estimate.
     pub fn to_clean(&self) -> Option<ToClean> {
-        let noise = self.noise.filter(|_| !self.is_preview)?;
+        let noise = self.noise.filter(|_| !self.is_preview && self.stochastic)?;
         if noise.relative_rms_error <= CLEAN_RELATIVE_ERROR {
             return Some(ToClean::Clean);
         }
@@ -115,6 +132,19 @@ impl Stats {
             format!("{}/{} spp", self.samples, self.target)
         };
         let frame = self.frame_cpu_ms.unwrap_or(self.ui_frame_ms);
+        if !self.stochastic && !self.is_preview && self.legend.is_none() {
+            return format!(
+                "{pass} · UI {frame:.1} ms · {samples} · {}",
+                self.exactness()
+            );
+        }
+        // The figure is the image on screen's: the denoised one's own error when it is shown.
+        if self.denoised.is_some() && !self.is_preview {
+            let error = self
+                .denoised_error
+                .map_or_else(String::new, |e| format!(": error ±{}", percent(e)));
+            return format!("{pass} · UI {frame:.1} ms · {samples} · denoised{error}");
+        }
         let Some((noise, to_clean)) = self.noise.zip(self.to_clean()) else {
             return format!("{pass} · UI {frame:.1} ms · {samples}");
         };
@@ -123,12 +153,20 @@ impl Stats {
             ToClean::In(s) => format!("1 % in {}", duration(s)),
             ToClean::Needs(n) => format!("1 % at ~{n:.0} spp"),
         };
-        // The noise is the accumulated image's: with the denoised one on screen, says so.
-        let raw = if self.denoised.is_some() { "raw " } else { "" };
         format!(
-            "{pass} · UI {frame:.1} ms · {samples} · {raw}noise ±{}, {to_clean}",
+            "{pass} · UI {frame:.1} ms · {samples} · noise ±{}, {to_clean}",
             percent(noise.relative_rms_error)
         )
+    }
+
+    /// What a render with nothing random is instead of noisy: exact with one sample, and with
+    /// more, anti-aliased.
+    fn exactness(&self) -> &'static str {
+        if self.samples <= 1 {
+            "exact"
+        } else {
+            "exact, anti-aliased"
+        }
     }
 
     /// The figures a user watches, in two lines pinned above the scrolled panel: the pass time,
@@ -188,13 +226,28 @@ impl Stats {
             format!("Samples: {} / {}", self.samples, self.target)
         };
         ui.label(&text);
+        if !self.stochastic && !self.is_preview && self.legend.is_none() {
+            let text = if self.samples <= 1 {
+                "Exact: nothing is random, no noise"
+            } else {
+                "Exact, anti-aliased: nothing is random, no noise"
+            };
+            ui.label(text).on_hover_text(EXACT_HOVER);
+        }
         if let Some((samples, ms)) = self.denoised {
             ui.label(format!("Denoised from {samples} samples in {ms:.1} ms"))
                 .on_hover_text(DENOISE_HOVER);
+            if let Some(error) = self.denoised_error {
+                ui.label(format!(
+                    "Denoised image's error: about ±{} (RMS over the image)",
+                    percent(error)
+                ))
+                .on_hover_text(DENOISED_ERROR_HOVER);
+            }
         }
         if let Some((noise, to_clean)) = self.noise.zip(self.to_clean()) {
             let of = if self.denoised.is_some() {
-                "Noise of the raw image"
+                "Noise of the raw image (not shown)"
             } else {
                 "Noise"
             };
@@ -247,6 +300,7 @@ mod tests {
         let mut stats = Stats {
             samples: 1,
             target: 8,
+            stochastic: true,
             ..Stats::default()
         };
         assert!(!stats.summary().contains("noise"));
@@ -288,12 +342,72 @@ mod tests {
             ..n
         });
         assert!(stats.summary().ends_with("noise ±0.90 %, clean"));
-        // With the denoised image on screen the figure is the raw image's, and says so.
-        stats.denoised = Some((2, 5.0));
+    }
+
+    /// With the denoised image on screen, the figure is its own estimated error, not the raw
+    /// image's noise (nor the time to make the raw image clean).
+    #[test]
+    fn a_denoised_image_shows_its_own_error() {
+        let mut stats = Stats {
+            samples: 64,
+            target: 1024,
+            stochastic: true,
+            noise: Some(NoiseEstimate {
+                relative_error_of_mean: 0.001,
+                share_of_pixels_above_1_percent: 0.9,
+                relative_rms_error: 0.049,
+            }),
+            elapsed_ms: 8000.0,
+            denoised: Some((64, 12.0)),
+            denoised_error: Some(0.0042),
+            ..Stats::default()
+        };
+        let summary = stats.summary();
         assert!(
-            stats
-                .summary()
-                .ends_with("2/64 spp · raw noise ±0.90 %, clean"),
+            summary.ends_with("64/1024 spp · denoised: error ±0.42 %"),
+            "{summary}"
+        );
+        assert!(
+            !summary.contains("4.9") && !summary.contains("1 %"),
+            "{summary}"
+        );
+        // The denoiser off: the raw image's noise again.
+        stats.denoised = None;
+        stats.denoised_error = None;
+        let summary = stats.summary();
+        assert!(summary.contains("noise ±4.9 %, 1 % at"), "{summary}");
+    }
+
+    /// A render with nothing random (the lab's stages with a point light and a pinhole) has no
+    /// noise figure, whatever spread its anti-aliasing samples have: it is exact.
+    #[test]
+    fn a_render_with_nothing_random_is_exact_not_noisy() {
+        let mut stats = Stats {
+            samples: 16,
+            target: 16,
+            stochastic: false,
+            noise: Some(NoiseEstimate {
+                relative_error_of_mean: 0.0002,
+                share_of_pixels_above_1_percent: 0.05,
+                relative_rms_error: 0.0083,
+            }),
+            ..Stats::default()
+        };
+        let summary = stats.summary();
+        assert!(
+            summary.ends_with("16/16 spp · exact, anti-aliased"),
+            "{summary}"
+        );
+        assert!(
+            !summary.contains("noise") && !summary.contains('±'),
+            "{summary}"
+        );
+        assert_eq!(stats.to_clean(), None);
+        stats.samples = 1;
+        stats.target = 1;
+        stats.noise = None;
+        assert!(
+            stats.summary().ends_with("1/1 spp · exact"),
             "{}",
             stats.summary()
         );

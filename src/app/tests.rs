@@ -25,8 +25,10 @@ mod caustics_ui;
 mod check_ui;
 mod denoise_ui;
 mod files_ui;
+mod inspector_ui;
 mod panels_ui;
 mod relief_ui;
+mod steps_ui;
 mod top_ui;
 mod water_ui;
 

@@ -31,6 +31,8 @@ pub struct ViewportInput {
     pub dragging: bool,
     /// Compare A/B: the drag is the divider's, not the camera's or the light's.
     pub on_divider: bool,
+    /// Shift is held: the drag and the wheel move a tenth as far (fine control).
+    pub fine: bool,
 }
 
 /// The light's marker radius, in points; a drag starting this close to it moves the light.
@@ -86,7 +88,6 @@ impl Viewport {
     }
 
     /// Where the image was drawn last, in points.
-    #[cfg(test)]
     pub fn shown_rect(&self) -> Option<egui::Rect> {
         self.shown_rect
     }
@@ -173,10 +174,13 @@ impl Viewport {
             .or_else(|| response.hover_pos())
             .map(to_fraction);
 
-        let scroll_y = if response.hovered() {
-            ui.input(|i| i.smooth_scroll_delta.y)
-        } else {
-            0.0
+        let fine = ui.input(|i| i.modifiers.shift_only());
+        // egui turns a wheel's scroll sideways while Shift is held (on every platform but
+        // macOS, whose wheel does it itself): with Shift either way is the wheel.
+        let scroll_y = match (response.hovered(), fine) {
+            (false, _) => 0.0,
+            (true, false) => ui.input(|i| i.smooth_scroll_delta.y),
+            (true, true) => ui.input(|i| i.smooth_scroll_delta.y + i.smooth_scroll_delta.x),
         };
         ViewportInput {
             drag_delta: if response.dragged() {
@@ -196,6 +200,7 @@ impl Viewport {
             drag_started_on_marker,
             dragging: response.dragged(),
             on_divider,
+            fine,
         }
     }
 }

@@ -30,6 +30,7 @@ use std::fmt::Write as _;
 use glam::{Vec2, Vec3};
 use serde::Serialize;
 
+use crate::display::Display;
 use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Recorder, Stage, Tracer, path, path_mis};
 use crate::intersect::Intersection;
@@ -295,6 +296,19 @@ pub struct InspectLine {
     /// The step with numbers substituted, e.g. "D = P·max(r̂·n̂, 0)/(4πr²) = 14 W × 0.906 /
     /// (4π × 2.740 units²) = 0.368 W per unit area".
     pub text: String,
+}
+
+/// What the screen shows at the inspected pixel: the value of the image on screen there, and
+/// what that image is. With one sample it is [`Inspection::r`] itself; with more it is their
+/// mean (the film's), or the denoised image's value.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ShownPixel {
+    /// The pixel's linear value in the image on screen.
+    pub value: Vec3,
+    /// The samples the image on screen averages (so far).
+    pub samples: u32,
+    /// Whether the image on screen is the denoised one, made from those samples.
+    pub denoised: bool,
 }
 
 /// Recomputes sample 0 of pixel `(x, y)` as the renderer does and records every step.
@@ -818,20 +832,78 @@ impl Inspection {
         lines.0
     }
 
+    /// What the display makes of the pixel, to follow [`Inspection::lines`]: R through
+    /// `display` (its exposure and curve) as the 8-bit value a screen or PNG shows; and when the
+    /// pixel on screen is not sample 0 alone (`shown`: several samples, or denoised), that R is
+    /// sample 0's, and the value shown with its own 8 bits. `shown` is `None` while no image of
+    /// these settings is on screen.
+    pub fn display_lines(&self, display: &Display, shown: Option<ShownPixel>) -> Vec<InspectLine> {
+        let mut lines = Lines::default();
+        let curve = match display.exposure {
+            0.0 => format!("display {}", display.transform.label()),
+            stops => format!(
+                "display {}, exposure {stops:+} EV",
+                display.transform.label()
+            ),
+        };
+        let eight_bit = |v: Vec3| {
+            let [r, g, b] = display.encode(v);
+            if r == g && g == b {
+                format!("{r}")
+            } else {
+                format!("({r}, {g}, {b})")
+            }
+        };
+        match shown {
+            Some(shown) if shown.samples > 1 || shown.denoised => {
+                let origin = if self.lens_point.is_some() {
+                    "through the pixel's centre and one point of the lens"
+                } else {
+                    "through the pixel's centre"
+                };
+                lines.push(
+                    "sample 0",
+                    format!(
+                        "R above is sample 0's alone (the ray {origin}), {} in 8 bits through the \
+                         {curve}: not the pixel on screen",
+                        eight_bit(self.r)
+                    ),
+                );
+                let what = if shown.denoised {
+                    format!(
+                        "the denoised image's value, filtered from the mean of {} samples",
+                        shown.samples
+                    )
+                } else {
+                    format!(
+                        "the mean of its {} samples (each through another point of the pixel)",
+                        shown.samples
+                    )
+                };
+                lines.push(
+                    "on screen",
+                    format!(
+                        "the pixel shown is {what}: {}, shown as {} in 8 bits",
+                        colour(shown.value),
+                        eight_bit(shown.value)
+                    ),
+                );
+            }
+            _ => lines.push(
+                "on screen",
+                format!(
+                    "R = {}, shown as {} in 8 bits through the {curve}",
+                    colour(self.r),
+                    eight_bit(self.r)
+                ),
+            ),
+        }
+        lines.0
+    }
+
     /// [`Inspection::lines`] joined, one per line: the equation, then the text.
     pub fn to_text(&self) -> String {
-        let lines = self.lines();
-        let width = lines
-            .iter()
-            .map(|l| l.equation.chars().count())
-            .max()
-            .unwrap_or(0);
-        let mut text = String::new();
-        for line in &lines {
-            let pad = width - line.equation.chars().count();
-            let _ = writeln!(text, "{}{}  {}", line.equation, " ".repeat(pad), line.text);
-        }
-        text
+        lines_text(&self.lines())
     }
 
     fn camera_lines(&self, lines: &mut Lines) {
@@ -1237,6 +1309,22 @@ fn final_equation(stage: Stage, n: Vec3) -> &'static str {
     }
 }
 
+/// Lines joined as [`Inspection::to_text`] joins them, one per line: the equation (padded to
+/// the longest), then the text.
+pub fn lines_text(lines: &[InspectLine]) -> String {
+    let width = lines
+        .iter()
+        .map(|l| l.equation.chars().count())
+        .max()
+        .unwrap_or(0);
+    let mut text = String::new();
+    for line in lines {
+        let pad = width - line.equation.chars().count();
+        let _ = writeln!(text, "{}{}  {}", line.equation, " ".repeat(pad), line.text);
+    }
+    text
+}
+
 #[derive(Default)]
 struct Lines(Vec<InspectLine>);
 
@@ -1307,6 +1395,55 @@ mod tests {
         assert_eq!(num(f32::NAN), "NaN");
         assert_eq!(colour(Vec3::splat(0.5)), "0.5");
         assert_eq!(colour(Vec3::new(0.75, 0.15, 0.15)), "(0.75, 0.15, 0.15)");
+    }
+
+    /// The display's lines: R's 8 bits through the display in force (×255 and rounded for the
+    /// lab's; the sRGB curve's own), and with several samples, that R is sample 0's beside the
+    /// value on screen with its 8 bits.
+    #[test]
+    fn the_display_lines_give_the_8_bits_shown() {
+        let scene = cornell_box();
+        let mut settings = RenderSettings::default();
+        settings.camera = settings.camera.with_resolution(64, 64);
+        let inspection = inspect_pixel(&scene, &settings, 20, 50).unwrap();
+        let r = inspection.r;
+        let lab = |v: f32| crate::display::to_display_u8(v);
+        let lines = inspection.display_lines(&settings.display, None);
+        assert_eq!(lines.len(), 1);
+        assert_eq!(lines[0].equation, "on screen");
+        let bits = format!("({}, {}, {})", lab(r.x), lab(r.y), lab(r.z));
+        assert!(
+            lines[0]
+                .text
+                .contains(&format!("shown as {bits} in 8 bits")),
+            "{}",
+            lines[0].text
+        );
+        let srgb = Display {
+            transform: crate::display::DisplayTransform::Srgb,
+            exposure: 0.0,
+        };
+        let shown = ShownPixel {
+            value: Vec3::new(0.25, 0.5, 0.75),
+            samples: 16,
+            denoised: false,
+        };
+        let lines = inspection.display_lines(&srgb, Some(shown));
+        assert_eq!(lines.len(), 2);
+        assert!(lines[0].text.starts_with("R above is sample 0's alone"));
+        let [a, b, c] = srgb.encode(shown.value);
+        assert_eq!((a, b, c), (137, 188, 225));
+        assert_eq!(
+            lines[1].text,
+            "the pixel shown is the mean of its 16 samples (each through another point of the \
+             pixel): (0.25, 0.5, 0.75), shown as (137, 188, 225) in 8 bits"
+        );
+        let denoised = ShownPixel {
+            denoised: true,
+            ..shown
+        };
+        let lines = inspection.display_lines(&srgb, Some(denoised));
+        assert!(lines[1].text.contains("the denoised image's value"));
     }
 
     /// The parts of D at the lab's floor centre (0, 1, 0), by hand as in the integrator's

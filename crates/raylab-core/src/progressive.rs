@@ -42,6 +42,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use crate::denoise::quality::estimated_error;
 use crate::denoise::{Denoiser, Features, denoising_film};
 use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
@@ -100,6 +101,10 @@ pub struct Frame {
     /// time allows).
     pub denoised: Option<Arc<Image>>,
     pub denoised_samples: u32,
+    /// The denoised image's estimated error, relative as [`NoiseEstimate::relative_rms_error`]
+    /// is ([`crate::denoise::quality::estimated_error`]; `None` for one sample, whose spread
+    /// is unknown).
+    pub denoised_error: Option<f64>,
     /// How long the last denoising took, in milliseconds (the feature buffers, traced once a
     /// view, not counted).
     pub denoise_ms: f64,
@@ -649,6 +654,8 @@ struct Denoising {
     /// The features this job's film recorded, and of how many samples.
     recorded: Option<(u32, Arc<Features>)>,
     image: Option<Arc<Image>>,
+    /// `image`'s estimated error.
+    error: Option<f64>,
     samples: u32,
     cost: Duration,
     at: Option<Instant>,
@@ -827,6 +834,11 @@ impl Worker {
                 self.denoising.samples
             } else {
                 last.denoised_samples
+            },
+            denoised_error: if denoised.is_some() && last.denoised.is_none() {
+                self.denoising.error
+            } else {
+                last.denoised_error
             },
             denoise_ms: if denoised.is_some() && last.denoised.is_none() {
                 self.denoising.cost.as_secs_f64() * 1e3
@@ -1063,12 +1075,19 @@ impl Worker {
             }
         };
         let variance = denoising.variance.clone();
-        let denoised = self.pool.install(|| {
-            Denoiser::default().denoise(image, variance.as_deref().map(Vec::as_slice), &features)
+        let variance = variance.as_deref().map(Vec::as_slice);
+        let denoise = |image: &Image| Denoiser::default().denoise(image, variance, &features);
+        let (denoised, error) = self.pool.install(|| {
+            let denoised = denoise(image);
+            // What the screen shows is the denoised image: its own error, from a second
+            // filtering (counted in the cost, so the spacing of denoisings allows for it).
+            let error = variance.map(|v| estimated_error(image, v, &denoised, denoise));
+            (denoised, error)
         });
         denoising.cost = start.elapsed();
         denoising.at = Some(Instant::now());
         denoising.image = Some(Arc::new(denoised));
+        denoising.error = error;
         denoising.samples = samples;
         if cancelled() { Err(Cancelled) } else { Ok(()) }
     }
@@ -1084,6 +1103,7 @@ impl Worker {
             rgba,
             denoise: on,
             denoised_samples: self.denoising.samples,
+            denoised_error: self.denoising.error,
             denoise_ms: self.denoising.cost.as_secs_f64() * 1e3,
             denoised: Some(denoised),
             ..frame
@@ -1167,6 +1187,7 @@ impl Worker {
             image: Arc::new(image),
             denoised: None,
             denoised_samples: 0,
+            denoised_error: None,
             denoise_ms: 0.0,
             denoise: self.shared.denoise(),
             rgba: Vec::new(),
