@@ -464,16 +464,21 @@ fn degrees_slider(
     range: std::ops::RangeInclusive<f32>,
     label: &str,
 ) {
-    let mut degrees = radians.to_degrees();
+    // In f64 and through `camera::radians`: a typed angle becomes the radians the same number
+    // gives on the command line and in a scene file.
+    let mut degrees = raylab_core::camera::degrees(*radians);
     let response = ui.add(
-        egui::Slider::new(&mut degrees, range.clone())
-            .custom_parser(typed_number(label, *range.start(), *range.end()))
-            .suffix("°")
-            .custom_formatter(|v, _| fixed(v, 1))
-            .text(label),
+        egui::Slider::new(
+            &mut degrees,
+            f64::from(*range.start())..=f64::from(*range.end()),
+        )
+        .custom_parser(typed_number(label, *range.start(), *range.end()))
+        .suffix("°")
+        .custom_formatter(|v, _| fixed(v, 1))
+        .text(label),
     );
     if response.changed() {
-        *radians = degrees.to_radians();
+        *radians = raylab_core::camera::radians(degrees);
     }
 }
 
