@@ -752,23 +752,6 @@ fn material_hover(preset: MaterialPreset) -> &'static str {
     }
 }
 
-/// Why a reflecting block's front face is dark, for the Materials row: it faces the box's open
-/// front, so it reflects the void behind the camera. `None` for a preset that reflects
-/// nothing there (diffuse, glass; the rough metal in the lab stages, shaded by its highlight).
-fn reflection_hint(preset: MaterialPreset, path: bool) -> Option<&'static str> {
-    match preset {
-        MaterialPreset::Mirror | MaterialPreset::Both => Some(
-            "The mirror's front face is black: it reflects the box's open front, the void \
-             behind the camera (physically right: the lab's box has no front wall)",
-        ),
-        MaterialPreset::Rough if path => Some(
-            "The metal's front face is dark: it reflects the box's open front, the void \
-             behind the camera (physically right: the lab's box has no front wall)",
-        ),
-        _ => None,
-    }
-}
-
 /// The stage, its switches, the path tracer's bounces and the materials. `limited_bounces` is
 /// the bounce count the "Bounces" slider remembers while "Unlimited bounces" is ticked.
 pub fn shading_ui(
@@ -799,7 +782,7 @@ pub fn shading_ui(
             materials,
             Some(material_hover),
         );
-        if let Some(hint) = reflection_hint(*materials, path) {
+        if let Some(hint) = materials.front_face_note(path, *roughness) {
             ui.weak(hint);
         }
     });
