@@ -191,7 +191,7 @@ pub struct Pixel(pub u32, pub u32);
 
 /// The options that set what a file given with `--settings` or `--scene-file` holds: either
 /// file takes them all, so none combines with it.
-const SETTINGS_OPTIONS: [&str; 33] = [
+const SETTINGS_OPTIONS: [&str; 34] = [
     "scene",
     "obj",
     "stage",
@@ -200,6 +200,7 @@ const SETTINGS_OPTIONS: [&str; 33] = [
     "focal",
     "camera",
     "yaw",
+    "pitch",
     "light",
     "light_power",
     "indirect",
@@ -323,8 +324,11 @@ pub struct RenderOptions {
     #[arg(long, value_parser = parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub camera: Option<Vec3>,
     /// Camera yaw in degrees; positive turns right.
-    #[arg(long, default_value_t = 0.0, value_parser = parse_finite, allow_hyphen_values = true)]
-    pub yaw: f32,
+    #[arg(long, default_value_t = 0.0, value_parser = parse_degrees, value_name = "DEG", allow_hyphen_values = true)]
+    pub yaw: f64,
+    /// Camera pitch in degrees; positive looks up.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_degrees, value_name = "DEG", allow_hyphen_values = true)]
+    pub pitch: f64,
     /// Light position [default: 0,-0.5,-0.7].
     #[arg(long, value_parser = parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub light: Option<Vec3>,
@@ -452,7 +456,8 @@ impl RenderOptions {
         if let Some(p) = self.camera {
             camera.position = p;
         }
-        camera.yaw = self.yaw.to_radians();
+        camera.yaw = raylab_core::camera::radians(self.yaw);
+        camera.pitch = raylab_core::camera::radians(self.pitch);
         camera.aperture = self.aperture;
         if let Some(d) = self.focus_distance {
             camera.focus_distance = d;
@@ -1322,11 +1327,22 @@ fn thread_pool(what: &'static str, threads: Option<u16>) -> anyhow::Result<rayon
 }
 
 fn parse_finite(s: &str) -> Result<f32, String> {
-    let x: f32 = s
+    finite(s)
+}
+
+/// An angle in degrees (`--yaw`, `--pitch`), read as an `f64`: the same number gives the same
+/// radians as in a scene file (`camera::radians`).
+fn parse_degrees(s: &str) -> Result<f64, String> {
+    finite(s)
+}
+
+/// A number that is finite as an `f32`.
+fn finite<T: std::str::FromStr + Into<f64> + Copy>(s: &str) -> Result<T, String> {
+    let x: T = s
         .trim()
         .parse()
         .map_err(|_| format!("'{s}' is not a number"))?;
-    if x.is_finite() {
+    if (x.into() as f32).is_finite() {
         Ok(x)
     } else {
         Err(format!("{s} is not a finite number"))
@@ -1469,6 +1485,12 @@ mod tests {
         assert!(!s.shading.indirect && s.shading.shadows);
         assert_eq!(s.camera.position, Vec3::new(-0.5, 0.0, -2.0));
         assert_eq!(s.camera.yaw, -std::f32::consts::FRAC_PI_2);
+        assert_eq!(s.camera.pitch, 0.0);
+        // Degrees, as the window's Pitch and a scene file's `pitch` take them.
+        let s = args(&["--pitch", "-12.5", "--yaw", "30"]).settings();
+        assert_eq!(s.camera.pitch, raylab_core::camera::radians(-12.5));
+        assert_eq!(s.camera.yaw, raylab_core::camera::radians(30.0));
+        assert!((s.camera.pitch + 12.5f32.to_radians()).abs() < 1e-7);
     }
 
     #[test]

@@ -114,6 +114,8 @@ fn bad_arguments_exit_non_zero_with_one_line_and_no_file() {
         (&["render", "--out", o, "--focal", "-3"], "--focal"),
         (&["render", "--out", o, "--focal", "0"], "--focal"),
         (&["render", "--out", o, "--yaw", "NaN"], "--yaw"),
+        (&["render", "--out", o, "--pitch", "inf"], "--pitch"),
+        (&["render", "--out", o, "--pitch", "1e39"], "--pitch"),
         (&["render", "--out", o, "--camera", "0,inf,0"], "--camera"),
         (&["render", "--out", o, "--light", "a,b,c"], "--light"),
         (&["render", "--out", o, "--stage", "phong"], "phong"),
@@ -753,7 +755,7 @@ fn the_check_command() {
     // The figure upside down, as a BMP.
     let mut s = settings(Stage::Direct, 48);
     s.camera = s.camera.with_resolution(48, 36);
-    s.camera.yaw = 10f32.to_radians();
+    s.camera.yaw = raylab_core::camera::radians(10.0);
     let flipped = &check::mistakes::looks(&cornell_box(), &s, Mistake::UpsideDown)[0];
     let bmp = path("flipped.bmp");
     image::RgbImage::from_raw(48, 36, flipped.data.clone())
@@ -1185,4 +1187,56 @@ fn caustics_and_photons_where_they_do_nothing_are_refused_in_every_command() {
     ]);
     let ok = raylab(&path);
     assert!(ok.status.success(), "{}", stderr(&ok));
+}
+
+/// `--pitch DEG` turns the camera up, as the window's Pitch does: the image differs from the
+/// level camera's and is, byte for byte, the render of a scene file whose pitch is the same
+/// degrees; `check` and `inspect` take it too.
+#[test]
+fn pitch_reaches_the_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let size = ["--stage", "direct", "--width", "40", "--height", "32"];
+    let render = |extra: &[&str]| {
+        let out = raylab(&[&["render"], &size[..], extra].concat());
+        assert!(out.status.success(), "{}", stderr(&out));
+    };
+    let (level, pitched, from_file) = (path("level.png"), path("pitched.png"), path("file.png"));
+    let scene = path("level.toml");
+    render(&["--out", &level, "--save-scene", &scene]);
+    render(&["--out", &pitched, "--pitch", "12.5"]);
+    let pixels = |p: &str| image::open(p).unwrap().to_rgb8().into_raw();
+    assert_ne!(pixels(&level), pixels(&pitched));
+
+    let text = std::fs::read_to_string(&scene).unwrap();
+    assert!(
+        text.contains("version = 2\n") && text.contains("\npitch = 0.0\n"),
+        "{text}"
+    );
+    std::fs::write(&scene, text.replace("\npitch = 0.0\n", "\npitch = 12.5\n")).unwrap();
+    let out = raylab(&["render", "--scene-file", &scene, "--out", &from_file]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // The same settings, so the same bytes: pixels and the settings the PNG carries.
+    assert_eq!(
+        std::fs::read(&pitched).unwrap(),
+        std::fs::read(&from_file).unwrap()
+    );
+
+    let check = |extra: &[&str]| {
+        let out = raylab(&[&["check", &pitched], &size[..], extra].concat());
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let text = check(&["--pitch", "12.5"]);
+    assert!(text.contains("match: 100.0 %"), "{text}");
+    assert!(!check(&[]).contains("match: 100.0 %"));
+    let out = raylab(
+        &[
+            &["inspect", "--pixel", "20,16"],
+            &size[..],
+            &["--pitch", "12.5"],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
 }

@@ -56,7 +56,7 @@ fn a_saved_scene_file_renders_the_same_image() {
     let s = scene.to_str().unwrap();
     render(&[&["--out", a_out, "--save-scene", s], &options[..]].concat());
     let text = std::fs::read_to_string(&scene).unwrap();
-    assert!(text.contains("version = 1") && text.contains("material_preset = \"mirror\""));
+    assert!(text.contains("version = 2") && text.contains("material_preset = \"mirror\""));
     render(&["--scene-file", s, "--out", b.to_str().unwrap()]);
     // The same settings, so the same bytes: pixels and the settings the PNG carries.
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
@@ -197,7 +197,7 @@ fn a_bad_scene_file_names_the_field_and_the_line_and_writes_nothing() {
             "missing field `seed`".to_owned(),
         ),
         (
-            good.replace("version = 1", "version = 7"),
+            good.replace("version = 2", "version = 7"),
             format!("line {}", line("version")),
         ),
         (

@@ -614,22 +614,27 @@ fn degrees_slider(
     range: std::ops::RangeInclusive<f32>,
     label: &str,
 ) {
-    let mut degrees = radians.to_degrees();
-    let before = f64::from(degrees);
+    // In f64 and through `camera::radians`: a typed angle becomes the radians the same number
+    // gives on the command line and in a scene file.
+    let before = raylab_core::camera::degrees(*radians);
+    let mut degrees = before;
     let response = ui.add(
-        egui::Slider::new(&mut degrees, range.clone())
-            .custom_parser(typed_number(label, *range.start(), *range.end()))
-            .suffix("°")
-            .custom_formatter(|v, _| fixed(v, 1))
-            .drag_value_speed(DEGREES_PER_POINT)
-            .text(label),
+        egui::Slider::new(
+            &mut degrees,
+            f64::from(*range.start())..=f64::from(*range.end()),
+        )
+        .custom_parser(typed_number(label, *range.start(), *range.end()))
+        .suffix("°")
+        .custom_formatter(|v, _| fixed(v, 1))
+        .drag_value_speed(DEGREES_PER_POINT)
+        .text(label),
     );
     if let Some(points) = rail_drag(ui, &response) {
         let (lo, hi) = (f64::from(*range.start()), f64::from(*range.end()));
-        degrees = (before + points * DEGREES_PER_POINT).clamp(lo, hi) as f32;
+        degrees = (before + points * DEGREES_PER_POINT).clamp(lo, hi);
     }
-    if degrees != before as f32 {
-        *radians = degrees.to_radians();
+    if degrees != before {
+        *radians = raylab_core::camera::radians(degrees);
     }
 }
 
@@ -910,23 +915,6 @@ fn material_hover(preset: MaterialPreset) -> &'static str {
     }
 }
 
-/// Why a reflecting block's front face is dark, for the Materials row: it faces the box's open
-/// front, so it reflects the void behind the camera. `None` for a preset that reflects
-/// nothing there (diffuse, glass; the rough metal in the lab stages, shaded by its highlight).
-fn reflection_hint(preset: MaterialPreset, path: bool) -> Option<&'static str> {
-    match preset {
-        MaterialPreset::Mirror | MaterialPreset::Both => Some(
-            "The mirror's front face is black: it reflects the box's open front, the void \
-             behind the camera (physically right: the lab's box has no front wall)",
-        ),
-        MaterialPreset::Rough if path => Some(
-            "The metal's front face is dark: it reflects the box's open front, the void \
-             behind the camera (physically right: the lab's box has no front wall)",
-        ),
-        _ => None,
-    }
-}
-
 /// The stage, its switches, the path tracer's bounces and the materials. `limited_bounces` is
 /// the bounce count the "Bounces" slider remembers while "Unlimited bounces" is ticked.
 pub fn shading_ui(
@@ -950,7 +938,7 @@ pub fn shading_ui(
             materials,
             Some(material_hover),
         );
-        if let Some(hint) = reflection_hint(*materials, path) {
+        if let Some(hint) = materials.front_face_note(path, *roughness) {
             ui.weak(hint);
         }
     });

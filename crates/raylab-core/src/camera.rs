@@ -20,12 +20,35 @@ use serde::{Deserialize, Serialize};
 use crate::geometry::Ray;
 use crate::memory::{AllocError, try_with_capacity};
 
+/// Radians from an angle in degrees as a person types it (the command line's `--yaw` and
+/// `--pitch`, a scene file's angles): converted in `f64` and rounded to `f32` once, so that the
+/// same typed number gives the same angle wherever it is typed, and every `f32` angle has a
+/// decimal in degrees that gives it back ([`degrees`]).
+pub fn radians(degrees: f64) -> f32 {
+    degrees.to_radians() as f32
+}
+
+/// The shortest decimal in degrees that [`radians`] turns back into `radians` bit for bit: what
+/// a scene file writes, so that saving and loading keeps every angle exactly (`10°` set on the
+/// command line is written `10.0`, not `9.999999747378752`). A NaN has no such decimal and is
+/// written as it converts.
+pub fn degrees(radians: f32) -> f64 {
+    let exact = f64::from(radians).to_degrees();
+    // At most 17 significant digits name any f64; the conversion back to f32 then rounds to
+    // `radians` itself, its error being ~1e−16 of the value against the f32's half step of 6e−8.
+    (0..17)
+        .filter_map(|digits| format!("{exact:.digits$e}").parse::<f64>().ok())
+        .find(|&d| self::radians(d).to_bits() == radians.to_bits())
+        .unwrap_or(exact)
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Camera {
     /// The pinhole: every primary ray starts here.
     pub position: Vec3,
-    /// Rotation about the y axis, in radians (shown in degrees in the UI and CLI).
+    /// Rotation about the y axis, in radians (typed in degrees in the workbench, on the command
+    /// line and in scene files: [`radians`], [`degrees`]).
     pub yaw: f32,
     /// Rotation about the camera's x axis, in radians; positive looks up.
     pub pitch: f32,

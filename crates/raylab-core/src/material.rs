@@ -306,6 +306,13 @@ pub const PRESET_GLASS: MaterialKind = MaterialKind::Glass {
     tint: Vec3::ONE,
 };
 
+/// The roughness α from which the rough preset's metal shows a bright front face in the lab's
+/// box: the light hangs in front of the blocks, and microfacets this rough turn enough of it
+/// toward the camera. The face brightens gradually: its mean display value is near the
+/// mirror's black at α = 0.03, about 0.15 at 0.05 and 0.5 at the default 0.2
+/// (`tests/extensions.rs` checks the notes on either side of 0.05–0.1).
+pub const ROUGH_FRONT_BRIGHT_FROM: f32 = 0.075;
+
 named_enum!(MaterialPreset as "material preset" {
     None => "none", "Diffuse (the lab)";
     Mirror => "mirror", "Mirror tall block";
@@ -315,6 +322,34 @@ named_enum!(MaterialPreset as "material preset" {
 });
 
 impl MaterialPreset {
+    /// What the tall block's front face shows in the lab's box, and why, for the workbench's
+    /// Materials row; `None` where it is not a reflector's (diffuse, glass) or where the lab's
+    /// stages shade the rough metal by its highlight alone (`path` false). The face looks at
+    /// the box's open front: a mirror, or a metal smoother than [`ROUGH_FRONT_BRIGHT_FROM`],
+    /// reflects the void behind the camera; a rougher metal catches the light in front of it.
+    pub fn front_face_note(self, path: bool, roughness: f32) -> Option<&'static str> {
+        match self {
+            MaterialPreset::Mirror | MaterialPreset::Both => Some(
+                "The mirror's front face is black above what it shows of the floor and the short \
+                 block: there it reflects the box's open front, the void behind the camera \
+                 (physically right: the lab's box has no front wall)",
+            ),
+            MaterialPreset::Rough if path && roughness < ROUGH_FRONT_BRIGHT_FROM => Some(
+                "The metal's front face is dark above what it shows of the floor and the short \
+                 block: this smooth (α below 0.075), it reflects mostly the box's open front, the void \
+                 behind the camera, as the mirror does (physically right: the lab's box has no \
+                 front wall)",
+            ),
+            MaterialPreset::Rough if path => Some(
+                "The metal's front face is bright, where the mirror's is black: the light hangs \
+                 in front of the blocks, and the rough microfacets (α from 0.075) turn its \
+                 light toward the camera; a smoother metal reflects the box's open front, the \
+                 void behind the camera",
+            ),
+            _ => None,
+        }
+    }
+
     /// The materials with the preset applied: by name, the tall block's (`blue`) becomes the
     /// mirror (or the rough metal of roughness `roughness`), the short block's (`red`) the
     /// glass. Scenes without those names are unchanged.

@@ -8,17 +8,23 @@
 //! nesting of parentheses is harder to edit by hand, and JSON, which raylab's screenshot
 //! sidecars use, has no comments.)
 //!
-//! The format is versioned and strict, unlike the lenient settings JSON: `version = 1` first,
+//! The format is versioned and strict, unlike the lenient settings JSON: `version = 2` first,
 //! every field present (but a scene's `models` list and its optional `terrain`), no unknown
 //! field, every value checked ([`RenderSettings::validate`], [`SceneSpec::validate`]); an error
-//! names the field and its line. The file's structs below are version 1 itself, kept apart
+//! names the field and its line. The file's structs below are version 2 itself, kept apart
 //! from raylab's in-memory types so those can change without changing what old files mean.
-//! Angles are in radians, as in the settings JSON, so a file round-trips exactly.
+//!
+//! Angles (the camera's yaw and pitch, a model's yaw) are in degrees, as the workbench and the
+//! command line take them. Version 1, the same but for its angles in radians, is still read
+//! with its meaning; raylab writes version 2. Each angle is written as the shortest decimal
+//! that reads back to the same `f32` ([`camera::degrees`]), so a file round-trips exactly.
+//! The settings JSON (screenshots, `--settings`) keeps radians: written by raylab, not typed,
+//! and without a version, it could not tell an old screenshot's radians from degrees.
 //!
 //! An example, the lab's figure 7 (`assets/scenes/figure7.toml`):
 //!
 //! ```toml
-//! version = 1
+//! version = 2
 //!
 //! [scene]
 //! name = "figure 7"
@@ -69,7 +75,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::camera::Camera;
+use crate::camera::{self, Camera};
 use crate::display::{Display, DisplayTransform};
 use crate::integrator::{Shading, Stage};
 use crate::light::{LightShape, PointLight};
@@ -81,8 +87,11 @@ use crate::scene::water::WaterSpec;
 use crate::settings::{Caustics, DEFAULT_PHOTONS, RenderSettings};
 use crate::view::View;
 
-/// The version this raylab reads and writes.
-pub const VERSION: u32 = 1;
+/// The version this raylab writes (and reads, with version 1).
+pub const VERSION: u32 = 2;
+
+/// Version 1: angles in radians.
+const VERSION_RADIANS: u32 = 1;
 
 /// The extension of scene files.
 pub const EXTENSION: &str = "toml";
@@ -133,22 +142,25 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
     match versioned.version {
         None => {
             return Err(format!(
-                "line 1: missing field `version` (this raylab reads version {VERSION}: \
-                 write `version = {VERSION}` first)"
+                "line 1: missing field `version` (this raylab reads versions \
+                 {VERSION_RADIANS} and {VERSION}: write `version = {VERSION}` first, angles in \
+                 degrees)"
             ));
         }
-        Some(toml::Value::Integer(v)) if v == i64::from(VERSION) => {}
+        Some(toml::Value::Integer(v))
+            if v == i64::from(VERSION) || v == i64::from(VERSION_RADIANS) => {}
         Some(other) => {
             return Err(at_key(
                 text,
                 &["version"],
                 &format!(
-                    "version {other} is not one this raylab reads (it reads version {VERSION})"
+                    "version {other} is not one this raylab reads (it reads versions \
+                     {VERSION_RADIANS}, angles in radians, and {VERSION}, angles in degrees)"
                 ),
             ));
         }
     }
-    let file: FileV1 = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
+    let file: FileV2 = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
     let settings = file.into_settings(folder);
     // The scene's parts are checked too (`SceneSpec::validate`).
     settings
@@ -161,11 +173,11 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
 /// are written relative to it). Fails only for a seed above 2⁶³ − 1, which TOML's integers
 /// cannot hold.
 pub fn to_text(settings: &RenderSettings, folder: &Path) -> Result<String, String> {
-    let file = FileV1::from_settings(settings, folder)?;
+    let file = FileV2::from_settings(settings, folder)?;
     let body = toml::to_string(&file).map_err(|e| e.to_string())?;
     Ok(format!(
         "# A raylab scene file: open it in the workbench, or `raylab render --scene-file FILE`.\n\
-         # Angles are in radians, lengths in scene units (the box spans \
+         # Angles are in degrees, lengths in scene units (the box spans \
          −1 to 1), sizes and focal length in pixels.\n{body}"
     ))
 }
@@ -279,23 +291,25 @@ fn at_key(text: &str, path: &[impl AsRef<str>], message: &str) -> String {
     }
 }
 
-// Version 1 of the format. Every field is required (but `models` and `terrain`), none unknown.
+// Version 2 of the format. Every field is required (but `models` and `terrain`), none unknown.
+// Version 1 has the same fields, its angles in radians: each angle is read as an `f64` (what
+// TOML holds) and turned into the in-memory radians by `Angles`.
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct FileV1 {
+struct FileV2 {
     version: u32,
-    scene: SceneV1,
-    camera: CameraV1,
-    light: LightV1,
-    shading: ShadingV1,
-    display: DisplayV1,
-    render: RenderV1,
+    scene: SceneV2,
+    camera: CameraV2,
+    light: LightV2,
+    shading: ShadingV2,
+    display: DisplayV2,
+    render: RenderV2,
 }
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct SceneV1 {
+struct SceneV2 {
     /// Shown in the workbench's scene list.
     name: String,
     /// The lab's room: floor, walls, ceiling.
@@ -310,17 +324,17 @@ struct SceneV1 {
     /// Textures for the floor and walls: none, checker-floor, grid-walls, both.
     texture_preset: TexturePreset,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    models: Vec<ModelV1>,
+    models: Vec<ModelV2>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    terrain: Option<TerrainV1>,
+    terrain: Option<TerrainV2>,
     /// Normal and height maps for parts of the box, `[[scene.surfaces]]` with `part =
     /// "back-wall"` (floor, left-wall, right-wall, back-wall, ceiling, short-block,
     /// tall-block) and the maps' fields as a model has them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    surfaces: Vec<SurfaceV1>,
+    surfaces: Vec<SurfaceV2>,
     /// Water over the floor, `[scene.water]`: depth, ior, waves (amplitude), time (seconds).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    water: Option<WaterV1>,
+    water: Option<WaterV2>,
 }
 
 fn default_roughness() -> f32 {
@@ -346,7 +360,7 @@ fn is_default_height_scale(v: &f32) -> bool {
 /// A part of the box and its maps.
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct SurfaceV1 {
+struct SurfaceV2 {
     part: BoxPart,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     normal_map: Option<PathBuf>,
@@ -366,17 +380,18 @@ struct SurfaceV1 {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ModelV1 {
+struct ModelV2 {
     /// `bunny`, `teapot`, `textured-teapot`, or an OBJ file's path (relative to the scene file).
     file: PathBuf,
     height: f32,
     floor_position: Floats<2>,
-    yaw: f32,
+    /// Degrees (radians in version 1).
+    yaw: f64,
     reflectance: Floats<3>,
     /// `{ kind = "diffuse" }`, `{ kind = "mirror", tint = [r, g, b] }`,
     /// `{ kind = "glass", ior = 1.5, tint = [r, g, b] }` or
     /// `{ kind = "rough", alpha = 0.2, tint = [r, g, b] }`.
-    material: MaterialV1,
+    material: MaterialV2,
     /// A tangent-space normal map (PNG or JPEG, +Y up), relative to the scene file; replaces
     /// one the model's material library names. Optional, as are the three below.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -398,7 +413,7 @@ struct ModelV1 {
     height_scale: f32,
 }
 
-impl SurfaceV1 {
+impl SurfaceV2 {
     fn relief(&self) -> ReliefSpec {
         ReliefSpec {
             normal_map: self.normal_map.clone(),
@@ -412,7 +427,7 @@ impl SurfaceV1 {
 /// A model's material: each kind with exactly its own fields (a mirror has no `ior`).
 #[derive(Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
-enum MaterialV1 {
+enum MaterialV2 {
     // A struct variant, not a unit one: only then are unknown fields refused.
     Diffuse {},
     Mirror { tint: Floats<3> },
@@ -420,16 +435,16 @@ enum MaterialV1 {
     Rough { alpha: f32, tint: Floats<3> },
 }
 
-impl From<MaterialKind> for MaterialV1 {
+impl From<MaterialKind> for MaterialV2 {
     fn from(kind: MaterialKind) -> Self {
         match kind {
-            MaterialKind::Diffuse => MaterialV1::Diffuse {},
-            MaterialKind::Mirror { tint } => MaterialV1::Mirror { tint: tint.into() },
-            MaterialKind::Glass { ior, tint } => MaterialV1::Glass {
+            MaterialKind::Diffuse => MaterialV2::Diffuse {},
+            MaterialKind::Mirror { tint } => MaterialV2::Mirror { tint: tint.into() },
+            MaterialKind::Glass { ior, tint } => MaterialV2::Glass {
                 ior,
                 tint: tint.into(),
             },
-            MaterialKind::Rough { alpha, tint } => MaterialV1::Rough {
+            MaterialKind::Rough { alpha, tint } => MaterialV2::Rough {
                 alpha,
                 tint: tint.into(),
             },
@@ -437,16 +452,16 @@ impl From<MaterialKind> for MaterialV1 {
     }
 }
 
-impl From<MaterialV1> for MaterialKind {
-    fn from(kind: MaterialV1) -> Self {
+impl From<MaterialV2> for MaterialKind {
+    fn from(kind: MaterialV2) -> Self {
         match kind {
-            MaterialV1::Diffuse {} => MaterialKind::Diffuse,
-            MaterialV1::Mirror { tint } => MaterialKind::Mirror { tint: tint.into() },
-            MaterialV1::Glass { ior, tint } => MaterialKind::Glass {
+            MaterialV2::Diffuse {} => MaterialKind::Diffuse,
+            MaterialV2::Mirror { tint } => MaterialKind::Mirror { tint: tint.into() },
+            MaterialV2::Glass { ior, tint } => MaterialKind::Glass {
                 ior,
                 tint: tint.into(),
             },
-            MaterialV1::Rough { alpha, tint } => MaterialKind::Rough {
+            MaterialV2::Rough { alpha, tint } => MaterialKind::Rough {
                 alpha,
                 tint: tint.into(),
             },
@@ -516,7 +531,7 @@ impl<'de, const N: usize> Deserialize<'de> for Floats<N> {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct TerrainV1 {
+struct TerrainV2 {
     seed: u64,
     grid: u32,
     height: f32,
@@ -525,7 +540,7 @@ struct TerrainV1 {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct WaterV1 {
+struct WaterV2 {
     depth: f32,
     ior: f32,
     waves: f32,
@@ -534,10 +549,12 @@ struct WaterV1 {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CameraV1 {
+struct CameraV2 {
     position: Floats<3>,
-    yaw: f32,
-    pitch: f32,
+    /// Degrees (radians in version 1); positive turns right.
+    yaw: f64,
+    /// Degrees (radians in version 1); positive looks up.
+    pitch: f64,
     focal_length: f32,
     width: u32,
     height: u32,
@@ -547,7 +564,7 @@ struct CameraV1 {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct LightV1 {
+struct LightV2 {
     position: Floats<3>,
     power: f32,
     colour: Floats<3>,
@@ -560,7 +577,7 @@ struct LightV1 {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ShadingV1 {
+struct ShadingV2 {
     stage: Stage,
     shadows: bool,
     indirect: bool,
@@ -632,14 +649,14 @@ impl<'de> Deserialize<'de> for Bounces {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct DisplayV1 {
+struct DisplayV2 {
     transform: DisplayTransform,
     exposure: f32,
 }
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RenderV1 {
+struct RenderV2 {
     samples_per_pixel: u32,
     seed: u64,
     /// Write the denoised image (`render --denoise on`); written only when true.
@@ -647,7 +664,7 @@ struct RenderV1 {
     denoise: bool,
 }
 
-impl FileV1 {
+impl FileV2 {
     fn from_settings(s: &RenderSettings, folder: &Path) -> Result<Self, String> {
         if s.seed > i64::MAX as u64 {
             return Err(format!(
@@ -662,7 +679,7 @@ impl FileV1 {
         let sh = &s.shading;
         Ok(Self {
             version: VERSION,
-            scene: SceneV1 {
+            scene: SceneV2 {
                 name: spec.name,
                 room: spec.room,
                 blocks: spec.blocks,
@@ -672,11 +689,11 @@ impl FileV1 {
                 models: spec
                     .models
                     .into_iter()
-                    .map(|m| ModelV1 {
+                    .map(|m| ModelV2 {
                         file: m.file,
                         height: m.height,
                         floor_position: Floats(m.floor_position),
-                        yaw: m.yaw,
+                        yaw: camera::degrees(m.yaw),
                         reflectance: m.reflectance.into(),
                         material: m.kind.into(),
                         normal_map: m.relief.normal_map,
@@ -688,7 +705,7 @@ impl FileV1 {
                 surfaces: spec
                     .surfaces
                     .into_iter()
-                    .map(|p| SurfaceV1 {
+                    .map(|p| SurfaceV2 {
                         part: p.part,
                         normal_map: p.relief.normal_map,
                         normal_strength: p.relief.normal_strength,
@@ -696,37 +713,37 @@ impl FileV1 {
                         height_scale: p.relief.height_scale,
                     })
                     .collect(),
-                terrain: spec.terrain.map(|t| TerrainV1 {
+                terrain: spec.terrain.map(|t| TerrainV2 {
                     seed: t.seed,
                     grid: t.grid,
                     height: t.height,
                     octaves: t.octaves,
                 }),
-                water: spec.water.map(|w| WaterV1 {
+                water: spec.water.map(|w| WaterV2 {
                     depth: w.depth,
                     ior: w.ior,
                     waves: w.waves,
                     time: w.time,
                 }),
             },
-            camera: CameraV1 {
+            camera: CameraV2 {
                 position: c.position.into(),
-                yaw: c.yaw,
-                pitch: c.pitch,
+                yaw: camera::degrees(c.yaw),
+                pitch: camera::degrees(c.pitch),
                 focal_length: c.focal_length,
                 width: c.width,
                 height: c.height,
                 aperture: c.aperture,
                 focus_distance: c.focus_distance,
             },
-            light: LightV1 {
+            light: LightV2 {
                 position: l.position.into(),
                 power: l.power,
                 colour: l.colour.into(),
                 radius: l.radius,
                 shape: Some(l.shape),
             },
-            shading: ShadingV1 {
+            shading: ShadingV2 {
                 stage: sh.stage,
                 shadows: sh.shadows,
                 indirect: sh.indirect,
@@ -738,11 +755,11 @@ impl FileV1 {
                 caustics: sh.caustics,
                 photons: sh.photons,
             },
-            display: DisplayV1 {
+            display: DisplayV2 {
                 transform: s.display.transform,
                 exposure: s.display.exposure,
             },
-            render: RenderV1 {
+            render: RenderV2 {
                 samples_per_pixel: s.samples_per_pixel,
                 seed: s.seed,
                 denoise: s.denoise,
@@ -752,6 +769,7 @@ impl FileV1 {
 
     /// The settings the file describes, its models' relative paths taken from `folder`.
     fn into_settings(self, folder: &Path) -> RenderSettings {
+        let angle = Angles::of_version(self.version);
         let scene = self.scene;
         let mut spec = SceneSpec {
             name: scene.name,
@@ -764,7 +782,7 @@ impl FileV1 {
                     file: m.file,
                     height: m.height,
                     floor_position: m.floor_position.0,
-                    yaw: m.yaw,
+                    yaw: angle.radians(m.yaw),
                     reflectance: m.reflectance.into(),
                     kind: m.material.into(),
                     relief: ReliefSpec {
@@ -804,8 +822,8 @@ impl FileV1 {
             scene: SceneChoice::from_spec(spec),
             camera: Camera {
                 position: c.position.into(),
-                yaw: c.yaw,
-                pitch: c.pitch,
+                yaw: angle.radians(c.yaw),
+                pitch: angle.radians(c.pitch),
                 focal_length: c.focal_length,
                 width: c.width,
                 height: c.height,
@@ -846,6 +864,34 @@ impl FileV1 {
             samples_per_pixel: self.render.samples_per_pixel,
             seed: self.render.seed,
             denoise: self.render.denoise,
+        }
+    }
+}
+
+/// The unit of a file's angles, by its version.
+#[derive(Clone, Copy)]
+enum Angles {
+    /// Version 1.
+    Radians,
+    /// Version 2.
+    Degrees,
+}
+
+impl Angles {
+    fn of_version(version: u32) -> Self {
+        if version == VERSION_RADIANS {
+            Angles::Radians
+        } else {
+            Angles::Degrees
+        }
+    }
+
+    /// The in-memory angle (radians) of a value in the file. A version-1 value becomes the
+    /// `f32` nearest it, exactly as version 1 was always read.
+    fn radians(self, value: f64) -> f32 {
+        match self {
+            Angles::Radians => value as f32,
+            Angles::Degrees => camera::radians(value),
         }
     }
 }
@@ -897,6 +943,144 @@ mod tests {
             };
             assert_eq!(round_trip(&s), s);
         }
+    }
+
+    /// Settings with a model: the camera's yaw and pitch and the model's yaw are the file's
+    /// three angles.
+    fn with_angles(yaw: f32, pitch: f32, model_yaw: f32) -> RenderSettings {
+        let mut spec = SceneSpec::cornell("angles");
+        let mut model = ModelSpec::new("teapot", &crate::scene::obj::Placement::TEAPOT);
+        model.yaw = model_yaw;
+        spec.models.push(model);
+        let mut s = RenderSettings {
+            scene: SceneChoice::Custom(Box::new(spec)),
+            ..RenderSettings::default()
+        };
+        s.camera.yaw = yaw;
+        s.camera.pitch = pitch;
+        s
+    }
+
+    /// The three angles' bits.
+    fn angle_bits(s: &RenderSettings) -> [u32; 3] {
+        let SceneChoice::Custom(spec) = &s.scene else {
+            panic!("{:?}", s.scene)
+        };
+        [s.camera.yaw, s.camera.pitch, spec.models[0].yaw].map(f32::to_bits)
+    }
+
+    /// Angles are written in degrees, as typed in the workbench and on the command line: an
+    /// angle set as 12.5° is written `12.5`, and a file's degrees are read as such.
+    #[test]
+    fn angles_are_in_degrees() {
+        let s = with_angles(
+            camera::radians(12.5),
+            camera::radians(-30.0),
+            camera::radians(90.0),
+        );
+        let text = to_text(&s, Path::new("/x")).unwrap();
+        assert!(text.starts_with("# A raylab scene file") && text.contains("\nversion = 2\n"));
+        assert!(text.contains("Angles are in degrees"), "{text}");
+        assert!(text.contains("yaw = 12.5\npitch = -30.0\n"), "{text}");
+        assert!(text.contains("yaw = 90.0\n"), "{text}");
+        let read = parse(&text, Path::new("/x")).unwrap();
+        assert_eq!(angle_bits(&read), angle_bits(&s));
+        assert!((read.camera.yaw - 12.5f32.to_radians()).abs() < 1e-7);
+        assert!((read.camera.pitch + std::f32::consts::FRAC_PI_6).abs() < 1e-7);
+    }
+
+    /// Saving then loading gives every angle back bit for bit, though a degree's decimal is not
+    /// the radian's: on many random angles — uniform over a few turns, typed degrees with a
+    /// decimal or two, and any finite `f32` — the file's decimal reads back to the same `f32`,
+    /// and is no longer than the degrees typed.
+    #[test]
+    fn angles_round_trip_bit_for_bit_through_degrees() {
+        let mut bits = crate::sampling::Rng::new(42);
+        let mut finite = || loop {
+            let x = f32::from_bits(bits.next_u32());
+            if x.is_finite() {
+                return x;
+            }
+        };
+        let mut rng = crate::sampling::Rng::new(7);
+        let mut angles: Vec<f32> = Vec::new();
+        for i in 0..30_000 {
+            angles.push(match i % 3 {
+                0 => rng.uniform(-4.0 * std::f32::consts::TAU, 4.0 * std::f32::consts::TAU),
+                1 => camera::radians(f64::from(rng.next_u32() % 72_001) / 100.0 - 360.0),
+                _ => finite(),
+            });
+        }
+        angles.extend([0.0, -0.0, f32::MIN_POSITIVE, 1e-45, f32::MAX, -f32::MAX]);
+        for &a in &angles {
+            assert_eq!(
+                camera::radians(camera::degrees(a)).to_bits(),
+                a.to_bits(),
+                "{a:e}"
+            );
+        }
+        // Degrees typed with two decimals come back as typed, never longer.
+        for hundredths in -36_000..=36_000 {
+            let typed = f64::from(hundredths) / 100.0;
+            let written = camera::degrees(camera::radians(typed));
+            assert!(
+                written.to_string().len() <= typed.to_string().len(),
+                "{typed} written as {written}"
+            );
+        }
+        // Through whole files, three angles a file.
+        for three in angles.chunks_exact(3).step_by(5) {
+            let s = with_angles(three[0], three[1], three[2]);
+            let read = round_trip(&s);
+            assert_eq!(angle_bits(&read), angle_bits(&s), "{three:?}");
+            assert_eq!(read, s);
+        }
+    }
+
+    /// A version-1 file (radians) keeps its meaning: its angles are the radians it holds,
+    /// exactly as before; saved again it is version 2 in degrees, and reads back the same.
+    #[test]
+    fn a_version_1_file_is_read_in_radians() {
+        let v2 = to_text(&with_angles(0.0, 0.0, 0.5), Path::new("/x")).unwrap();
+        let model_yaw = format!("yaw = {}\n", camera::degrees(0.5));
+        assert!(v2.contains(&model_yaw), "{v2}");
+        let v1 = v2
+            .replace("version = 2", "version = 1")
+            .replace("yaw = 0.0\npitch = 0.0", "yaw = 0.3\npitch = -0.05")
+            .replace(&model_yaw, "yaw = -0.6\n");
+        let read = parse(&v1, Path::new("/x")).unwrap();
+        assert_eq!(angle_bits(&read), [0.3f32, -0.05, -0.6].map(f32::to_bits));
+        let saved = to_text(&read, Path::new("/x")).unwrap();
+        assert!(saved.contains("version = 2"), "{saved}");
+        assert!(
+            saved.contains(&format!(
+                "yaw = {}\npitch = {}\n",
+                camera::degrees(0.3),
+                camera::degrees(-0.05)
+            )),
+            "{saved}"
+        );
+        assert!((camera::degrees(0.3) - 17.188_733).abs() < 1e-5);
+        let again = parse(&saved, Path::new("/x")).unwrap();
+        assert_eq!(angle_bits(&again), angle_bits(&read));
+        assert_eq!(again, read);
+        // The same numbers in a version-2 file are degrees.
+        let as_degrees = parse(&v1.replace("version = 1", "version = 2"), Path::new("/x")).unwrap();
+        assert_eq!(as_degrees.camera.yaw, camera::radians(0.3));
+    }
+
+    /// The shipped gallery, rewritten in degrees, holds the radians its version-1 text held
+    /// (its models' yaws 0.3, 0 and −0.6), bit for bit.
+    #[test]
+    fn the_shipped_gallery_kept_its_angles() {
+        let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes");
+        let text = std::fs::read_to_string(folder.join("gallery.toml")).unwrap();
+        assert!(text.contains("\nversion = 2\n"), "{text}");
+        let SceneChoice::Custom(spec) = parse(&text, &folder).unwrap().scene else {
+            panic!("{text}")
+        };
+        let yaws: Vec<u32> = spec.models.iter().map(|m| m.yaw.to_bits()).collect();
+        assert_eq!(yaws, [0.3f32, 0.0, -0.6].map(f32::to_bits));
     }
 
     /// A file written before caustics existed (no `caustics`, no `photons`) reads with
@@ -1019,7 +1203,7 @@ mod tests {
 
     #[test]
     fn errors_name_the_field_and_the_line() {
-        // The default file: comments on lines 1–2, then `version = 1` on 3.
+        // The default file: comments on lines 1–2, then `version = 2` on 3.
         let text = to_text(&RenderSettings::default(), Path::new("/x")).unwrap();
         let line = |key: &str| text.lines().position(|l| l.starts_with(key)).unwrap() + 1;
 
@@ -1132,12 +1316,13 @@ mod tests {
 
     #[test]
     fn the_version_is_checked_first() {
-        let e = error_of(|t| t.replace("version = 1", "version = 2"));
+        let e = error_of(|t| t.replace("version = 2", "version = 3"));
         assert_eq!(
             e,
-            "line 3 (version = 2): version 2 is not one this raylab reads (it reads version 1)"
+            "line 3 (version = 3): version 3 is not one this raylab reads (it reads versions \
+             1, angles in radians, and 2, angles in degrees)"
         );
-        let e = error_of(|t| t.replace("version = 1\n", ""));
+        let e = error_of(|t| t.replace("version = 2\n", ""));
         assert!(e.starts_with("line 1: missing field `version`"), "{e}");
         let e = parse("not toml [", Path::new("/x")).unwrap_err();
         assert!(e.starts_with("line 1 (not toml [)"), "{e}");

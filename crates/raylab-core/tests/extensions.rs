@@ -9,7 +9,10 @@ mod common;
 use common::{assert_renders, assert_same_image, bits, settings};
 use glam::Vec3;
 use raylab_core::geometry::Triangle;
-use raylab_core::material::{PRESET_TEXTURE_SCALE, TexturePreset};
+use raylab_core::material::{
+    DEFAULT_ROUGHNESS, MaterialPreset, PRESET_TEXTURE_SCALE, ROUGH_FRONT_BRIGHT_FROM, TALL_BLOCK,
+    TexturePreset,
+};
 use raylab_core::render::render;
 use raylab_core::scene::{Scene, SceneChoice, cornell_box};
 use raylab_core::{Camera, Image, Material, RenderSettings, Stage};
@@ -292,4 +295,116 @@ fn a_coloured_light_scales_each_channel() {
         assert!((o.y - 0.5 * w.y).abs() <= 1e-6 * w.y, "{o} vs {w}");
         assert_eq!(o.z, 0.0);
     }
+}
+
+/// The mean display values (the lab's clamp to [0, 1], Rec. 709 luminance) of the tall
+/// block's front face, the face turned most toward the camera: of its upper half, its lower half
+/// and the whole, over the pixels whose centre and four neighbours' centres see it (no edge
+/// pixel, which anti-aliasing mixes with what lies beside).
+fn front_face_means(scene: &Scene, s: &RenderSettings) -> [f32; 3] {
+    let side = s.camera.width;
+    let triangle = |x: u32, y: u32| {
+        let hit = scene.closest_intersection(&s.camera.pixel_ray(x, y), f32::INFINITY)?;
+        (scene.material_of(hit.triangle_index).name == TALL_BLOCK).then_some(hit.triangle_index)
+    };
+    let seen: Vec<Option<usize>> = (0..side * side)
+        .map(|i| triangle(i % side, i / side))
+        .collect();
+    let facing = |t: usize| scene.triangles[t].normal.normalize().z.abs();
+    let most = seen
+        .iter()
+        .flatten()
+        .map(|&t| facing(t))
+        .fold(0.0, f32::max);
+    let on_front =
+        |x: u32, y: u32| seen[(y * side + x) as usize].is_some_and(|t| facing(t) > most - 1e-3);
+    let image = render(scene, s);
+    let mut face = Vec::new();
+    for y in 1..side - 1 {
+        for x in 1..side - 1 {
+            if [(x, y), (x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)]
+                .iter()
+                .all(|&(x, y)| on_front(x, y))
+            {
+                let v = image.get(x, y).clamp(Vec3::ZERO, Vec3::ONE);
+                face.push((y, v.dot(Vec3::new(0.2126, 0.7152, 0.0722))));
+            }
+        }
+    }
+    assert!(
+        face.len() > 100,
+        "only {} pixels on the front face",
+        face.len()
+    );
+    let (top, bottom) = (face[0].0, face[face.len() - 1].0);
+    let mean = |rows: std::ops::RangeInclusive<u32>| {
+        let values: Vec<f32> = face
+            .iter()
+            .filter(|(y, _)| rows.contains(y))
+            .map(|&(_, v)| v)
+            .collect();
+        values.iter().sum::<f32>() / values.len() as f32
+    };
+    let middle = (top + bottom) / 2;
+    [
+        mean(top..=middle),
+        mean(middle + 1..=bottom),
+        mean(top..=bottom),
+    ]
+}
+
+/// The Materials row's note on the tall block's front face (`front_face_note`) says what the
+/// render shows: where it says black or dark above what the face shows of the floor and the
+/// short block, the face's upper half has a mean display value below 0.1 and its lower half
+/// more; where it says bright, the whole face's mean is above 0.2 — for the mirror presets in
+/// both kinds of stage and the rough metal in the path stage over its roughness, either side
+/// of α 0.05–0.1, where the face brightens gradually from one to the other. (The rough metal's
+/// note said "dark" when its default α = 0.2 renders a bright silver face.)
+#[test]
+fn the_front_face_note_says_what_the_render_shows() {
+    let scene = cornell_box();
+    let mut cases = Vec::new();
+    for stage in [Stage::Lab, Stage::Path] {
+        for preset in [MaterialPreset::Mirror, MaterialPreset::Both] {
+            cases.push((stage, preset, DEFAULT_ROUGHNESS));
+        }
+    }
+    for alpha in [0.01, 0.03, 0.1, DEFAULT_ROUGHNESS, 0.5, 1.0] {
+        cases.push((Stage::Path, MaterialPreset::Rough, alpha));
+    }
+    for (stage, preset, alpha) in cases {
+        let path = stage == Stage::Path;
+        let note = preset.front_face_note(path, alpha).unwrap();
+        let mut s = settings(stage, 96);
+        s.material_preset = preset;
+        s.roughness = alpha;
+        s.samples_per_pixel = if path { 32 } else { 1 };
+        let [upper, lower, whole] = front_face_means(&scene, &s);
+        let case = format!(
+            "{stage} {preset} α {alpha}: means {upper:.3} above, {lower:.3} below, {whole:.3} \
+             in all; note {note:?}"
+        );
+        if note.contains("front face is black above") || note.contains("front face is dark above") {
+            assert!(upper < 0.1 && lower > upper, "{case}");
+        } else {
+            assert!(note.contains("front face is bright"), "{case}");
+            assert!(whole > 0.2, "{case}");
+        }
+        if preset == MaterialPreset::Rough {
+            // The roughness the note names is the one that chooses it.
+            assert!(
+                note.contains(&ROUGH_FRONT_BRIGHT_FROM.to_string()),
+                "{case}"
+            );
+        }
+    }
+    // No note where the face is not a reflector's, or the lab's stages shade the metal by its
+    // highlight alone.
+    for preset in [MaterialPreset::None, MaterialPreset::Glass] {
+        assert_eq!(preset.front_face_note(true, DEFAULT_ROUGHNESS), None);
+    }
+    assert_eq!(
+        MaterialPreset::Rough.front_face_note(false, DEFAULT_ROUGHNESS),
+        None
+    );
 }

@@ -54,7 +54,7 @@ pub struct ModelSpec {
     pub height: f32,
     /// The centre of its footprint on the floor, (x, z).
     pub floor_position: [f32; 2],
-    /// Turn about the vertical axis, in radians.
+    /// Turn about the vertical axis, in radians (degrees in a scene file).
     pub yaw: f32,
     /// Its diffuse reflectance ρ (kept for mirror and glass too, as the blocks' is).
     pub reflectance: Vec3,
