@@ -42,7 +42,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use crate::denoise::{Denoiser, Features, denoising_film};
+use crate::denoise::{Denoiser, Features, Noisy, denoising_film};
 use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, accumulate_pass, camera_sees_nothing, render_pass};
@@ -1064,7 +1064,12 @@ impl Worker {
         };
         let variance = denoising.variance.clone();
         let denoised = self.pool.install(|| {
-            Denoiser::default().denoise(image, variance.as_deref().map(Vec::as_slice), &features)
+            // The film's outliers are taken apart where the film is the image's own.
+            let noisy = match film {
+                Some(film) if film.samples() == samples => Noisy::of_film(film),
+                _ => Noisy::whole(image.clone(), variance.as_deref().cloned()),
+            };
+            Denoiser::default().denoise_noisy(&noisy, &features)
         });
         denoising.cost = start.elapsed();
         denoising.at = Some(Instant::now());
