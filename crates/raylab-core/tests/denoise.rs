@@ -216,8 +216,8 @@ fn the_path_tracer_records_the_features_tracing_finds() {
     assert!(record(&settings(Stage::Shadows, 8), 1).is_none());
 }
 
-/// The box with a mirror and a glass block (`--material-preset both`) at 96², 64 samples: the
-/// samples, and `measure`'s other figures, of `counts`, against a 512-sample reference.
+/// The box with a mirror and a glass block (`--material-preset both`) at 96²: `measure`'s
+/// figures at `counts` samples, against a 512-sample reference.
 fn mirror_and_glass(counts: &[u32]) -> Vec<raylab_core::denoise::quality::QualityRow> {
     use raylab_core::material::MaterialPreset;
     let scene = cornell_box();
@@ -226,21 +226,21 @@ fn mirror_and_glass(counts: &[u32]) -> Vec<raylab_core::denoise::quality::Qualit
     on_threads(2, || measure(&scene, &s, counts, 512, &Denoiser::default()))
 }
 
-/// Mirror and glass denoised at 64 samples come closer to the reference than 160 raw samples
-/// (measured: 2.2·10⁻³ denoised; 3.1·10⁻³ raw at 160, 7.7·10⁻³ at 64), the mean within 0.5
-/// %. The few samples far brighter than the rest (a path through the glass into the
-/// mirror's view of it) were the larger part of the error the filter left (3.6·10⁻³): they
-/// are taken apart and their light spread over their surface (`denoise::Noisy`).
+/// Mirror and glass denoised at 64 samples come closer to the reference than 176 raw samples
+/// (measured: 3.25·10⁻³ denoised; 3.64·10⁻³ raw at 176, 8.17·10⁻³ at 64; the reference's
+/// own noise is in each), the mean within 0.5 %. A few samples far brighter than the rest (in
+/// the mirror's view of the glass) left 4.01·10⁻³ after the filter: they are taken apart and
+/// their light spread over their surface (`denoise::Noisy`).
 #[test]
-fn mirror_and_glass_denoised_beat_160_raw_samples() {
-    let rows = mirror_and_glass(&[64, 160]);
-    let (sixty_four, raw_160) = (rows[0], rows[1]);
+fn mirror_and_glass_denoised_beat_176_raw_samples() {
+    let rows = mirror_and_glass(&[64, 176]);
+    let (sixty_four, raw_176) = (rows[0], rows[1]);
     eprintln!("{rows:?}");
     assert!(
-        sixty_four.denoised_relative_mse < raw_160.raw_relative_mse,
-        "denoised 64: {:.3e}, raw 160: {:.3e}",
+        sixty_four.denoised_relative_mse < raw_176.raw_relative_mse,
+        "denoised 64: {:.3e}, raw 176: {:.3e}",
         sixty_four.denoised_relative_mse,
-        raw_160.raw_relative_mse
+        raw_176.raw_relative_mse
     );
     assert!(sixty_four.denoised_mean_change < 0.005, "{sixty_four:?}");
 }
@@ -276,7 +276,7 @@ fn no_firefly_survives_denoising() {
         .collect();
     eprintln!("{} fireflies: {fireflies:?}", fireflies.len());
     assert!(
-        fireflies.len() >= 3,
+        fireflies.len() >= 2,
         "the raw image has fireflies to remove"
     );
     for i in 0..denoised.pixels.len() {
