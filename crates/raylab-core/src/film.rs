@@ -497,6 +497,15 @@ pub struct Film {
     samples: u32,
 }
 
+/// A film's per-pixel sums ([`Film::sums`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmSums<'a> {
+    pub sum: &'a [Vec3],
+    pub sum_sq: Option<&'a [f32]>,
+    pub largest: Option<&'a [Vec3]>,
+    pub samples: u32,
+}
+
 /// The samples whose features a film records ([`Film::with_features`]), the first of its
 /// passes. Recording costs a path pass about 7 % of its time (a second look at each camera
 /// ray's first surface: PERFORMANCE.md); the features of 64 samples are enough for the
@@ -592,13 +601,13 @@ impl Film {
     /// Per pixel, the sum of its samples, the sum of their squared channel means (if the film
     /// tracks the noise) and its brightest sample (if it keeps it), with the samples summed:
     /// what the denoiser's outlier test reads ([`crate::denoise::Noisy`]).
-    pub fn sums(&self) -> (&[Vec3], Option<&[f32]>, Option<&[Vec3]>, u32) {
-        (
-            &self.sum.pixels,
-            self.sum_sq.as_deref(),
-            self.largest.as_deref(),
-            self.samples,
-        )
+    pub fn sums(&self) -> FilmSums<'_> {
+        FilmSums {
+            sum: &self.sum.pixels,
+            sum_sq: self.sum_sq.as_deref(),
+            largest: self.largest.as_deref(),
+            samples: self.samples,
+        }
     }
 
     /// Whether the next pass's samples are to tell what they saw ([`Film::add_pass_rows`]).
@@ -894,14 +903,14 @@ mod tests {
             });
             result.unwrap();
         }
-        let (_, _, largest, samples) = whole.sums();
-        assert_eq!(samples, 3);
+        let sums = whole.sums();
+        assert_eq!(sums.samples, 3);
         assert_eq!(
-            largest,
+            sums.largest,
             Some(&[Vec3::new(0.0, 0.0, 0.9), Vec3::new(9.0, 0.0, 0.0)][..])
         );
         assert_eq!(rows.sums(), whole.sums());
-        assert_eq!(Film::with_noise(2, 1).sums().2, None);
+        assert_eq!(Film::with_noise(2, 1).sums().largest, None);
     }
 
     /// A film with features sums what its first [`FEATURE_SAMPLES_RECORDED`] samples saw (a

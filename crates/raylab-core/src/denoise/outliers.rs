@@ -26,7 +26,7 @@
 use glam::Vec3;
 
 use super::{Features, effective};
-use crate::film::{Film, Image, channel_mean, mean_and_variance_of_mean};
+use crate::film::{Film, FilmSums, Image, channel_mean, mean_and_variance_of_mean};
 
 /// How many standard deviations of a pixel's other samples its brightest may lie above their
 /// mean before it is taken apart. A well-behaved pixel's largest of 64 samples lies a few
@@ -66,7 +66,12 @@ impl Noisy {
     /// `film`'s mean, its outliers taken apart (module docs) if it keeps its pixels' brightest
     /// samples and tracks their spread; else its mean and variance as they are.
     pub fn of_film(film: &Film) -> Noisy {
-        let (sums, sum_sq, largest, n) = film.sums();
+        let FilmSums {
+            sum: sums,
+            sum_sq,
+            largest,
+            samples: n,
+        } = film.sums();
         let (Some(sum_sq), Some(largest)) = (sum_sq, largest) else {
             return Noisy::whole(film.resolve(), film.variance());
         };
