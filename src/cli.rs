@@ -91,13 +91,17 @@ pub struct BenchArgs {
     /// lab: the figures above; path: also one pass of the path stage (unlimited bounces), as
     /// camera paths per second; denoise: the denoiser on the path-traced Cornell box, its time
     /// at W×H (16 samples) and its quality at 256² against a converged reference (about a
-    /// minute: see --reference-samples).
+    /// minute: see --reference-samples; with mirror and glass, a few).
     #[arg(long, default_value = "lab", value_parser = ["lab", "path", "denoise"], value_name = "STAGE")]
     pub stage: String,
     /// With --stage denoise: samples per pixel of the reference the quality is measured
     /// against.
     #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(1..=1_000_000), value_name = "N")]
     pub reference_samples: u32,
+    /// With --stage denoise: the box's materials, as render's --material-preset: none (the
+    /// lab's diffuse box), mirror, glass, both (a mirror and a glass block) or rough.
+    #[arg(long, value_name = "PRESET")]
+    pub material_preset: Option<MaterialPreset>,
 }
 
 #[derive(Debug, Args)]
@@ -701,10 +705,11 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let view = args.view.unwrap_or(settings.view);
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;
-    // Denoising holds a film with its variance and its samples' features' sums, the features
-    // and the filter's planes beside the image: under 48 floats a pixel more.
+    // Denoising holds a film with its variance, brightest samples and its samples' features'
+    // sums, the features, the colour without outliers and the filter's planes beside the
+    // image: under 52 floats a pixel more.
     let denoise_memory = if settings.denoise {
-        192 * u64::from(c.width) * u64::from(c.height)
+        208 * u64::from(c.width) * u64::from(c.height)
     } else {
         0
     };
@@ -946,7 +951,7 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
             format!("denoising a {}×{} render", c.width, c.height),
             settings
                 .memory_estimate(raylab_core::view::View::Shaded)
-                .saturating_add(192 * u64::from(c.width) * u64::from(c.height)),
+                .saturating_add(208 * u64::from(c.width) * u64::from(c.height)),
         )?;
         let (_, denoised) =
             pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
@@ -1083,6 +1088,12 @@ fn settings_at_image_size(
 }
 
 fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
+    if args.material_preset.is_some() && args.stage != "denoise" {
+        anyhow::bail!(
+            "--material-preset is measured by --stage denoise only (the denoiser's quality with \
+             mirror and glass); the lab and path figures are of the scenes' own materials"
+        );
+    }
     let pool = thread_pool("bench", args.threads)?;
     if args.stage == "denoise" {
         return run_denoise_bench(args, &pool);
@@ -1178,25 +1189,30 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
 }
 
 /// `raylab bench --stage denoise`: the denoiser's time (features and filter, medians of
-/// `--passes`) on a 16-sample path-traced Cornell box at W×H, then its quality at 256²:
-/// relative MSE raw and denoised at 4 to 1,024 samples against `--reference-samples`
-/// ([`raylab_core::denoise::quality`]).
+/// `--passes`) on a 16-sample path-traced Cornell box at W×H (its materials
+/// `--material-preset`'s), then its quality at 256²: relative MSE raw and denoised at 4 to
+/// 1,024 samples against `--reference-samples` ([`raylab_core::denoise::quality`]).
 fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     use raylab_core::bench::path_settings;
-    use raylab_core::denoise::{Denoiser, denoising_film, features_of, quality};
+    use raylab_core::denoise::{Denoiser, Noisy, denoising_film, features_of, quality};
     use raylab_core::film::Film;
     raylab_core::memory::check(
         format!("a {}×{} denoise bench", args.width, args.height),
-        // A film (sum, squares, the features' sums), the features and the filter's planes:
-        // under 48 floats a pixel.
-        192 * u64::from(args.width) * u64::from(args.height),
+        // A film (sum, squares, brightest samples, the features' sums), the features, the
+        // colour without outliers and the filter's planes: under 52 floats a pixel.
+        208 * u64::from(args.width) * u64::from(args.height),
     )?;
     let scene = raylab_core::scene::cornell_box();
+    let preset = args.material_preset.unwrap_or_default();
+    let with_preset = |width: u32, height: u32| RenderSettings {
+        material_preset: preset,
+        ..path_settings(width, height)
+    };
     let denoiser = Denoiser::default();
     let mut out = std::io::stdout().lock();
     let never = || false;
     let (timing, rows) = pool.install(|| -> anyhow::Result<_> {
-        let settings = path_settings(args.width, args.height);
+        let settings = with_preset(args.width, args.height);
         // The path tracer records the features as it traces (`denoising_film`): their time
         // here is averaging the film's sums. What recording costs the passes: the same 16
         // passes into a film that records none, alternating with them.
@@ -1217,14 +1233,15 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
             raylab_core::bench::median_ms(recording),
             raylab_core::bench::median_ms(not_recording),
         );
-        let (raw, variance) = (film.resolve(), film.variance());
         let (mut feature_times, mut filter_times) = (Vec::new(), Vec::new());
         for _ in 0..=args.passes {
             let start = std::time::Instant::now();
             let features = features_of(&film, &scene, &settings, &never)?;
             feature_times.push(start.elapsed());
+            // The filter's time includes taking the film's outliers apart and giving them back.
             let start = std::time::Instant::now();
-            std::hint::black_box(denoiser.denoise(&raw, variance.as_deref(), &features));
+            let noisy = Noisy::of_film(&film);
+            std::hint::black_box(denoiser.denoise_noisy(&noisy, &features));
             filter_times.push(start.elapsed());
         }
         // The first of each is the warm-up.
@@ -1234,7 +1251,7 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
         );
         let rows = quality::measure(
             &scene,
-            &path_settings(256, 256),
+            &with_preset(256, 256),
             &[4, 16, 64, 256, 1024],
             args.reference_samples,
             &denoiser,
@@ -1247,6 +1264,7 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
             "width": args.width,
             "height": args.height,
             "threads": threads,
+            "material_preset": preset.name(),
             "features_ms": timing.0,
             "filter_ms": timing.1,
             "path_pass_ms_recording_features": timing.2.0,
@@ -1260,8 +1278,12 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
     }
     writeln!(
         out,
-        "denoiser, Cornell box, path stage at 16 samples, {}×{}, {threads} threads: features \
-         {:.2} ms + filter {:.2} ms = {:.2} ms (medians of {} passes)",
+        "denoiser, Cornell box{}, path stage at 16 samples, {}×{}, {threads} threads: \
+         features {:.2} ms + filter {:.2} ms = {:.2} ms (medians of {} passes)",
+        match preset {
+            MaterialPreset::None => String::new(),
+            preset => format!(" ({preset} preset: {})", preset.label()),
+        },
         args.width,
         args.height,
         timing.0,

@@ -121,4 +121,16 @@ fn bench_prints_one_json_object_with_the_figures() {
     }
     let out = raylab(&["bench", "--scene", "cornell", "--isa", "sse9"]);
     assert!(!out.status.success() && stderr(&out).contains("sse9"));
+    // The materials are the denoiser's bench's: elsewhere refused, in one line, as is a name
+    // that is none of the presets.
+    let out = raylab(&["bench", "--scene", "cornell", "--material-preset", "both"]);
+    let err = stderr(&out);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("--stage denoise") && !err.contains("panicked"),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    let out = raylab(&["bench", "--stage", "denoise", "--material-preset", "gold"]);
+    assert!(!out.status.success() && stderr(&out).contains("gold"));
 }

@@ -489,9 +489,21 @@ pub struct Film {
     sum_sq: Option<Vec<f32>>,
     /// Per pixel, what its first samples saw, when the features are recorded.
     seen: Option<Vec<SeenSum>>,
+    /// Per pixel, its brightest sample so far (the largest mean of the three channels; the
+    /// first of equals), when the film keeps it ([`Film::with_largest`]).
+    largest: Option<Vec<Vec3>>,
     /// The samples `seen` sums, up to [`FEATURE_SAMPLES_RECORDED`].
     seen_samples: u32,
     samples: u32,
+}
+
+/// A film's per-pixel sums ([`Film::sums`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmSums<'a> {
+    pub sum: &'a [Vec3],
+    pub sum_sq: Option<&'a [f32]>,
+    pub largest: Option<&'a [Vec3]>,
+    pub samples: u32,
 }
 
 /// The samples whose features a film records ([`Film::with_features`]), the first of its
@@ -553,6 +565,7 @@ impl Film {
             sum: Image::new(width, height),
             sum_sq: None,
             seen: None,
+            largest: None,
             seen_samples: 0,
             samples: 0,
         }
@@ -573,6 +586,28 @@ impl Film {
     /// records them ([`Film::with_features`]).
     pub fn seen(&self) -> Option<(&[SeenSum], u32)> {
         Some((self.seen.as_deref()?, self.seen_samples))
+    }
+
+    /// This film, also keeping each pixel's brightest sample (12 more bytes per pixel): what
+    /// the denoiser takes apart as an outlier ([`crate::denoise::Noisy`]).
+    pub fn with_largest(self) -> Self {
+        let len = self.sum.pixels.len();
+        Self {
+            largest: Some(vec![Vec3::ZERO; len]),
+            ..self
+        }
+    }
+
+    /// Per pixel, the sum of its samples, the sum of their squared channel means (if the film
+    /// tracks the noise) and its brightest sample (if it keeps it), with the samples summed:
+    /// what the denoiser's outlier test reads ([`crate::denoise::Noisy`]).
+    pub fn sums(&self) -> FilmSums<'_> {
+        FilmSums {
+            sum: &self.sum.pixels,
+            sum_sq: self.sum_sq.as_deref(),
+            largest: self.largest.as_deref(),
+            samples: self.samples,
+        }
     }
 
     /// Whether the next pass's samples are to tell what they saw ([`Film::add_pass_rows`]).
@@ -614,6 +649,9 @@ impl Film {
                 *s += y * y;
             }
         }
+        if let Some(largest) = &mut self.largest {
+            keep_largest(largest, &pass.pixels, self.samples == 0);
+        }
         self.samples += 1;
     }
 
@@ -639,14 +677,17 @@ impl Film {
             true => self.seen.as_deref_mut().unwrap_or_default(),
             false => Default::default(),
         };
+        let largest = self.largest.as_deref_mut().unwrap_or_default();
+        let first = self.samples == 0;
         self.sum
             .pixels
             .par_chunks_mut(width)
             .zip(par_rows(sum_sq, width, rows))
             .zip(par_rows(seen_sums, width, rows))
+            .zip(par_rows(largest, width, rows))
             .enumerate()
             .with_max_len(rows_per_job())
-            .try_for_each(|(y, ((sum, sum_sq), seen_sums))| {
+            .try_for_each(|(y, (((sum, sum_sq), seen_sums), largest))| {
                 with_row_buffers(width, seen_width, |row, seen| {
                     trace(y as u32, row, seen)?;
                     for (s, p) in sum.iter_mut().zip(row.iter()) {
@@ -659,6 +700,7 @@ impl Film {
                     for (sums, seen) in seen_sums.iter_mut().zip(seen.iter()) {
                         sums.add(*seen);
                     }
+                    keep_largest(largest, row, first);
                     Ok(())
                 })
             })?;
@@ -810,7 +852,7 @@ fn par_rows<T: Send>(
 
 /// A pixel's mean value and the variance of that mean, s²/n, from the sum of its `n` samples
 /// and the sum of their squared channel means.
-fn mean_and_variance_of_mean(sum: Vec3, sum_sq: f32, n: u32) -> (f64, f64) {
+pub(crate) fn mean_and_variance_of_mean(sum: Vec3, sum_sq: f32, n: u32) -> (f64, f64) {
     let n = f64::from(n);
     let mean = f64::from(channel_mean(sum)) / n;
     // s² = (Σy² − n·m²)/(n − 1); rounding can make it slightly negative.
@@ -818,14 +860,58 @@ fn mean_and_variance_of_mean(sum: Vec3, sum_sq: f32, n: u32) -> (f64, f64) {
     (mean, variance / n)
 }
 
+/// Each of `largest` replaced by the sample of `pass` beside it where that is brighter (by
+/// channel mean), or in any case for the `first` pass.
+fn keep_largest(largest: &mut [Vec3], pass: &[Vec3], first: bool) {
+    for (l, p) in largest.iter_mut().zip(pass) {
+        if first || channel_mean(*p) > channel_mean(*l) {
+            *l = *p;
+        }
+    }
+}
+
 /// The mean of a value's three channels: the scalar whose spread the noise estimate follows.
-fn channel_mean(p: Vec3) -> f32 {
+pub(crate) fn channel_mean(p: Vec3) -> f32 {
     (p.x + p.y + p.z) * (1.0 / 3.0)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A film that keeps its brightest samples keeps, per pixel, the sample of the largest
+    /// channel mean (the first of equals), whether a pass comes as an image or row by row.
+    #[test]
+    fn a_film_keeps_each_pixels_brightest_sample() {
+        let passes = [
+            [Vec3::new(0.3, 0.0, 0.0), Vec3::splat(2.0)],
+            [Vec3::new(0.0, 0.2, 0.0), Vec3::new(9.0, 0.0, 0.0)],
+            [Vec3::new(0.0, 0.0, 0.9), Vec3::splat(1.0)],
+        ];
+        let mut whole = Film::with_noise(2, 1).with_largest();
+        let mut rows = Film::with_noise(2, 1).with_largest();
+        for pass in passes {
+            let image = Image {
+                width: 2,
+                height: 1,
+                pixels: pass.to_vec(),
+            };
+            whole.add_pass(&image);
+            let result: Result<(), ()> = rows.add_pass_rows(|_, row, _| {
+                row.copy_from_slice(&pass);
+                Ok(())
+            });
+            result.unwrap();
+        }
+        let sums = whole.sums();
+        assert_eq!(sums.samples, 3);
+        assert_eq!(
+            sums.largest,
+            Some(&[Vec3::new(0.0, 0.0, 0.9), Vec3::new(9.0, 0.0, 0.0)][..])
+        );
+        assert_eq!(rows.sums(), whole.sums());
+        assert_eq!(Film::with_noise(2, 1).sums().largest, None);
+    }
 
     /// A film with features sums what its first [`FEATURE_SAMPLES_RECORDED`] samples saw (a
     /// sample that saw nothing adds to the albedo's count only), and asks the later passes for

@@ -43,7 +43,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use crate::denoise::quality::estimated_error;
-use crate::denoise::{Denoiser, Features, denoising_film};
+use crate::denoise::{Denoiser, Features, Noisy, denoising_film};
 use crate::display::Display;
 use crate::film::{Film, Image, NoiseEstimate};
 use crate::render::{Cancelled, accumulate_pass, camera_sees_nothing, render_pass};
@@ -1075,13 +1075,27 @@ impl Worker {
             }
         };
         let variance = denoising.variance.clone();
-        let variance = variance.as_deref().map(Vec::as_slice);
-        let denoise = |image: &Image| Denoiser::default().denoise(image, variance, &features);
         let (denoised, error) = self.pool.install(|| {
-            let denoised = denoise(image);
+            // The film's outliers are taken apart where the film is the image's own.
+            let noisy = match film {
+                Some(film) if film.samples() == samples => Noisy::of_film(film),
+                _ => Noisy::whole(image.clone(), variance.as_deref().cloned()),
+            };
+            let denoiser = Denoiser::default();
+            let denoised = denoiser.denoise_noisy(&noisy, &features);
             // What the screen shows is the denoised image: its own error, from a second
-            // filtering (counted in the cost, so the spacing of denoisings allows for it).
-            let error = variance.map(|v| estimated_error(image, v, &denoised, denoise));
+            // filtering of the same colour moved a little (the outliers' light, given back
+            // after the filter, is the same in both), counted in the cost, so the spacing of
+            // denoisings allows for it.
+            let error = noisy.variance.as_deref().map(|v| {
+                estimated_error(&noisy.colour, v, &denoised, |moved| {
+                    let moved = Noisy {
+                        colour: moved.clone(),
+                        ..noisy.clone()
+                    };
+                    denoiser.denoise_noisy(&moved, &features)
+                })
+            });
             (denoised, error)
         });
         denoising.cost = start.elapsed();

@@ -40,17 +40,30 @@
 //!    to noisy taps is mostly noise, and the taps' weights favour those near the centre's own
 //!    noisy value, so with little ridge the fit extrapolated noise and moved the mean.
 //!
+//! 5. Before the passes, a pixel whose brightest sample is an outlier (a firefly: far brighter
+//!    than its other samples, which the luminance weights would keep apart) is taken apart:
+//!    the filter denoises the mean of its other samples, and the outlier's share of the mean
+//!    is given back after the passes, spread over the pixels of its surface around it, whole
+//!    ([`Noisy`], `outliers.rs`). The image's light is kept; only a rare sample's light moves,
+//!    by up to [`SPREAD_RADIUS`] pixels.
+//!
+//! Through mirrors and glass the features are those of the surface seen there
+//! ([`Features`]), so a reflection or what is seen through glass is filtered as that surface
+//! is, and its edges kept.
+//!
 //! The result depends only on the inputs (no random numbers, each pixel computed on its own),
 //! so it is the same on any thread count. The film's linear mean is never changed: the
 //! denoised image is a second image made from it.
 
 mod features;
+mod outliers;
 pub mod quality;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 pub use features::{FEATURE_SAMPLES, Features};
+pub use outliers::{Noisy, OUTLIER_DEVIATIONS, SPREAD_RADIUS};
 
 use crate::film::{Film, Image};
 use crate::integrator::Tracer;
@@ -237,6 +250,20 @@ impl Denoiser {
     /// size.
     pub fn denoise(&self, colour: &Image, variance: Option<&[f32]>, features: &Features) -> Image {
         self.denoise_with(Isa::best(), colour, variance, features)
+    }
+
+    /// The denoised `noisy` image: its colour without the outliers denoised, and their excess
+    /// given back spread over their surfaces ([`Noisy`]).
+    pub fn denoise_noisy(&self, noisy: &Noisy, features: &Features) -> Image {
+        let mut image = self.denoise(&noisy.colour, noisy.variance.as_deref(), features);
+        outliers::spread(
+            &mut image,
+            &noisy.excess,
+            features,
+            self.sigma_normal,
+            self.sigma_depth,
+        );
+        image
     }
 
     /// [`Denoiser::denoise`] with the row loop compiled for `isa`, which the CPU must have.
@@ -917,10 +944,10 @@ fn spatial_variance(light: &[Vec3], width: usize, height: usize) -> Vec<f32> {
 }
 
 /// A film for the passes of `settings`' view of `scene` that is to be denoised: it tracks each
-/// pixel's variance and, where the integrator records them ([`Tracer::records_features`]),
-/// what the samples saw.
+/// pixel's variance and brightest sample (its outlier, [`Noisy`]) and, where the integrator
+/// records them ([`Tracer::records_features`]), what the samples saw.
 pub fn denoising_film(scene: &Scene, settings: &RenderSettings) -> Film {
-    let film = Film::with_noise(settings.camera.width, settings.camera.height);
+    let film = Film::with_noise(settings.camera.width, settings.camera.height).with_largest();
     if Tracer::new(scene, settings).records_features() {
         film.with_features()
     } else {
@@ -958,7 +985,7 @@ pub fn render_denoised(scene: &Scene, settings: &RenderSettings) -> (Image, Opti
     }
     let raw = film.resolve();
     let features = features_of(&film, scene, settings, &never).expect("never cancelled");
-    let denoised = Denoiser::default().denoise(&raw, film.variance().as_deref(), &features);
+    let denoised = Denoiser::default().denoise_noisy(&Noisy::of_film(&film), &features);
     (raw, Some(denoised))
 }
 

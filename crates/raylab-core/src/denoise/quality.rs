@@ -9,7 +9,7 @@
 
 use glam::Vec3;
 
-use super::{Denoiser, denoising_film, features_of};
+use super::{Denoiser, Noisy, denoising_film, features_of};
 use crate::film::{Film, Image};
 use crate::render::accumulate_pass;
 use crate::scene::Scene;
@@ -179,9 +179,8 @@ pub fn measure(
             trace(settings, &mut film, sample);
         }
         let raw = film.resolve();
-        let variance = film.variance();
         let features = features_of(&film, scene, settings, &never).expect("never cancelled");
-        let denoised = denoiser.denoise(&raw, variance.as_deref(), &features);
+        let denoised = denoiser.denoise_noisy(&Noisy::of_film(&film), &features);
         let (before, after) = (mean(&raw), mean(&denoised));
         let change = ((after - before) / before.max(Vec3::splat(1e-12))).abs();
         rows.push(QualityRow {
