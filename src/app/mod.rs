@@ -804,6 +804,11 @@ impl WorkbenchApp {
             .as_ref()
             .is_some_and(|s| s.renders_like(settings))
         {
+            // A new resolution keeps the inspected pixel on the same spot of the image.
+            let size = |s: &RenderSettings| [s.camera.width, s.camera.height];
+            if let (Some(old), Some(pinned)) = (&self.submitted, self.state.pinned) {
+                self.state.pinned = Some(same_spot(pinned, size(old), size(settings)));
+            }
             self.submitted = Some(settings.clone());
             restarted = Some(controller.submit(&self.scene, settings));
         }
@@ -1745,4 +1750,13 @@ impl eframe::App for WorkbenchApp {
     fn auto_save_interval(&self) -> std::time::Duration {
         std::time::Duration::from_secs(5)
     }
+}
+
+/// The pixel of a `to`-sized image on the same spot as `pixel` of a `from`-sized one: its
+/// centre scaled, kept inside the image.
+fn same_spot(pixel: [u32; 2], from: [u32; 2], to: [u32; 2]) -> [u32; 2] {
+    std::array::from_fn(|i| {
+        let centre = (f64::from(pixel[i]) + 0.5) / f64::from(from[i].max(1));
+        ((centre * f64::from(to[i])) as u32).min(to[i].saturating_sub(1))
+    })
 }

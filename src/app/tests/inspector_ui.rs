@@ -120,3 +120,43 @@ fn with_one_sample_the_inspector_gives_rs_8_bits_through_the_display() {
     assert!(h.query_by_label_contains("sample 0's alone").is_none());
     settle(&mut h);
 }
+
+/// A smaller resolution keeps the inspected pixel on the same spot (it used to stay at its old
+/// coordinates, outside the image, until another click).
+#[test]
+fn a_new_resolution_keeps_the_inspected_pixel_on_its_spot() {
+    let mut state = WorkbenchState::default();
+    state.render_threads = 2;
+    state.inspect_mode = true;
+    state.pinned = Some([301, 283]);
+    assert_eq!(
+        (state.settings.camera.width, state.settings.camera.height),
+        (512, 512)
+    );
+    let mut h = Harness::builder()
+        .with_size([1180.0, 760.0])
+        .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
+    settle(&mut h);
+    h.state_mut().state.settings.camera.width = 256;
+    h.state_mut().state.settings.camera.height = 256;
+    settle(&mut h);
+    assert_eq!(h.state().state.pinned, Some([150, 141]));
+    assert!(h.query_by_label_contains("is outside the").is_none());
+    assert!(
+        h.query_all_by_label_contains("pixel (150, 141)")
+            .next()
+            .is_some()
+    );
+}
+
+/// The same spot at another size: the pixel's centre scaled (halving and doubling give each
+/// other back), kept inside the image.
+#[test]
+fn the_same_spot_at_another_size() {
+    assert_eq!(same_spot([301, 283], [512, 512], [256, 256]), [150, 141]);
+    assert_eq!(same_spot([150, 141], [256, 256], [512, 512]), [301, 283]);
+    assert_eq!(same_spot([0, 0], [512, 512], [256, 256]), [0, 0]);
+    assert_eq!(same_spot([511, 511], [512, 512], [256, 256]), [255, 255]);
+    assert_eq!(same_spot([10, 5], [20, 10], [40, 10]), [21, 5]);
+    assert_eq!(same_spot([7, 7], [8, 8], [1, 1]), [0, 0]);
+}
