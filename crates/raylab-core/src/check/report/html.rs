@@ -11,8 +11,7 @@
 
 use std::fmt::Write as _;
 
-use super::{figure_files, row_files, row_id, verdict_counts, worst_region};
-use crate::check::Mistake;
+use super::{figure_files, row_files, row_id, verdict_counts, verdict_order, worst_region};
 use crate::check::class::{Class, REFUSED, Row};
 use crate::check::compare::{DIFF_GAIN, TOLERANCE};
 use crate::check::{RIGHT, WELL};
@@ -53,18 +52,12 @@ fn verdict_colour(verdict: &str) -> &'static str {
     }
 }
 
-/// A verdict's place when sorting: right first, the mistakes in the catalogue's order,
-/// unknown, refused.
+/// A verdict's place when sorting: its place in [`verdict_order`] (a verdict not listed goes
+/// with unknown).
 fn verdict_rank(verdict: &str) -> usize {
-    match verdict {
-        "none" => 0,
-        "unknown" => Mistake::ALL.len(),
-        REFUSED => Mistake::ALL.len() + 1,
-        m => Mistake::ALL
-            .iter()
-            .position(|a| a.name() == m)
-            .unwrap_or(Mistake::ALL.len()),
-    }
+    let order = verdict_order();
+    let place = |v: &str| order.iter().position(|o| *o == v);
+    place(verdict).or_else(|| place("unknown")).unwrap_or(0)
 }
 
 fn percent(share: f64) -> String {
@@ -509,6 +502,7 @@ pub fn page(class: &Class, title: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::check::{FACTOR, OTHER_STAGE};
 
     #[test]
     fn text_is_escaped() {
@@ -518,12 +512,21 @@ mod tests {
         );
     }
 
-    /// Right first, the mistakes in the catalogue's order, then unknown and refused.
+    /// Right first, the mistakes in the catalogue's order, then another stage, a factor,
+    /// unknown and refused.
     #[test]
     fn verdicts_sort_in_the_catalogues_order() {
-        let ranks: Vec<usize> = ["none", "no-4pi", "bgr", "unknown", REFUSED]
-            .map(verdict_rank)
-            .to_vec();
+        let ranks: Vec<usize> = [
+            "none",
+            "no-4pi",
+            "bgr",
+            OTHER_STAGE,
+            FACTOR,
+            "unknown",
+            REFUSED,
+        ]
+        .map(verdict_rank)
+        .to_vec();
         assert!(ranks.is_sorted(), "{ranks:?}");
         assert_eq!(ranks[0], 0);
     }

@@ -192,14 +192,19 @@ impl Keep for ReportFolder {
     }
 }
 
-/// The verdicts of the class, in the order the page shows them (right first, then the
-/// mistakes in the catalogue's order, another stage, a factor, unknown, refused), with how many
-/// submissions got each; only those some submission got.
-pub fn verdict_counts(class: &Class) -> Vec<(String, usize)> {
+/// Every verdict in the order the page shows and sorts them: right first, then the mistakes in
+/// the catalogue's order, another stage, a factor, unknown, refused.
+pub fn verdict_order() -> Vec<&'static str> {
     let mut order: Vec<&str> = vec!["none"];
     order.extend(super::Mistake::catalogue().map(|m| m.name()));
     order.extend([super::OTHER_STAGE, super::FACTOR, "unknown", REFUSED]);
     order
+}
+
+/// The verdicts of the class, in [`verdict_order`], with how many submissions got each; only
+/// those some submission got.
+pub fn verdict_counts(class: &Class) -> Vec<(String, usize)> {
+    verdict_order()
         .into_iter()
         .map(|v| {
             let n = class.rows.iter().filter(|r| r.verdict() == v).count();
