@@ -994,15 +994,17 @@ fn the_walkthrough_steps_through_the_figures() {
     settle(&mut h);
 }
 
-/// A screenshot saved before the sample target says at how many samples it was taken.
-#[test]
-fn a_screenshot_before_the_target_says_so() {
-    let dir = tempfile::tempdir().unwrap();
+/// A window of `size` saving screenshots into `dir`, at 2 of its 4000 samples: a screenshot
+/// taken now is saved long before the target.
+fn early_screenshot_harness(
+    dir: &std::path::Path,
+    size: [f32; 2],
+) -> (Harness<'static, WorkbenchApp>, Instant) {
     let mut state = small_state();
-    state.screenshot_folder = dir.path().to_owned();
+    state.screenshot_folder = dir.to_owned();
     state.settings.samples_per_pixel = 4000;
     let mut h = Harness::builder()
-        .with_size([1400.0, 2400.0])
+        .with_size(size)
         .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
     let start = Instant::now();
     while h.state().last_full.as_ref().is_none_or(|s| s.samples < 2) {
@@ -1010,13 +1012,26 @@ fn a_screenshot_before_the_target_says_so() {
         std::thread::sleep(Duration::from_millis(2));
         h.step();
     }
-    h.get_by_role_and_label(Role::Button, "Save screenshot")
-        .click();
-    while pngs_in(dir.path()).is_empty() || !h.state().screenshots_saving.is_empty() {
+    (h, start)
+}
+
+/// Steps `h` until the screenshot asked for is written into `dir`.
+fn until_saved(h: &mut Harness<'_, WorkbenchApp>, dir: &std::path::Path, start: Instant) {
+    while pngs_in(dir).is_empty() || !h.state().screenshots_saving.is_empty() {
         assert!(start.elapsed() < DEADLINE);
         std::thread::sleep(Duration::from_millis(2));
         h.step();
     }
+}
+
+/// A screenshot saved before the sample target says at how many samples it was taken.
+#[test]
+fn a_screenshot_before_the_target_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut h, start) = early_screenshot_harness(dir.path(), [1400.0, 2400.0]);
+    h.get_by_role_and_label(Role::Button, "Save screenshot")
+        .click();
+    until_saved(&mut h, dir.path(), start);
     let (text, kind) = status(&h);
     assert_eq!(kind, StatusKind::Notice, "{text}");
     assert!(text.contains("/4000 samples"), "{text}");

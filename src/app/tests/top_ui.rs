@@ -145,24 +145,9 @@ fn enter_while_checking_checks_the_typed_image_and_the_dialog_starts_empty() {
 #[test]
 fn a_long_status_is_cut_short_beside_the_stats_with_a_tooltip() {
     let dir = tempfile::tempdir().unwrap();
-    let mut state = small_state();
-    state.screenshot_folder = dir.path().to_owned();
-    state.settings.samples_per_pixel = 4000;
-    let mut h = Harness::builder()
-        .with_size([1000.0, 900.0])
-        .build_eframe(move |cc| WorkbenchApp::with_state(&cc.egui_ctx, state, None));
-    let start = Instant::now();
-    while h.state().last_full.as_ref().is_none_or(|s| s.samples < 2) {
-        assert!(start.elapsed() < DEADLINE);
-        std::thread::sleep(Duration::from_millis(2));
-        h.step();
-    }
+    let (mut h, start) = early_screenshot_harness(dir.path(), [1000.0, 900.0]);
     h.key_press_modifiers(Modifiers::COMMAND, Key::S);
-    while pngs_in(dir.path()).is_empty() || !h.state().screenshots_saving.is_empty() {
-        assert!(start.elapsed() < DEADLINE);
-        std::thread::sleep(Duration::from_millis(2));
-        h.step();
-    }
+    until_saved(&mut h, dir.path(), start);
     h.step();
     let (text, kind) = status(&h);
     assert_eq!(kind, StatusKind::Notice);
