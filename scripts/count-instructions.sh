@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Instructions and taken branches a pixel of one render pass, counted exactly by single-stepping
 # (scripts/stepcount.c): the measure of work that does not depend on what else the host runs,
-# for machines without hardware counters. PERFORMANCE.md ("What the slow state is") says why.
+# for machines without hardware counters. PERFORMANCE.md ("How to measure": a busy minute) says why.
 #
 #   scripts/count-instructions.sh [lab|path] [WIDTH HEIGHT [SAMPLE]] [-- report options]
 #

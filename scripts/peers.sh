@@ -49,7 +49,7 @@ printf '%-6s %-24s %14s %14s %8s\n' round pair "raylab/s" "mitsuba/s" ratio
 for round in $(seq 1 "$ROUNDS"); do
     # 61 passes: the median then spans seconds, as Mitsuba's launches do (a lab pass is 3-6 ms;
     # with the default 15 the whole figure took 0.1 s, and a hiccup of the shared host that
-    # long decided the round: PERFORMANCE.md, "raylab against Mitsuba 3").
+    # long decided the round: PERFORMANCE.md, "Against Mitsuba 3").
     raylab_json=$("$RAYLAB" bench --scene cornell --stage path --threads "$THREADS" --passes 61 \
         --json)
     out=$(mktemp --suffix=.exr)

@@ -1,8 +1,8 @@
 // stepcount: how many instructions, and how many taken branches, one thread of a program runs
 // between two getpid() system calls (the marks), counted exactly by single-stepping it with
 // ptrace. For machines whose hardware counters are not available (`perf stat` says "not
-// supported", as in the virtual machines raylab is developed on); see PERFORMANCE.md, "What the
-// slow state is". Used by scripts/count-instructions.sh, which builds it with `cc -O2`.
+// supported", as in the virtual machines raylab is developed on); see PERFORMANCE.md, "How to
+// measure" (a busy minute). Used by scripts/count-instructions.sh, which builds it with `cc -O2`.
 //
 //   stepcount HISTOGRAM PROGRAM [ARGS...]
 //

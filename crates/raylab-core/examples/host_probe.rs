@@ -6,7 +6,7 @@
 //! to tell what a slow minute takes away: the clock (the dependent `add` chain slows), the
 //! execution units (the independent FMAs and adds slow at the same clock, as when another
 //! hardware thread shares the core), the branch predictor (the learnable branch patterns slow),
-//! or the caches and memory (the pointer chases slow). PERFORMANCE.md ("What a busy minute is")
+//! or the caches and memory (the pointer chases slow). PERFORMANCE.md ("How to measure": a busy minute)
 //! reports what it showed.
 //!
 //! ```text
