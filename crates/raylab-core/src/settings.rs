@@ -236,8 +236,8 @@ impl RenderSettings {
             c.width,
             c.height,
             v(c.position),
-            c.yaw.to_degrees(),
-            c.pitch.to_degrees(),
+            crate::camera::degrees(c.yaw),
+            crate::camera::degrees(c.pitch),
             c.focal_length,
             v(l.position),
             l.power,
@@ -817,6 +817,14 @@ mod tests {
             s.summary(),
             "scene cornell, stage lab (shadows on, indirect on), 128×96, camera (0, 0, -3.001) \
              yaw 0° pitch 0° f 128 px, light (0, -0.5, -0.7) 14 W, 1 spp, seed 3"
+        );
+        // Angles as they were typed (15°, not the f32's 15.000001°).
+        s.camera.yaw = 15f32.to_radians();
+        s.camera.pitch = crate::camera::radians(-2.5);
+        assert!(
+            s.summary().contains("yaw 15° pitch -2.5° "),
+            "{}",
+            s.summary()
         );
     }
 
