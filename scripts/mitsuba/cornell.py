@@ -81,6 +81,15 @@ def bsdf(name, preset, roughness=0.2):
                 "bsdf": {"type": "roughconductor", "material": "none", "distribution": "ggx",
                          "alpha": roughness,
                          "specular_reflectance": {"type": "rgb", "value": [0.9] * 3}}}
+    if name == "blue" and preset == "plastic":
+        # raylab's plastic preset: Mitsuba's roughplastic as it is, GGX of alpha `roughness`
+        # with visible-normal sampling, index 1.5 inside and exactly 1.0 outside, the block's
+        # own blue as the diffuse base under a white specular coating, `nonlinear` off.
+        return {"type": "twosided",
+                "bsdf": {"type": "roughplastic", "distribution": "ggx", "alpha": roughness,
+                         "int_ior": 1.5, "ext_ior": 1.0, "nonlinear": False,
+                         "diffuse_reflectance": {"type": "rgb", "value": REFLECTANCE["blue"]},
+                         "specular_reflectance": {"type": "rgb", "value": [1.0] * 3}}}
     if name == "red" and preset in ("glass", "both"):
         # ext_ior 1.0 exactly: Mitsuba's default "air" is 1.000277.
         return {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}
@@ -105,7 +114,8 @@ def mesh(name, tris, preset, roughness=0.2):
 
 def scene_dict(width=512, height=512, spp=64, integrator="path", max_depth=-1, rr_depth=5,
                light=(0.0, -0.5, -0.7), light_power=14.0, camera=(0.0, 0.0, -3.001),
-               focal=None, preset="none", roughness=0.2, light_shape="point", light_size=0.0):
+               focal=None, preset="none", roughness=0.2, light_shape="point", light_size=0.0,
+               light_aim=(0.0, 1.0, -0.2), spot_cutoff=25.0, spot_beam=15.0):
     focal = width if focal is None else focal
     groups = {}
     for t in triangles():
@@ -134,6 +144,16 @@ def scene_dict(width=512, height=512, spp=64, integrator="path", max_depth=-1, r
                       "emitter": {"type": "area", "radiance": {
                           "type": "rgb",
                           "value": [light_power / (4 * math.pi ** 2 * r * r)] * 3}}}
+    elif light_shape == "spot":
+        # Mitsuba's spot: intensity I (W/sr) inside the beam width, falling linearly in the
+        # angle to 0 at the cutoff; raylab's default I is the lab's P/4pi. Its local +z is
+        # the axis, aimed by look_at (any up not along the axis).
+        axis = np.asarray(light_aim, np.float64) - np.asarray(light, np.float64)
+        up = [0, 0, 1] if abs(axis[2]) < 0.9 * np.linalg.norm(axis) else [1, 0, 0]
+        d["light"] = {"type": "spot", "cutoff_angle": spot_cutoff, "beam_width": spot_beam,
+                      "to_world": mi.ScalarTransform4f().look_at(
+                          origin=list(light), target=list(light_aim), up=up),
+                      "intensity": {"type": "rgb", "value": [light_power / (4 * math.pi)] * 3}}
     else:
         d["light"] = {"type": "point", "position": list(light),
                       "intensity": {"type": "rgb", "value": [light_power / (4 * math.pi)] * 3}}
@@ -179,11 +199,15 @@ def parse_args(argv=None):
     p.add_argument("--light", type=vec3, default=(0.0, -0.5, -0.7))
     p.add_argument("--light-power", type=float, default=14.0, help="P in W per channel")
     p.add_argument("--camera", type=vec3, default=(0.0, 0.0, -3.001))
-    p.add_argument("--preset", choices=["none", "mirror", "glass", "both", "rough"], default="none")
-    p.add_argument("--roughness", type=float, default=0.2, help="the rough preset's GGX alpha")
-    p.add_argument("--light-shape", choices=["point", "sphere", "quad"], default="point")
+    p.add_argument("--preset", choices=["none", "mirror", "glass", "both", "rough", "plastic"], default="none")
+    p.add_argument("--roughness", type=float, default=0.2, help="the rough and plastic presets' GGX alpha")
+    p.add_argument("--light-shape", choices=["point", "sphere", "quad", "spot"], default="point")
     p.add_argument("--light-size", type=float, default=0.5,
                    help="the sphere's radius or the quad's side")
+    p.add_argument("--light-aim", type=vec3, default=(0.0, 1.0, -0.2),
+                   help="the point the spot light is aimed at")
+    p.add_argument("--spot-cutoff", type=float, default=25.0, help="degrees")
+    p.add_argument("--spot-beam", type=float, default=15.0, help="degrees")
     p.add_argument("--threads", type=int, default=None, help="drjit threads (default: all)")
     p.add_argument("--out", default="mitsuba.exr", help="EXR of pi x radiance")
     return p.parse_args(argv)
@@ -196,7 +220,8 @@ def main():
         dr.set_thread_count(a.threads)
     scene = mi.load_dict(scene_dict(a.width, a.height, a.spp, a.integrator, a.max_depth,
                                     a.rr_depth, a.light, a.light_power, a.camera, a.focal,
-                                    a.preset, a.roughness, a.light_shape, a.light_size))
+                                    a.preset, a.roughness, a.light_shape, a.light_size,
+                                    a.light_aim, a.spot_cutoff, a.spot_beam))
     img = mi.render(scene, spp=a.spp, seed=a.seed) * math.pi  # raylab's units
     mi.Bitmap(img).write(a.out)
     means = np.array(img, np.float64).reshape(-1, 3).mean(axis=0)
