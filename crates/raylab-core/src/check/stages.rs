@@ -54,11 +54,12 @@ impl StageSwitches {
 
     pub fn terms(self) -> Terms {
         let lit = self.stage != Stage::Flat;
+        let rho = match self.stage {
+            Stage::Flat | Stage::Direct | Stage::Shadows | Stage::Lab => true,
+            Stage::Incoming | Stage::Path => false,
+        };
         Terms {
-            rho: matches!(
-                self.stage,
-                Stage::Flat | Stage::Direct | Stage::Shadows | Stage::Lab
-            ),
+            rho,
             d: lit,
             n: lit && self.indirect,
             shadows: lit && self.shadows,

@@ -289,7 +289,7 @@ pub fn shaded_value<V: Vector>(stage: Stage, rho: V, d: V, blocked: MaskOf<V>, n
     match stage {
         Stage::Flat => rho,
         Stage::Incoming => d + n,
-        _ => rho * (d + n),
+        Stage::Direct | Stage::Shadows | Stage::Lab | Stage::Path => rho * (d + n),
     }
 }
 

@@ -87,7 +87,18 @@ impl Stage {
     pub fn integrator(self) -> Integrator {
         match self {
             Stage::Path => Integrator::Path,
-            _ => Integrator::Lab,
+            Stage::Flat | Stage::Incoming | Stage::Direct | Stage::Shadows | Stage::Lab => {
+                Integrator::Lab
+            }
+        }
+    }
+
+    /// Whether the stage is one of the lab's that multiplies the light by ρ (equations 28 and
+    /// 30): not the flat colour, the incoming light, or the path tracer.
+    pub fn reflects_light(self) -> bool {
+        match self {
+            Stage::Direct | Stage::Shadows | Stage::Lab => true,
+            Stage::Flat | Stage::Incoming | Stage::Path => false,
         }
     }
 }
@@ -251,18 +262,18 @@ impl Shading {
                 first.to_lowercase().chain(chars).collect::<String>()
             })
         };
-        match (materials, self.stage) {
-            (MaterialPreset::None, _) => {}
-            (MaterialPreset::Rough, Stage::Path) => {
+        match (materials, self.stage.integrator()) {
+            (MaterialPreset::None, Integrator::Lab | Integrator::Path) => {}
+            (MaterialPreset::Rough, Integrator::Path) => {
                 text.push_str("; rough metal tall block sampled (GGX)");
             }
             // The lab stages shade the rough metal as a surface whose ρ is its GGX reflection
             // toward the light's centre: a highlight, no reflected ray.
-            (MaterialPreset::Rough, _) => {
+            (MaterialPreset::Rough, Integrator::Lab) => {
                 text.push_str("; rough metal tall block: its GGX highlight from the light");
             }
-            (_, Stage::Path) => text.push_str(&format!("; {} sampled", named())),
-            _ => text.push_str(&format!(
+            (_, Integrator::Path) => text.push_str(&format!("; {} sampled", named())),
+            (_, Integrator::Lab) => text.push_str(&format!(
                 "; {} followed up to {} deep (Whitted)",
                 named(),
                 self.specular_depth
