@@ -7,7 +7,7 @@
 #
 # Defaults: lab, 512 × 32 (a strip through the middle of the default view; a 512-pixel row
 # makes the same batches as the full image), sample 0. Needs cc and binutils (addr2line).
-# About 20 µs a step in a virtual machine: the default lab strip takes two to three minutes.
+# Single-stepping is slow: the default lab strip takes minutes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 STAGE=${1:-lab}

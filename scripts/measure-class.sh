@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # How long `raylab check` takes over a class: 200 submissions of 512² (the class_folder
 # example's set, repeated) checked and reported (--report, --gradescope) on 2 threads, the
-# release build, three runs. Prints each run's wall time; PERFORMANCE.md has the figures.
+# release build, three runs. Prints each run's wall time; PERFORMANCE.md ("In the window, and
+# a class check") has the figures.
 #
 # Usage: scripts/measure-class.sh [COUNT] [SIDE] [THREADS]
 set -euo pipefail

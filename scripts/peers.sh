@@ -7,7 +7,7 @@
 # and the path pass, medians of 61 passes), `raylab render --stage shadows --samples 64` three
 # times (the `direct` integrator's equivalent, at Mitsuba's 64 samples a pixel in one go; the
 # render alone is timed, not writing the file, and the median of the three taken: one render
-# is a tenth of a second, and a hiccup of the shared host that long moved it by 5 %) and then
+# is short enough that one hiccup of the shared host would move it) and then
 # scripts/mitsuba/time.py --threads N (the `direct` and `path` integrators, 64 samples per
 # pixel a launch, L launches of which the first, the JIT compilation, is left out, and their
 # median taken), so both see the same minute of this shared machine. Prints one line per round
@@ -19,7 +19,8 @@
 #
 # A sample is one camera ray's whole estimate (a path, for `path`). Mitsuba must be installed
 # (scripts/mitsuba/install.sh); the release binary is built if missing.
-# BVH-level comparison with another Rust library: `cargo bench --bench peers` (PERFORMANCE.md).
+# BVH-level comparison with another Rust library: `cargo bench --bench peers` (PERFORMANCE.md,
+# "Against obvhs").
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
@@ -47,9 +48,9 @@ echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), fa
     "$THREADS thread(s), 512x512, $(date -u +%Y-%m-%dT%H:%MZ)"
 printf '%-6s %-24s %14s %14s %8s\n' round pair "raylab/s" "mitsuba/s" ratio
 for round in $(seq 1 "$ROUNDS"); do
-    # 61 passes: the median then spans seconds, as Mitsuba's launches do (a lab pass is 3-6 ms;
-    # with the default 15 the whole figure took 0.1 s, and a hiccup of the shared host that
-    # long decided the round: PERFORMANCE.md, "Against Mitsuba 3").
+    # 61 passes: the median then spans seconds, as Mitsuba's launches do (with the default 15
+    # a lab pass's figure spans a fraction of a second, and one hiccup of the shared host
+    # could decide the round: PERFORMANCE.md, "Against Mitsuba 3").
     raylab_json=$("$RAYLAB" bench --scene cornell --stage path --threads "$THREADS" --passes 61 \
         --json)
     out=$(mktemp --suffix=.exr)

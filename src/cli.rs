@@ -26,6 +26,7 @@ use raylab_core::scene::SceneChoice;
 use raylab_core::settings::{
     Caustics, DEFAULT_PHOTONS, MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_PHOTONS, MAX_SAMPLES,
 };
+use raylab_core::view::View;
 use raylab_core::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 mod class;
@@ -767,7 +768,14 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             settings.display,
             None,
         ),
-        view => {
+        view @ (View::Normals
+        | View::Depth
+        | View::Barycentric
+        | View::Triangle
+        | View::BvhCost
+        | View::Shadow
+        | View::Variance
+        | View::Photons) => {
             let v = pool
                 .install(|| raylab_core::view::render_view(&scene, &settings, view, &|| false))?;
             (v.image, Display::default(), Some(v.legend))

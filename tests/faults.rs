@@ -173,7 +173,7 @@ fn a_million_triangles_in_one_point_build_an_empty_tree() {
 
 /// An OBJ file of one triangle, then `f 1 2 3` over and over (8 MB for a million): the copies
 /// are left out with a warning saying how many, and the command line renders it, printing that
-/// warning. (It took minutes at 300,000 copies; the `degenerate` benchmark times it now.)
+/// warning. (How fast: the `degenerate` benchmark times it.)
 #[test]
 fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     let dir = tempfile::tempdir().unwrap();
@@ -486,9 +486,9 @@ fn assert_refused_for_memory(kib: u32, args: &[&str], out: &str, needs: &str) {
     );
 }
 
-/// A 16384 × 16384 render under a 4 GB limit aborted ("memory allocation … failed", exit code
-/// 134) after rendering, needing 6.3 GB (PNG) to 9.4 GB (EXR). It now needs one image,
-/// 3 GiB, plus 64 MiB for the program: 3.1 GiB. That fits under `ulimit -v 4000000` (3.8 GiB),
+/// A 16384 × 16384 render must not abort after rendering ("memory allocation … failed", exit
+/// code 134) for want of memory to write its PNG or EXR: it needs one image, 3 GiB, plus
+/// 64 MiB for the program: 3.1 GiB. That fits under `ulimit -v 4000000` (3.8 GiB),
 /// so here the limit is 3,000,000 KiB (2.9 GiB, less what the program already uses): refused.
 /// Under the 4 GB limit, what still does not fit is refused as well: the variance view
 /// (32 bytes a pixel: 8.1 GiB), and the bench (its rays, 64 bytes a pixel: 16.4 GiB).
@@ -787,7 +787,8 @@ fn a_texture_too_large_for_the_memory_is_refused_before_the_render() {
     );
 }
 
-/// An OBJ naming one library of 2,000 materials 8,000 times (it asked for 5.4 GB) renders
+/// An OBJ naming one library of 2,000 materials 8,000 times (read once a line, it would ask
+/// for gigabytes) renders
 /// under a 2 GB address-space limit: the library is read once.
 #[test]
 fn a_library_named_thousands_of_times_is_read_once() {
@@ -820,7 +821,7 @@ fn a_library_named_thousands_of_times_is_read_once() {
 }
 
 /// 100,000 missing material libraries: three warnings name the first three, one counts the
-/// rest (they printed 12.8 MB of warnings).
+/// rest (not a warning a library).
 #[test]
 fn many_missing_libraries_make_a_few_warnings() {
     let dir = tempfile::tempdir().unwrap();
@@ -1215,8 +1216,8 @@ fn outputs_with_the_longest_names_are_written() {
     }
 }
 
-/// A scene file 900 bytes over the 4 MiB cap was refused as "4 MiB, more than the 4 MiB a
-/// scene file may be": the exact sizes are said.
+/// A scene file 900 bytes over the 4 MiB cap is refused with the exact sizes, not as "4 MiB,
+/// more than the 4 MiB a scene file may be".
 #[test]
 fn a_scene_file_over_its_cap_is_refused_with_the_exact_sizes() {
     let dir = tempfile::tempdir().unwrap();
@@ -1523,8 +1524,8 @@ fn thread_counts_and_kernel_names_from_the_environment() {
             .output()
             .unwrap()
     };
-    // 2000 on a machine of a few cores started 1,024 threads, and a 64² render took seconds:
-    // at most four a core.
+    // 2000 on a machine of a few cores would start far more threads than it has cores, each
+    // a cost to the render: at most four a core.
     let cores = std::thread::available_parallelism().unwrap().get();
     let cap = raylab_core::progressive::THREADS_PER_CORE * cores;
     let out = run("RAYON_NUM_THREADS", "2000");

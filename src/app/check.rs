@@ -3,7 +3,7 @@
 //! ([`raylab_core::check`], the same check as `raylab check`).
 //!
 //! Reading the image and each check run on a short-lived thread (a check renders a dozen
-//! figures at the image's size: tens of milliseconds at 512², more for large images), at most
+//! figures at the image's size, too long for the UI thread), at most
 //! one at a time; a settings change starts a new check once the running one is back, so the
 //! diagnosis follows the stage, camera and light as the student sets them to what their image
 //! was made with. While checking, the viewport shows the student's image (left) against the

@@ -29,8 +29,8 @@ pub const LIGHT_STEP: f32 = 0.1;
 /// Camera turn per point dragged on the image.
 pub const DRAG_DEGREES_PER_POINT: f32 = 0.25;
 /// Focal length factor per point of wheel scroll: `f · exp(scroll · this)`. A wheel's notch
-/// on X11 arrives as two lines of egui's `line_scroll_speed`, 40 points each (measured under
-/// Xvfb: `xdotool click 4` scrolls 80 points): ln(1.05)/80 zooms 5 % a notch (a platform that
+/// on X11 arrives as two lines of egui's `line_scroll_speed`, 40 points each (under Xvfb
+/// `xdotool click 4` scrolls 80 points): ln(1.05)/80 zooms 5 % a notch (a platform that
 /// reports one line a notch, 2.5 %).
 pub const WHEEL_ZOOM_PER_POINT: f32 = 0.000_61;
 /// Shift divides a drag's turn and the wheel's zoom on the image by this (fine control, as in

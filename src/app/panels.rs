@@ -258,16 +258,15 @@ fn stage_ui(ui: &mut egui::Ui, settings: &RenderSettings, commands: &mut Vec<Com
 /// may be the user's: they change the view, not what is computed.
 fn figure_differences(settings: &RenderSettings) -> Vec<String> {
     let s = &settings.shading;
-    let on = |b: bool| if b { "on" } else { "off" };
-    let (shadows, indirect) = s.stage.preset_switches();
-    let mut differs = Vec::new();
+    let mut differs: Vec<String> = s
+        .switches_unlike_figure()
+        .into_iter()
+        .map(|(what, on)| format!("{what} {}", if on { "on" } else { "off" }))
+        .collect();
     if s.stage != Stage::Flat {
-        if s.shadows != shadows {
-            differs.push(format!("shadows {}", on(s.shadows)));
-        }
-        if s.indirect != indirect {
-            differs.push(format!("N {}", on(s.indirect)));
-        } else if s.indirect && s.indirect_light != raylab_core::Shading::LAB_INDIRECT_LIGHT {
+        // N on as the figure has it, but not the lab's N.
+        let (_, figure_n) = s.stage.preset_switches();
+        if s.indirect && figure_n && s.indirect_light != raylab_core::Shading::LAB_INDIRECT_LIGHT {
             differs.push("another N".to_owned());
         }
         if settings.light.is_area() {

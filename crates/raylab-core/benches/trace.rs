@@ -2,7 +2,7 @@
 //! camera's primary rays, any-hit shadow rays, one full pass of the lab stage (figure 7) and,
 //! for the Cornell box, of the path stage — the figures `raylab bench` reports, measured by
 //! criterion. 512×512 on the default rayon pool
-//! (all cores); set RAYON_NUM_THREADS=2 to match PERFORMANCE.md.
+//! (all cores); set RAYON_NUM_THREADS=2 to match PERFORMANCE.md ("How to measure").
 //!
 //! `cargo bench -- cornell` runs one scene's group. The `degenerate` group times the inputs
 //! that once took minutes (a million copies of one triangle, built and loaded from an OBJ

@@ -507,9 +507,10 @@ pub struct FilmSums<'a> {
 }
 
 /// The samples whose features a film records ([`Film::with_features`]), the first of its
-/// passes. Recording costs a path pass about 7 % of its time (a second look at each camera
-/// ray's first surface: PERFORMANCE.md); the features of 64 samples are enough for the
-/// denoiser to match 1,024 raw samples at 64, and later samples would add little.
+/// passes. Recording costs a path pass a second look at each camera ray's first surface
+/// (PERFORMANCE.md, "Design choices and what each buys"); the features of 64 samples are enough for the
+/// denoiser to match 1,024 raw samples at 64 (PERFORMANCE.md, "The denoiser"), and later
+/// samples would add little.
 pub const FEATURE_SAMPLES_RECORDED: u32 = 64;
 
 /// How far the accumulated image may still be from the converged one, estimated from the
@@ -527,10 +528,9 @@ pub struct NoiseEstimate {
     /// sees as grain, relative to the image's brightness; dark pixels, whose own relative error
     /// is large however little they show, do not dominate it as they would an RMS of sᵢ/mᵢ.
     /// It falls as 1/√n, so it says how many more samples a clean image needs
-    /// ([`NoiseEstimate::samples_to_reach`], [`NoiseEstimate::seconds_to_reach`]). On the
-    /// path-traced box at 128², the samples to 1 % it predicts stay within 909–939 from 4 to
-    /// 512 samples, and 1024 samples give 0.96 %; the share of pixels above 1 % still reads
-    /// 81 % there.
+    /// ([`NoiseEstimate::samples_to_reach`], [`NoiseEstimate::seconds_to_reach`]): on the
+    /// path-traced box its prediction holds from the first few samples on, while the share of
+    /// pixels above 1 % still reads high when the image as a whole is there.
     pub relative_rms_error: f64,
 }
 
@@ -798,11 +798,9 @@ impl Film {
 /// share them, so that a thread that runs out of rows takes the next one from another's
 /// share. Left to rayon's own splitting, a pass is cut into a few long runs of rows, each
 /// traced to its end by one thread; the path stage's rows differ in cost, so on two threads
-/// one thread finished first and waited while the other, which had a tenth more to trace,
-/// ended its run: a path render kept 1.89 of 2 CPUs busy, and the Cornell box's path
-/// pass at 512² took 23.0-24.0 ms against 22.1-22.7 ms with a job a row (Zen 5). On one
-/// thread there is no one to share with, and a job a row (about 0.2 µs each) cost the lab
-/// pass 3.5 %: there, rayon's own splitting.
+/// one thread finishes first and waits while the other ends its run (PERFORMANCE.md,
+/// "Design choices and what each buys"). On one thread there is no one to share with, and a job a
+/// row only adds each job's own cost: there, rayon's own splitting.
 pub(crate) fn rows_per_job() -> usize {
     match rayon::current_num_threads() {
         1 => usize::MAX,
@@ -812,7 +810,7 @@ pub(crate) fn rows_per_job() -> usize {
 
 thread_local! {
     /// A thread's row and its samples' features, for [`Film::add_pass_rows`]: made once a
-    /// thread, not once a job, which is a row on two threads (a 512-pixel row's are 22 KB).
+    /// thread, not once a job, which is a row on two threads.
     static ROW_BUFFERS: RefCell<(Vec<Vec3>, Vec<Option<Seen>>)> = const {
         RefCell::new((Vec::new(), Vec::new()))
     };

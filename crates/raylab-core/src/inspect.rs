@@ -1281,11 +1281,11 @@ impl Inspection {
                 format!("{lhs} = T = D + N = {} + {} = {v}", colour(d), colour(n)),
             ),
             Stage::Path => ("eq. 28", format!("ρ·D = {rho} · {} = {v}", colour(d))),
-            _ if n == Vec3::ZERO => (
+            Stage::Direct | Stage::Shadows | Stage::Lab if n == Vec3::ZERO => (
                 "eq. 28",
                 format!("{lhs} = ρ·D = {rho} · {} = {v}", colour(d)),
             ),
-            _ => (
+            Stage::Direct | Stage::Shadows | Stage::Lab => (
                 "eq. 30",
                 format!(
                     "{lhs} = ρ·(D + N) = {rho} · ({} + {}) = {v}",
@@ -1304,8 +1304,8 @@ fn final_equation(stage: Stage, n: Vec3) -> &'static str {
         Stage::Incoming if n == Vec3::ZERO => "eq. 27",
         Stage::Incoming => "eq. 29",
         Stage::Path => "path",
-        _ if n == Vec3::ZERO => "eq. 28",
-        _ => "eq. 30",
+        Stage::Direct | Stage::Shadows | Stage::Lab if n == Vec3::ZERO => "eq. 28",
+        Stage::Direct | Stage::Shadows | Stage::Lab => "eq. 30",
     }
 }
 

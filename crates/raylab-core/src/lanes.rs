@@ -79,11 +79,11 @@ pub trait Real:
 
 /// [`Real::select`] or [`Vector::select`] of two sides — `select_lazy!(Real: T, mask, a, b)`
 /// or `select_lazy!(Vector: T, mask, a, b)` — computing only the side taken when `T` is one
-/// value, as the scalar code's branch did (the path stage, a hit at a time, lost 3 % to
-/// computing both), and both sides for sixteen lanes, each lane taking its own. The same bits
-/// either way: the sides are plain arithmetic. A macro, not closures: a closure too large to
-/// inline is compiled without the caller's instruction set (measured: the sixteen-lane sides
-/// ran as SSE code, 3 % of the lab pass).
+/// value, as the scalar code's branch did (computing both would slow the path stage, a hit at
+/// a time), and both sides for sixteen lanes, each lane taking its own. The same bits either
+/// way: the sides are plain arithmetic. A macro, not closures: a closure too large to inline
+/// is compiled without the caller's instruction set (the sixteen-lane sides would run as SSE
+/// code; PERFORMANCE.md, "Design choices and what each buys": phase batching).
 macro_rules! select_lazy {
     (Real: $t:ty, $mask:expr, $a:expr, $b:expr) => {{
         let mask = $mask;
@@ -405,7 +405,7 @@ impl M16 {
     #[inline(always)]
     pub fn bits(self) -> u16 {
         // A plain loop, no closure: a closure inside the code compiled for the CPU may be
-        // called out of line (`DiffuseHits::blocked`'s was, PERFORMANCE.md).
+        // called out of line, compiled without the CPU's instruction set.
         let mut bits = 0;
         for (i, &b) in self.0.iter().enumerate() {
             bits |= u16::from(b) << i;

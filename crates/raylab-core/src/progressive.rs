@@ -673,7 +673,8 @@ const DENOISE_SPACING: u32 = 9;
 /// * never after the first pass, which is shown raw at once;
 /// * at every doubling of the samples (2, 4, 8, 16, …): each halves the raw image's variance,
 ///   and the denoised image keeps up with it without delay (16 samples denoised are about as
-///   clean as 256 raw ones: PERFORMANCE.md, shown as soon as the sixteenth pass is in);
+///   clean as 256 raw ones: PERFORMANCE.md, "The denoiser"; shown as soon as the sixteenth
+///   pass is in);
 /// * between doublings, once the last denoising is [`DENOISE_SPACING`] times its cost ago,
 ///   the samples have grown by a quarter since it, and the next doubling is farther off than
 ///   the spacing at `pass` a pass. So the denoiser takes at most a tenth of the time, and less

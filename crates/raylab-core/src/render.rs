@@ -198,9 +198,9 @@ pub fn render_pass(
     let (width, height) = (settings.camera.width, settings.camera.height);
     let tracer = Tracer::for_pass(scene, settings, sample);
     let rows = Rows::new(&tracer, settings, sample);
-    // The image is written row by row on the pool, once, into memory not filled first.
-    // Filled with zeros first, on the calling thread alone, the Cornell box's lab pass at
-    // 512² took 3.65 against 3.55 ms on one thread, 1.99 against 1.89 ms on two (Zen 5).
+    // The image is written row by row on the pool, once, into memory not filled first:
+    // filling it with zeros first, on the calling thread alone, would be a serial step
+    // before every pass (PERFORMANCE.md, "Design choices and what each buys": shared working memory).
     let len = width as usize * height as usize;
     let mut pixels: Vec<Vec3> = Vec::with_capacity(len);
     pixels.spare_capacity_mut()[..len]
@@ -262,8 +262,8 @@ struct Rows<'a> {
     sample: u32,
     /// Nothing random and a pinhole (the lab's stages as the lab sets them): each image point
     /// is its pixel's offset alone, with no generator and no lens point, in a loop the
-    /// compiler can keep simple (a loop asking both per pixel took 8 % of the lab pass's
-    /// instructions: PERFORMANCE.md).
+    /// compiler can keep simple (a loop asking both per pixel would spend instructions on
+    /// every pixel of the lab pass).
     points_only: bool,
 }
 
@@ -283,9 +283,9 @@ struct Batch {
 }
 
 thread_local! {
-    /// Each thread's [`Batch`], made at its first row and reused for every row after: about
-    /// 100 KB with room for the path tracer's batches, whose zeroing for each row took 7 % of
-    /// the lab pass (a row of 512 pixels is 6 µs).
+    /// Each thread's [`Batch`], made at its first row and reused for every row after: it has
+    /// room for the path tracer's batches, far more memory than a row of the lab pass traces,
+    /// so zeroing it for each row would be a share of that pass.
     static BATCH_MEMORY: RefCell<Option<Box<Batch>>> = const { RefCell::new(None) };
 }
 
@@ -303,9 +303,9 @@ impl Batch {
 
     /// A new batch memory on the heap. Out of line, so that the row loop, inlined into
     /// rayon's splitting (a frame a level, nine levels for 512 rows a job each), never holds
-    /// room for one (101 KB) in its own stack frame. It had held room for two (110 KB with
-    /// batches of 256 paths), and a tall image's levels came near the 2 MiB of a rayon
-    /// thread's stack (`a_tall_image_fits_in_a_small_stack`).
+    /// room for one in its own stack frame: a [`Batch`] in each level's frame would bring a
+    /// tall image's levels near the end of a rayon thread's stack
+    /// (`a_tall_image_fits_in_a_small_stack`).
     #[cold]
     #[inline(never)]
     fn boxed() -> Box<Batch> {
@@ -379,8 +379,8 @@ impl<'a> Rows<'a> {
     fn trace_samples(&self, y: u32, row: &mut [Vec3], samples: u32) {
         // Each batch: `pixels` pixels, up to `each` samples of each, a pixel's one after
         // another. Its sums are `pixels` chains of additions, each waiting on the one before:
-        // side by side they wait together (one pixel's 64 samples a batch, a chain of 64,
-        // took 4 % of a 64-sample render of the lab's box).
+        // side by side they wait together (one pixel's 64 samples a batch would be one chain
+        // of 64 additions, each waiting).
         let each = samples.clamp(1, (BATCH / 4) as u32) as usize;
         let pixels = self.tracer.batch_len() / each;
         Batch::with(|b| {
@@ -579,9 +579,9 @@ fn accumulate(scene: &Scene, settings: &RenderSettings, sum: &mut Image) {
         }
     } else {
         let tracer = Tracer::new(scene, settings);
-        // `trace_samples` names its samples itself: the pass's sample is not used. (Passed to
-        // `Rows::trace` as an argument instead of kept here, it made the lab pass 7 % slower,
-        // the compiler fitting the row loop together differently: measured.)
+        // `trace_samples` names its samples itself: the pass's sample is not used. (Kept here
+        // rather than passed to `Rows::trace` as an argument: that way the compiler fits the
+        // row loop together less tightly.)
         let rows = Rows::new(&tracer, settings, 0);
         sum.pixels
             .par_chunks_mut(width.max(1))
@@ -777,9 +777,9 @@ mod tests {
     /// image on two threads with half a mebibyte of stack each traces every row, in a pass, a
     /// film's pass and a render.
     ///
-    /// Running out of stack depends on how the build inlines: a release build once kept room
-    /// for two row memories (110 KB) in each level's frame and overflowed here, where the test
-    /// build, inlining less, passed. So the depth is also measured, in any build: the stack
+    /// Running out of stack depends on how the build inlines: a release build that keeps a row
+    /// memory in each level's frame overflows here, where the test build, inlining less,
+    /// passes. So the depth is also measured, in any build: the stack
     /// each row starts on (asked at every row's cancellation check, against the address its
     /// thread started at) must be under a quarter of the stack, leaving three quarters to
     /// the row's own tracing. That catches a level's frame growing (by a few kilobytes a

@@ -141,8 +141,7 @@ impl Default for RenderSettings {
 }
 
 /// What [`RenderSettings::memory_estimate`] allows for the program itself: its code, its
-/// threads' stacks and its allocator's first reserves (a small render runs in 50 MiB of
-/// address space).
+/// threads' stacks and its allocator's first reserves (a small render runs well within it).
 pub const BASE_MEMORY: u64 = 64 << 20;
 
 impl RenderSettings {

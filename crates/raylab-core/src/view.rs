@@ -567,7 +567,14 @@ fn from_film(
     let mut film = Film::with_noise(width, height);
     let samples = match view {
         View::Variance => settings.samples_per_pixel.max(2),
-        _ => settings.samples_per_pixel.max(1),
+        View::Shaded
+        | View::Normals
+        | View::Depth
+        | View::Barycentric
+        | View::Triangle
+        | View::BvhCost
+        | View::Shadow
+        | View::Photons => settings.samples_per_pixel.max(1),
     };
     for sample in 0..samples {
         film.add_pass(&render_pass(scene, settings, sample, cancelled)?);

@@ -105,14 +105,11 @@ fn mean_and_error(values: &[f64]) -> (f64, f64) {
 /// conservative error). The reference is 32 renders of 128 samples, each from its own seed:
 /// its mean and standard error from those 32. The 256-pass mean must lie within 4 standard
 /// errors of the difference from the reference; with the errors' own estimates (31 and 255
-/// degrees of freedom) a correct pair fails with probability about 3·10⁻⁴. Measured: the
-/// reference 0.4070 ± 0.0060, the photons 0.4238 ± 0.0045, 2.2 standard errors apart; the
-/// difference's standard error is 1.8 % of the reference, so the bound is 7.4 %, and that
-/// error must stay under 2.5 % (a noisier run proves nothing). A fixed 3 % was 1.7 of these
-/// standard errors: a correct renderer failed it for about one seed in eleven. The first 4
-/// passes' mean (0.3930, the wide early radius blurring the caustic) lies 1.9 standard
-/// errors below the reference: this much noise cannot tell it from converged, so the test
-/// does not claim to.
+/// degrees of freedom) a correct pair fails with probability about 3·10⁻⁴. The difference's
+/// standard error must stay under 2.5 % of the reference (a noisier run proves nothing); a
+/// fixed bound in its place would fail a correct renderer for some seeds. The first few
+/// passes' mean, the wide early radius blurring the caustic, lies within this noise of the
+/// reference: the test cannot tell it from converged, so it does not claim to.
 #[test]
 fn the_caustic_agrees_with_the_path_tracers_under_a_small_sphere() {
     let scene = cornell_box();

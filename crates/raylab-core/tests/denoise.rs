@@ -14,10 +14,9 @@ use raylab_core::{RenderSettings, Stage};
 use common::{assert_same_image, on_threads, settings};
 
 /// The path-traced box at 64², 16 samples denoised: closer to a 2,048-sample reference than 32
-/// raw samples, a third of the 16 raw samples' error (measured: 5.4·10⁻³ against 2.3·10⁻²
-/// raw, 3.0·10⁻³ for 128 raw), its mean the raw image's within 0.5 %. A 64² box is mostly
-/// edges; at 256², `raylab bench --stage denoise` measures the gain that matters
-/// (PERFORMANCE.md).
+/// raw samples, under the 16 raw samples' error over 2.5, its mean the raw image's within
+/// 0.5 %. A 64² box is mostly edges; at 256², `raylab bench --stage denoise` measures the gain
+/// that matters (PERFORMANCE.md, "The denoiser").
 #[test]
 fn sixteen_denoised_samples_beat_32_raw_ones() {
     let scene = cornell_box();

@@ -95,7 +95,10 @@ fn expected(
     };
     let reflect = |incoming: Vec3| match stage {
         Stage::Incoming => incoming,
-        _ => rho * incoming,
+        Stage::Direct | Stage::Shadows | Stage::Lab => rho * incoming,
+        Stage::Flat | Stage::Path => {
+            unreachable!("{stage:?}: flat returns above, path is not a lab figure")
+        }
     };
     let (lit, shadowed) = (reflect(dl + n), reflect(n));
     Expected {

@@ -638,7 +638,7 @@ impl Builder<'_> {
         centroids: BuildBox,
     ) -> Part {
         if prims.len() < PARALLEL_MIN {
-            // About one node per two prims with leaves of up to eight (the terrain: 0.47).
+            // About one node per two prims with leaves of up to eight.
             let mut nodes = Vec::with_capacity(prims.len() / 2 + 1);
             self.serial(prims, offset, depth, bounds, centroids, &mut nodes);
             return Part::Nodes(nodes);

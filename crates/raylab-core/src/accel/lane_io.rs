@@ -6,8 +6,8 @@
 //!
 //! Why: filled lane by lane, sixteen hits' fields went through the stack one `f32` at a time,
 //! and the vector loads that then read them back waited for those stores (a store-forwarding
-//! stall). Gathers avoid the stall but read each lane from memory one at a time: slower still
-//! (PERFORMANCE.md).
+//! stall). Gathers avoid the stall but read each lane from memory one at a time, which is
+//! slower still.
 
 use glam::Vec3;
 

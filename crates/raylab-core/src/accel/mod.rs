@@ -12,7 +12,7 @@
 //! * [`calibrate`]: which kernel set is fastest on this CPU, measured at start-up.
 //!
 //! [`Accel::build`] picks per scene ([`AccelKind::Auto`]): the flat list for tiny scenes (the
-//! 30-triangle Cornell box, where it beats any tree: see PERFORMANCE.md), the wide BVH
+//! 30-triangle Cornell box, where it beats any tree: PERFORMANCE.md, "Design choices and what each buys"), the wide BVH
 //! otherwise, with the few triangles that are large next to the scene (the box's walls) set
 //! apart in one packet tested first; and the kernels measured fastest on this CPU
 //! ([`Isa::best_with`]), or forced with `--isa`.
@@ -66,10 +66,10 @@ use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
 use self::wide::{Bvh8Big, Flat, KernelSet};
 
-/// Scenes with at most this many triangles use the flat packet list. Measured (PERFORMANCE.md,
-/// 512×512 lab pass, 2 threads): on the 30-triangle Cornell box the flat AVX-512 loop takes
-/// 7.9 ms against 10.8 ms for the 8-wide BVH; on the 1,022-triangle teapot it takes 91 ms
-/// against 10.6 ms. The crossover lies in between; 64 (four 16-wide packets) is on the safe side.
+/// Scenes with at most this many triangles use the flat packet list. The flat loop tests every
+/// triangle for every ray with no nodes to walk: it beats the 8-wide BVH on the 30-triangle
+/// Cornell box and loses far behind it on the 1,022-triangle teapot. The crossover lies in
+/// between; 64 (four 16-wide packets) is on the safe side (PERFORMANCE.md, "Design choices and what each buys").
 pub const FLAT_MAX_TRIANGLES: usize = 64;
 
 /// A closest hit: the triangle's index in the scene and `t`, `u`, `v` exactly as
@@ -445,7 +445,7 @@ impl Accel {
     /// distance, exactly as the brute-force loop. With SIMD kernels a batch of one
     /// ([`Accel::closest_batch`]); the scalar kernels answer here, inlined into the caller.
     /// (That inlining is kept on purpose: without it the compiler inlined the integrators' own
-    /// code differently, and the path pass ran 18 % more instructions,
+    /// code differently, and the path pass ran more instructions,
     /// `scripts/count-instructions.sh`.)
     #[inline(always)]
     pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
@@ -519,9 +519,9 @@ impl Accel {
     }
 }
 
-// The batch queries are calls, never inlined: their callers (the integrators' code, compiled
-// for the instruction set) were measured to be inlined differently, and to run more
-// instructions, whenever these grew or shrank (`scripts/count-instructions.sh`).
+// The batch queries are calls, never inlined: inlined, they make the compiler inline their
+// callers (the integrators' code, compiled for the instruction set) differently, running more
+// instructions, whenever these grow or shrink (`scripts/count-instructions.sh` shows it).
 impl Accel {
     /// [`Accel::closest`] for many rays, `out[i]` for `rays[i]`: the same answers, with the
     /// choice of structure and kernels made once for the batch instead of once per ray, and the
@@ -1043,7 +1043,7 @@ fn flat_occluded_culled<P: packet::PacketIsa>(
 
 /// [`flat_closest_culled`] for shadow rays given as lanes; unlike the batches of rays, lanes
 /// without a cone are tested from the lanes too, against every triangle (the path tracer's
-/// shadow rays: 2 ms of its 49 ms pass, against copying them out).
+/// shadow rays: cheaper than copying them out of the lanes).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn occluded_lanes_in<P: packet::PacketIsa>(
@@ -1068,9 +1068,9 @@ fn occluded_lanes_in<P: packet::PacketIsa>(
     // group has none; rays from all over the scene (the path tracer's bounces) are not tried.
     // Either way, the groups without one are tested against every triangle, still straight
     // from the lanes. Only rays in a cone give up a triangle as soon as none of them meets
-    // its plane within its length (`Lanes::triangle_or_give_up`: the Cornell box's lab pass
-    // 4 % faster); for rays from all over the scene that branch is a coin toss, and the path
-    // pass took 2.4 % longer.
+    // its plane within its length (`Lanes::triangle_or_give_up`, PERFORMANCE.md, "Design choices and what each buys":
+    // culling cones); for rays from all over the scene that branch is a coin toss, and costs
+    // more than it saves.
     let all = u64::MAX.checked_shr(64 - f.count as u32).unwrap_or(0);
     let mut coned = neighbours && groups.len() > 1;
     for (g, blocked) in groups.iter().zip(blocked) {

@@ -5,8 +5,8 @@
 //! point light, meet the same nodes in the same order. Ray by ray, each of them loads a node's
 //! eight boxes and tests them eight lanes wide. As a packet, the node is loaded once and each
 //! child box is tested against all the packet's rays in one step: for a node every ray of the
-//! packet enters, a third of the instructions with AVX-512 (PERFORMANCE.md measures what it
-//! buys, for both widths).
+//! packet enters, far fewer instructions (PERFORMANCE.md, "Design choices and what each buys", gives what it
+//! buys).
 //!
 //! The traversal is written once, generic over [`PacketIsa`]: the lane width, a lane type
 //! with the arithmetic of [`crate::lanes`], and the few operations it needs beyond (masks as
@@ -58,9 +58,9 @@ const _: () = assert!(
         && std::mem::offset_of!((Ray, f32), 1) == 24
 );
 
-/// A packet with at most this many rays left in a subtree lets each go on alone. Measured
-/// (whole `raylab bench --threads 1` runs, bunny and terrain, alternating binaries): 1, 2 and 4
-/// are level within 1 % (AVX-512).
+/// A packet with at most this many rays left in a subtree lets each go on alone: below it a
+/// packet's shared node loads no longer pay for its masks. Small values (1, 2, 4) trace the
+/// bunny and terrain equally fast; 2 sits between.
 const ALONE: u32 = 2;
 
 /// Directions within about 18° of the first ray's (cosine 0.95) travel together.
@@ -187,8 +187,8 @@ unsafe fn gather16<const K: usize>(base: *const f32, stride: i32, len: usize) ->
 }
 
 /// [`gather16`] for a full packet (`len` = 16) of records of `S` floats (`K ≤ S ≤ 8`), read
-/// with `S` plain loads and rearranged in registers: a gather takes one load per lane, and
-/// gathers were the packet paths' bottleneck (40 % of the Cornell box's shadow rays).
+/// with `S` plain loads and rearranged in registers: a gather takes one load per lane, which
+/// would be the packet paths' bottleneck.
 ///
 /// Lane `i` of output `c` is float `S·i + c`, which lies in loaded vector `(S·i + c) / 16`;
 /// `permutex2var` picks lanes from a pair of vectors, so each output is one pick per pair of
@@ -698,7 +698,7 @@ impl<P: PacketIsa> Lanes<P> {
 
     /// The lanes of `active` that hit any triangle of a leaf with `0 < t < limit` (per lane).
     /// A packet's rays are alike, so each triangle is given up as soon as none meets its
-    /// plane within its segment: the bunny's shadow rays 80 → 93 Mrays/s (Zen 5, one thread).
+    /// plane within its segment, before the rest of its test.
     #[inline(always)]
     fn leaf_any<const N: usize>(&self, p: &Packet<N>, active: u32, limit: P::F) -> u32 {
         let triangles = (0..N)

@@ -35,9 +35,9 @@ pub type Packet8 = Packet<LANES>;
 ///
 /// `n` depends on the triangle alone, so the flat loop (which tests every triangle for every
 /// ray) stores it rather than computing it per ray: computed by the same expression as
-/// `intersect_triangle`'s `e1.cross(e2)`, it has the same bits. Measured on one thread: shadow
-/// rays +10 %, the path stage +4 % on the Cornell box. The BVH's 8-wide leaves do not store it:
-/// for the terrain the larger leaves cost more in memory traffic than they save (PERFORMANCE.md).
+/// `intersect_triangle`'s `e1.cross(e2)`, it has the same bits, and a cross product less per
+/// ray and triangle. The BVH's 8-wide leaves do not store it: for a large scene such as the
+/// terrain the larger leaves cost more in memory traffic than they save.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 pub struct Packet16 {
@@ -644,7 +644,7 @@ mod x86 {
         let at_min = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(hit, t, _mm512_set1_ps(m));
         let lane = (at_min as u32).trailing_zeros() as usize & 15;
         // The lane's u and v moved to lane 0 in registers: storing the vectors and reading one
-        // float back stalled on the store (13 % of the Cornell box's camera rays).
+        // float back would stall on the store (store forwarding).
         let pick = _mm512_set1_epi32(lane as i32);
         Some(LaneHit {
             lane,

@@ -217,7 +217,7 @@ impl Mistake {
         use Mistake::*;
         let s = &settings.shading;
         let lit = s.stage != Stage::Flat;
-        let reflected = matches!(s.stage, Stage::Direct | Stage::Shadows | Stage::Lab);
+        let reflected = s.stage.reflects_light();
         match self {
             None | FocalHalf | PixelCorner | UpsideDown | Gamma | Bgr => true,
             No4Pi | InverseR | UnclampedCos | FlippedNormal => lit,
@@ -457,7 +457,7 @@ impl Recombine<'_> {
                 return HitTerms { blocked, ..*terms }.value(stage, n);
             }
         };
-        let reflected = matches!(stage, Stage::Direct | Stage::Shadows | Stage::Lab);
+        let reflected = stage.reflects_light();
         match mistake {
             None => terms.value(stage, n),
             No4Pi | InverseR | UnclampedCos | FlippedNormal => {

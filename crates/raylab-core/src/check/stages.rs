@@ -54,11 +54,12 @@ impl StageSwitches {
 
     pub fn terms(self) -> Terms {
         let lit = self.stage != Stage::Flat;
+        let rho = match self.stage {
+            Stage::Flat | Stage::Direct | Stage::Shadows | Stage::Lab => true,
+            Stage::Incoming | Stage::Path => false,
+        };
         Terms {
-            rho: matches!(
-                self.stage,
-                Stage::Flat | Stage::Direct | Stage::Shadows | Stage::Lab
-            ),
+            rho,
             d: lit,
             n: lit && self.indirect,
             shadows: lit && self.shadows,
@@ -79,17 +80,13 @@ impl StageSwitches {
         if let Some(f) = self.figure() {
             return format!("figure {f}");
         }
-        let (mine, preset) = (self.terms(), Self::preset(self.stage).terms());
         let mut with = Vec::new();
         let mut without = Vec::new();
-        for (has, had, what) in [
-            (mine.shadows, preset.shadows, "shadows"),
-            (mine.n, preset.n, "N"),
-        ] {
-            match (has, had) {
-                (true, false) => with.push(what),
-                (false, true) => without.push(what),
-                _ => {}
+        for (what, on) in self.shading(&Shading::default()).switches_unlike_figure() {
+            if on {
+                with.push(what);
+            } else {
+                without.push(what);
             }
         }
         let mut name = format!("figure {}", self.stage.figure().unwrap_or(0));

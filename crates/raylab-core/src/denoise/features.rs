@@ -3,9 +3,9 @@
 //! normal and the distance to the surface, each averaged over [`FEATURE_SAMPLES`] camera rays.
 //!
 //! The path tracer records them as it traces, from every sample of the image at no extra ray
-//! ([`Features::recorded`], from a [`Film::with_features`]): at 64 samples those features
-//! gave the denoised image the error of 955 raw samples, where 16 traced ones gave 856
-//! (PERFORMANCE.md). For the other integrators they are traced apart ([`Features::trace`]),
+//! ([`Features::recorded`], from a [`Film::with_features`]): those of 64 samples steer the
+//! denoiser at least as well as features traced apart (PERFORMANCE.md, "The denoiser", gives
+//! the quality). For the other integrators they are traced apart ([`Features::trace`]),
 //! from the render's own first camera samples ([`crate::render`]'s `camera_sample`: the pixel
 //! centre, then jittered points and, with an aperture, points of the lens). Either way a
 //! feature blurred by depth of field or shared by two surfaces at an edge is blurred as the

@@ -86,15 +86,15 @@ const CENTRE_MEAN: f32 = 0.7;
 /// The ridge of each pass's plane fit (module docs, point 4), added to the variance of the
 /// weighted taps' offsets along x and y (in steps: the whole kernel's is 1 along each), plus
 /// [`SLOPE_RIDGE_NOISE`] times the centre's relative variance (the light's blurred variance
-/// over the taps' mean luminance squared). Swept on the path-traced box (PERFORMANCE.md): a
-/// smaller ridge removed more of the bias at 64 and 256 samples, but moved the mean of the
-/// 64² box at 16 samples by more than 0.5 %.
+/// over the taps' mean luminance squared). Chosen on the path-traced box: a smaller ridge
+/// removes more of the bias at 64 and 256 samples, but moves the mean of the 64² box at 16
+/// samples by more than the 0.5 % the denoiser's tests allow.
 const SLOPE_RIDGE: f32 = 0.1;
 const SLOPE_RIDGE_NOISE: f32 = 300.0;
 
 /// The filter's settings. The defaults started from SVGF's (σl 4, σn 128, σz 1, five passes)
-/// and were swept on the path-traced Cornell box at 4 to 256 samples (PERFORMANCE.md gives
-/// the sweep and the quality they reach): fewer passes and a looser normal weight lowered the
+/// and were swept on the path-traced Cornell box at 4 to 256 samples (PERFORMANCE.md, "The
+/// denoiser", gives the quality they reach): fewer passes and a looser normal weight lower the
 /// error at every sample count.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Denoiser {
@@ -180,8 +180,8 @@ impl Layout {
 
 /// Planes kept from one call of the filter to the next, up to [`SPARE_BYTES`]: a fresh
 /// megabyte-sized allocation comes from the system as untouched pages, and the page faults of
-/// the filter's sixteen planes took about as long as its passes (at 512², some 7,000 faults a
-/// call, 15 ms). What a plane held never matters: each is filled before it is read.
+/// the filter's sixteen planes can cost as much as its passes. What a plane held never
+/// matters: each is filled before it is read.
 static SPARE_PLANES: std::sync::Mutex<Vec<Vec<f32>>> = std::sync::Mutex::new(Vec::new());
 
 /// At most this many bytes of planes are kept (a 1,024² image's planes fit).

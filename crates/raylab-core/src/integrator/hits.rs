@@ -10,10 +10,10 @@
 //! their rays and, in a scene of at most 32 triangles, their triangles' [`TriangleTable`]
 //! entries in registers, and makes their surfaces in lanes: the values [`Tracer::surface_with`]
 //! gives one hit at a time, bit for bit (tested). One at a time, each surface went through the
-//! stack field by field, with a branch for the edge test (PERFORMANCE.md). The path tracer
-//! packs its diffuse hits one after another instead: its rays that leave the box would leave
-//! their lanes empty, and empty lanes cost their group's light and shadow rays as full ones do
-//! (a pass took 11 % longer).
+//! stack field by field, with a branch for the edge test (PERFORMANCE.md, "Design choices and
+//! what each buys"). The path tracer packs its diffuse hits one after another instead: its
+//! rays that leave the box would leave their lanes empty, and empty lanes cost their group's
+//! light and shadow rays as full ones do.
 
 use super::{BATCH, HitTerms, Lighting, PATH_BATCH, Surface, Surfaces, Tracer, light_point};
 use crate::accel::lane_io::{ray_lanes, table_lanes};
@@ -49,7 +49,7 @@ pub(crate) fn lanes_of(mut mask: u16) -> impl Iterator<Item = usize> {
 /// A scene of at most 32 triangles, plain (flat, constant ρ), as tables by triangle index: each
 /// triangle's normal, ρ (its material's, the preset applied) and edge zones. Sixteen hits read
 /// them with one permute per table ([`table_lanes`]) where they would gather each lane from the
-/// triangles (PERFORMANCE.md).
+/// triangles (PERFORMANCE.md, "Design choices and what each buys").
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct TriangleTable {
     normal: [[f32; 32]; 3],
@@ -260,8 +260,8 @@ impl<const G: usize> DiffuseHits<G> {
     /// (a spherical light) the shadow rays go to points of the light drawn from
     /// `rngs[rng_of(owner)]` ([`light_point`]), in that order; otherwise nothing is drawn.
     /// `SPHERE` is a constant so that, for a point light, the closure that finds the points
-    /// is small enough to inline into the code compiled for the CPU (as a run-time flag it was
-    /// not, and the lab pass took 8 % longer: measured). Into `lit`, one per group up to
+    /// is small enough to inline into the code compiled for the CPU (as a run-time flag it is
+    /// not, and the lab's loop pays for the call). Into `lit`, one per group up to
     /// the last with a hit ([`Lighting::NONE`] for a group without).
     #[inline(always)]
     pub fn light<const SPHERE: bool>(
@@ -312,9 +312,9 @@ impl<const G: usize> DiffuseHits<G> {
         neighbours: bool,
     ) -> [u16; G] {
         // Every group's lanes, those without a hit casting nothing (a fixed array: collecting
-        // the groups in use into an `ArrayVec` cost 8 instructions a pixel of the lab pass;
-        // made by `array::from_fn`, its closure was called out of line, 5). Past the last
-        // group in use the copies of the first are never read.
+        // the groups in use into an `ArrayVec` costs instructions at every pixel of the lab
+        // pass, and `array::from_fn`'s closure is called out of line). Past the last group in
+        // use the copies of the first are never read.
         let mut shadows = [lit[0].shadow.segment_lanes(self.active[0]); G];
         for (g, shadows) in shadows.iter_mut().enumerate().take(self.groups).skip(1) {
             *shadows = lit[g].shadow.segment_lanes(self.active[g]);

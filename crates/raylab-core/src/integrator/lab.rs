@@ -81,7 +81,7 @@ pub(super) fn trace<R: Recorder>(
 }
 
 /// [`wave`] for the scene's light: compiled apart for the lab's point light, whose loop then
-/// carries no random numbers at all (with them the lab pass took half as long again).
+/// carries no random numbers at all (drawing them is work the point light never needs).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // `wave`'s
 fn wave_for_light<R: Recorder>(

@@ -20,9 +20,9 @@
 //! [`shaded_value`] combines ρ, D and N as equations 28–30 say. That code is generic over a
 //! lane type ([`crate::lanes`]): both integrators take it sixteen hits at a time through
 //! `DiffuseHits` (the same operations in every lane, so the same bits; with the divisions and
-//! square roots of a hit no longer one after another; PERFORMANCE.md), and [`HitTerms`]
-//! ([`HitTerms::at`], [`HitTerms::value`]) is the same code for one hit, which the tests and
-//! the pixel inspector's record of a hit use.
+//! square roots of a hit no longer one after another; PERFORMANCE.md, "Design choices and
+//! what each buys"), and [`HitTerms`] ([`HitTerms::at`], [`HitTerms::value`]) is the same
+//! code for one hit, which the tests and the pixel inspector's record of a hit use.
 //! The one-ray path ([`Tracer::trace`] with one ray) is the batched path with a batch of one.
 //!
 //! **Watching a pixel.** Both integrators are generic over a [`Recorder`], told each step as it
@@ -62,19 +62,19 @@ use crate::texture::planar_uv;
 /// How many rays the integrators take through each phase together. Phases (all closest hits,
 /// then the light at every hit, then all shadow rays, then the sums) are loops of independent
 /// queries, which the CPU overlaps; ray by ray, every pixel's long chain of dependent divisions
-/// and square roots runs alone. On the Cornell box this halves the time of a lab pass (see
-/// PERFORMANCE.md).
+/// and square roots runs alone (PERFORMANCE.md, "Design choices and what each buys": phase
+/// batching).
 pub const BATCH: usize = 64;
 
 /// How many paths the sixteen-lane path tracer takes through each phase together: eight
 /// batches of camera rays. Paths end at different vertices and each vertex's phases run in
-/// whole groups of sixteen lanes, so at each vertex a batch's last group is partly empty (with
-/// 64 paths the groups were 76.7 % full on the Cornell box); and each phase has costs of its
-/// own (calls, the kernels' set-up), shared by more paths. The Cornell box's path pass at 512²
-/// took 44.5–45.1 ms with batches of 256 against 49.6–50.0 with 64 (46.9–47.8 with 128), and
-/// 42.3–42.5 with 512 against 44.1–44.6 with 256 (Zen 5, one thread, alternating runs; the
-/// same images each time). The camera rays' first hits and their shadow rays are still
-/// bounded by cones a batch of [`BATCH`] at a time (`accel::cull`: a wider fan keeps more
+/// whole groups of sixteen lanes, so at each vertex a batch's last group is partly empty: the
+/// more paths a batch holds, the smaller that share, and the more paths share each phase's
+/// own costs (calls, the kernels' set-up). 512 is where larger batches stop paying: a
+/// thread's working memory still fits in its core's L2 cache (the images are the same at
+/// any size; PERFORMANCE.md, "Design choices and what each buys" and "Tried and not kept
+/// (details in git)"). The camera rays' first hits and their shadow rays are still bounded
+/// by cones a batch of [`BATCH`] at a time (`accel::cull`: a wider fan keeps more
 /// triangles). At most 65,536: a path's index in its batch is a `u16`.
 pub const PATH_BATCH: usize = 512;
 const _: () = assert!(PATH_BATCH.is_multiple_of(BATCH) && PATH_BATCH <= 1 << 16);
@@ -86,10 +86,10 @@ use path::PathScratch;
 
 /// The working memory of the sixteen-lane integrators' batches (the lab's waves, the path
 /// tracer's vertices): the camera rays, the diffuse hits in lanes and the light at them, and
-/// the path tracer's paths, 78 KB here and the path batch's 95 KB on the heap
+/// the path tracer's paths, here and the path batch's larger arrays on the heap
 /// (`PathScratch`). Made once for a thread's rows and reused batch after batch: made afresh
-/// for every batch of 64 rays, its zeroing (a `memset`, `rep stosb` in glibc) took 6 % of the
-/// Cornell box's lab pass when it was 7 KB (Zen 5, one thread).
+/// for every batch of 64 rays, its zeroing (a `memset`) would be a share of the lab pass
+/// (PERFORMANCE.md, "Design choices and what each buys": shared working memory).
 pub struct Scratch {
     /// The lab's batches' hits, [`GROUPS`] groups.
     lab: HitScratch<GROUPS>,
@@ -122,8 +122,8 @@ impl Default for Scratch {
 
 thread_local! {
     /// The working memory of this thread's single calls ([`Tracer::trace`],
-    /// [`Tracer::trace_recorded`]), made at the first: 78 KB and the path batch's 95 KB to fill,
-    /// where a call on one pixel (the inspector's) traces in microseconds.
+    /// [`Tracer::trace_recorded`]), made at the first: a [`Scratch`] is far more memory to fill
+    /// than a call on one pixel (the inspector's) traces through.
     static CALL_SCRATCH: RefCell<Option<Box<Scratch>>> = const { RefCell::new(None) };
 }
 
@@ -138,8 +138,8 @@ impl Scratch {
         )
     }
 
-    /// A new working memory on the heap, made out of line: inlined, its 78 KB went into the
-    /// callers' stack frames.
+    /// A new working memory on the heap, made out of line: inlined, the whole [`Scratch`] would
+    /// go into the callers' stack frames.
     #[cold]
     #[inline(never)]
     fn boxed() -> Box<Scratch> {
@@ -289,7 +289,7 @@ pub fn shaded_value<V: Vector>(stage: Stage, rho: V, d: V, blocked: MaskOf<V>, n
     match stage {
         Stage::Flat => rho,
         Stage::Incoming => d + n,
-        _ => rho * (d + n),
+        Stage::Direct | Stage::Shadows | Stage::Lab | Stage::Path => rho * (d + n),
     }
 }
 
@@ -371,8 +371,8 @@ impl<V: Vector> Lighting<V> {
     /// `wanted` holds): averaged over samples, D is multiplied by the fraction of the light
     /// seen (soft shadows). It is called only when some shadow ray is cast. For the lab's point
     /// light it returns the light's position and draws nothing; the lab stages pass that alone,
-    /// so their loop carries no random numbers (with them it ran half as slow again:
-    /// PERFORMANCE.md).
+    /// so their loop carries no random numbers (drawing them is work the point light never
+    /// needs, in the lab's hottest loop).
     ///
     /// Where the scalar code would branch per hit (a smooth normal on the unlit side, no light
     /// to block), every lane computes both sides and takes its own: the same bits.
@@ -465,8 +465,8 @@ impl ShadowRays<Vec3x16> {
 ///
 /// Normal rendering passes `()`: its hooks are empty and [`Recorder::ENABLED`] is false, and
 /// every hook is called inside `if R::ENABLED`, so the hooks and the work of preparing their
-/// arguments vanish when the integrators are monomorphised for `()` (`raylab bench`'s lab pass
-/// measured no slower with them).
+/// arguments vanish when the integrators are monomorphised for `()`: watching costs the
+/// renderer nothing.
 ///
 /// The order of the calls is the integrators' order: in a wave of rays (lab) or a step of the
 /// paths (path), [`Recorder::closest_hit`] for each ray, with [`Recorder::specular_hit`] right
@@ -733,8 +733,8 @@ impl<'a> Tracer<'a> {
         let scene = self.scene;
         let geometric = scene.triangles[index].normal;
         if self.plain {
-            // The same values as below (flat normal, constant ρ) without asking per hit:
-            // 2–3 % of the lab pass (PERFORMANCE.md).
+            // The same values as below (flat normal, constant ρ) without asking per hit, in the
+            // lab pass's inner loop (PERFORMANCE.md, "Design choices and what each buys").
             return Surface {
                 position: hit.position,
                 normal: geometric,
@@ -857,7 +857,7 @@ impl<'a> Tracer<'a> {
     /// On a CPU with AVX2 and FMA, or AVX-512 (where the scene's kernels use them), the same
     /// code is compiled for that instruction set: the results are the same bit for bit (Rust never
     /// fuses a multiply and an add on its own, and every operation here is exactly rounded), and
-    /// the path tracer runs faster (PERFORMANCE.md).
+    /// the path tracer runs faster (PERFORMANCE.md, "Design choices and what each buys").
     pub fn trace(&self, rays: &[Ray], rngs: &mut [Rng], out: &mut [Vec3]) {
         debug_assert_eq!(rays.len(), out.len());
         Scratch::with_thread(|scratch| {
@@ -928,9 +928,9 @@ impl<'a> Tracer<'a> {
         self.trace_primary(primary, rngs, out, seen, scratch);
     }
 
-    /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (Passing a closure to one such
-    /// function instead left the closure out of line, compiled without them: measured. So the
-    /// camera rays come as data, [`Primary::Camera`].)
+    /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (A closure passed to such a
+    /// function stays out of line, compiled without them; so the camera rays come as data,
+    /// [`Primary::Camera`].)
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn trace_avx2(
@@ -961,8 +961,8 @@ impl<'a> Tracer<'a> {
                 let working = (&mut scratch.lab, &mut scratch.path);
                 self.trace_seen(rays, rngs, out, seen, working, &mut ())
             }
-            // The batch's length a constant in each: as a run-time value the lab pass took
-            // 2-3 % longer (the loops around it compiled differently; measured).
+            // The batch's length a constant in each: as a run-time value the loops around it
+            // compile less tightly.
             Primary::Camera(points) if self.batch_len() == PATH_BATCH => {
                 self.camera_batches::<PATH_BATCH>(points, rngs, out, seen, scratch)
             }

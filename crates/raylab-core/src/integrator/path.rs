@@ -42,9 +42,9 @@ use crate::material::{Scatter, facing};
 use crate::sampling::{Rng, Rng16, Uniform, cosine_hemisphere_by_rejection, hemisphere_around};
 
 /// The vertex from which Russian roulette may end a path: the fifth, as in Mitsuba 3's path
-/// tracer (`rr_depth` = 5), so that at equal samples the two are equally noisy. From the third
-/// vertex a sample cost 16 % less time but the image's RMSE was 8 % higher (16 samples at 256²,
-/// against a converged image): the same variance × time, but a noisier image a sample.
+/// tracer (`rr_depth` = 5), so that at equal samples the two are equally noisy. Starting
+/// earlier makes a sample cheaper and the image noisier by about as much: the same variance ×
+/// time, but a noisier image a sample (PERFORMANCE.md, "Design choices and what each buys").
 pub const ROULETTE_DEPTH: u32 = 5;
 
 /// The largest survival probability of Russian roulette: even a path that keeps all its
@@ -83,9 +83,9 @@ impl PathScratch {
 
 /// A batch's paths: what each camera sample looks for ([`Looking`]), each path's state, the
 /// paths still going and their next rays and hits, the mirror and glass vertices, and β of
-/// each diffuse hit's path as it arrives, about 95 KB. Kept off the stack: as the batch's own
-/// arrays (in batches of 256 paths), they made the frame of the code compiled for the CPU,
-/// which the lab's batches share, 59 KB, and the lab pass 8–11 % slower. A batch takes only
+/// each diffuse hit's path as it arrives. Kept off the stack: as the batch's own arrays they
+/// would swell the stack frame of the code compiled for the CPU, which the lab's batches
+/// share, and slow the lab pass. A batch takes only
 /// what it wrote: the entries of its paths are set when they start, and lanes left from
 /// earlier vertices or batches are computed with, never taken (as [`super::Scratch`]'s).
 struct PathMemory {
@@ -169,8 +169,8 @@ impl Looking {
 /// roulette starts later); one at a mirror or glass looks on. Returns how many still look.
 ///
 /// Out of the path vertex's own loop, and called only while some path looks (after the first
-/// hits, only those that met a mirror or glass first): recorded inside it, the features made
-/// the whole pass 25 % slower. A diffuse hit's surface is found here a second time.
+/// hits, only those that met a mirror or glass first): recorded inside it, the features would
+/// weigh on every vertex of every path. A diffuse hit's surface is found here a second time.
 #[inline(never)]
 fn look(
     tracer: &Tracer,

@@ -125,8 +125,8 @@ enum Arrival {
 
 /// The value of every ray (π × radiance), into `out`, each path drawing from its own
 /// generator; each vertex told to `rec`. Kept out of line: inlined into the tracer's
-/// per-CPU entry points it made the sixteen-lane path tracer beside it 3 % longer in
-/// instructions (LLVM then left some of that one's helpers out of line).
+/// per-CPU entry points it would change how LLVM compiles the sixteen-lane path tracer beside
+/// it (some of that one's helpers left out of line, more instructions).
 #[inline(never)]
 pub(super) fn trace<R: Recorder>(
     tracer: &Tracer,
@@ -414,8 +414,8 @@ mod tests {
     /// standard error of a tracer's mean is their standard deviation over √256, and the two
     /// means may differ by at most 4 standard errors of their difference in each channel. A
     /// correct pair fails with probability at most 3 · 7·10⁻⁵ (Student's t with 255 degrees
-    /// of freedom beyond 4, each channel), and a tracer 1.3 % off in any channel fails: the
-    /// difference's standard error is 0.24–0.32 % of the mean (measured).
+    /// of freedom beyond 4, each channel), and a tracer off by a few times the difference's
+    /// standard error in any channel fails.
     #[test]
     fn with_bounces_both_estimate_the_same_image() {
         let scene = cornell_box();
@@ -509,9 +509,7 @@ mod tests {
     /// BSDF hits dropped 0.822; the balance heuristic on the light's side only 0.870, on the
     /// BSDF's side only 1.130; the area density 1/A in place of the solid-angle one in the
     /// BSDF hits' weight 1.109, in the light sample's weight 0.891, in the light sample's
-    /// estimate 1.438 (1.496 with no bounces). (At the earlier side 0.5 and h = 1.5 all but the
-    /// last were within 3.2 % of 1, most within 0.5 %: BSDF samples hardly ever found the
-    /// light.) So the estimate must be the closed form within 4 of its standard errors
+    /// estimate 1.438 (1.496 with no bounces). So the estimate must be the closed form within 4 of its standard errors
     /// (computed from the samples), and those must be under 2 % of it, below every slip's
     /// 10.9 %: a correct tracer fails with probability 3 · 6.3·10⁻⁵ over its three
     /// configurations. The heuristic applied consistently (balance on both sides) is unbiased

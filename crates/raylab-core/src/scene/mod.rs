@@ -196,8 +196,7 @@ impl Scene {
 
     /// [`Scene::closest_intersection`] for many rays at once: `out[i]` for `rays[i]`, the same
     /// answers, faster (see [`Accel::closest_batch`]). Inlined, so that the path tracer's
-    /// vertex, compiled for the CPU, makes the `Intersection`s with its instruction set: path
-    /// pass 48.9 → 48.3 ms (Zen 5, one thread, alternating).
+    /// vertex, compiled for the CPU, makes the `Intersection`s with its instruction set.
     #[inline]
     pub fn closest_intersections(
         &self,
@@ -207,8 +206,8 @@ impl Scene {
     ) {
         debug_assert_eq!(rays.len(), out.len());
         // Not through `closest_hits`: written that way, the path tracer's step (which calls
-        // this) ran 14 % more instructions (count-instructions.sh path), the compiler no
-        // longer fitting it together the same way. Same answers either way (tested).
+        // this) runs more instructions (count-instructions.sh path), the compiler no longer
+        // fitting it together the same way. Same answers either way (tested).
         if !self.accel.built_for(self.triangles.len()) {
             for (ray, hit) in rays.iter().zip(out) {
                 *hit = intersect::closest_intersection_brute_force(ray, &self.triangles, t_max);

@@ -863,7 +863,8 @@ impl Fan {
 /// each library or image that could not be used (see [`obj_scene_with_warnings`](super::spec::obj_scene_with_warnings)).
 ///
 /// Each material library is read once, however many `mtllib` lines name it (a file naming one
-/// library of thousands of materials 8,000 times asked for 5 GB), and a texture's name is taken
+/// library of thousands of materials thousands of times would otherwise ask for gigabytes),
+/// and a texture's name is taken
 /// relative to the library that names it. Libraries that cannot be read are warned of by name,
 /// the first [`LISTED_LIBRARY_FAILURES`] of them, then counted: a file naming 100,000 missing
 /// libraries makes four warnings, not 100,000. A texture too large for the memory there is
@@ -1884,7 +1885,8 @@ mod tests {
     }
 
     /// One library of 2,000 materials named by 8,000 `mtllib` lines (read once a line, it
-    /// would ask for 5.4 GB): read once, its 2,000 materials in once, and the estimate counts it once.
+    /// would ask for gigabytes): read once, its 2,000 materials in once, and the estimate
+    /// counts it once.
     #[test]
     fn a_library_named_many_times_is_read_once() {
         let dir = tempfile::tempdir().unwrap();
@@ -1907,7 +1909,7 @@ mod tests {
     }
 
     /// 100,000 missing libraries: three warnings name the first three, a fourth counts the
-    /// rest (they printed 12.8 MB of warnings, one a library). A FIFO named as a library is
+    /// rest (not megabytes of warnings, one a library). A FIFO named as a library is
     /// refused at once, not waited on.
     #[test]
     fn many_missing_libraries_are_summarised() {

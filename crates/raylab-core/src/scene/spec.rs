@@ -470,9 +470,8 @@ impl SceneSpec {
     /// speak of for the lab's box; 16 MiB a built-in model; for an OBJ file, 8 times its size,
     /// its material libraries and its largest texture ([`obj::memory_estimate`]), or 0 if it
     /// cannot be read (loading it fails anyway); 320 MiB for the default terrain's million
-    /// triangles (it runs in about 350 MiB of address space in all), in proportion to its
-    /// triangle count for another grid. A file named by several models is counted once a
-    /// model: each is loaded.
+    /// triangles, in proportion to its triangle count for another grid. A file named by
+    /// several models is counted once a model: each is loaded.
     pub fn memory_estimate(&self) -> u64 {
         let models: u64 = self
             .models

@@ -87,7 +87,18 @@ impl Stage {
     pub fn integrator(self) -> Integrator {
         match self {
             Stage::Path => Integrator::Path,
-            _ => Integrator::Lab,
+            Stage::Flat | Stage::Incoming | Stage::Direct | Stage::Shadows | Stage::Lab => {
+                Integrator::Lab
+            }
+        }
+    }
+
+    /// Whether the stage is one of the lab's that multiplies the light by ρ (equations 28 and
+    /// 30): not the flat colour, the incoming light, or the path tracer.
+    pub fn reflects_light(self) -> bool {
+        match self {
+            Stage::Direct | Stage::Shadows | Stage::Lab => true,
+            Stage::Flat | Stage::Incoming | Stage::Path => false,
         }
     }
 }
@@ -198,6 +209,27 @@ impl Shading {
         self.stage == Stage::Path && self.caustics == Caustics::Photons
     }
 
+    /// The switches set otherwise than the lab figure of the stage has them, each named as the
+    /// lab does ("shadows", then "N") with its setting: what makes a lit stage's image another
+    /// than its figure. None for the flat stage, whose figure (ρ alone) no switch changes. The
+    /// window's heading ("not figure 7: shadows off") and the check's names ("figure 7 without
+    /// shadows") both say these.
+    pub fn switches_unlike_figure(&self) -> Vec<(&'static str, bool)> {
+        let lit = match self.stage {
+            Stage::Flat => false,
+            Stage::Incoming | Stage::Direct | Stage::Shadows | Stage::Lab | Stage::Path => true,
+        };
+        let (shadows, indirect) = self.stage.preset_switches();
+        [
+            ("shadows", self.shadows, shadows),
+            ("N", self.indirect, indirect),
+        ]
+        .into_iter()
+        .filter(|&(_, on, figure)| lit && on != figure)
+        .map(|(what, on, _)| (what, on))
+        .collect()
+    }
+
     /// N if the indirect switch is on (and the stage is one of the lab's), else 0.
     pub fn indirect_term(&self) -> Vec3 {
         if self.indirect && self.stage != Stage::Path {
@@ -251,23 +283,50 @@ impl Shading {
                 first.to_lowercase().chain(chars).collect::<String>()
             })
         };
-        match (materials, self.stage) {
-            (MaterialPreset::None, _) => {}
-            (MaterialPreset::Rough, Stage::Path) => {
+        match (materials, self.stage.integrator()) {
+            (MaterialPreset::None, Integrator::Lab | Integrator::Path) => {}
+            (MaterialPreset::Rough, Integrator::Path) => {
                 text.push_str("; rough metal tall block sampled (GGX)");
             }
             // The lab stages shade the rough metal as a surface whose ρ is its GGX reflection
             // toward the light's centre: a highlight, no reflected ray.
-            (MaterialPreset::Rough, _) => {
+            (MaterialPreset::Rough, Integrator::Lab) => {
                 text.push_str("; rough metal tall block: its GGX highlight from the light");
             }
-            (_, Stage::Path) => text.push_str(&format!("; {} sampled", named())),
-            _ => text.push_str(&format!(
+            (_, Integrator::Path) => text.push_str(&format!("; {} sampled", named())),
+            (_, Integrator::Lab) => text.push_str(&format!(
                 "; {} followed up to {} deep (Whitted)",
                 named(),
                 self.specular_depth
             )),
         }
         text
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each switch set otherwise than its stage's figure, shadows before N, with its setting;
+    /// none in the flat stage, whose figure no switch changes.
+    #[test]
+    fn the_switches_unlike_the_figure_are_named_in_order() {
+        let mut lab = Shading::for_stage(Stage::Lab);
+        assert!(lab.switches_unlike_figure().is_empty());
+        lab.shadows = false;
+        assert_eq!(lab.switches_unlike_figure(), [("shadows", false)]);
+        lab.indirect = false;
+        assert_eq!(
+            lab.switches_unlike_figure(),
+            [("shadows", false), ("N", false)]
+        );
+        let mut incoming = Shading::for_stage(Stage::Incoming);
+        incoming.indirect = true;
+        assert_eq!(incoming.switches_unlike_figure(), [("N", true)]);
+        let mut flat = Shading::for_stage(Stage::Flat);
+        flat.shadows = true;
+        flat.indirect = true;
+        assert!(flat.switches_unlike_figure().is_empty());
     }
 }

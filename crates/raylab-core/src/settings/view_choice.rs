@@ -65,7 +65,16 @@ impl View {
     /// Whether [`render_view`] traces this view from primary rays (all but the shaded image
     /// and the variance map, which come from the renderer's film).
     pub fn is_traced(self) -> bool {
-        !matches!(self, View::Shaded | View::Variance)
+        match self {
+            View::Shaded | View::Variance => false,
+            View::Normals
+            | View::Depth
+            | View::Barycentric
+            | View::Triangle
+            | View::BvhCost
+            | View::Shadow
+            | View::Photons => true,
+        }
     }
 
     /// The bytes a pixel of this view takes while it is made ([`render_view`]; the shaded
