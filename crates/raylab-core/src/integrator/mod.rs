@@ -880,11 +880,15 @@ impl<'a> Tracer<'a> {
                 }
             }
         }
-        (weights > 0.0).then(|| Seen {
-            albedo,
-            normal: normal / weights,
-            depth: depth / weights,
-        })
+        if weights > 0.0 {
+            Some(Seen {
+                albedo,
+                normal: normal / weights,
+                depth: depth / weights,
+            })
+        } else {
+            None
+        }
     }
 
     /// Whether the integrator draws random numbers (and so needs each ray's generator).
@@ -893,7 +897,8 @@ impl<'a> Tracer<'a> {
     }
 
     /// Whether the integrator tells what each camera sample sees ([`Seen`]) as it traces it:
-    /// the sixteen-lane path tracer does, at no extra ray. For the others the denoiser's
+    /// the sixteen-lane path tracer does, at no extra ray but those of the specular branches
+    /// of a camera ray that meets a mirror or glass first. For the others the denoiser's
     /// features are traced apart ([`crate::denoise::Features::trace`]).
     pub fn records_features(&self) -> bool {
         self.shading.stage.integrator() == Integrator::Path && !self.general
