@@ -159,10 +159,10 @@ fn edge_pixels_mix_their_surfaces() {
 }
 
 /// The path tracer records, sample by sample, the features that tracing them apart gives from
-/// the same camera samples: bit for bit on the box as the lab builds it; with mirror blocks,
-/// whose reflections both follow, to the last bits of the distance (the path tracer and the
-/// BSDF reflect the ray with their own rounding). Glass differs by design: there the path's
-/// own lobe is recorded, where tracing apart follows the dominant one.
+/// the same camera samples: bit for bit on the box as the lab builds it, and with a mirror and
+/// a glass block, whose features both find by following every specular branch
+/// (`Tracer::seen_through_specular`), not the lobe a path took: the features of a glass pixel
+/// are the same at every sample along one camera ray.
 #[test]
 fn the_path_tracer_records_the_features_tracing_finds() {
     use raylab_core::denoise::denoising_film;
@@ -184,25 +184,15 @@ fn the_path_tracer_records_the_features_tracing_finds() {
         Features::trace_samples(&scene, &s, 5, &never).unwrap()
     );
 
-    let mut mirrors = s.clone();
-    mirrors.material_preset = MaterialPreset::Mirror;
-    let recorded = record(&mirrors, 5).unwrap();
-    let traced = Features::trace_samples(&scene, &mirrors, 5, &never).unwrap();
-    assert_eq!(recorded.albedo, traced.albedo);
-    for i in 0..recorded.depth.len() {
-        let (a, b) = (recorded.depth[i], traced.depth[i]);
-        assert!(
-            (a - b).abs() <= 1e-5 * b,
-            "pixel {i}: depth {a} against {b}"
-        );
-        let normals = (recorded.normal[i], traced.normal[i]);
-        assert!(
-            (normals.0 - normals.1).length() <= 1e-5,
-            "pixel {i}: {normals:?}"
-        );
-    }
-    // Not trivially: where the blocks are mirrors, the features are what they reflect, farther
-    // than the blocks.
+    let mut specular = s.clone();
+    specular.material_preset = MaterialPreset::Both;
+    let recorded = record(&specular, 5).unwrap();
+    assert_eq!(
+        recorded,
+        Features::trace_samples(&scene, &specular, 5, &never).unwrap()
+    );
+    // Not trivially: where the blocks are a mirror and glass, the features are what they
+    // reflect and what is seen through them, farther than the blocks.
     let plain = record(&s, 5).unwrap();
     let farther = recorded
         .depth
@@ -225,21 +215,23 @@ fn mirror_and_glass(counts: &[u32]) -> Vec<raylab_core::denoise::quality::Qualit
     on_threads(2, || measure(&scene, &s, counts, 512, &Denoiser::default()))
 }
 
-/// Mirror and glass denoised at 64 samples come closer to the reference than 176 raw samples
-/// (measured: 3.25·10⁻³ denoised; 3.64·10⁻³ raw at 176, 8.17·10⁻³ at 64; the reference's
+/// Mirror and glass denoised at 64 samples come closer to the reference than 320 raw samples
+/// (measured: 2.22·10⁻³ denoised; 2.44·10⁻³ raw at 320, 8.17·10⁻³ at 64; the reference's
 /// own noise is in each), the mean within 0.5 %. A few samples far brighter than the rest (in
-/// the mirror's view of the glass) left 4.01·10⁻³ after the filter: they are taken apart and
-/// their light spread over their surface (`denoise::Noisy`).
+/// the mirror's view of the glass) are taken apart and their light spread over their surface
+/// (`denoise::Noisy`). Features that follow each sample's own lobe through the glass (noisy in
+/// step with its colour) left 3.25·10⁻³, and the mirror's black face (its view of the void,
+/// albedo about 0) taking its neighbours' light unscaled a little more.
 #[test]
-fn mirror_and_glass_denoised_beat_176_raw_samples() {
-    let rows = mirror_and_glass(&[64, 176]);
-    let (sixty_four, raw_176) = (rows[0], rows[1]);
+fn mirror_and_glass_denoised_beat_320_raw_samples() {
+    let rows = mirror_and_glass(&[64, 320]);
+    let (sixty_four, raw_320) = (rows[0], rows[1]);
     eprintln!("{rows:?}");
     assert!(
-        sixty_four.denoised_relative_mse < raw_176.raw_relative_mse,
-        "denoised 64: {:.3e}, raw 176: {:.3e}",
+        sixty_four.denoised_relative_mse < raw_320.raw_relative_mse,
+        "denoised 64: {:.3e}, raw 320: {:.3e}",
         sixty_four.denoised_relative_mse,
-        raw_176.raw_relative_mse
+        raw_320.raw_relative_mse
     );
     assert!(sixty_four.denoised_mean_change < 0.005, "{sixty_four:?}");
 }

@@ -12,18 +12,19 @@
 //! image is. Through a mirror or glass the features are those of the first surface that is not
 //! a perfect specular one ([`Seen`]), its albedo times the tints on the way and its distance
 //! the length of the whole path, as Open Image Denoise asks of its auxiliary images: a mirror
-//! then shows the features of what it reflects, and the filter keeps its edges. Traced apart,
-//! the dominant lobe is followed (reflection, or the refraction where Fresnel's reflectance is
-//! below one half); recorded, the lobe the path took, so a glass pixel's features mix both as
-//! its samples do.
+//! then shows the features of what it reflects, and the filter keeps its edges. At glass both
+//! branches are followed, with Fresnel's weights ([`Tracer::seen_through_specular`]), traced
+//! apart and recorded alike: the features are those the samples see on average, without the
+//! noise of the lobe each sample took, which is in step with the colour's and which the filter
+//! could not tell from detail.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::bsdf::Bsdf;
 use crate::film::{Film, Seen, SeenSum};
 use crate::geometry::Ray;
-use crate::integrator::{BATCH, FEATURE_SPECULAR_BOUNCES, Tracer};
+use crate::integrator::{BATCH, Tracer};
 use crate::intersect::Intersection;
 use crate::render::{Cancelled, camera_sample};
 use crate::sampling::Rng;
@@ -104,7 +105,7 @@ impl Features {
                         }
                         scene.closest_intersections(&rays[..n], f32::INFINITY, &mut first[..n]);
                         for k in 0..n {
-                            sums[k].add(see(&tracer, scene, rays[k], first[k]));
+                            sums[k].add(see(&tracer, rays[k], first[k]));
                         }
                     }
                     for (k, sum) in sums[..n].iter().enumerate() {
@@ -126,7 +127,7 @@ impl Features {
     /// The features the samples added to `film` saw (its first
     /// [`crate::film::FEATURE_SAMPLES_RECORDED`]: [`Film::with_features`]), or `None` if it
     /// records none. The same averages as [`Features::trace_samples`] of as many samples,
-    /// bit for bit, where the two see alike (no glass: its lobe is chosen differently).
+    /// bit for bit.
     pub fn recorded(film: &Film) -> Option<Features> {
         let (sums, samples) = film.seen()?;
         let mut albedo = vec![Vec3::ZERO; sums.len()];
@@ -190,42 +191,25 @@ fn average(sum: &SeenSum, samples: u32) -> (Vec3, Vec3, f32) {
     (albedo, sum.normal / hits, sum.depth / hits)
 }
 
-/// What the ray `ray` sees: the first surface that is not a perfect specular one, with the
-/// tints of those before it, or `None` if the path leaves the scene. `first` is the ray's own
-/// closest hit, found with its batch.
-fn see(tracer: &Tracer, scene: &Scene, mut ray: Ray, first: Option<Intersection>) -> Option<Seen> {
-    let mut tint = Vec3::ONE;
-    let mut travelled = 0.0f32;
-    for bounce in 0..=FEATURE_SPECULAR_BOUNCES {
-        let hit = if bounce == 0 {
-            first?
-        } else {
-            scene.closest_intersection(&ray, f32::INFINITY)?
-        };
-        travelled += hit.distance;
-        let scattering = tracer.scattering(&hit, ray.direction);
-        let frame = &scattering.frame;
-        let bsdf = scattering.bsdf;
-        if !bsdf.is_delta() || bounce == FEATURE_SPECULAR_BOUNCES {
-            let albedo = match bsdf {
-                Bsdf::RoughConductor { tint, .. } => tint,
-                _ => scattering.surface.rho,
-            };
-            let normal = frame.shading_normal();
-            return Some(Seen::at(tint, albedo, normal, scattering.wo, travelled));
-        }
-        // Mirror or glass: the dominant lobe (uc = 0.5 picks refraction where Fresnel's
-        // reflectance is below one half).
-        let wo = frame.to_local(scattering.wo);
-        let sample = bsdf.sample(wo, 0.5, Vec2::splat(0.5))?;
-        tint *= sample.weight.min(Vec3::ONE);
-        let direction = frame.to_world(sample.wi).normalize();
-        ray = crate::integrator::continue_ray(
-            scattering.surface.position,
-            scattering.surface.geometric,
-            direction,
-            scattering.surface.at_edge,
-        );
+/// What the ray `ray` sees, `first` its own closest hit, found with its batch: the surface as
+/// it is, or through a mirror or glass what every specular branch reaches
+/// ([`Tracer::seen_through_specular`]); `None` if the ray leaves the scene.
+fn see(tracer: &Tracer, ray: Ray, first: Option<Intersection>) -> Option<Seen> {
+    let hit = first?;
+    if tracer.material_of(hit.triangle_index).is_specular() {
+        return tracer.seen_through_specular(ray, hit);
     }
-    None
+    let scattering = tracer.scattering(&hit, ray.direction);
+    let albedo = match scattering.bsdf {
+        Bsdf::RoughConductor { tint, .. } => tint,
+        _ => scattering.surface.rho,
+    };
+    let normal = scattering.frame.shading_normal();
+    Some(Seen::at(
+        Vec3::ONE,
+        albedo,
+        normal,
+        scattering.wo,
+        hit.distance,
+    ))
 }

@@ -74,9 +74,13 @@ use crate::settings::RenderSettings;
 /// The B3-spline's weights: the 5 × 5 kernel is their outer product.
 const B3: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 
-/// Below this, an albedo channel is taken as 1: nothing to divide out (a black surface, the
-/// background), and the colour is filtered as it is.
-const ALBEDO_FLOOR: f32 = 1e-3;
+/// The least an albedo channel is taken as. Where a pixel's samples saw almost nothing (a
+/// mirror facing the void, the edge of a surface against it), the albedo is near 0 and its
+/// colour too: divided by the floor, its light stays small, so its neighbours do not take it
+/// for a bright one, and multiplied back by the floor, the light it takes from them stays
+/// small too. Taken as 1 (the colour filtered as it is) such a pixel took its neighbours' light
+/// unscaled and shone in the mirror's black face. Below any albedo the Cornell box has.
+const ALBEDO_FLOOR: f32 = 0.03;
 
 /// In the first pass, the share of the 3 × 3 mean in the luminance a neighbour's is held
 /// against (module docs, point 2); the rest is the centre's own. A little of its own keeps a
@@ -914,10 +918,9 @@ fn exp_neg(x: f32) -> f32 {
     if outside { 0.0 } else { scale * p }
 }
 
-/// The albedo a colour is divided by: each channel, or 1 where the channel is about black.
+/// The albedo a colour is divided by: each channel, at least [`ALBEDO_FLOOR`].
 fn effective(albedo: Vec3) -> Vec3 {
-    let pick = |a: f32| if a > ALBEDO_FLOOR { a } else { 1.0 };
-    Vec3::new(pick(albedo.x), pick(albedo.y), pick(albedo.z))
+    albedo.max(Vec3::splat(ALBEDO_FLOOR))
 }
 
 /// For a single sample, whose spread is unknown: the variance of the light's luminance over

@@ -828,13 +828,77 @@ impl<'a> Tracer<'a> {
         &self.materials[self.scene.triangles[triangle_index].material as usize]
     }
 
+    /// What a camera ray whose first hit is `hit`, a mirror or glass, sees through it ([`Seen`]),
+    /// the same for every sample along that ray: both specular branches are followed at each
+    /// mirror and glass hit, Whitted-style with their weights ([`Material::specular_branches`],
+    /// as the lab's stages trace them), to the first surface that is not a perfect specular one
+    /// or the one reached after [`FEATURE_SPECULAR_BOUNCES`]. The albedo is the sum of those
+    /// surfaces' reflectances times their branches' weights: the mean of what the path tracer's
+    /// samples see along one lobe each, without its noise. The normal and the distance are
+    /// the surfaces' averaged by their branches' weights; `None` if every branch leaves the
+    /// scene.
+    pub fn seen_through_specular(&self, ray: Ray, hit: Intersection) -> Option<Seen> {
+        // Depth first: at most one pending branch a bounce, plus the one being followed.
+        let mut stack =
+            [(ray, hit, Vec3::ONE, 0u32, 0.0f32); FEATURE_SPECULAR_BOUNCES as usize + 2];
+        let mut pending = 1;
+        let (mut albedo, mut normal, mut depth, mut weights) = (Vec3::ZERO, Vec3::ZERO, 0.0, 0.0);
+        while pending > 0 {
+            pending -= 1;
+            let (ray, hit, weight, bounces, travelled) = stack[pending];
+            let travelled = travelled + hit.distance;
+            let material = self.material_of(hit.triangle_index);
+            if !material.is_specular() || bounces == FEATURE_SPECULAR_BOUNCES {
+                let scattering = self.scattering(&hit, ray.direction);
+                let rho = match scattering.bsdf {
+                    crate::bsdf::Bsdf::RoughConductor { tint, .. } => tint,
+                    _ => scattering.surface.rho,
+                };
+                let normal_there = scattering.frame.shading_normal();
+                let seen = Seen::at(weight, rho, normal_there, scattering.wo, travelled);
+                let w = (weight.x + weight.y + weight.z) / 3.0;
+                albedo += seen.albedo;
+                normal += w * seen.normal;
+                depth += w * seen.depth;
+                weights += w;
+                continue;
+            }
+            let d = ray.direction;
+            let surface_normal = self.specular_normal(&hit, material, d);
+            let at_edge = self
+                .scene
+                .approach_at_edge(hit.triangle_index, hit.u, hit.v, d);
+            for &(direction, w) in material.specular_branches(d, surface_normal).as_slice() {
+                let weight = weight * w;
+                if weight.max_element() <= 0.0 {
+                    continue;
+                }
+                let next = continue_ray(hit.position, surface_normal, direction, at_edge);
+                if let Some(next_hit) = self.scene.closest_intersection(&next, f32::INFINITY) {
+                    stack[pending] = (next, next_hit, weight, bounces + 1, travelled);
+                    pending += 1;
+                }
+            }
+        }
+        if weights > 0.0 {
+            Some(Seen {
+                albedo,
+                normal: normal / weights,
+                depth: depth / weights,
+            })
+        } else {
+            None
+        }
+    }
+
     /// Whether the integrator draws random numbers (and so needs each ray's generator).
     pub fn uses_random_numbers(&self) -> bool {
         self.random
     }
 
     /// Whether the integrator tells what each camera sample sees ([`Seen`]) as it traces it:
-    /// the sixteen-lane path tracer does, at no extra ray. For the others the denoiser's
+    /// the sixteen-lane path tracer does, at no extra ray but those of the specular branches
+    /// of a camera ray that meets a mirror or glass first. For the others the denoiser's
     /// features are traced apart ([`crate::denoise::Features::trace`]).
     pub fn records_features(&self) -> bool {
         self.shading.stage.integrator() == Integrator::Path && !self.general

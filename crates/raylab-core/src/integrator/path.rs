@@ -31,8 +31,8 @@
 use glam::Vec3;
 
 use super::{
-    BATCH, FEATURE_SPECULAR_BOUNCES, HitScratch, PATH_BATCH, PATH_GROUPS, Recorder, Seen, Stage,
-    Tracer, departure_points, shaded_value,
+    BATCH, HitScratch, PATH_BATCH, PATH_GROUPS, Recorder, Seen, Stage, Tracer, departure_points,
+    shaded_value,
 };
 use crate::bsdf::ShadingFrame;
 use crate::geometry::Ray;
@@ -66,7 +66,6 @@ impl PathScratch {
         Self {
             hits: HitScratch::new(),
             memory: Box::new(PathMemory {
-                looking: [Looking::START; PATH_BATCH],
                 paths: [PathState::START; PATH_BATCH],
                 alive: [0; PATH_BATCH],
                 rays_alive: [Ray {
@@ -81,15 +80,13 @@ impl PathScratch {
     }
 }
 
-/// A batch's paths: what each camera sample looks for ([`Looking`]), each path's state, the
-/// paths still going and their next rays and hits, the mirror and glass vertices, and β of
-/// each diffuse hit's path as it arrives. Kept off the stack: as the batch's own arrays they
-/// would swell the stack frame of the code compiled for the CPU, which the lab's batches
-/// share, and slow the lab pass. A batch takes only
-/// what it wrote: the entries of its paths are set when they start, and lanes left from
+/// A batch's paths: each path's state, the paths still going and their next rays and hits, the
+/// mirror and glass vertices, and β of each diffuse hit's path as it arrives. Kept off the
+/// stack: as the batch's own arrays they would swell the stack frame of the code compiled for
+/// the CPU, which the lab's batches share, and slow the lab pass. A batch takes only what it
+/// wrote: the entries of its paths are set when they start, and lanes left from
 /// earlier vertices or batches are computed with, never taken (as [`super::Scratch`]'s).
 struct PathMemory {
-    looking: [Looking; PATH_BATCH],
     paths: [PathState; PATH_BATCH],
     alive: [u16; PATH_BATCH],
     rays_alive: [Ray; PATH_BATCH],
@@ -145,69 +142,35 @@ pub(super) fn trace<R: Recorder>(
     }
 }
 
-/// A path's search for what its camera sample sees ([`Seen`]): the mirror and glass bounces
-/// it followed and the distance travelled, until it settles.
-#[derive(Clone, Copy)]
-struct Looking {
-    travelled: f32,
-    bounces: u32,
-    settled: bool,
-}
-
-impl Looking {
-    const START: Self = Self {
-        travelled: 0.0,
-        bounces: 0,
-        settled: false,
-    };
-}
-
-/// What the camera samples whose paths just `arrived` (their indices, rays and hits) see, for
-/// those still looking: a path that left the scene settles on nothing; one that reached a
-/// surface that is not a mirror or glass, or reached one after [`FEATURE_SPECULAR_BOUNCES`]
-/// of them, settles on it, tinted by its throughput so far (the mirrors' and glass' weights:
-/// roulette starts later); one at a mirror or glass looks on. Returns how many still look.
+/// What the camera samples see ([`Seen`]), from their rays and first hits: nothing where the
+/// ray leaves the scene; a surface that is not a mirror or glass as it is; through a mirror or
+/// glass, what every specular branch reaches ([`Tracer::seen_through_specular`]), the same at
+/// every sample of the ray, where the lobe the path takes would make the features as noisy as
+/// its colour.
 ///
-/// Out of the path vertex's own loop, and called only while some path looks (after the first
-/// hits, only those that met a mirror or glass first): recorded inside it, the features would
-/// weigh on every vertex of every path. A diffuse hit's surface is found here a second time.
+/// Out of the path vertex's own loop, and called only at the first hits: recorded inside it,
+/// the features would weigh on every vertex of every path. A diffuse hit's surface is found
+/// here a second time.
 #[inline(never)]
-fn look(
-    tracer: &Tracer,
-    (alive, rays, hits): (&[u16], &[Ray], &[Option<Intersection>]),
-    paths: &[PathState; PATH_BATCH],
-    looking: &mut [Looking; PATH_BATCH],
-    seen: &mut [Option<Seen>],
-) -> usize {
-    let mut still = 0;
-    for ((&i, ray), hit) in alive.iter().zip(rays).zip(hits) {
-        let (i, incoming) = (i as usize, ray.direction);
-        let looking = &mut looking[i];
-        if looking.settled {
-            continue;
-        }
+fn look(tracer: &Tracer, rays: &[Ray], hits: &[Option<Intersection>], seen: &mut [Option<Seen>]) {
+    for ((ray, hit), seen) in rays.iter().zip(hits).zip(seen) {
         let Some(hit) = hit else {
-            looking.settled = true;
             continue;
         };
-        looking.travelled += hit.distance;
         let material = tracer.material_of(hit.triangle_index);
-        if material.is_diffuse() || looking.bounces == FEATURE_SPECULAR_BOUNCES {
+        *seen = if material.is_specular() {
+            tracer.seen_through_specular(*ray, *hit)
+        } else {
+            let incoming = ray.direction;
             let at_edge = tracer
                 .scene
                 .approach_at_edge(hit.triangle_index, hit.u, hit.v, incoming);
             let surface = tracer.surface_with(hit, material, incoming, at_edge);
             let wo = -incoming;
             let normal = ShadingFrame::seen_normal(surface.normal, surface.geometric, wo);
-            let tint = paths[i].beta.min(Vec3::ONE);
-            seen[i] = Some(Seen::at(tint, surface.rho, normal, wo, looking.travelled));
-            looking.settled = true;
-        } else {
-            looking.bounces += 1;
-            still += 1;
-        }
+            Some(Seen::at(Vec3::ONE, surface.rho, normal, wo, hit.distance))
+        };
     }
-    still
 }
 
 /// Up to sixteen path vertices that go on, a path a lane: where each leaves from, along which
@@ -355,16 +318,13 @@ fn batch<R: Recorder>(
     let sphere_light = tracer.light.is_area();
     let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
     out.fill(Vec3::ZERO);
-    // What each camera sample sees, if asked: settled at the path's first vertex that is not
-    // a perfect mirror or glass; `None` if it leaves the scene (or ends at a mirror or glass)
-    // before one.
+    // What each camera sample sees, if asked: found at the camera rays' hits (`look`).
     seen.fill(None);
     let PathScratch {
         hits: lanes,
         memory,
     } = scratch;
     let PathMemory {
-        looking,
         paths,
         alive,
         rays_alive,
@@ -374,8 +334,6 @@ fn batch<R: Recorder>(
     } = &mut **memory;
     let HitScratch { diffuse, lit } = lanes;
     let n = rays.len();
-    looking[..n].fill(Looking::START);
-    let mut still_looking = if seen.is_empty() { 0 } else { n };
     paths[..n].fill(PathState::START);
     // The paths still going, by index, and the ray each goes on with.
     for (i, ray) in rays.iter().enumerate() {
@@ -394,9 +352,9 @@ fn batch<R: Recorder>(
         for (rays, hits) in asked.zip(hits[..n_alive].chunks_mut(each)) {
             scene.closest_intersections(rays, f32::INFINITY, hits);
         }
-        if still_looking > 0 {
-            let arrived = (&alive[..n_alive], &rays_alive[..n_alive], &hits[..n_alive]);
-            still_looking = look(tracer, arrived, paths, looking, seen);
+        if first_step && !seen.is_empty() {
+            // The paths still going are the camera rays, in their order.
+            look(tracer, &rays_alive[..n_alive], &hits[..n_alive], seen);
         }
         // Each hit to its phase: the diffuse ones into lanes for their light and bounce, the
         // specular ones sampled here.
