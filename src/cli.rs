@@ -466,13 +466,12 @@ impl RenderOptions {
         }
         if let (Some(shape @ (LightShape::Point | LightShape::Spot)), Some(size)) =
             (self.light_shape, self.light_size)
+            && !(shape == LightShape::Point && size == 0.0)
         {
-            if !(shape == LightShape::Point && size == 0.0) {
-                anyhow::bail!(
-                    "--light-size {size}: a {shape} light has no size (--light-shape sphere or \
-                     quad have one)"
-                );
-            }
+            anyhow::bail!(
+                "--light-size {size}: a {shape} light has no size (--light-shape sphere or \
+                 quad have one)"
+            );
         }
         Ok(())
     }

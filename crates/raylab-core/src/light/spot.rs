@@ -121,7 +121,7 @@ pub fn acos<R: Real>(x: R) -> R {
     let z_big = half * (one - a);
     let s = R::select(big, z_big.sqrt(), a);
     let z = R::select(big, z_big, a * a);
-    let poly = (((R::splat(4.216_32e-2) * z + R::splat(2.418_131_1e-2)) * z
+    let poly = (((R::splat(4.216_32e-2) * z + R::splat(2.418_131e-2)) * z
         + R::splat(4.547_002_6e-2))
         * z
         + R::splat(7.495_300_3e-2))
@@ -315,7 +315,7 @@ mod tests {
             let s = spot.sample_li(p, Vec2::ZERO).unwrap();
             let e = s.li.x * s.wi.dot(n) / PI;
             assert!((e - 1.114_084_6 * share).abs() < 2e-6, "{degrees}°: {e}");
-            assert!((spot.falloff_toward(p) - share as f32).abs() < 2e-6);
+            assert!((spot.falloff_toward(p) - share).abs() < 2e-6);
         }
     }
 
