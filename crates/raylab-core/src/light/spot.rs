@@ -121,12 +121,11 @@ pub fn acos<R: Real>(x: R) -> R {
     let z_big = half * (one - a);
     let s = R::select(big, z_big.sqrt(), a);
     let z = R::select(big, z_big, a * a);
-    let poly = (((R::splat(4.216_32e-2) * z + R::splat(2.418_131e-2)) * z
-        + R::splat(4.547_002_6e-2))
-        * z
-        + R::splat(7.495_300_3e-2))
-        * z
-        + R::splat(1.666_675_2e-1);
+    let poly =
+        (((R::splat(4.216_32e-2) * z + R::splat(2.418_131e-2)) * z + R::splat(4.547_002_6e-2)) * z
+            + R::splat(7.495_300_3e-2))
+            * z
+            + R::splat(1.666_675_2e-1);
     let asin_s = poly * z * s + s;
     let twice = asin_s + asin_s;
     let negative = x.simd_lt(R::ZERO);
