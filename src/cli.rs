@@ -19,7 +19,7 @@ use raylab_core::display::{Display, DisplayTransform};
 use raylab_core::film::OutputFormat;
 use raylab_core::inspect::{InspectError, inspect_pixel};
 use raylab_core::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
-use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
+use raylab_core::light::{LightKind, LightShape, SpotCone};
 use raylab_core::material::{DEFAULT_ROUGHNESS, TexturePreset};
 use raylab_core::render::try_render;
 use raylab_core::scene::SceneChoice;
@@ -196,7 +196,7 @@ pub struct Pixel(pub u32, pub u32);
 
 /// The options that set what a file given with `--settings` or `--scene-file` holds: either
 /// file takes them all, so none combines with it.
-const SETTINGS_OPTIONS: [&str; 34] = [
+const SETTINGS_OPTIONS: [&str; 37] = [
     "scene",
     "obj",
     "stage",
@@ -225,6 +225,9 @@ const SETTINGS_OPTIONS: [&str; 34] = [
     "light_shape",
     "light_size",
     "light_colour",
+    "light_aim",
+    "spot_cutoff",
+    "spot_beam",
     "aperture",
     "focus_distance",
     "display",
@@ -343,10 +346,24 @@ pub struct RenderOptions {
     /// Light colour, each channel ≥ 0 [default: 1,1,1, white].
     #[arg(long, value_parser = parse_colour, value_name = "R,G,B", allow_hyphen_values = true)]
     pub light_colour: Option<Vec3>,
-    /// Light shape: point (the lab's), sphere (radius --light-size) or quad (a square of side
-    /// --light-size under the light's position, facing the floor); each of the same power.
-    #[arg(long, value_name = "point|sphere|quad")]
+    /// Light shape: point (the lab's), sphere (radius --light-size), quad (a square of side
+    /// --light-size under the light's position, facing the floor), each of the same power; or
+    /// spot (the point light's intensity P/4π inside a cone: --light-aim, --spot-cutoff,
+    /// --spot-beam).
+    #[arg(long, value_name = "point|sphere|quad|spot")]
     pub light_shape: Option<LightShape>,
+    /// The point a spot light is aimed at (--light-shape spot) [default: 0,1,-0.2, the floor
+    /// in front of the blocks].
+    #[arg(long, value_parser = parse_vec3, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub light_aim: Option<Vec3>,
+    /// A spot light's cutoff angle in degrees, from its axis: no light beyond it; above 0 and
+    /// below 90 [default: 25].
+    #[arg(long, value_parser = parse_degrees, value_name = "DEG", allow_hyphen_values = true)]
+    pub spot_cutoff: Option<f64>,
+    /// A spot light's beam width in degrees: full intensity within it, falling linearly in
+    /// the angle to 0 at the cutoff; from 0 to the cutoff [default: 15].
+    #[arg(long, value_parser = parse_degrees, value_name = "DEG", allow_hyphen_values = true)]
+    pub spot_beam: Option<f64>,
     /// The area light's size: the sphere's radius or the quad's side [default: 0.1 for a
     /// sphere, 0.5 for a quad].
     #[arg(long, value_parser = parse_non_negative, value_name = "S", allow_hyphen_values = true, conflicts_with = "light_radius")]
@@ -427,9 +444,37 @@ impl RenderOptions {
             Some(path) => read_settings_file(path),
             None => {
                 self.check_caustics()?;
+                self.check_light()?;
                 Ok(self.settings())
             }
         }
+    }
+
+    /// The spot's options only with `--light-shape spot`, and a size only for a sphere or a
+    /// square: elsewhere they would do nothing, without a word.
+    fn check_light(&self) -> anyhow::Result<()> {
+        let spot = self.light_shape == Some(LightShape::Spot);
+        let given = [
+            ("--light-aim", self.light_aim.is_some()),
+            ("--spot-cutoff", self.spot_cutoff.is_some()),
+            ("--spot-beam", self.spot_beam.is_some()),
+        ];
+        if let (false, Some((flag, _))) = (spot, given.iter().find(|(_, is)| *is)) {
+            anyhow::bail!(
+                "{flag} sets a spot light's cone: it needs --light-shape spot (the light is {})",
+                self.light_shape.unwrap_or_default()
+            );
+        }
+        if let (Some(shape @ (LightShape::Point | LightShape::Spot)), Some(size)) =
+            (self.light_shape, self.light_size)
+            && !(shape == LightShape::Point && size == 0.0)
+        {
+            anyhow::bail!(
+                "--light-size {size}: a {shape} light has no size (--light-shape sphere or \
+                 quad have one)"
+            );
+        }
+        Ok(())
     }
 
     /// `--caustics photons` only in the path stage, and `--photons` only with it: elsewhere
@@ -508,25 +553,28 @@ impl RenderOptions {
         if let Some(c) = self.light_colour {
             settings.light.colour = c;
         }
-        match (self.light_radius, self.light_shape) {
-            (Some(r), _) => {
-                settings.light.shape = LightShape::Sphere;
-                settings.light.radius = r;
-            }
-            (None, Some(shape)) => {
-                settings.light.shape = shape;
-                settings.light.radius = self.light_size.unwrap_or(match shape {
-                    LightShape::Point => 0.0,
-                    LightShape::Sphere => DEFAULT_SPHERE_RADIUS,
-                    LightShape::Quad => DEFAULT_QUAD_SIDE,
-                });
-            }
-            (None, None) => {
-                if let Some(size) = self.light_size {
-                    settings.light.shape = LightShape::Sphere;
-                    settings.light.radius = size;
-                }
-            }
+        settings.light.kind = match (self.light_radius, self.light_shape) {
+            (Some(radius), _) => LightKind::Sphere { radius },
+            (None, Some(shape)) => match self.light_size {
+                Some(size) => LightKind::sized(shape, size),
+                None => LightKind::of_shape(shape),
+            },
+            (None, None) => match self.light_size {
+                Some(radius) => LightKind::Sphere { radius },
+                None => LightKind::Point,
+            },
+        };
+        if let LightKind::Spot(cone) = &mut settings.light.kind {
+            let default = SpotCone::default();
+            *cone = SpotCone {
+                aim: self.light_aim.unwrap_or(default.aim),
+                cutoff: self
+                    .spot_cutoff
+                    .map_or(default.cutoff, raylab_core::camera::radians),
+                beam: self
+                    .spot_beam
+                    .map_or(default.beam, raylab_core::camera::radians),
+            };
         }
         if let Some(shadows) = self.shadows {
             settings.shading.shadows = shadows;

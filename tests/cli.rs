@@ -358,8 +358,7 @@ fn the_extensions_on_the_command_line() {
             "radius.exr",
             vec!["--light-radius", "0.2", "--samples", "4"],
             with(&|s| {
-                s.light.radius = 0.2;
-                s.light.shape = raylab_core::light::LightShape::Sphere;
+                s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.2 };
                 s.samples_per_pixel = 4;
             }),
         ),
@@ -1239,4 +1238,100 @@ fn pitch_reaches_the_image() {
         .concat(),
     );
     assert!(out.status.success(), "{}", stderr(&out));
+}
+
+/// `--light-shape spot` with its cone (`--light-aim`, `--spot-cutoff`, `--spot-beam`, in
+/// degrees): the EXR is the library's render of that spot, float for float; on the floor every
+/// pixel outside the cutoff cone is black and those inside the beam are lit (but where a block
+/// shadows them). The cone's options without the spot, a beam wider than the cutoff, a cutoff
+/// of 90° and a spot aimed at its own position are refused with one line naming the option.
+#[test]
+fn a_spot_light_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("spot.exr");
+    let side = 64;
+    let size = ["--width", "64", "--height", "64", "--stage", "shadows"];
+    let mut args = vec!["render", "--out", path.to_str().unwrap()];
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&[
+        "--light-shape",
+        "spot",
+        "--light-aim",
+        "0,1,-0.2",
+        "--spot-cutoff",
+        "25",
+        "--spot-beam",
+        "15",
+    ]);
+    let out = raylab(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let exr = image::open(&path).unwrap().to_rgb32f().into_raw();
+    let mut s = settings(Stage::Shadows, side);
+    s.light.kind = raylab_core::light::LightKind::Spot(raylab_core::light::SpotCone::default());
+    assert_eq!(exr, library_exr(&s));
+    let spot = s.light.spot().unwrap();
+    let scene = cornell_box();
+    let (mut outside, mut beam, mut beam_lit) = (0, 0, 0);
+    for y in 0..side {
+        for x in 0..side {
+            let ray = s.camera.pixel_ray(x, y);
+            let Some(hit) = scene.closest_intersection(&ray, f32::INFINITY) else {
+                continue;
+            };
+            if hit.position.y < 0.999 {
+                continue;
+            }
+            let value = exr[3 * (y * side + x) as usize];
+            let falloff = spot.falloff_toward(hit.position);
+            if falloff == 0.0 {
+                outside += 1;
+                assert_eq!(value, 0.0, "pixel ({x}, {y}) outside the cone");
+            } else if falloff == 1.0 {
+                beam += 1;
+                beam_lit += usize::from(value > 0.0);
+            }
+        }
+    }
+    assert!(
+        outside > 100 && beam > 30,
+        "{outside} outside, {beam} in the beam"
+    );
+    assert!(
+        beam_lit * 10 > beam * 8,
+        "{beam_lit} of {beam} lit in the beam"
+    );
+
+    let refused = dir.path().join("refused.png");
+    let base = ["render", "--out", refused.to_str().unwrap()];
+    for (extra, says) in [
+        (
+            &["--light-aim", "0,1,0"][..],
+            "--light-aim sets a spot light's cone: it needs --light-shape spot",
+        ),
+        (
+            &["--light-shape", "sphere", "--spot-cutoff", "20"][..],
+            "--spot-cutoff sets a spot light's cone",
+        ),
+        (
+            &["--light-shape", "spot", "--spot-beam", "30"][..],
+            "invalid spot beam 30° (cutoff 25°)",
+        ),
+        (
+            &["--light-shape", "spot", "--spot-cutoff", "90"][..],
+            "invalid spot cutoff 90°",
+        ),
+        (
+            &["--light-shape", "spot", "--light-aim", "0,-0.5,-0.7"][..],
+            "invalid light aim (0, -0.5, -0.7)",
+        ),
+        (
+            &["--light-shape", "spot", "--light-size", "0.2"][..],
+            "a spot light has no size",
+        ),
+    ] {
+        let mut args = base.to_vec();
+        args.extend_from_slice(&size);
+        args.extend_from_slice(extra);
+        assert_refused(&args, says, &refused);
+    }
 }

@@ -354,7 +354,7 @@ fn a_light_outside_the_box_lights_nothing_inside() {
 #[test]
 fn the_floor_edge_is_lit_from_inside_and_dark_from_outside() {
     use raylab_core::intersect::{closest_intersection_brute_force, intersect_triangle};
-    let light = raylab_core::PointLight::default().position;
+    let light = raylab_core::LightSpec::default().position;
     let inside = shadows_stage(light, 128);
     let outside = shadows_stage(Vec3::new(1.5, 0.0, 0.0), 128);
     let scene = raylab_core::scene::cornell_box();

@@ -22,6 +22,7 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use eframe::egui;
+use raylab_core::light::{LightKind, LightSpec, SpotCone};
 use raylab_core::progressive::{Controller, ControllerError, Frame, WorkerError, catch_panic};
 use raylab_core::scene::Scene;
 use raylab_core::{Camera, Image, RenderSettings, Shading};
@@ -685,11 +686,41 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     };
     differ("scene", *scene != b.scene);
     camera_differences(camera, &b.camera, &mut differ);
-    differ("light position", light.position != b.light.position);
-    differ("light power", light.power != b.light.power);
-    differ("light colour", light.colour != b.light.colour);
-    differ("light radius", light.radius != b.light.radius);
-    differ("light shape", light.shape != b.light.shape);
+    let LightSpec {
+        position,
+        power,
+        colour,
+        kind,
+    } = light;
+    differ("light position", *position != b.light.position);
+    differ("light power", *power != b.light.power);
+    differ("light colour", *colour != b.light.colour);
+    differ("light shape", kind.shape() != b.light.kind.shape());
+    match (*kind, b.light.kind) {
+        (LightKind::Sphere { radius }, LightKind::Sphere { radius: other }) => {
+            differ("light radius", radius != other)
+        }
+        (LightKind::Quad { side }, LightKind::Quad { side: other }) => {
+            differ("light side", side != other)
+        }
+        (LightKind::Spot(cone), LightKind::Spot(other)) => {
+            let SpotCone { aim, cutoff, beam } = cone;
+            differ("spot aim", aim != other.aim);
+            differ("spot cutoff", cutoff != other.cutoff);
+            differ("spot beam", beam != other.beam);
+        }
+        // Different shapes, named above; the point light has no parameters.
+        (
+            LightKind::Point
+            | LightKind::Sphere { .. }
+            | LightKind::Quad { .. }
+            | LightKind::Spot(_),
+            LightKind::Point
+            | LightKind::Sphere { .. }
+            | LightKind::Quad { .. }
+            | LightKind::Spot(_),
+        ) => {}
+    }
     let Shading {
         stage,
         shadows,

@@ -25,6 +25,7 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Instant;
 
 use eframe::egui;
+use raylab_core::light::LightKind;
 use raylab_core::progressive::{Controller, Frame, WorkerError, catch_panic};
 use raylab_core::scene::{Scene, SceneChoice, cornell_box};
 use raylab_core::{Camera, Image, RenderSettings, Shading, Stage};
@@ -198,6 +199,8 @@ pub struct WorkbenchApp {
     central_width: f32,
     /// While the light's marker is dragged: the light's depth when the drag started.
     dragging_light: Option<f32>,
+    /// While a spot light's aim is dragged: the aim's depth when the drag started.
+    dragging_aim: Option<f32>,
     /// When the newest job was submitted, and UI frames since.
     change: Option<(Instant, u32)>,
     log_frames: bool,
@@ -319,6 +322,37 @@ pub fn light_marker(settings: &RenderSettings) -> Option<egui::Vec2> {
     ))
 }
 
+/// A spot light's cone where the camera sees it ([`viewport::SpotMarker`]): its aim, and 24
+/// points of the circle of the cutoff's radius about the aim, square to the spot's axis (each
+/// left out when behind the camera); `None` for the other lights.
+pub fn spot_marker(settings: &RenderSettings) -> Option<viewport::SpotMarker> {
+    let LightKind::Spot(cone) = settings.light.kind else {
+        return None;
+    };
+    let camera = &settings.camera;
+    let fraction = |p| {
+        let (px, py, _) = camera.project(p)?;
+        Some(egui::vec2(
+            px / camera.width as f32,
+            py / camera.height as f32,
+        ))
+    };
+    let to_aim = cone.aim - settings.light.position;
+    let axis = to_aim.normalize_or_zero();
+    let radius = to_aim.length() * cone.cutoff.tan();
+    let (t1, t2) = raylab_core::sampling::orthonormal_basis(axis);
+    let rim = (0..24)
+        .filter_map(|k| {
+            let a = k as f32 * std::f32::consts::TAU / 24.0;
+            fraction(cone.aim + radius * (a.cos() * t1 + a.sin() * t2))
+        })
+        .collect();
+    Some(viewport::SpotMarker {
+        aim: fraction(cone.aim),
+        rim,
+    })
+}
+
 /// Opens the workbench window; returns when it is closed.
 pub fn run() -> anyhow::Result<()> {
     // eframe reads its state file before the app starts, and would wait for ever on a FIFO:
@@ -410,6 +444,7 @@ impl WorkbenchApp {
             screenshot_wanted: false,
             screenshots_saving: Vec::new(),
             dragging_light: None,
+            dragging_aim: None,
             inspection: None,
             inspector_width: INSPECTOR_WIDTH,
             inspector_opened: 0,
@@ -824,25 +859,42 @@ impl WorkbenchApp {
     }
 
     /// A drag that starts on the light's marker moves the light in the image plane, at the
-    /// depth it had when the drag started; any other drag turns the camera.
+    /// depth it had when the drag started; one that starts on a spot light's aim moves the aim
+    /// so (turning the spot); any other drag turns the camera.
     fn drag_light_or_camera(&mut self, pointer: &viewport::ViewportInput) {
         let settings = &mut self.state.settings;
+        let depth_of = |p| settings.camera.project(p).map(|(_, _, depth)| depth);
         if pointer.drag_started_on_marker {
-            self.dragging_light = settings
-                .camera
-                .project(settings.light.position)
-                .map(|(_, _, depth)| depth);
+            self.dragging_light = depth_of(settings.light.position);
+        } else if let (true, LightKind::Spot(cone)) =
+            (pointer.drag_started_on_aim, settings.light.kind)
+        {
+            self.dragging_aim = depth_of(cone.aim);
         }
-        match self.dragging_light {
-            Some(depth) if pointer.dragging => {
-                if let Some(at) = pointer.pointer_at {
-                    let camera = &settings.camera;
-                    let (px, py) = (at.x * camera.width as f32, at.y * camera.height as f32);
-                    settings.light.position = camera.unproject(px, py, depth);
+        let camera = &settings.camera;
+        let under_pointer = |depth| {
+            let at = pointer.pointer_at?;
+            let (px, py) = (at.x * camera.width as f32, at.y * camera.height as f32);
+            Some(camera.unproject(px, py, depth))
+        };
+        match (
+            self.dragging_light,
+            self.dragging_aim,
+            &mut settings.light.kind,
+        ) {
+            (Some(depth), _, _) if pointer.dragging => {
+                if let Some(p) = under_pointer(depth) {
+                    settings.light.position = p;
+                }
+            }
+            (None, Some(depth), LightKind::Spot(cone)) if pointer.dragging => {
+                if let Some(p) = under_pointer(depth) {
+                    cone.aim = p;
                 }
             }
             _ => {
                 self.dragging_light = None;
+                self.dragging_aim = None;
                 input::pointer(pointer, &mut settings.camera);
             }
         }
@@ -1669,7 +1721,10 @@ impl eframe::App for WorkbenchApp {
                     (None, Some(compare)) => Some(compare),
                     (None, None) => None,
                 };
-            let pointer = self.viewport.viewport_ui(ui, marker, overlay);
+            let spot = spot_marker(&self.state.settings);
+            let pointer = self
+                .viewport
+                .viewport_ui(ui, marker, spot.as_ref(), overlay);
             if pointer.pressed
                 && let Some(id) = ui.memory(|m| m.focused())
             {

@@ -5,16 +5,17 @@
 //! find them by.
 
 use eframe::egui;
+use raylab_core::camera;
 use raylab_core::display::Display;
 use raylab_core::integrator::MAX_SPECULAR_DEPTH;
-use raylab_core::light::{DEFAULT_QUAD_SIDE, DEFAULT_SPHERE_RADIUS, LightShape};
+use raylab_core::light::{LightKind, LightShape, SpotCone};
 use raylab_core::material::MIN_ROUGHNESS;
 use raylab_core::material::TexturePreset;
 use raylab_core::named::NamedEnum;
 use raylab_core::scene::SceneChoice;
 use raylab_core::settings::{Caustics, MAX_PHOTONS};
 use raylab_core::view::{Legend, View};
-use raylab_core::{Camera, MaterialPreset, PointLight, RenderSettings, Stage};
+use raylab_core::{Camera, LightSpec, MaterialPreset, RenderSettings, Stage};
 
 use super::Command;
 use super::persistence::WorkbenchState;
@@ -32,6 +33,9 @@ pub const MAX_BOUNCES_UI: u32 = 64;
 pub const MAX_APERTURE_UI: f32 = 0.3;
 /// The largest light radius the slider offers, in scene units.
 pub const MAX_LIGHT_RADIUS_UI: f32 = 0.5;
+/// The spot's cutoff slider's range, in degrees (the settings allow up to, not including, 90°).
+pub const MAX_SPOT_CUTOFF_UI: f64 = 89.0;
+const MIN_SPOT_CUTOFF_UI: f64 = 0.5;
 /// The exposure slider's range either way, in stops.
 pub const MAX_EXPOSURE_UI: f32 = 10.0;
 /// The most render threads the panel offers.
@@ -665,7 +669,7 @@ pub fn lens_ui(ui: &mut egui::Ui, camera: &mut Camera, focus_mode: &mut bool) {
         .on_hover_text("A click on the image sets the focus distance to that pixel's depth");
 }
 
-pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
+pub fn light_ui(ui: &mut egui::Ui, light: &mut LightSpec) {
     position_slider(ui, &mut light.position.x, -1.0..=1.0, "Light x");
     position_slider(ui, &mut light.position.y, -1.0..=1.0, "Light y");
     position_slider(ui, &mut light.position.z, -1.0..=1.0, "Light z");
@@ -695,28 +699,39 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
             light.colour = glam::Vec3::ONE;
         }
     });
-    let shape_before = light.shape;
-    choice_ui(ui, "light_shape", "Light shape", &mut light.shape, None).on_hover_text(
-        "The lab's point light, or an area light of the same power: a sphere, or a square \
-             facing the floor. The lab's stages keep equation 27 from its centre and soften the \
-             shadows; the path stage sees the real light, with multiple importance sampling",
+    let mut shape = light.kind.shape();
+    choice_ui(ui, "light_shape", "Light shape", &mut shape, None).on_hover_text(
+        "The lab's point light, an area light of the same power (a sphere, or a square facing \
+         the floor), or a spot (the point light's intensity inside a cone). The lab's stages \
+         keep equation 27 from its centre and soften the shadows; the path stage sees the real \
+         light, with multiple importance sampling",
     );
-    if light.shape != shape_before {
-        light.radius = match light.shape {
-            LightShape::Point => 0.0,
-            _ if light.radius > 0.0 => light.radius,
-            LightShape::Sphere => DEFAULT_SPHERE_RADIUS,
-            LightShape::Quad => DEFAULT_QUAD_SIDE,
+    if shape != light.kind.shape() {
+        // An area light keeps its size from one shape to the other.
+        let size = light.kind.size();
+        light.kind = match shape {
+            LightShape::Sphere | LightShape::Quad if size > 0.0 => LightKind::sized(shape, size),
+            LightShape::Point | LightShape::Sphere | LightShape::Quad | LightShape::Spot => {
+                LightKind::of_shape(shape)
+            }
         };
     }
-    let size_label = if light.shape == LightShape::Quad {
-        "Light side"
-    } else {
-        "Light radius"
-    };
-    let radius_before = light.radius;
+    match &mut light.kind {
+        LightKind::Spot(cone) => spot_ui(ui, cone),
+        kind @ (LightKind::Point | LightKind::Sphere { .. } | LightKind::Quad { .. }) => {
+            size_ui(ui, kind)
+        }
+    }
+}
+
+/// The area light's size: the sphere's radius or the square's side (a size given to the point
+/// light makes it the sphere it always meant).
+fn size_ui(ui: &mut egui::Ui, kind: &mut LightKind) {
+    let quad = matches!(kind, LightKind::Quad { .. });
+    let size_label = if quad { "Light side" } else { "Light radius" };
+    let mut size = kind.size();
     ui.add(
-        egui::Slider::new(&mut light.radius, 0.0..=MAX_LIGHT_RADIUS_UI)
+        egui::Slider::new(&mut size, 0.0..=MAX_LIGHT_RADIUS_UI)
             .custom_parser(typed_number(size_label, 0.0, MAX_LIGHT_RADIUS_UI))
             .clamping(egui::SliderClamping::Edits)
             .max_decimals(3)
@@ -727,10 +742,56 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut PointLight) {
          sphere of this radius, or a square of this side), whose shadows are soft: each sample \
          sees a point of it, and the samples average to the fraction of the light a point sees",
     );
-    // A radius given to the point light makes it the sphere it always meant.
-    if light.shape == LightShape::Point && radius_before == 0.0 && light.radius > 0.0 {
-        light.shape = LightShape::Sphere;
+    if size != kind.size() {
+        *kind = match kind {
+            LightKind::Quad { .. } => LightKind::Quad { side: size },
+            LightKind::Point | LightKind::Sphere { .. } | LightKind::Spot(_) => {
+                LightKind::Sphere { radius: size }
+            }
+        };
     }
+}
+
+/// A spot light's aim and its cone's angles, in degrees (the beam never wider than the cutoff).
+fn spot_ui(ui: &mut egui::Ui, cone: &mut SpotCone) {
+    position_slider(ui, &mut cone.aim.x, -1.0..=1.0, "Aim x");
+    position_slider(ui, &mut cone.aim.y, -1.0..=1.0, "Aim y");
+    position_slider(ui, &mut cone.aim.z, -1.0..=1.0, "Aim z");
+    let angle = |ui: &mut egui::Ui, value: &mut f32, max: f64, label: &str, hover: &str| {
+        let mut degrees = camera::degrees(*value);
+        ui.add(
+            egui::Slider::new(&mut degrees, 0.0..=max)
+                .custom_parser(typed_number(label, 0.0, max as f32))
+                .clamping(egui::SliderClamping::Always)
+                .max_decimals(1)
+                .suffix("°")
+                .text(label),
+        )
+        .on_hover_text(hover);
+        if degrees != camera::degrees(*value) {
+            *value = camera::radians(degrees);
+        }
+    };
+    angle(
+        ui,
+        &mut cone.cutoff,
+        MAX_SPOT_CUTOFF_UI,
+        "Spot cutoff",
+        "No light beyond this angle from the spot's axis",
+    );
+    if cone.cutoff <= 0.0 {
+        cone.cutoff = camera::radians(MIN_SPOT_CUTOFF_UI);
+    }
+    let cutoff = camera::degrees(cone.cutoff);
+    angle(
+        ui,
+        &mut cone.beam,
+        cutoff,
+        "Spot beam",
+        "Full intensity within this angle of the axis, falling linearly in the angle to 0 at \
+         the cutoff",
+    );
+    cone.beam = cone.beam.min(cone.cutoff);
 }
 
 /// The lab walk-through: the current step's explanation and equation, Previous / Next.

@@ -823,7 +823,10 @@ fn the_extensions_controls_are_found_by_label_and_render_what_the_library_render
     set_target(&mut h, 2);
     settle(&mut h);
     let s = settings(&h);
-    assert_eq!(s.light.radius, 0.2);
+    assert_eq!(
+        s.light.kind,
+        raylab_core::light::LightKind::Sphere { radius: 0.2 }
+    );
     assert_eq!(s.camera.aperture, 0.05);
     assert!(!s.shading.smooth);
     let frame = shown(&h);
@@ -1532,8 +1535,12 @@ fn the_light_shape_and_the_rough_metal_are_chosen_in_the_panels() {
     let mut h = harness(tiny_state());
     choose(&mut h, "Light shape", "Square (quad)");
     let s = settings(&h);
-    assert_eq!(s.light.shape, raylab_core::light::LightShape::Quad);
-    assert_eq!(s.light.radius, raylab_core::light::DEFAULT_QUAD_SIDE);
+    assert_eq!(
+        s.light.kind,
+        raylab_core::light::LightKind::Quad {
+            side: raylab_core::light::DEFAULT_QUAD_SIDE
+        }
+    );
     // The size slider names what it sets.
     h.get_by_role_and_label(Role::Slider, "Light side");
     assert!(h.query_by_label("Roughness α").is_none());
@@ -1544,6 +1551,41 @@ fn the_light_shape_and_the_rough_metal_are_chosen_in_the_panels() {
     let frame = shown(&h);
     assert_eq!(frame.settings.material_preset, MaterialPreset::Rough);
     assert_eq!(frame.settings.roughness, 0.5);
+    assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
+}
+
+/// Choosing Spot in the light panel makes the lab's spot (aimed at (0, 1, −0.2), cutoff 25°,
+/// beam 15°) and re-renders: the image shown is the library's for it, not the point light's;
+/// the cutoff slider, in degrees, reaches the settings, and the beam follows a cutoff set
+/// below it.
+#[test]
+fn choosing_the_spot_light_re_renders_with_its_cone() {
+    use raylab_core::light::{LightKind, SpotCone};
+    let mut h = harness(tiny_state());
+    settle(&mut h);
+    let point = shown(&h).image.clone();
+    choose(&mut h, "Light shape", "Spot");
+    assert_eq!(
+        settings(&h).light.kind,
+        LightKind::Spot(SpotCone::default())
+    );
+    settle(&mut h);
+    let frame = shown(&h);
+    assert_eq!(
+        frame.settings.light.kind,
+        LightKind::Spot(SpotCone::default())
+    );
+    assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
+    assert_ne!(*frame.image, *point);
+    h.get_by_role_and_label(Role::Slider, "Spot cutoff")
+        .set_value_accesskit(10.0);
+    settle(&mut h);
+    let LightKind::Spot(cone) = settings(&h).light.kind else {
+        panic!("not a spot: {:?}", settings(&h).light.kind);
+    };
+    assert_eq!(cone.cutoff, raylab_core::camera::radians(10.0));
+    assert_eq!(cone.beam, cone.cutoff);
+    let frame = shown(&h);
     assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
 }
 

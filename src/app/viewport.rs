@@ -27,6 +27,8 @@ pub struct ViewportInput {
     pub pointer_at: Option<egui::Vec2>,
     /// A drag started this frame on the light's marker.
     pub drag_started_on_marker: bool,
+    /// A drag started this frame on a spot light's aim (and not on the light's marker).
+    pub drag_started_on_aim: bool,
     /// A drag on the image is going on.
     pub dragging: bool,
     /// Compare A/B: the drag is the divider's, not the camera's or the light's.
@@ -38,6 +40,15 @@ pub struct ViewportInput {
 /// The light's marker radius, in points; a drag starting this close to it moves the light.
 pub const MARKER_RADIUS: f32 = 7.0;
 const MARKER_GRAB_RADIUS: f32 = 12.0;
+
+/// A spot light's cone where the camera sees it, as fractions of the image's width and height:
+/// the point it is aimed at (a handle: dragged, it turns the spot) and points of the circle its
+/// cutoff makes about the aim.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SpotMarker {
+    pub aim: Option<egui::Vec2>,
+    pub rim: Vec<egui::Vec2>,
+}
 
 #[derive(Default)]
 pub struct Viewport {
@@ -99,12 +110,13 @@ impl Viewport {
     }
 
     /// Draws the image fitted into the available space, and the light's marker at `marker` (a
-    /// fraction of the image's width and height) when it is on the image; reports pointer input
-    /// on it.
+    /// fraction of the image's width and height) when it is on the image, with a spot light's
+    /// cone (`spot`); reports pointer input on it.
     pub fn viewport_ui(
         &mut self,
         ui: &mut egui::Ui,
         marker: Option<egui::Vec2>,
+        spot: Option<&SpotMarker>,
         mut overlay: Option<&mut dyn Overlay>,
     ) -> ViewportInput {
         let available = ui.available_rect_before_wrap();
@@ -137,6 +149,16 @@ impl Viewport {
         let marker_pos = marker
             .filter(|m| (0.0..=1.0).contains(&m.x) && (0.0..=1.0).contains(&m.y))
             .map(|m| rect.min + m * rect.size());
+        let aim_pos = spot.and_then(|s| s.aim).map(|m| rect.min + m * rect.size());
+        if let Some(spot) = spot {
+            let at = |m: &egui::Vec2| rect.min + *m * rect.size();
+            draw_spot_cone(
+                ui.painter(),
+                marker.map(|m| at(&m)),
+                aim_pos,
+                &spot.rim.iter().map(at).collect::<Vec<_>>(),
+            );
+        }
         if let Some(pos) = marker_pos {
             draw_light_marker(ui.painter(), pos);
         }
@@ -165,6 +187,11 @@ impl Viewport {
         let press = ui.input(|i| i.pointer.press_origin());
         let drag_started_on_marker = response.drag_started()
             && marker_pos
+                .zip(press)
+                .is_some_and(|(m, p)| m.distance(p) <= MARKER_GRAB_RADIUS);
+        let drag_started_on_aim = response.drag_started()
+            && !drag_started_on_marker
+            && aim_pos
                 .zip(press)
                 .is_some_and(|(m, p)| m.distance(p) <= MARKER_GRAB_RADIUS);
         let on_divider =
@@ -198,6 +225,7 @@ impl Viewport {
                 .map(to_fraction),
             pointer_at,
             drag_started_on_marker,
+            drag_started_on_aim,
             dragging: response.dragged(),
             on_divider,
             fine,
@@ -220,6 +248,32 @@ pub trait Overlay {
         rect: egui::Rect,
         on_marker: bool,
     ) -> bool;
+}
+
+/// A spot light's cone: its rim (the circle its cutoff makes about the aim), four lines from
+/// the light to it, and the aim's handle, a ring, in the marker's yellow over a dark rim.
+fn draw_spot_cone(
+    painter: &egui::Painter,
+    light: Option<egui::Pos2>,
+    aim: Option<egui::Pos2>,
+    rim: &[egui::Pos2],
+) {
+    let dark = egui::Stroke::new(3.0, egui::Color32::from_gray(30));
+    let yellow = egui::Stroke::new(1.5, egui::Color32::from_rgb(255, 210, 40));
+    for stroke in [dark, yellow] {
+        if rim.len() > 2 {
+            painter.add(egui::Shape::closed_line(rim.to_vec(), stroke));
+        }
+        if let Some(light) = light {
+            let quarter = (rim.len() / 4).max(1);
+            for point in rim.iter().step_by(quarter) {
+                painter.line_segment([light, *point], stroke);
+            }
+        }
+        if let Some(aim) = aim {
+            painter.circle_stroke(aim, MARKER_RADIUS * 0.7, stroke);
+        }
+    }
 }
 
 /// The light where the camera sees it: a small sun, yellow with a dark rim so it shows on light

@@ -24,7 +24,7 @@ use crate::accel::{Accel, AccelKind, Isa};
 pub use crate::camera::{primary_rays, try_primary_rays};
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, HitTerms, Surface};
-use crate::light::PointLight;
+use crate::light::LightSpec;
 use crate::memory::{AllocError, try_with_capacity};
 use crate::render::render_pass;
 use crate::scene::Scene;
@@ -126,7 +126,7 @@ pub fn memory_estimate(config: &BenchConfig) -> u64 {
 
 /// The shadow rays the lab stage casts for these primary rays: from every hit that receives
 /// light, [`crate::light::shadow_ray`] towards the light, with its `t_max`.
-pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(Ray, f32)> {
+pub fn shadow_rays(scene: &Scene, light: &LightSpec, primary: &[Ray]) -> Vec<(Ray, f32)> {
     primary
         .par_iter()
         .filter_map(|ray| shadow_ray_of(scene, light, ray))
@@ -137,7 +137,7 @@ pub fn shadow_rays(scene: &Scene, light: &PointLight, primary: &[Ray]) -> Vec<(R
 /// time so that no second full-size buffer is needed.
 pub fn try_shadow_rays(
     scene: &Scene,
-    light: &PointLight,
+    light: &LightSpec,
     primary: &[Ray],
 ) -> Result<Vec<(Ray, f32)>, AllocError> {
     let mut rays = try_with_capacity(primary.len(), || {
@@ -154,7 +154,7 @@ pub fn try_shadow_rays(
 }
 
 /// The lab stage's shadow ray from where `ray` hits, if it hits a point the light reaches.
-fn shadow_ray_of(scene: &Scene, light: &PointLight, ray: &Ray) -> Option<(Ray, f32)> {
+fn shadow_ray_of(scene: &Scene, light: &LightSpec, ray: &Ray) -> Option<(Ray, f32)> {
     let hit = scene.closest_intersection(ray, f32::INFINITY)?;
     let triangle = &scene.triangles[hit.triangle_index];
     let surface = Surface {

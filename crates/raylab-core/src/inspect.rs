@@ -34,7 +34,7 @@ use crate::display::Display;
 use crate::geometry::Ray;
 use crate::integrator::{HitTerms, Recorder, Stage, Tracer, path, path_mis};
 use crate::intersect::Intersection;
-use crate::light::{DirectLight, PointLight};
+use crate::light::{DirectLight, LightKind, LightSpec};
 use crate::material::{Material, MaterialKind, Scatter};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -109,7 +109,7 @@ pub struct Inspection {
     #[serde(default)]
     pub normal_mapped: bool,
     /// The light.
-    pub light: PointLight,
+    pub light: LightSpec,
     /// The lab's terms at the first diffuse hit shaded (see above).
     #[serde(flatten)]
     pub terms: LightTerms,
@@ -151,6 +151,9 @@ pub struct LightTerms {
     pub power: Option<Vec3>,
     /// 4πr², the area of the sphere of radius |r| the power is spread over.
     pub four_pi_r2: Option<f32>,
+    /// A spot light's falloff toward the point (1 within its beam, 0 beyond its cutoff).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub falloff: Option<f32>,
     /// D = P·max(r̂·n̂, 0)/(4πr²) (equation 27), in watts per unit area, before shadows.
     #[serde(rename = "D")]
     pub d: Option<Vec3>,
@@ -483,6 +486,7 @@ impl LightTerms {
         out.cos_theta = Some(parts.cos);
         out.power = Some(light.channel_power());
         out.four_pi_r2 = Some(parts.four_pi_r2);
+        out.falloff = light.spot().map(|_| parts.falloff);
         out.d = Some(terms.d);
         out.relief_shadowed = terms.relief_shadowed;
         out.light_behind_surface =
@@ -1180,8 +1184,9 @@ impl Inspection {
             )
         };
         // Where the relief hides the light, the equation's own value first, then why it is 0.
+        let falloff = t.falloff.unwrap_or(1.0);
         let d = if t.relief_shadowed {
-            p * cos.max(0.0) / area
+            p * (falloff * cos.max(0.0)) / area
         } else {
             d
         };
@@ -1190,11 +1195,31 @@ impl Inspection {
         } else {
             format!("max({}, 0)", num(cos))
         };
+        let (formula, falloff_text) = match (t.falloff, self.light.spot()) {
+            (Some(f), Some(spot)) => {
+                let deg = |a: f32| num(crate::camera::degrees(a) as f32);
+                let theta = deg(crate::light::acos(-r.normalize_or_zero().dot(spot.axis)));
+                let why = if f == 1.0 {
+                    format!("θ = {theta}° within the beam, {}°: 1", deg(spot.beam))
+                } else if f == 0.0 {
+                    format!("θ = {theta}° beyond the cutoff, {}°: 0", deg(spot.cutoff))
+                } else {
+                    let (c, b) = (deg(spot.cutoff), deg(spot.beam));
+                    format!("θ = {theta}°: ({c}° − θ)/({c}° − {b}°) = {}", num(f))
+                };
+                lines.push(
+                    "spot",
+                    format!("{indent}the spot's falloff at θ from its axis, {why}"),
+                );
+                ("P·falloff·max(r̂·n̂, 0)/(4πr²)", format!(" × {}", num(f)))
+            }
+            _ => ("P·max(r̂·n̂, 0)/(4πr²)", String::new()),
+        };
         lines.push(
             "eq. 27",
             format!(
-                "{indent}D = P·max(r̂·n̂, 0)/(4πr²) = {watts} × {cos_text} / (4π × {} units² = {} \
-                 units²) = {} W per unit area",
+                "{indent}D = {formula} = {watts}{falloff_text} × {cos_text} / (4π × {} units² = \
+                 {} units²) = {} W per unit area",
                 num(r2),
                 num(area),
                 colour(d)
@@ -1227,14 +1252,21 @@ impl Inspection {
                 format!("{indent}no shadow ray: no light arrives to be blocked"),
             ),
             Some(ray) => {
-                let toward = if self.light.is_area() {
-                    format!(
+                let toward = match self.light.kind {
+                    LightKind::Sphere { radius } if radius > 0.0 => format!(
                         "a random point of the light's sphere (radius {}), along {}",
-                        num(self.light.radius),
+                        num(radius),
                         vector(ray.direction)
-                    )
-                } else {
-                    "the light".to_owned()
+                    ),
+                    LightKind::Quad { side } if side > 0.0 => format!(
+                        "a random point of the light's square (side {}), along {}",
+                        num(side),
+                        vector(ray.direction)
+                    ),
+                    LightKind::Point
+                    | LightKind::Sphere { .. }
+                    | LightKind::Quad { .. }
+                    | LightKind::Spot(_) => "the light".to_owned(),
                 };
                 let answer = if t.shadow_blocked {
                     match &t.blocker {
@@ -1451,7 +1483,7 @@ mod tests {
     /// 4πr² = 34.431856, D = 14 × 0.906183 / 34.431856 = 0.368454, and the tracer's D exactly.
     #[test]
     fn the_parts_of_d_at_the_floor_centre() {
-        let light = PointLight::default();
+        let light = LightSpec::default();
         let (p, n) = (Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
         let parts = DirectLight::at(&light, p, n);
         assert_eq!(parts.to_light, Vec3::new(0.0, -1.5, -0.7));
@@ -1506,16 +1538,14 @@ mod tests {
     /// and from each other's extremes (a weight in (0.05, 0.95)).
     #[test]
     fn a_path_vertex_under_an_area_light_shows_its_mis_weight() {
-        use crate::light::LightShape;
         let scene = crate::scene::cornell_box();
         let mut s = RenderSettings::default();
         s.camera = s.camera.with_resolution(32, 32);
         s.shading = crate::integrator::Shading::for_stage(Stage::Path);
         s.light.position = Vec3::new(0.0, -0.98, 0.0);
-        s.light.shape = LightShape::Quad;
         // A square of side 1.5: large enough that, at vertices near it, BSDF samples find it
         // as readily as light samples do (at a side of 0.5 no weight of these pixels was within (0.05, 0.95)).
-        s.light.radius = 1.5;
+        s.light.kind = LightKind::Quad { side: 1.5 };
         s.material_preset = crate::material::MaterialPreset::Rough;
         let (mut seen, mut shared) = (0, 0);
         for (x, y) in [(10, 16), (16, 20), (22, 26), (5, 5)] {

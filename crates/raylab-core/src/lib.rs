@@ -55,6 +55,6 @@ pub mod walkthrough;
 pub use camera::Camera;
 pub use film::Image;
 pub use integrator::{Shading, Stage};
-pub use light::PointLight;
+pub use light::LightSpec;
 pub use material::{Material, MaterialKind, MaterialPreset};
 pub use settings::RenderSettings;

@@ -697,8 +697,11 @@ mod tests {
             for soft in [false, true] {
                 settings.shading = crate::Shading::for_stage(stage);
                 settings.samples_per_pixel = samples;
-                (settings.light.radius, settings.camera.aperture) =
-                    if soft { (0.1, 0.03) } else { (0.0, 0.0) };
+                (settings.light.kind, settings.camera.aperture) = if soft {
+                    (crate::light::LightKind::Sphere { radius: 0.1 }, 0.03)
+                } else {
+                    (crate::light::LightKind::Point, 0.0)
+                };
                 let image = render(&scene, &settings);
                 let mut film = Film::new(37, 5);
                 for sample in 0..samples {

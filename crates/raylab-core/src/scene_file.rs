@@ -47,7 +47,7 @@
 //! position = [0.0, -0.5, -0.7]
 //! power = 14.0
 //! colour = [1.0, 1.0, 1.0]
-//! radius = 0.0
+//! shape = "point"
 //!
 //! [shading]
 //! stage = "lab"
@@ -78,7 +78,7 @@ use serde::{Deserialize, Serialize};
 use crate::camera::{self, Camera};
 use crate::display::{Display, DisplayTransform};
 use crate::integrator::{Shading, Stage};
-use crate::light::{LightShape, PointLight};
+use crate::light::{LightKind, LightShape, LightSpec, SpotCone};
 use crate::material::{MaterialKind, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
 use crate::scene::spec::{self, BoxPart, ModelSpec, PartRelief, ReliefSpec, SceneSpec};
@@ -161,11 +161,22 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
         }
     }
     let file: FileV2 = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
-    let settings = file.into_settings(folder);
+    let kind = file.light.kind(Angles::of_version(file.version), text)?;
+    // A square's size is its `side`, or in older files its `radius`.
+    let size_key = if file.light.side.is_some() {
+        "side"
+    } else {
+        "radius"
+    };
+    let settings = file.into_settings(folder, kind);
     // The scene's parts are checked too (`SceneSpec::validate`).
-    settings
-        .validate()
-        .map_err(|e| at_key(text, &key_path(&e.name), &e.to_string()))?;
+    settings.validate().map_err(|e| {
+        let path = match &*e.name {
+            "light size" => vec!["light".to_owned(), size_key.to_owned()],
+            name => key_path(name),
+        };
+        at_key(text, &path, &e.to_string())
+    })?;
     Ok(settings)
 }
 
@@ -235,7 +246,9 @@ fn key_path(name: &str) -> Vec<String> {
         "light position" => &["light", "position"],
         "light power" => &["light", "power"],
         "light colour" => &["light", "colour"],
-        "light size" => &["light", "radius"],
+        "light aim" => &["light", "aim"],
+        "spot cutoff" => &["light", "cutoff"],
+        "spot beam" => &["light", "beam"],
         "roughness" => &["scene", "roughness"],
         "exposure" => &["display", "exposure"],
         "indirect light" => &["shading", "indirect_light"],
@@ -568,11 +581,124 @@ struct LightV2 {
     position: Floats<3>,
     power: f32,
     colour: Floats<3>,
-    /// The area light's size: the sphere's radius or the square's side.
-    radius: f32,
-    /// `point`, `sphere` or `quad`; a file without it means a sphere by any radius above 0.
+    /// `point`, `sphere`, `quad` or `spot`; a file without it means a sphere by any radius
+    /// above 0, else the point light.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     shape: Option<LightShape>,
+    /// The sphere's radius (0 or absent for the point light; required without a shape, and
+    /// read as a square's side in files written before `side`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    radius: Option<f32>,
+    /// The square's side.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    side: Option<f32>,
+    /// The spot's aim, cutoff and beam width (degrees; radians in version 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    aim: Option<Floats<3>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    cutoff: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    beam: Option<f64>,
+}
+
+impl LightV2 {
+    /// The file's light as written: its kind's own fields and none of another's (a field of
+    /// another kind is refused at its line, a missing one at the `[light]` table's).
+    fn of(l: &LightSpec) -> Self {
+        let mut light = LightV2 {
+            position: l.position.into(),
+            power: l.power,
+            colour: l.colour.into(),
+            shape: Some(l.kind.shape()),
+            radius: None,
+            side: None,
+            aim: None,
+            cutoff: None,
+            beam: None,
+        };
+        match l.kind {
+            LightKind::Point => {}
+            LightKind::Sphere { radius } => light.radius = Some(radius),
+            LightKind::Quad { side } => light.side = Some(side),
+            LightKind::Spot(cone) => {
+                light.aim = Some(cone.aim.into());
+                light.cutoff = Some(camera::degrees(cone.cutoff));
+                light.beam = Some(camera::degrees(cone.beam));
+            }
+        }
+        light
+    }
+
+    /// The light's kind, its fields checked against its shape; errors name the line and field.
+    fn kind(&self, angle: Angles, text: &str) -> Result<LightKind, String> {
+        let shape = self.shape;
+        let given = [
+            ("radius", self.radius.is_some()),
+            ("side", self.side.is_some()),
+            ("aim", self.aim.is_some()),
+            ("cutoff", self.cutoff.is_some()),
+            ("beam", self.beam.is_some()),
+        ];
+        let own: &[&str] = match shape {
+            None | Some(LightShape::Point) | Some(LightShape::Sphere) => &["radius"],
+            Some(LightShape::Quad) => &["side", "radius"],
+            Some(LightShape::Spot) => &["aim", "cutoff", "beam"],
+        };
+        let name = shape.map_or("point".to_owned(), |s| s.name().to_owned());
+        if let Some((field, _)) = given.iter().find(|(f, is)| *is && !own.contains(f)) {
+            return Err(at_key(
+                text,
+                &["light", field],
+                &format!(
+                    "light.{field}: a {name} light has no `{field}` (its fields: {})",
+                    own.join(", ")
+                ),
+            ));
+        }
+        let missing = |field: &str| {
+            at_key(
+                text,
+                &["light"],
+                &format!("missing field `{field}` in [light]: a {name} light needs it"),
+            )
+        };
+        Ok(match shape {
+            None => match self.radius.ok_or_else(|| missing("radius"))? {
+                radius if radius > 0.0 => LightKind::Sphere { radius },
+                _ => LightKind::Point,
+            },
+            Some(LightShape::Point) => match self.radius.unwrap_or(0.0) {
+                0.0 => LightKind::Point,
+                r => {
+                    return Err(at_key(
+                        text,
+                        &["light", "radius"],
+                        &format!(
+                            "invalid light size {r}: a point light has no size: for an area \
+                             light of this size choose the shape sphere or quad \
+                             (--light-shape), or give the size 0"
+                        ),
+                    ));
+                }
+            },
+            Some(LightShape::Sphere) => LightKind::Sphere {
+                radius: self.radius.ok_or_else(|| missing("radius"))?,
+            },
+            Some(LightShape::Quad) => match (self.side, self.radius) {
+                (Some(_), Some(_)) => {
+                    let why = "light.radius: a quad light's size is its `side`, given already";
+                    return Err(at_key(text, &["light", "radius"], why));
+                }
+                (Some(side), None) | (None, Some(side)) => LightKind::Quad { side },
+                (None, None) => return Err(missing("side")),
+            },
+            Some(LightShape::Spot) => LightKind::Spot(SpotCone {
+                aim: self.aim.ok_or_else(|| missing("aim"))?.into(),
+                cutoff: angle.radians(self.cutoff.ok_or_else(|| missing("cutoff"))?),
+                beam: angle.radians(self.beam.ok_or_else(|| missing("beam"))?),
+            }),
+        })
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -736,13 +862,7 @@ impl FileV2 {
                 aperture: c.aperture,
                 focus_distance: c.focus_distance,
             },
-            light: LightV2 {
-                position: l.position.into(),
-                power: l.power,
-                colour: l.colour.into(),
-                radius: l.radius,
-                shape: Some(l.shape),
-            },
+            light: LightV2::of(l),
             shading: ShadingV2 {
                 stage: sh.stage,
                 shadows: sh.shadows,
@@ -768,7 +888,7 @@ impl FileV2 {
     }
 
     /// The settings the file describes, its models' relative paths taken from `folder`.
-    fn into_settings(self, folder: &Path) -> RenderSettings {
+    fn into_settings(self, folder: &Path, kind: LightKind) -> RenderSettings {
         let angle = Angles::of_version(self.version);
         let scene = self.scene;
         let mut spec = SceneSpec {
@@ -830,16 +950,11 @@ impl FileV2 {
                 aperture: c.aperture,
                 focus_distance: c.focus_distance,
             },
-            light: PointLight {
+            light: LightSpec {
                 position: l.position.into(),
                 power: l.power,
                 colour: l.colour.into(),
-                radius: l.radius,
-                shape: l.shape.unwrap_or(if l.radius > 0.0 {
-                    LightShape::Sphere
-                } else {
-                    LightShape::Point
-                }),
+                kind,
             },
             shading: Shading {
                 stage: sh.stage,
@@ -919,8 +1034,7 @@ mod tests {
         s.light.position = Vec3::new(0.3, -0.7, 0.1);
         s.light.power = 21.5;
         s.light.colour = Vec3::new(1.0, 0.8, 0.6);
-        s.light.radius = 0.05;
-        s.light.shape = LightShape::Sphere;
+        s.light.kind = LightKind::Sphere { radius: 0.05 };
         s.shading = Shading::for_stage(Stage::Path);
         s.shading.bounces = Some(3);
         s.shading.indirect_light = Vec3::new(0.1, 0.2, 0.3);
@@ -1446,13 +1560,15 @@ mod tests {
     }
 
     /// A point light given a size, and an area light too small for its radiance to be an
-    /// `f32`, are refused at the radius's line, saying what to use instead.
+    /// `f32`, are refused at the radius's (or side's) line, saying what to use instead.
     #[test]
     fn a_point_light_with_a_size_or_a_tiny_area_light_is_refused_at_its_line() {
         let text = to_text(&RenderSettings::default(), Path::new("/x")).unwrap();
-        assert!(text.contains("radius = 0.0\nshape = \"point\"\n"), "{text}");
-        let line = line_number(&text, "radius = 0.0");
-        let e = error_of(|t| t.replace("radius = 0.0", "radius = 0.3"));
+        assert!(text.contains("shape = \"point\"\n"), "{text}");
+        assert!(!text.contains("radius"), "{text}");
+        let point = "shape = \"point\"";
+        let line = line_number(&text, point) + 1;
+        let e = error_of(|t| t.replace(point, "shape = \"point\"\nradius = 0.3"));
         assert_eq!(
             e,
             format!(
@@ -1461,18 +1577,120 @@ mod tests {
                  (--light-shape), or give the size 0"
             )
         );
-        for shape in ["sphere", "quad"] {
-            let e = error_of(|t| {
-                t.replace("radius = 0.0", "radius = 1e-30")
-                    .replace("shape = \"point\"", &format!("shape = \"{shape}\""))
-            });
+        for (shape, field) in [("sphere", "radius"), ("quad", "side"), ("quad", "radius")] {
+            let e =
+                error_of(|t| t.replace(point, &format!("shape = \"{shape}\"\n{field} = 1e-30")));
             assert!(
                 e.starts_with(&format!(
-                    "line {line} (radius = 1e-30): invalid light size 1e-30: must be 0 (the \
+                    "line {line} ({field} = 1e-30): invalid light size 1e-30: must be 0 (the \
                      point light) or between 0.001 and 1e6 (scene units)"
                 )),
                 "{e}"
             );
         }
+    }
+
+    /// Files written when a light was a `radius` and a `shape` still load as the same light:
+    /// a square's side given as its radius, no shape with a radius (a sphere) or radius 0 (the
+    /// point).
+    #[test]
+    fn old_lights_load_as_the_same_light() {
+        let point = "shape = \"point\"";
+        let read = |with: &str| {
+            let text = to_text(&RenderSettings::default(), Path::new("/x")).unwrap();
+            parse(&text.replace(point, with), Path::new("/x")).map(|s| s.light.kind)
+        };
+        assert_eq!(
+            read("radius = 0.5\nshape = \"quad\""),
+            Ok(LightKind::Quad { side: 0.5 })
+        );
+        assert_eq!(read("radius = 0.2"), Ok(LightKind::Sphere { radius: 0.2 }));
+        assert_eq!(read("radius = 0.0"), Ok(LightKind::Point));
+        assert_eq!(
+            read("radius = 0.0\nshape = \"point\""),
+            Ok(LightKind::Point)
+        );
+        // The scene files in the repository, written before, load.
+        for name in ["figure7", "gallery", "mirror"] {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../assets/scenes")
+                .join(format!("{name}.toml"));
+            let settings = load(&path).unwrap();
+            assert!(!settings.light.is_area() || name == "gallery", "{name}");
+        }
+    }
+
+    /// A spot light's fields: written in degrees and read back exactly; each missing one named
+    /// at the `[light]` table's line, one of another kind (a spot's `radius`, a sphere's `aim`)
+    /// at its own, values out of bounds at theirs with the settings' own reasons; version 1
+    /// reads the angles in radians.
+    #[test]
+    fn a_spot_light_in_a_scene_file() {
+        let mut s = RenderSettings::default();
+        s.light.kind = LightKind::Spot(SpotCone::default());
+        let text = to_text(&s, Path::new("/x")).unwrap();
+        assert!(
+            text.contains("shape = \"spot\"\naim = [0.0, 1.0, -0.2]\ncutoff = 25.0\nbeam = 15.0\n"),
+            "{text}"
+        );
+        assert_eq!(parse(&text, Path::new("/x")).unwrap(), s);
+        let at = |line: &str| line_number(&text, line);
+        let edit =
+            |from: &str, to: &str| parse(&text.replace(from, to), Path::new("/x")).unwrap_err();
+        let table = at("[light]");
+        assert_eq!(
+            edit("cutoff = 25.0\n", ""),
+            format!(
+                "line {table} ([light]): missing field `cutoff` in [light]: a spot light needs it"
+            )
+        );
+        assert_eq!(
+            edit("beam = 15.0", "beam = 15.0\nradius = 0.1"),
+            format!(
+                "line {} (radius = 0.1): light.radius: a spot light has no `radius` (its fields: \
+                 aim, cutoff, beam)",
+                at("beam = 15.0") + 1
+            )
+        );
+        assert_eq!(
+            edit("beam = 15.0", "beam = 30.0"),
+            format!(
+                "line {} (beam = 30.0): invalid spot beam 30° (cutoff 25°): must be from 0° to \
+                 the cutoff (--spot-beam, --spot-cutoff)",
+                at("beam = 15.0")
+            )
+        );
+        assert_eq!(
+            edit("cutoff = 25.0", "cutoff = 90.0"),
+            format!(
+                "line {} (cutoff = 90.0): invalid spot cutoff 90°: must be above 0° and below \
+                 90° (--spot-cutoff)",
+                at("cutoff = 25.0")
+            )
+        );
+        assert!(
+            edit("aim = [0.0, 1.0, -0.2]", "aim = [0.0, -0.5, -0.7]").starts_with(&format!(
+                "line {} (aim = [0.0, -0.5, -0.7]): invalid light aim",
+                at("aim = [0.0, 1.0, -0.2]")
+            )),
+        );
+        let sphere = text.replace("shape = \"spot\"", "shape = \"sphere\"\nradius = 0.1");
+        assert!(
+            parse(&sphere, Path::new("/x"))
+                .unwrap_err()
+                .contains("light.aim: a sphere light has no `aim`")
+        );
+        let v1 = text
+            .replace("version = 2", "version = 1")
+            .replace("cutoff = 25.0", "cutoff = 0.5")
+            .replace("beam = 15.0", "beam = 0.25");
+        assert_eq!(
+            parse(&v1, Path::new("/x")).unwrap().light.kind,
+            LightKind::Spot(SpotCone {
+                cutoff: 0.5,
+                beam: 0.25,
+                ..SpotCone::default()
+            })
+        );
     }
 }

@@ -21,7 +21,7 @@ use crate::invalid::check_path;
 
 use crate::camera::Camera;
 use crate::display::Display;
-use crate::light::PointLight;
+use crate::light::{LightKind, LightSpec};
 use crate::material::{DEFAULT_ROUGHNESS, MIN_ROUGHNESS, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
 
@@ -92,7 +92,7 @@ pub struct RenderSettings {
     pub scene: SceneChoice,
     /// The camera, including the image size.
     pub camera: Camera,
-    pub light: PointLight,
+    pub light: LightSpec,
     pub shading: Shading,
     /// Mirror, glass or rough metal for the Cornell box's blocks (none: the lab's diffuse box).
     pub material_preset: MaterialPreset,
@@ -126,7 +126,7 @@ impl Default for RenderSettings {
         Self {
             scene: SceneChoice::Cornell,
             camera: Camera::default(),
-            light: PointLight::default(),
+            light: LightSpec::default(),
             shading: Shading::default(),
             material_preset: MaterialPreset::None,
             roughness: DEFAULT_ROUGHNESS,
@@ -288,17 +288,25 @@ impl RenderSettings {
             }
             _ => {}
         }
-        if lit && self.light.is_area() {
-            let size = short(self.light.radius);
-            let light = match self.light.effective_shape() {
-                crate::light::LightShape::Quad => format!("a square light of side {size}"),
-                _ => format!("a light of radius {size}"),
-            };
+        let area = match self.light.kind {
+            LightKind::Sphere { radius } => Some(format!("a light of radius {}", short(radius))),
+            LightKind::Quad { side } => Some(format!("a square light of side {}", short(side))),
+            LightKind::Point | LightKind::Spot(_) => None,
+        };
+        if let (true, true, Some(light)) = (lit, self.light.is_area(), area) {
             if s.stage == Stage::Path {
                 add(format!("{light}, seen and sampled"));
             } else if s.shadows {
                 add(format!("soft shadows from {light}"));
             }
+        }
+        if let (true, LightKind::Spot(cone)) = (lit, self.light.kind) {
+            add(format!(
+                "a spot light aimed at {}, cutoff {}°, beam {}°",
+                vector(cone.aim),
+                crate::camera::degrees(cone.cutoff),
+                crate::camera::degrees(cone.beam)
+            ));
         }
         if lit && self.light.colour != Vec3::ONE {
             add("coloured light".to_owned());
@@ -543,25 +551,24 @@ fn check_vec(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
     }
 }
 
-/// The light's size: 0 (the lab's point light), or for a sphere or square a size from
-/// [`MIN_LIGHT_SIZE`] to [`MAX_LIGHT_SIZE`]; a point light has none (a size given to it would
-/// silently make it a sphere).
-fn check_light_size(light: &PointLight) -> Result<(), SettingsError> {
-    let size = light.radius;
+/// The light's parameters. A sphere's radius or a square's side: 0 (the lab's point light) or
+/// from [`MIN_LIGHT_SIZE`] to [`MAX_LIGHT_SIZE`]. A spot's aim: a finite point within
+/// [`MAX_COORDINATE`], at least [`MIN_LIGHT_DISTANCE`](crate::light::MIN_LIGHT_DISTANCE) from
+/// the light (aimed at itself it has no direction); its cutoff above 0 and below 90°, its beam
+/// width from 0 to the cutoff.
+fn check_light_size(light: &LightSpec) -> Result<(), SettingsError> {
+    let size = match light.kind {
+        LightKind::Point => return Ok(()),
+        LightKind::Sphere { radius } => radius,
+        LightKind::Quad { side } => side,
+        LightKind::Spot(cone) => return check_spot(light.position, cone),
+    };
     check_finite("light size", size)?;
     if size < 0.0 {
         return Err(err("light size", number(size), "must be ≥ 0"));
     }
     if size == 0.0 {
         return Ok(());
-    }
-    if light.shape == crate::light::LightShape::Point {
-        return Err(err(
-            "light size",
-            number(size),
-            "a point light has no size: for an area light of this size choose the shape \
-             sphere or quad (--light-shape), or give the size 0",
-        ));
     }
     if !(MIN_LIGHT_SIZE..=MAX_LIGHT_SIZE).contains(&size) {
         return Err(err(
@@ -570,6 +577,38 @@ fn check_light_size(light: &PointLight) -> Result<(), SettingsError> {
             "must be 0 (the point light) or between 0.001 and 1e6 (scene units): a smaller \
              sphere or square is brighter than the light's bounds allow; for a light that \
              small use the point light (--light-shape point)",
+        ));
+    }
+    Ok(())
+}
+
+/// A spot light's cone (see [`check_light_size`]); angles are shown in degrees.
+fn check_spot(position: Vec3, cone: crate::light::SpotCone) -> Result<(), SettingsError> {
+    check_position("light aim", cone.aim)?;
+    if !((cone.aim - position).length() >= crate::light::MIN_LIGHT_DISTANCE) {
+        return Err(err(
+            "light aim",
+            vector(cone.aim),
+            "must be at least 0.001 from the light's position: a spot aimed at itself has no \
+             direction (--light-aim)",
+        ));
+    }
+    let (cutoff, beam) = (cone.cutoff, cone.beam);
+    check_finite("spot cutoff", cutoff)?;
+    check_finite("spot beam", beam)?;
+    let deg = |a: f32| format!("{}°", crate::camera::degrees(a));
+    if !(cutoff > 0.0 && cutoff < std::f32::consts::FRAC_PI_2) {
+        return Err(err(
+            "spot cutoff",
+            deg(cutoff),
+            "must be above 0° and below 90° (--spot-cutoff)",
+        ));
+    }
+    if !(beam >= 0.0 && beam <= cutoff) {
+        return Err(err(
+            "spot beam",
+            format!("{} (cutoff {})", deg(beam), deg(cutoff)),
+            "must be from 0° to the cutoff (--spot-beam, --spot-cutoff)",
         ));
     }
     Ok(())
@@ -717,7 +756,7 @@ mod tests {
         let mut s = RenderSettings::default();
         assert_eq!(s.description(), "ρ·(D + N) (eq. 30) with shadows (§5.1)");
         s.texture_preset = TexturePreset::CheckerFloor;
-        s.light.radius = 0.15;
+        s.light.kind = LightKind::Sphere { radius: 0.15 };
         s.camera.aperture = 0.1;
         s.light.colour = Vec3::new(1.0, 0.5, 0.2);
         s.samples_per_pixel = 16;
@@ -741,7 +780,7 @@ mod tests {
         assert!(!s.description().contains("textured"), "{}", s.description());
         // The path tracer sees the area light itself; its samples are not anti-aliasing alone.
         s.shading = Shading::for_stage(Stage::Path);
-        s.light.shape = crate::light::LightShape::Quad;
+        s.light.kind = LightKind::Quad { side: 0.15 };
         let path = s.description();
         assert!(
             path.contains("· a square light of side 0.15, seen and sampled"),
@@ -834,7 +873,7 @@ mod tests {
         b.display.exposure = 2.0;
         b.display.transform = crate::display::DisplayTransform::Filmic;
         assert!(a.renders_like(&b) && b.renders_like(&a));
-        b.light.radius = 0.1;
+        b.light.kind = LightKind::Sphere { radius: 0.1 };
         assert!(!a.renders_like(&b));
     }
 
@@ -967,8 +1006,7 @@ mod tests {
         for shape in [LightShape::Sphere, LightShape::Quad] {
             for size in [1e-30, 5e-20, 1e-19, 1e-16, 1e-8, 9.9e-4, 1.1e6, 1e30] {
                 let mut s = RenderSettings::default();
-                s.light.shape = shape;
-                s.light.radius = size;
+                s.light.kind = LightKind::sized(shape, size);
                 let e = s.validate().unwrap_err();
                 assert_eq!(e.name, "light size", "{shape} {size}");
                 assert_eq!(e.value, number(size));
@@ -981,14 +1019,12 @@ mod tests {
             }
             for size in [0.0, MIN_LIGHT_SIZE, 0.1, MAX_LIGHT_SIZE] {
                 let mut s = RenderSettings::default();
-                s.light.shape = shape;
-                s.light.radius = size;
+                s.light.kind = LightKind::sized(shape, size);
                 s.validate().unwrap();
             }
         }
         let mut s = RenderSettings::default();
-        s.light.shape = LightShape::Sphere;
-        s.light.radius = 1e-30;
+        s.light.kind = LightKind::Sphere { radius: 1e-30 };
         assert_eq!(
             s.validate().unwrap_err().to_string(),
             "invalid light size 1e-30: must be 0 (the point light) or between 0.001 and 1e6 \
@@ -999,25 +1035,92 @@ mod tests {
 
     /// A size given to a point light is refused with what to do instead (it silently made a
     /// sphere, and a saved scene said `shape = "point"` with `radius = 0.3`); size 0 is the
-    /// point light itself.
+    /// point light itself. A file written before lights had shapes means a sphere by a
+    /// radius: still read so.
     #[test]
     fn a_point_light_with_a_size_is_refused() {
-        let mut s = RenderSettings::default();
-        s.light.radius = 0.3;
-        assert_eq!(s.light.shape, crate::light::LightShape::Point);
-        assert_eq!(
-            s.validate().unwrap_err().to_string(),
-            "invalid light size 0.3: a point light has no size: for an area light of this size \
-             choose the shape sphere or quad (--light-shape), or give the size 0"
-        );
-        s.light.radius = 0.0;
-        s.validate().unwrap();
-        // A file written before lights had shapes means a sphere by a radius: still read so.
         let old = from_json(r#"{"light": {"radius": 0.3}}"#).unwrap().settings;
-        assert_eq!(old.light.shape, crate::light::LightShape::Sphere);
+        assert_eq!(old.light.kind, LightKind::Sphere { radius: 0.3 });
         old.validate().unwrap();
-        let point = from_json(r#"{"light": {"radius": 0.3, "shape": "point"}}"#).unwrap();
-        assert_eq!(point.settings.validate().unwrap_err().name, "light size");
+        let e = from_json(r#"{"light": {"radius": 0.3, "shape": "point"}}"#).unwrap_err();
+        assert!(
+            e.to_string().contains(
+                "a point light has no size: for an area light of this size choose the shape \
+                 sphere or quad (--light-shape), or give the size 0"
+            ),
+            "{e}"
+        );
+        let zero = from_json(r#"{"light": {"radius": 0, "shape": "point"}}"#).unwrap();
+        assert_eq!(zero.settings.light.kind, LightKind::Point);
+    }
+
+    /// A spot light's cone is checked with errors naming the field, in degrees: aimed at its
+    /// own position, a cutoff of 0 or of 90° and more, a beam wider than the cutoff, a
+    /// coordinate that is not finite. The lab's spot passes.
+    #[test]
+    fn a_spot_light_out_of_bounds_is_refused() {
+        use crate::light::SpotCone;
+        let spot = |cone: SpotCone| {
+            let mut s = RenderSettings::default();
+            s.light.kind = LightKind::Spot(cone);
+            s.validate().map_err(|e| e.to_string())
+        };
+        let lab = SpotCone::default();
+        assert_eq!(spot(lab), Ok(()));
+        let aim = LightSpec::default().position;
+        assert_eq!(
+            spot(SpotCone { aim, ..lab }).unwrap_err(),
+            "invalid light aim (0, -0.5, -0.7): must be at least 0.001 from the light's \
+             position: a spot aimed at itself has no direction (--light-aim)"
+        );
+        let deg = |d: f64| crate::camera::radians(d);
+        assert_eq!(
+            spot(SpotCone {
+                cutoff: deg(90.0),
+                ..lab
+            })
+            .unwrap_err(),
+            "invalid spot cutoff 90°: must be above 0° and below 90° (--spot-cutoff)"
+        );
+        assert!(
+            spot(SpotCone {
+                cutoff: 0.0,
+                beam: 0.0,
+                ..lab
+            })
+            .is_err()
+        );
+        assert_eq!(
+            spot(SpotCone {
+                beam: deg(30.0),
+                ..lab
+            })
+            .unwrap_err(),
+            "invalid spot beam 30° (cutoff 25°): must be from 0° to the cutoff (--spot-beam, \
+             --spot-cutoff)"
+        );
+        assert!(
+            spot(SpotCone {
+                aim: Vec3::NAN,
+                ..lab
+            })
+            .is_err()
+        );
+        assert!(
+            spot(SpotCone {
+                beam: f32::NAN,
+                ..lab
+            })
+            .is_err()
+        );
+        assert_eq!(
+            spot(SpotCone {
+                beam: lab.cutoff,
+                ..lab
+            }),
+            Ok(())
+        );
+        assert_eq!(spot(SpotCone { beam: 0.0, ..lab }), Ok(()));
     }
 
     /// The smallest allowed area light with the largest power and colour, a few millimetres
@@ -1035,8 +1138,7 @@ mod tests {
             s.light.position = Vec3::new(0.5, 0.995, 0.3);
             s.light.power = MAX_LIGHT_POWER;
             s.light.colour = Vec3::splat(MAX_LIGHT_COLOUR);
-            s.light.shape = shape;
-            s.light.radius = MIN_LIGHT_SIZE;
+            s.light.kind = LightKind::sized(shape, MIN_LIGHT_SIZE);
             for stage in crate::Stage::ALL {
                 s.shading = crate::Shading::for_stage(stage);
                 s.shading.indirect = true;

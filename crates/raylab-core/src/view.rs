@@ -22,7 +22,7 @@ use crate::accel::{AccelKind, TraversalCost};
 use crate::film::{Film, Image};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::light::{PointLight, direct_light};
+use crate::light::{LightSpec, direct_light};
 use crate::render::{Cancelled, render_pass};
 use crate::scene::Scene;
 use crate::scene::in_shadow;
@@ -262,7 +262,7 @@ fn photons_view(scene: &Scene, settings: &RenderSettings) -> ViewImage {
 /// triangle needs it: [`crate::light::shadow_ray`]).
 pub fn shadow_state(
     scene: &Scene,
-    light: &PointLight,
+    light: &LightSpec,
     hit: &Intersection,
     incoming: Vec3,
     smooth: bool,
@@ -272,7 +272,7 @@ pub fn shadow_state(
     let geometric = scene.triangles[index].normal;
     // D for a light of unit power: zero exactly where equation 27 gives none, whatever the
     // light's real power (a light of power 0 still has a side it would light).
-    let unit = PointLight {
+    let unit = LightSpec {
         power: 1.0,
         colour: Vec3::ONE,
         ..*light

@@ -7,6 +7,7 @@
 //! back to the lab's point by the others). The workbench shows the steps with Previous / Next.
 
 use crate::integrator::{Shading, Stage};
+use crate::light::LightKind;
 use crate::material::{MaterialPreset, TexturePreset};
 use crate::settings::Caustics;
 use crate::settings::RenderSettings;
@@ -52,10 +53,13 @@ impl Step {
         settings.material_preset = s.materials;
         settings.texture_preset = TexturePreset::None;
         settings.samples_per_pixel = s.samples;
-        settings.light.radius = s.light_radius;
-        if s.light_radius > 0.0 {
-            settings.light.shape = crate::light::LightShape::Sphere;
-        }
+        settings.light.kind = if s.light_radius > 0.0 {
+            LightKind::Sphere {
+                radius: s.light_radius,
+            }
+        } else {
+            LightKind::Point
+        };
     }
 }
 
@@ -68,8 +72,7 @@ pub fn restore(before: &RenderSettings, settings: &mut RenderSettings) {
     settings.material_preset = before.material_preset;
     settings.texture_preset = before.texture_preset;
     settings.samples_per_pixel = before.samples_per_pixel;
-    settings.light.radius = before.light.radius;
-    settings.light.shape = before.light.shape;
+    settings.light.kind = before.light.kind;
 }
 
 /// The walk: the lab's figures 2, 3, 5, 6 and 7, then anti-aliasing, path tracing, soft shadows,
@@ -267,8 +270,7 @@ mod tests {
         user.material_preset = MaterialPreset::Glass;
         user.texture_preset = TexturePreset::GridWalls;
         user.samples_per_pixel = 5;
-        user.light.radius = 0.2;
-        user.light.shape = crate::light::LightShape::Quad;
+        user.light.kind = LightKind::Quad { side: 0.2 };
         for step in STEPS {
             let mut walked = user.clone();
             step.apply(&mut walked);

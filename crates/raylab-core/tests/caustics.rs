@@ -8,7 +8,7 @@ mod common;
 use common::{assert_same_image, on_threads};
 use glam::Vec3;
 use raylab_core::film::Image;
-use raylab_core::light::LightShape;
+use raylab_core::light::LightKind;
 use raylab_core::render::{render, render_pass};
 use raylab_core::scene::cornell_box;
 use raylab_core::settings::Caustics;
@@ -118,8 +118,7 @@ fn the_caustic_agrees_with_the_path_tracers_under_a_small_sphere() {
     let references: Vec<f64> = (0..32)
         .map(|seed| {
             let mut sphere = glass(128, Caustics::Off, 100 + seed);
-            sphere.light.shape = LightShape::Sphere;
-            sphere.light.radius = 0.05;
+            sphere.light.kind = LightKind::Sphere { radius: 0.05 };
             f64::from(mean(&render(&scene, &sphere), &region))
         })
         .collect();
@@ -159,8 +158,7 @@ fn photons_and_the_path_tracer_agree_under_a_sphere_light() {
     let settings = |caustics: Caustics, seed: u64| {
         let mut s = glass(4096, caustics, seed);
         s.camera = s.camera.with_resolution(32, 32);
-        s.light.shape = LightShape::Sphere;
-        s.light.radius = 0.1;
+        s.light.kind = LightKind::Sphere { radius: 0.1 };
         s.shading.photons = 2_000;
         s
     };

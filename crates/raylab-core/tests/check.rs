@@ -298,8 +298,7 @@ fn what_check_refuses() {
     let mut path = s.clone();
     path.shading.stage = Stage::Path;
     let mut area = s.clone();
-    area.light.radius = 0.1;
-    area.light.shape = raylab_core::light::LightShape::Sphere;
+    area.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.1 };
     let mut nan = s.clone();
     nan.camera.yaw = f32::NAN;
     for bad in [path, area, nan] {

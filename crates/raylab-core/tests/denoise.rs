@@ -82,7 +82,7 @@ fn texture_detail_is_kept_under_soft_shadows() {
     let scene_settings = |samples: u32, seed: u64| {
         let mut s = settings(Stage::Lab, 96);
         s.texture_preset = TexturePreset::Both;
-        s.light.radius = 0.1;
+        s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.1 };
         s.samples_per_pixel = samples;
         s.seed = seed;
         s
@@ -249,8 +249,7 @@ fn no_firefly_survives_denoising() {
     let side = 64u32;
     let mut s = settings(Stage::Path, side);
     s.material_preset = MaterialPreset::Both;
-    s.light.shape = raylab_core::light::LightShape::Sphere;
-    s.light.radius = 0.1;
+    s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.1 };
     s.samples_per_pixel = 64;
     let (raw, denoised) = on_threads(2, || render_denoised(&scene, &s));
     let denoised = denoised.unwrap();

@@ -91,10 +91,7 @@ fn r_is_the_rendered_pixel_in_every_configuration() {
                     let mut s = settings(stage, 12);
                     s.material_preset = preset;
                     s.texture_preset = texture;
-                    s.light.radius = radius;
-                    if radius > 0.0 {
-                        s.light.shape = raylab_core::light::LightShape::Sphere;
-                    }
+                    s.light.kind = raylab_core::light::LightKind::Sphere { radius };
                     s.camera.aperture = aperture;
                     s.seed = 7;
                     let what = format!("{stage} {preset} {texture} r={radius} a={aperture}");

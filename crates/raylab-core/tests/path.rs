@@ -14,7 +14,7 @@ use raylab_core::integrator::Tracer;
 use raylab_core::render::{render, render_pass};
 use raylab_core::sampling::{Rng, cosine_hemisphere, orthonormal_basis, uniform_hemisphere};
 use raylab_core::scene::{Scene, cornell_box};
-use raylab_core::{Material, MaterialPreset, PointLight, Stage};
+use raylab_core::{LightSpec, Material, MaterialPreset, Stage};
 
 /// With 0 bounces a path is the camera ray and the lab's direct term: the `shadows` stage
 /// (figure 6), bit for bit, at the pixel centres (sample 0).
@@ -80,9 +80,9 @@ fn a_closed_furnace_converges_to_its_analytic_value() {
     for (a, expected, samples) in [(0.5f32, 0.583333f64, 120_000u32), (0.8, 2.333333, 120_000)] {
         let scene = closed_box(a);
         let mut s = settings(Stage::Path, 8);
-        s.light = PointLight {
+        s.light = LightSpec {
             position: Vec3::ZERO,
-            ..PointLight::default()
+            ..LightSpec::default()
         };
         let tracer = Tracer::new(&scene, &s);
         let mut rng = Rng::new(99);

@@ -27,7 +27,7 @@ use crate::film::Image;
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, HitTerms, Recorder, Stage, Tracer};
 use crate::intersect::Intersection;
-use crate::light::{DirectLight, PointLight};
+use crate::light::{DirectLight, LightSpec};
 use crate::material::Scatter;
 use crate::named::named_enum;
 use crate::render::render;
@@ -431,7 +431,7 @@ impl Recorder for HitRecording {
 /// A hit's terms put together again, with a mistake.
 struct Recombine<'a> {
     scene: &'a Scene,
-    light: PointLight,
+    light: LightSpec,
     stage: Stage,
     shadows: bool,
     /// N, the constant indirect term in force (0 when off).
@@ -494,7 +494,7 @@ impl Recombine<'_> {
     }
 
     /// D (equation 27) as the mistake computes it, from the lab's own parts of the equation
-    /// ([`DirectLight::at`]: r², r̂·n̂, 4πr²) with `normal`.
+    /// ([`DirectLight::at`]: r², r̂·n̂, 4πr² and a spot's falloff) with `normal`.
     fn mistaken_d(&self, mistake: Mistake, position: Vec3, normal: Vec3) -> Vec3 {
         let parts = DirectLight::at(&self.light, position, normal);
         let cos = match mistake {
@@ -506,7 +506,8 @@ impl Recombine<'_> {
             Mistake::InverseR => 4.0 * PI * parts.r2.sqrt(),
             _ => parts.four_pi_r2,
         };
-        self.light.channel_power() * cos / area
+        // A spot's falloff is 1 for every other light: the product is `cos` itself.
+        self.light.channel_power() * (parts.falloff * cos) / area
     }
 
     /// Whether a hit given a mistaken D is in shadow: the lab's answer where it cast a shadow

@@ -278,7 +278,6 @@ fn features_serve_a_moved_light_but_not_a_moved_camera() {
     reseeded.seed += 1;
     assert!(!Features::serve(&settings, &reseeded));
     let mut sphere = settings.clone();
-    sphere.light.shape = crate::light::LightShape::Sphere;
-    sphere.light.radius = 0.1;
+    sphere.light.kind = crate::light::LightKind::Sphere { radius: 0.1 };
     assert!(!Features::serve(&settings, &sphere));
 }

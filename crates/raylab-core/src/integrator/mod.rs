@@ -50,7 +50,9 @@ use crate::film::Seen;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
-use crate::light::{AnyLight, DirectLight, PointLight, SHADOW_OFFSET, ShadowRays, shadow_rays_to};
+use crate::light::{
+    AnyLight, DirectLight, LightKind, LightSpec, SHADOW_OFFSET, ShadowRays, shadow_rays_to,
+};
 use crate::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::memory::with_thread_memory;
 use crate::photon_map::PhotonMap;
@@ -231,7 +233,7 @@ impl HitTerms {
     /// ([`light_point`]), called only when a shadow ray is cast.
     #[inline(always)]
     pub fn at(
-        light: &PointLight,
+        light: &LightSpec,
         stage: Stage,
         shadows: bool,
         surface: Surface,
@@ -378,7 +380,7 @@ impl<V: Vector> Lighting<V> {
     /// to block), every lane computes both sides and takes its own: the same bits.
     #[inline(always)]
     pub fn at(
-        light: &PointLight,
+        light: &LightSpec,
         stage: Stage,
         shadows: bool,
         surface: &Surfaces<V>,
@@ -529,9 +531,9 @@ impl Recorder for () {
 }
 
 /// The point of the light a shadow ray from `position` goes to: the centre of the lab's point
-/// light, or a point of an area light drawn from `rng` ([`PointLight::shadow_target`]).
+/// light, or a point of an area light drawn from `rng` ([`LightSpec::shadow_target`]).
 #[inline(always)]
-pub fn light_point(light: &PointLight, position: Vec3, rng: &mut Rng) -> Vec3 {
+pub fn light_point(light: &LightSpec, position: Vec3, rng: &mut Rng) -> Vec3 {
     if light.is_area() {
         light.shadow_target(position, rng.next_f32(), rng.next_f32())
     } else {
@@ -596,11 +598,11 @@ enum Primary<'a> {
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
     pub materials: Cow<'a, [Material]>,
-    pub light: PointLight,
+    pub light: LightSpec,
     /// The light as an emitter ([`Light`]): what the general path tracer samples and sees.
     emitter: AnyLight,
-    /// Whether the path stage needs the general path tracer ([`path_mis`]): an area light, or
-    /// a material the sixteen-lane one does not have (the rough metal).
+    /// Whether the path stage needs the general path tracer ([`path_mis`]): an area or spot
+    /// light, or a material the sixteen-lane one does not have (the rough metal).
     general: bool,
     pub shading: Shading,
     /// Whether anything draws random numbers: the path tracer, a spherical light's soft
@@ -627,8 +629,14 @@ impl<'a> Tracer<'a> {
             materials = Cow::Owned(settings.texture_preset.apply(&materials));
         }
         let random = settings.is_stochastic();
-        // Caustics by photons are gathered by the general path tracer.
-        let general = settings.light.is_area()
+        // The sixteen-lane path tracer knows the lab's point light alone; caustics by photons
+        // are gathered by the general path tracer.
+        let light_needs_general = match settings.light.kind {
+            LightKind::Point => false,
+            LightKind::Sphere { .. } | LightKind::Quad { .. } => settings.light.is_area(),
+            LightKind::Spot(_) => true,
+        };
+        let general = light_needs_general
             || settings.shading.photon_caustics()
             || materials
                 .iter()
@@ -1181,7 +1189,7 @@ mod tests {
     /// ρ·(D + N) = (0.130268, 0.651341, 0.130268).
     #[test]
     fn hit_terms_at_the_floor_centre() {
-        let light = PointLight::default();
+        let light = LightSpec::default();
         let floor = Vec3::new(0.0, -1.0, 0.0);
         let rho = Vec3::new(0.15, 0.75, 0.15);
         let p = Vec3::new(0.0, 1.0, 0.0);
@@ -1220,7 +1228,7 @@ mod tests {
     /// the box, smooth normals (on the lit side and the unlit one), zero normals, at edges of
     /// their triangles, the light within [`crate::light::MIN_LIGHT_DISTANCE`] or exactly on the
     /// point, behind the surface, and at infinity.
-    fn awkward_surfaces(light: &PointLight) -> Vec<Surface> {
+    fn awkward_surfaces(light: &LightSpec) -> Vec<Surface> {
         let mut rng = Rng::for_pixel_sample(7, 3, 5, 0);
         let mut r = move || rng.next_f32() * 2.0 - 1.0;
         let mut surfaces = Vec::new();
@@ -1256,14 +1264,14 @@ mod tests {
 
     /// A stand-in for a spherical light's point ([`light_point`]) that depends on the hit, so
     /// that the lanes must hand each its own.
-    fn sphere_point(light: &PointLight, p: Vec3) -> Vec3 {
+    fn sphere_point(light: &LightSpec, p: Vec3) -> Vec3 {
         light.position + 0.05 * p
     }
 
     /// [`Lighting::at`] sixteen at a time, with [`sphere_point`] for the lanes that want it.
     #[inline(always)]
     fn lit_lanes(
-        light: &PointLight,
+        light: &LightSpec,
         shading: &Shading,
         surfaces: &Surfaces<Vec3x16>,
         sphere: bool,
@@ -1292,7 +1300,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
     fn lit_lanes_avx512(
-        light: &PointLight,
+        light: &LightSpec,
         shading: &Shading,
         surfaces: &Surfaces<Vec3x16>,
         sphere: bool,
@@ -1304,7 +1312,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn lit_lanes_avx2(
-        light: &PointLight,
+        light: &LightSpec,
         shading: &Shading,
         surfaces: &Surfaces<Vec3x16>,
         sphere: bool,
@@ -1316,16 +1324,24 @@ mod tests {
     /// wave computes them, compiled portably and for each instruction set the CPU has) equal
     /// [`HitTerms::at`] one hit at a time, bit for bit: D, the shadow ray (whether it is cast,
     /// its origin, direction and length), the value blocked or not, in every stage with shadows
-    /// on and off, for the lab's light and a coloured one, with a point light and with a
+    /// on and off, for the lab's light, a coloured one and a spot, with a point light and with a
     /// stand-in for a spherical one's points (asked for exactly where the one-hit code asks).
     #[test]
     fn sixteen_hits_at_a_time_equal_one_at_a_time() {
-        let coloured = PointLight {
+        let coloured = LightSpec {
             position: Vec3::new(0.3, 0.9, 0.2),
             power: 3.5,
             colour: Vec3::new(1.0, 0.25, 0.0),
-            radius: 0.0,
-            shape: crate::light::LightShape::Point,
+            kind: LightKind::Point,
+        };
+        // A spot aimed so that the awkward surfaces lie in its beam, its falloff and outside.
+        let spot = LightSpec {
+            kind: LightKind::Spot(crate::light::SpotCone {
+                aim: Vec3::new(0.2, 1.0, 0.1),
+                cutoff: 0.6,
+                beam: 0.3,
+            }),
+            ..coloured
         };
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         let mut builds: Vec<(&str, LanesFn)> = vec![("portable", lit_lanes)];
@@ -1344,7 +1360,7 @@ mod tests {
             }
         }
         let mut cast = 0;
-        for light in [PointLight::default(), coloured] {
+        for light in [LightSpec::default(), coloured, spot] {
             let surfaces = awkward_surfaces(&light);
             for stage in Stage::LAB {
                 for shadows in [false, true] {
@@ -1408,7 +1424,7 @@ mod tests {
     }
 
     /// How the test calls one build of [`lit_lanes`].
-    type LanesFn = fn(&PointLight, &Shading, &Surfaces<Vec3x16>, bool) -> (Lighting<Vec3x16>, M16);
+    type LanesFn = fn(&LightSpec, &Shading, &Surfaces<Vec3x16>, bool) -> (Lighting<Vec3x16>, M16);
 
     /// The code compiled for the CPU (AVX2 and FMA, or AVX-512 where the kernels use it) gives
     /// bit for bit what the portable build gives, in every stage and with every preset (Rust
@@ -1511,7 +1527,7 @@ mod tests {
     /// time: on either side, at edges and not, and leaving along the surface itself.
     #[test]
     fn departures_sixteen_at_a_time_equal_one_at_a_time() {
-        let light = PointLight::default();
+        let light = LightSpec::default();
         let surfaces = awkward_surfaces(&light);
         let mut rng = Rng::new(31);
         for chunk in surfaces.chunks(LANES) {

@@ -332,7 +332,7 @@ mod tests {
     use super::*;
     use crate::camera::primary_rays;
     use crate::geometry::Triangle;
-    use crate::light::{LightShape, PointLight};
+    use crate::light::{LightKind, LightSpec};
     use crate::material::Material;
     use crate::scene::{Scene, cornell_box};
     use crate::settings::{RenderSettings, Shading, Stage};
@@ -471,11 +471,10 @@ mod tests {
 
     fn quad_settings(position: Vec3, side: f32) -> RenderSettings {
         let mut s = path_settings(1, None);
-        s.light = PointLight {
+        s.light = LightSpec {
             position,
-            shape: LightShape::Quad,
-            radius: side,
-            ..PointLight::default()
+            kind: LightKind::Quad { side },
+            ..LightSpec::default()
         };
         s
     }

@@ -5,6 +5,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use crate::camera::radians;
 use crate::geometry::{Ray, Triangle};
 use crate::lanes::{Mask, MaskOf, Real, Vector, select_lazy};
 use crate::named::named_enum;
@@ -17,13 +18,17 @@ mod point;
 mod quad;
 mod shape;
 mod sphere;
+mod spot;
 
 pub use interface::{Light, LightSample};
+pub use point::PointLight;
 pub use quad::QuadLight;
 pub use shape::{AnyLight, emitter};
 pub use sphere::SphereLight;
+pub use spot::{SpotLight, acos};
 
-/// The shape of the emitter the lab's light is turned into by [`emitter`].
+/// The kind of light, by name: what the command line's `--light-shape` and the workbench's
+/// selector choose ([`LightKind::of_shape`] makes the kind with its default parameters).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LightShape {
@@ -34,12 +39,15 @@ pub enum LightShape {
     Sphere,
     /// A square panel facing the floor ([`QuadLight`]): a Cornell box's ceiling light.
     Quad,
+    /// The point light given a direction ([`SpotLight`]): a cone of light.
+    Spot,
 }
 
 named_enum!(LightShape as "light shape" {
     Point => "point", "Point (the lab)";
     Sphere => "sphere", "Sphere";
     Quad => "quad", "Square (quad)";
+    Spot => "spot", "Spot";
 });
 
 /// The sphere light's radius when only its shape is chosen.
@@ -55,128 +63,227 @@ pub const MIN_LIGHT_DISTANCE: f32 = 1e-3;
 /// hit point can't make the surface shadow itself ("shadow acne"), far below a pixel's size.
 pub const SHADOW_OFFSET: f32 = 1e-4;
 
-/// The lab's light: a point at `position` sending `power` watts equally in all directions, in
-/// the colour `colour` (so `power · colour` per channel, the lab's `lightColor = 14·(1, 1, 1)`).
+/// What the light is, with the parameters of its kind. Every kind sits at the light's
+/// `position` and emits the total power of the lab's omni light, `power · colour`, or for the
+/// spot the omni light's intensity `power · colour / (4π)` inside its cone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// The lab's point light (section 5).
+    Point,
+    /// A sphere of this radius (scene units) about the position, emitting from its surface; a
+    /// radius of 0 is the point light.
+    Sphere { radius: f32 },
+    /// A square of this side (scene units) centred on the position, facing the floor (+y); a
+    /// side of 0 is the point light.
+    Quad { side: f32 },
+    /// A spot light ([`SpotLight`]): the point light aimed at a point, with a cone.
+    Spot(SpotCone),
+}
+
+/// A spot light's cone: the point it is aimed at, the cutoff angle beyond which it sends
+/// nothing and the beam width within which it sends its full intensity (radians, measured
+/// from the axis; 0 ≤ beam ≤ cutoff < 90°). Between the two its intensity falls linearly in
+/// the angle (Mitsuba 3's `spot`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotCone {
+    /// The point the spot is aimed at (its axis runs from the light's position to it).
+    pub aim: Vec3,
+    /// The cutoff angle, in radians.
+    pub cutoff: f32,
+    /// The beam width, in radians.
+    pub beam: f32,
+}
+
+impl Default for SpotCone {
+    /// Aimed from the lab's light at (0, 1, −0.2) on the floor, cutoff 25°, beam width 15°.
+    fn default() -> Self {
+        Self {
+            aim: Vec3::new(0.0, 1.0, -0.2),
+            cutoff: radians(25.0),
+            beam: radians(15.0),
+        }
+    }
+}
+
+impl LightKind {
+    /// The kind's name ([`LightShape`]).
+    pub fn shape(&self) -> LightShape {
+        match self {
+            LightKind::Point => LightShape::Point,
+            LightKind::Sphere { .. } => LightShape::Sphere,
+            LightKind::Quad { .. } => LightShape::Quad,
+            LightKind::Spot(_) => LightShape::Spot,
+        }
+    }
+
+    /// The kind of this `shape` with its default parameters.
+    pub fn of_shape(shape: LightShape) -> Self {
+        match shape {
+            LightShape::Point => LightKind::Point,
+            LightShape::Sphere => LightKind::Sphere {
+                radius: DEFAULT_SPHERE_RADIUS,
+            },
+            LightShape::Quad => LightKind::Quad {
+                side: DEFAULT_QUAD_SIDE,
+            },
+            LightShape::Spot => LightKind::Spot(SpotCone::default()),
+        }
+    }
+
+    /// An area light's size (the sphere's radius, the square's side); 0 for the point and the
+    /// spot, which have none.
+    pub fn size(&self) -> f32 {
+        match *self {
+            LightKind::Sphere { radius } => radius,
+            LightKind::Quad { side } => side,
+            LightKind::Point | LightKind::Spot(_) => 0.0,
+        }
+    }
+
+    /// The kind `shape` of area size `size`: [`LightKind::of_shape`] with the sphere's radius
+    /// or the square's side set to `size` (ignored by the point and the spot).
+    pub fn sized(shape: LightShape, size: f32) -> Self {
+        match shape {
+            LightShape::Sphere => LightKind::Sphere { radius: size },
+            LightShape::Quad => LightKind::Quad { side: size },
+            LightShape::Point | LightShape::Spot => LightKind::of_shape(shape),
+        }
+    }
+}
+
+/// The scene's light: at `position`, `power` watts in the colour `colour` (so `power · colour`
+/// per channel, the lab's `lightColor = 14·(1, 1, 1)`), of the kind `kind`.
 ///
-/// Its `shape` may make it an area light of the same total power: a sphere of radius `radius`
-/// or a square of side `radius` facing the floor ([`emitter`] makes the [`Light`] each is). The
-/// lab's stages keep equation 27 from the centre for every shape and aim the shadow rays at
-/// points of the shape ([`PointLight::shadow_target`]); the path tracer sees the real emitter.
-///
-/// With a `radius` above 0 it is a sphere of that radius, emitting the same total power
-/// uniformly from its surface (soft shadows, one of the lab's extensions); the sphere is not
-/// drawn, only its light is seen. Radius 0 is the lab's point light.
+/// [`LightSpec::emitter`] makes the [`Light`] it is. The lab's stages use equation 27 from the
+/// position for every kind (times the spot's falloff, [`DirectLight`]) and aim the shadow rays
+/// at points of the light ([`LightSpec::shadow_target`]); the path tracers see the real emitter.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(from = "LightFields")]
-pub struct PointLight {
+#[serde(try_from = "LightFields", into = "LightFields")]
+pub struct LightSpec {
     pub position: Vec3,
-    /// Total emitted power P, in watts.
+    /// Total emitted power P, in watts (for a spot, the power of the omni light of its
+    /// intensity: I = P / (4π)).
     pub power: f32,
     /// The light's colour: the power per channel is `power · colour`.
     pub colour: Vec3,
-    /// The size of an area light in scene units: the sphere's radius or the square's side
-    /// (0 makes any shape the lab's point light; a point with a radius is a sphere).
-    pub radius: f32,
-    /// The light's shape: the lab's point, a sphere or a square.
-    pub shape: LightShape,
+    /// What the light is: point, sphere, square or spot, with its parameters.
+    pub kind: LightKind,
 }
 
-impl Default for PointLight {
+impl Default for LightSpec {
     /// The lab's light: at (0, −0.5, −0.7), 14 W, white, a point.
     fn default() -> Self {
         Self {
             position: Vec3::new(0.0, -0.5, -0.7),
             power: 14.0,
             colour: Vec3::ONE,
-            radius: 0.0,
-            shape: LightShape::Point,
+            kind: LightKind::Point,
         }
     }
 }
 
-impl PointLight {
+impl LightSpec {
     /// The power per colour channel, `P · colour`, in watts: the lab's `lightColor`.
     #[inline(always)]
     pub fn channel_power(&self) -> Vec3 {
         self.colour * self.power
     }
 
-    /// Whether the light is an area light, not the lab's point: any size above 0 (a point
-    /// given a radius is the sphere of that radius, as the lab's extension had it).
+    /// Whether the light is an area light: a sphere or square of a size above 0.
     #[inline]
     pub fn is_area(&self) -> bool {
-        self.radius > 0.0
+        self.kind.size() > 0.0
     }
 
-    /// The shape the light really has: a point with a radius is a sphere.
-    pub fn effective_shape(&self) -> LightShape {
-        match (self.is_area(), self.shape) {
-            (false, _) => LightShape::Point,
-            (true, LightShape::Point) => LightShape::Sphere,
-            (true, shape) => shape,
+    /// The spot light this is, if it is one.
+    #[inline]
+    pub fn spot(&self) -> Option<SpotLight> {
+        match self.kind {
+            LightKind::Spot(cone) => {
+                Some(SpotLight::new(self.position, self.channel_power(), cone))
+            }
+            LightKind::Point | LightKind::Sphere { .. } | LightKind::Quad { .. } => None,
         }
     }
 
     /// The emitter this light is, behind the [`Light`] interface.
     pub fn emitter(&self) -> AnyLight {
-        emitter(self, self.effective_shape(), self.radius)
+        emitter(self)
     }
 
     /// The point a lab-stage shadow ray from `position` aims at (`u1`, `u2` uniform in
-    /// [0, 1)): the centre of the point light, a point of the sphere's near side
-    /// ([`PointLight::sample_point`]) or a point drawn uniformly on the square. The share of
-    /// such points a surface sees unblocked estimates how much of the light it sees.
+    /// [0, 1)): the position of the point and spot lights, a point of the sphere's near side
+    /// ([`sphere_point`]) or a point drawn uniformly on the square. The share of such points a
+    /// surface sees unblocked estimates how much of the light it sees.
     #[inline]
     pub fn shadow_target(&self, position: Vec3, u1: f32, u2: f32) -> Vec3 {
-        match self.effective_shape() {
-            LightShape::Sphere => self.sample_point(position, u1, u2),
-            LightShape::Quad => self.position + self.radius * Vec3::new(u1 - 0.5, 0.0, u2 - 0.5),
-            LightShape::Point => self.position,
+        match self.kind {
+            LightKind::Sphere { radius } if radius > 0.0 => {
+                sphere_point(self.position, radius, position, u1, u2)
+            }
+            LightKind::Quad { side } if side > 0.0 => {
+                self.position + side * Vec3::new(u1 - 0.5, 0.0, u2 - 0.5)
+            }
+            LightKind::Point | LightKind::Sphere { .. } | LightKind::Quad { .. } => self.position,
+            LightKind::Spot(_) => self.position,
         }
-    }
-
-    /// A point of the light for a shadow ray from `position`: the centre for the point light,
-    /// else a point of the sphere's near side, in a direction drawn uniformly from the cone the
-    /// sphere fills as seen from `position` (`u1`, `u2` uniform in [0, 1)). The share of such
-    /// points a surface point sees unblocked estimates the fraction of the light it sees. Seen
-    /// from inside the sphere, the centre.
-    pub fn sample_point(&self, position: Vec3, u1: f32, u2: f32) -> Vec3 {
-        let to_centre = self.position - position;
-        let d2 = to_centre.length_squared();
-        let r2 = self.radius * self.radius;
-        if !(d2 > r2) {
-            return self.position;
-        }
-        let d = d2.sqrt();
-        let axis = to_centre / d;
-        let sin2_max = r2 / d2;
-        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-        let local = uniform_cone(u1, u2, cos_max);
-        let (t1, t2) = orthonormal_basis(axis);
-        let direction = local.x * t1 + local.y * t2 + local.z * axis;
-        // The nearer crossing of the sphere along `direction`.
-        let cos = local.z;
-        let sin2 = (1.0 - cos * cos).max(0.0);
-        let t = d * cos - (r2 - d2 * sin2).max(0.0).sqrt();
-        position + t * direction
     }
 }
 
-/// What a settings file may hold for the light: `power` as watts (`14`) or, as files written
-/// before the light had a colour, as watts per channel (`[14, 14, 14]`), which is read as the
-/// largest channel's power and the colour it makes.
-#[derive(Deserialize)]
+/// A point of the sphere of `radius` about `centre` for a shadow ray from `position`: a point
+/// of its near side, in a direction drawn uniformly from the cone the sphere fills as seen
+/// from `position` (`u1`, `u2` uniform in [0, 1)). The share of such points a surface point
+/// sees unblocked estimates the fraction of the light it sees. Seen from inside the sphere
+/// (or for radius 0), the centre.
+pub fn sphere_point(centre: Vec3, radius: f32, position: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let to_centre = centre - position;
+    let d2 = to_centre.length_squared();
+    let r2 = radius * radius;
+    if !(d2 > r2) {
+        return centre;
+    }
+    let d = d2.sqrt();
+    let axis = to_centre / d;
+    let sin2_max = r2 / d2;
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+    let local = uniform_cone(u1, u2, cos_max);
+    let (t1, t2) = orthonormal_basis(axis);
+    let direction = local.x * t1 + local.y * t2 + local.z * axis;
+    // The nearer crossing of the sphere along `direction`.
+    let cos = local.z;
+    let sin2 = (1.0 - cos * cos).max(0.0);
+    let t = d * cos - (r2 - d2 * sin2).max(0.0).sqrt();
+    position + t * direction
+}
+
+/// What a settings file holds for the light: the kind's name as `shape` and its parameters as
+/// fields of their own (`radius` for a sphere, `side` for a square; `aim`, `cutoff` and `beam`,
+/// in radians, for a spot). Files written before may give `power` as watts per channel
+/// (`[14, 14, 14]`, read as the largest channel's power and the colour it makes), `radius` for
+/// a square's side, a radius with no shape (a sphere), or any shape with size 0 (the point);
+/// a point light with a size is refused.
+#[derive(Serialize, Deserialize)]
 #[serde(default)]
 struct LightFields {
     position: Vec3,
     power: PowerField,
+    #[serde(skip_serializing_if = "Option::is_none")]
     colour: Option<Vec3>,
-    radius: f32,
-    /// Files written before lights had shapes meant a sphere by any radius above 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     shape: Option<LightShape>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    radius: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    side: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    aim: Option<Vec3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    cutoff: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    beam: Option<f32>,
 }
 
-#[derive(Deserialize)]
+#[derive(Serialize, Deserialize)]
 #[serde(untagged)]
 enum PowerField {
     Watts(f32),
@@ -184,20 +291,53 @@ enum PowerField {
 }
 
 impl Default for LightFields {
+    /// The lab's light where a file gives no value; no colour or shape, so that the power's
+    /// form and the radius decide them.
     fn default() -> Self {
-        let light = PointLight::default();
-        Self {
+        let light = LightSpec::default();
+        LightFields {
             position: light.position,
             power: PowerField::Watts(light.power),
             colour: None,
-            radius: light.radius,
             shape: None,
+            radius: None,
+            side: None,
+            aim: None,
+            cutoff: None,
+            beam: None,
         }
     }
 }
 
-impl From<LightFields> for PointLight {
-    fn from(f: LightFields) -> Self {
+impl From<LightSpec> for LightFields {
+    fn from(l: LightSpec) -> Self {
+        let mut f = LightFields {
+            position: l.position,
+            power: PowerField::Watts(l.power),
+            colour: Some(l.colour),
+            shape: Some(l.kind.shape()),
+            radius: None,
+            side: None,
+            aim: None,
+            cutoff: None,
+            beam: None,
+        };
+        match l.kind {
+            LightKind::Point => {}
+            LightKind::Sphere { radius } => f.radius = Some(radius),
+            LightKind::Quad { side } => f.side = Some(side),
+            LightKind::Spot(cone) => {
+                (f.aim, f.cutoff, f.beam) = (Some(cone.aim), Some(cone.cutoff), Some(cone.beam))
+            }
+        }
+        f
+    }
+}
+
+impl TryFrom<LightFields> for LightSpec {
+    type Error = String;
+
+    fn try_from(f: LightFields) -> Result<Self, String> {
         let (power, colour) = match f.power {
             PowerField::Watts(p) => (p, f.colour.unwrap_or(Vec3::ONE)),
             PowerField::PerChannel(v) => {
@@ -206,17 +346,38 @@ impl From<LightFields> for PointLight {
                 (p, f.colour.unwrap_or(from_channels))
             }
         };
-        Self {
+        let radius = f.radius.unwrap_or(0.0);
+        let kind = match f.shape {
+            // Before lights had shapes, a radius above 0 meant a sphere.
+            None if radius > 0.0 => LightKind::Sphere { radius },
+            Some(LightShape::Point) if radius != 0.0 => {
+                return Err(format!(
+                    "the light's radius {radius}: a point light has no size: for an area light \
+                     of this size choose the shape sphere or quad (--light-shape), or give the \
+                     size 0"
+                ));
+            }
+            None | Some(LightShape::Point) => LightKind::Point,
+            Some(LightShape::Sphere) => LightKind::Sphere { radius },
+            // Before a square had its side, `radius` held it.
+            Some(LightShape::Quad) => LightKind::Quad {
+                side: f.side.unwrap_or(radius),
+            },
+            Some(LightShape::Spot) => {
+                let default = SpotCone::default();
+                LightKind::Spot(SpotCone {
+                    aim: f.aim.unwrap_or(default.aim),
+                    cutoff: f.cutoff.unwrap_or(default.cutoff),
+                    beam: f.beam.unwrap_or(default.beam),
+                })
+            }
+        };
+        Ok(Self {
             position: f.position,
             power,
             colour,
-            radius: f.radius,
-            shape: f.shape.unwrap_or(if f.radius > 0.0 {
-                LightShape::Sphere
-            } else {
-                LightShape::Point
-            }),
-        }
+            kind,
+        })
     }
 }
 
@@ -225,11 +386,13 @@ impl From<LightFields> for PointLight {
 ///
 /// `D = P · max(r̂ · n̂, 0) / (4π r²)`
 ///
-/// where `r` is the distance to the light and `r̂` the unit direction toward it. A point facing
-/// away from the light (or a zero normal) gets 0. For `r` below [`MIN_LIGHT_DISTANCE`] the
-/// light is treated as that far away and straight above the surface.
+/// where `r` is the distance to the light and `r̂` the unit direction toward it; for a spot
+/// light `D = I(θ) · max(r̂ · n̂, 0) / r²` with `I(θ) = P · falloff(θ) / (4π)`
+/// ([`SpotLight::falloff`]). A point facing away from the light (or a zero normal) gets 0. For
+/// `r` below [`MIN_LIGHT_DISTANCE`] the light is treated as that far away and straight above
+/// the surface (and the spot's falloff as 1).
 #[inline(always)]
-pub fn direct_light(light: &PointLight, position: Vec3, normal: Vec3) -> Vec3 {
+pub fn direct_light(light: &LightSpec, position: Vec3, normal: Vec3) -> Vec3 {
     DirectLight::at(light, position, normal).d
 }
 
@@ -250,6 +413,8 @@ pub struct DirectLight<V: Vector = Vec3> {
     pub cos: V::Real,
     /// 4πr².
     pub four_pi_r2: V::Real,
+    /// The spot light's falloff toward the point (1 for every other light).
+    pub falloff: V::Real,
     /// D.
     pub d: V,
 }
@@ -266,7 +431,7 @@ impl<V: Vector> DirectLight<V> {
     /// Both sides of the [`MIN_LIGHT_DISTANCE`] test are computed and each lane takes its own
     /// (see [`crate::lanes`]): the same bits as a branch.
     #[inline(always)]
-    pub fn at(light: &PointLight, position: V, normal: V) -> Self {
+    pub fn at(light: &LightSpec, position: V, normal: V) -> Self {
         let to_light = V::splat(light.position) - position;
         let r2 = to_light.length_squared();
         let min_r2 = V::Real::splat(MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE);
@@ -277,6 +442,18 @@ impl<V: Vector> DirectLight<V> {
             normal.length(),
             (to_light / r2.sqrt()).dot(normal)
         );
+        let one = V::Real::splat(1.0);
+        let (falloff, lit) = match light.kind {
+            LightKind::Spot(cone) => {
+                let spot = SpotLight::new(light.position, light.channel_power(), cone);
+                let towards = -(to_light.dot(V::splat(spot.axis)) / r2.sqrt());
+                let falloff = V::Real::select(near, one, spot.falloff(towards));
+                (falloff, falloff * cos.simd_max(V::Real::ZERO))
+            }
+            LightKind::Point | LightKind::Sphere { .. } | LightKind::Quad { .. } => {
+                (one, cos.simd_max(V::Real::ZERO))
+            }
+        };
         let r2 = V::Real::select(near, min_r2, r2);
         let four_pi_r2 = V::Real::splat(4.0 * PI) * r2;
         Self {
@@ -284,7 +461,8 @@ impl<V: Vector> DirectLight<V> {
             r2,
             cos,
             four_pi_r2,
-            d: V::splat(light.channel_power()) * cos.simd_max(V::Real::splat(0.0)) / four_pi_r2,
+            falloff,
+            d: V::splat(light.channel_power()) * lit / four_pi_r2,
         }
     }
 }
@@ -352,7 +530,7 @@ pub fn near_an_edge<R: Real>(zones: [R; 3], u: R, v: R) -> R::Mask {
 /// shadow ray grazing a block's edge may go either way, and moving its start would turn some.)
 #[inline]
 pub fn shadow_ray(
-    light: &PointLight,
+    light: &LightSpec,
     position: Vec3,
     normal: Vec3,
     at_edge: Option<Vec3>,
@@ -360,7 +538,7 @@ pub fn shadow_ray(
     shadow_ray_to(light.position, position, normal, at_edge)
 }
 
-/// [`shadow_ray`] toward any point `target` of the light (see [`PointLight::sample_point`]):
+/// [`shadow_ray`] toward any point `target` of the light (see [`sphere_point`]):
 /// [`shadow_rays_to`] for one point.
 #[inline]
 pub fn shadow_ray_to(
@@ -470,10 +648,10 @@ mod tests {
     fn direct_light_straight_below_the_light() {
         // Light at (0,0,0) with P = 4π W per channel; a floor point 2 below, normal facing it:
         // r = 2, r̂·n̂ = 1, D = 4π·1 / (4π·2²) = 0.25.
-        let light = PointLight {
+        let light = LightSpec {
             position: Vec3::ZERO,
             power: 4.0 * PI,
-            ..PointLight::default()
+            ..LightSpec::default()
         };
         let d = direct_light(&light, Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
         assert!(close(d, Vec3::splat(0.25), 1e-7), "{d}");
@@ -486,7 +664,7 @@ mod tests {
         // r̂·n̂ = 1.5 / 1.655295 = 0.906183.
         // D = 14 · 0.906183 / (4π · 2.74) = 12.686562 / 34.431855 = 0.368454.
         let d = direct_light(
-            &PointLight::default(),
+            &LightSpec::default(),
             Vec3::new(0.0, 1.0, 0.0),
             Vec3::new(0.0, -1.0, 0.0),
         );
@@ -500,7 +678,7 @@ mod tests {
         // r̂·n̂ = 1.7 / 1.841195 = 0.923314.
         // D = 14 · 0.923314 / (4π · 3.39) = 12.926396 / 42.599996 = 0.303437.
         let d = direct_light(
-            &PointLight::default(),
+            &LightSpec::default(),
             Vec3::new(0.5, 0.0, 1.0),
             Vec3::new(0.0, 0.0, -1.0),
         );
@@ -512,7 +690,7 @@ mod tests {
         // The floor point below the light, with its normal reversed (facing down, away from the
         // light): r̂·n̂ = −0.906 < 0, so max(r̂·n̂, 0) = 0.
         let d = direct_light(
-            &PointLight::default(),
+            &LightSpec::default(),
             Vec3::new(0.0, 1.0, 0.0),
             Vec3::new(0.0, 1.0, 0.0),
         );
@@ -521,9 +699,9 @@ mod tests {
 
     #[test]
     fn light_on_the_surface_is_finite() {
-        let light = PointLight {
+        let light = LightSpec {
             position: Vec3::new(0.0, 1.0, 0.0),
-            ..PointLight::default()
+            ..LightSpec::default()
         };
         let n = Vec3::new(0.0, -1.0, 0.0);
         for p in [Vec3::new(0.0, 1.0, 0.0), Vec3::new(1e-9, 1.0, 0.0)] {
@@ -552,7 +730,7 @@ mod tests {
         // Points on the edge where the left wall (x = −1) meets the ceiling (y = −1), lit from
         // inside the box: lifting off one wall leaves the point in the other wall's plane.
         let scene = cornell_box();
-        let light = PointLight::default();
+        let light = LightSpec::default();
         for z in [-0.9, -0.248, 0.0, 0.5, 0.99] {
             let p = Vec3::new(-1.0, -1.0, z);
             for n in [Vec3::X, Vec3::Y] {
@@ -596,13 +774,13 @@ mod tests {
     #[test]
     fn corners_are_shadowed_by_the_wall_they_touch_from_a_light_outside() {
         let scene = cornell_box();
-        let outside_right = PointLight {
+        let outside_right = LightSpec {
             position: Vec3::new(1.5, 0.0, 0.0),
-            ..PointLight::default()
+            ..LightSpec::default()
         };
-        let above = PointLight {
+        let above = LightSpec {
             position: Vec3::new(-0.5, -1.5, 0.0),
-            ..PointLight::default()
+            ..LightSpec::default()
         };
         for z in [-0.9, -0.248, 0.0, 0.5, 0.99] {
             // The floor's normal faces the light above it: D > 0, so only the shadow ray can
@@ -623,7 +801,7 @@ mod tests {
         // y = −0.19. The segment from the floor point (−0.45, 1, 0.9) to the light
         // (0, −0.5, −0.7) passes (−0.32, 0.55, 0.42) at 30% of the way: inside the block.
         let scene = cornell_box();
-        let light = PointLight::default();
+        let light = LightSpec::default();
         let p = Vec3::new(-0.45, 1.0, 0.9);
         let n = Vec3::new(0.0, -1.0, 0.0);
         assert!(in_shadow(&scene, &light, p, n, None));
@@ -643,22 +821,20 @@ mod tests {
     /// point; radius 0 gives the centre, the lab's point light.
     #[test]
     fn sampled_points_lie_on_the_near_side_of_the_sphere() {
-        let mut light = PointLight::default();
+        let light = LightSpec::default();
         let p = Vec3::new(0.3, 1.0, 0.2);
-        assert_eq!(light.sample_point(p, 0.4, 0.9), light.position);
-        light.radius = 0.2;
+        let c = light.position;
+        assert_eq!(sphere_point(c, 0.0, p, 0.4, 0.9), c);
+        assert_eq!(light.shadow_target(p, 0.4, 0.9), c);
         let mut rng = crate::sampling::Rng::new(5);
         for _ in 0..1000 {
-            let q = light.sample_point(p, rng.next_f32(), rng.next_f32());
-            assert!(((q - light.position).length() - 0.2).abs() < 1e-5, "{q}");
+            let q = sphere_point(c, 0.2, p, rng.next_f32(), rng.next_f32());
+            assert!(((q - c).length() - 0.2).abs() < 1e-5, "{q}");
             // The near side: the sphere's normal at q faces p.
-            assert!((q - light.position).dot(p - q) >= -1e-5, "{q}");
+            assert!((q - c).dot(p - q) >= -1e-5, "{q}");
         }
         // Inside the sphere: the centre.
-        assert_eq!(
-            light.sample_point(light.position + 0.1 * Vec3::X, 0.5, 0.5),
-            light.position
-        );
+        assert_eq!(sphere_point(c, 0.2, c + 0.1 * Vec3::X, 0.5, 0.5), c);
     }
 
     /// The share of a spherical light seen past a straight edge converges to the analytic
@@ -679,11 +855,10 @@ mod tests {
     /// Simpson's rule.
     #[test]
     fn the_fraction_of_a_sphere_seen_past_an_edge_matches_the_analytic_one() {
-        let light = PointLight {
+        let light = LightSpec {
             position: Vec3::new(0.0, 0.0, 2.0),
-            radius: 0.5,
-            shape: LightShape::Point,
-            ..PointLight::default()
+            kind: LightKind::Sphere { radius: 0.5 },
+            ..LightSpec::default()
         };
         let alpha = (0.5f64 / 2.0).asin();
         let analytic_seen = |h: f64| {
@@ -720,7 +895,7 @@ mod tests {
             let samples = 100_000;
             let mut seen = 0;
             for _ in 0..samples {
-                let q = light.sample_point(p, rng.next_f32(), rng.next_f32());
+                let q = light.shadow_target(p, rng.next_f32(), rng.next_f32());
                 let (ray, t_max) = shadow_ray_to(q, p, n, None).unwrap();
                 if !scene.occluded(&ray, t_max) {
                     seen += 1;
@@ -744,19 +919,71 @@ mod tests {
 
     #[test]
     fn old_settings_with_power_per_channel_still_load() {
-        let old: PointLight =
+        let old: LightSpec =
             serde_json::from_str(r#"{"position": [0, 0, 0], "power": [14, 7, 0]}"#).unwrap();
         assert_eq!(old.power, 14.0);
         assert_eq!(old.colour, Vec3::new(1.0, 0.5, 0.0));
         assert_eq!(old.channel_power(), Vec3::new(14.0, 7.0, 0.0));
-        let new: PointLight =
+        let new: LightSpec =
             serde_json::from_str(r#"{"power": 20, "colour": [1, 0.5, 0.25], "radius": 0.1}"#)
                 .unwrap();
-        assert_eq!(new.position, PointLight::default().position);
+        assert_eq!(new.position, LightSpec::default().position);
         assert_eq!(new.channel_power(), Vec3::new(20.0, 10.0, 5.0));
-        assert_eq!(new.radius, 0.1);
-        let round: PointLight =
-            serde_json::from_str(&serde_json::to_string(&new).unwrap()).unwrap();
+        assert_eq!(new.kind, LightKind::Sphere { radius: 0.1 });
+        let round: LightSpec = serde_json::from_str(&serde_json::to_string(&new).unwrap()).unwrap();
         assert_eq!(round, new);
+    }
+
+    /// Settings written when the light was a shape and a `radius` (a square's side too) load
+    /// as the light they rendered: a square's `radius` is its side, a point with a radius a
+    /// sphere, any shape of size 0 the point light; every kind round-trips, the spot's cone
+    /// (radians) included.
+    #[test]
+    fn old_shapes_and_radii_load_as_the_same_light() {
+        let read = |json: &str| serde_json::from_str::<LightSpec>(json).unwrap();
+        let quad = read(r#"{"shape": "quad", "radius": 0.5}"#);
+        assert_eq!(quad.kind, LightKind::Quad { side: 0.5 });
+        assert!(quad.is_area());
+        let sphere = read(r#"{"radius": 0.2}"#);
+        assert_eq!(sphere.kind, LightKind::Sphere { radius: 0.2 });
+        for shape in ["point", "sphere", "quad"] {
+            let none = read(&format!(r#"{{"shape": "{shape}", "radius": 0}}"#));
+            assert!(!none.is_area(), "{shape}");
+            assert_eq!(
+                none.emitter(),
+                AnyLight::Point(PointLight {
+                    position: none.position,
+                    power: none.channel_power()
+                })
+            );
+        }
+        let spot = read(r#"{"shape": "spot", "aim": [0, 1, 0], "cutoff": 0.5, "beam": 0.25}"#);
+        let cone = SpotCone {
+            aim: Vec3::new(0.0, 1.0, 0.0),
+            cutoff: 0.5,
+            beam: 0.25,
+        };
+        assert_eq!(spot.kind, LightKind::Spot(cone));
+        assert_eq!(
+            read(r#"{"shape": "spot"}"#).kind,
+            LightKind::Spot(SpotCone::default())
+        );
+        for kind in [
+            LightKind::Point,
+            LightKind::Sphere { radius: 0.1 },
+            LightKind::Quad { side: 0.3 },
+            LightKind::Spot(cone),
+        ] {
+            let light = LightSpec {
+                kind,
+                ..LightSpec::default()
+            };
+            let json = serde_json::to_string(&light).unwrap();
+            assert_eq!(read(&json), light, "{json}");
+            assert!(
+                !json.contains("radius") || matches!(kind, LightKind::Sphere { .. }),
+                "{json}"
+            );
+        }
     }
 }

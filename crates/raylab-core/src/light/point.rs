@@ -2,16 +2,23 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{Light, LightSample, MIN_LIGHT_DISTANCE, PointLight};
+use super::{Light, LightSample, MIN_LIGHT_DISTANCE};
 use crate::geometry::Ray;
 use crate::sampling::uniform_sphere;
 
-/// The lab's light as a point at `position` (its `radius` is ignored: [`crate::light::SphereLight`]
-/// is the light with a size). It sends `I = P / (4π)` watts per steradian in every direction,
+/// The lab's light as a point at `position` emitting the total power `power` per channel
+/// (`P · colour`). It sends `I = P / (4π)` watts per steradian in every direction,
 /// so at distance `r` it gives the radiance-like `I / r²` along its single direction; in lab
 /// units (π ×) that is `Li = π · I / r² = P · colour / (4 r²)`, and a diffuse surface's
 /// `(ρ/π) · Li · cos θ` is exactly the lab's `ρ · D` of equation 27 ([`super::direct_light`]).
 /// Closer than [`MIN_LIGHT_DISTANCE`], `Li` is as at that distance, as in equation 27.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    pub position: Vec3,
+    /// Total emitted power per channel, `P · colour`, in watts.
+    pub power: Vec3,
+}
+
 impl Light for PointLight {
     /// The one direction toward the point, with `pdf` 1. `None` for `p` exactly at the light
     /// (or not finite): there is no direction.
@@ -26,7 +33,7 @@ impl Light for PointLight {
         let clamped_r2 = r2.max(MIN_LIGHT_DISTANCE * MIN_LIGHT_DISTANCE);
         Some(LightSample {
             wi: to_light / distance,
-            li: self.channel_power() / (4.0 * clamped_r2),
+            li: self.power / (4.0 * clamped_r2),
             pdf: 1.0,
             distance,
             point: self.position,
@@ -59,7 +66,7 @@ impl Light for PointLight {
 
     #[inline]
     fn power(&self) -> Vec3 {
-        self.channel_power()
+        self.power
     }
 
     /// From the point, a direction uniform over the sphere: the point light sends the same
@@ -78,7 +85,7 @@ mod tests {
     use std::f32::consts::PI;
 
     use super::*;
-    use crate::light::direct_light;
+    use crate::light::{LightSpec, direct_light};
     use crate::sampling::Rng;
 
     /// `(ρ/π) · Li · cos θ / pdf` from the sample equals the lab's `ρ · D` ([`direct_light`])
@@ -86,9 +93,13 @@ mod tests {
     /// closer than [`MIN_LIGHT_DISTANCE`] at normal incidence (where both clamp r).
     #[test]
     fn point_light_gives_the_labs_d() {
-        let light = PointLight {
+        let spec = LightSpec {
             colour: Vec3::new(1.0, 0.6, 0.25),
-            ..PointLight::default()
+            ..LightSpec::default()
+        };
+        let light = PointLight {
+            position: spec.position,
+            power: spec.channel_power(),
         };
         let rho = Vec3::new(0.75, 0.5, 0.25);
         let mut rng = Rng::new(6);
@@ -118,14 +129,15 @@ mod tests {
             assert!((s.wi.length() - 1.0).abs() < 1e-6);
             assert!((s.distance - (light.position - p).length()).abs() <= 1e-6 * s.distance);
             let ours = rho / PI * s.li * s.wi.dot(n).max(0.0) / s.pdf;
-            let labs = rho * direct_light(&light, p, n);
+            let labs = rho * direct_light(&spec, p, n);
             let scale = labs.max_element().max(1e-30);
             worst = worst.max((ours - labs).abs().max_element() / scale);
         }
         assert!(worst < 1e-6, "largest relative difference {worst}");
         // By hand at the lab's floor centre (direct_light_at_the_labs_floor_centre): r² = 2.74,
         // Li = 14 / (4 · 2.74) = 1.277372 per white channel.
-        let s = PointLight::default()
+        let s = LightSpec::default()
+            .emitter()
             .sample_li(Vec3::new(0.0, 1.0, 0.0), Vec2::ZERO)
             .unwrap();
         assert!(
@@ -139,7 +151,12 @@ mod tests {
     /// direction from the point itself.
     #[test]
     fn point_light_is_a_delta_light() {
-        let light = PointLight::default();
+        let spec = LightSpec::default();
+        let light = PointLight {
+            position: spec.position,
+            power: spec.channel_power(),
+        };
+        assert_eq!(spec.emitter(), crate::light::AnyLight::Point(light));
         assert!(light.is_delta());
         assert_eq!(light.power(), Vec3::splat(14.0));
         let p = Vec3::new(0.0, 1.0, 0.0);

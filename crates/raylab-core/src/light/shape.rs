@@ -1,8 +1,10 @@
-//! Which emitter the lab's light is: a point, a sphere or a square, and the light that makes.
+//! Which emitter the scene's light is: a point, a sphere, a square or a spot.
 
 use glam::{Vec2, Vec3};
 
-use super::{Light, LightSample, LightShape, PointLight, QuadLight, SphereLight};
+use super::{
+    Light, LightKind, LightSample, LightSpec, PointLight, QuadLight, SphereLight, SpotLight,
+};
 use crate::geometry::Ray;
 
 /// One of the lab's lights, whichever its shape: enum dispatch, so a light is a plain `Copy`
@@ -13,6 +15,7 @@ pub enum AnyLight {
     Point(PointLight),
     Sphere(SphereLight),
     Quad(QuadLight),
+    Spot(SpotLight),
 }
 
 impl From<PointLight> for AnyLight {
@@ -24,6 +27,12 @@ impl From<PointLight> for AnyLight {
 impl From<SphereLight> for AnyLight {
     fn from(light: SphereLight) -> Self {
         AnyLight::Sphere(light)
+    }
+}
+
+impl From<SpotLight> for AnyLight {
+    fn from(light: SpotLight) -> Self {
+        AnyLight::Spot(light)
     }
 }
 
@@ -41,6 +50,7 @@ impl Light for AnyLight {
             AnyLight::Point(light) => light.sample_li(p, u),
             AnyLight::Sphere(light) => light.sample_li(p, u),
             AnyLight::Quad(light) => light.sample_li(p, u),
+            AnyLight::Spot(light) => light.sample_li(p, u),
         }
     }
 
@@ -50,6 +60,7 @@ impl Light for AnyLight {
             AnyLight::Point(light) => light.pdf_li(p, wi),
             AnyLight::Sphere(light) => light.pdf_li(p, wi),
             AnyLight::Quad(light) => light.pdf_li(p, wi),
+            AnyLight::Spot(light) => light.pdf_li(p, wi),
         }
     }
 
@@ -59,6 +70,7 @@ impl Light for AnyLight {
             AnyLight::Point(light) => light.intersect(ray, t_max),
             AnyLight::Sphere(light) => light.intersect(ray, t_max),
             AnyLight::Quad(light) => light.intersect(ray, t_max),
+            AnyLight::Spot(light) => light.intersect(ray, t_max),
         }
     }
 
@@ -68,6 +80,7 @@ impl Light for AnyLight {
             AnyLight::Point(light) => light.le(ray_direction),
             AnyLight::Sphere(light) => light.le(ray_direction),
             AnyLight::Quad(light) => light.le(ray_direction),
+            AnyLight::Spot(light) => light.le(ray_direction),
         }
     }
 
@@ -77,6 +90,7 @@ impl Light for AnyLight {
             AnyLight::Point(light) => light.is_delta(),
             AnyLight::Sphere(light) => light.is_delta(),
             AnyLight::Quad(light) => light.is_delta(),
+            AnyLight::Spot(light) => light.is_delta(),
         }
     }
 
@@ -86,6 +100,7 @@ impl Light for AnyLight {
             AnyLight::Point(light) => light.power(),
             AnyLight::Sphere(light) => light.power(),
             AnyLight::Quad(light) => light.power(),
+            AnyLight::Spot(light) => light.power(),
         }
     }
 
@@ -95,42 +110,49 @@ impl Light for AnyLight {
             AnyLight::Point(light) => light.sample_le(u_point, u_direction),
             AnyLight::Sphere(light) => light.sample_le(u_point, u_direction),
             AnyLight::Quad(light) => light.sample_le(u_point, u_direction),
+            AnyLight::Spot(light) => light.sample_le(u_point, u_direction),
         }
     }
 }
 
-/// The lab's light as an emitter of the given shape and size, with its position as the centre
-/// and its total power per channel (`P · colour`):
+/// The scene's light as an emitter, centred on its position, with its total power per channel
+/// (`P · colour`); the one place a kind of light becomes its [`Light`]:
 ///
-/// * [`LightShape::Point`]: the point light itself (its `radius` is ignored, `size` too);
-/// * [`LightShape::Sphere`]: a [`SphereLight`] of radius `size`;
-/// * [`LightShape::Quad`]: a [`QuadLight`] of side `size`, facing the floor (+y).
+/// * [`LightKind::Point`]: the lab's [`PointLight`];
+/// * [`LightKind::Sphere`]: a [`SphereLight`] of that radius;
+/// * [`LightKind::Quad`]: a [`QuadLight`] of that side, facing the floor (+y);
+/// * [`LightKind::Spot`]: a [`SpotLight`] with the omni light's intensity `P · colour / (4π)`.
 ///
-/// A `size` that is not above 0 (or not finite) gives the point light for every shape: a
-/// sphere or square of no size is a point, and its radiance would be infinite.
-pub fn emitter(light: &PointLight, shape: LightShape, size: f32) -> AnyLight {
-    if !(size > 0.0 && size < f32::INFINITY) {
-        return AnyLight::Point(*light);
-    }
+/// A sphere or square whose size is not above 0 (or not finite) is the point light: of no
+/// size, its radiance would be infinite.
+pub fn emitter(light: &LightSpec) -> AnyLight {
     let (centre, power) = (light.position, light.channel_power());
-    match shape {
-        LightShape::Point => AnyLight::Point(*light),
-        LightShape::Sphere => AnyLight::Sphere(SphereLight {
+    let point = AnyLight::Point(PointLight {
+        position: centre,
+        power,
+    });
+    let sized = |size: f32| size > 0.0 && size < f32::INFINITY;
+    match light.kind {
+        LightKind::Point => point,
+        LightKind::Sphere { radius } if sized(radius) => AnyLight::Sphere(SphereLight {
             centre,
-            radius: size,
+            radius,
             power,
         }),
-        LightShape::Quad => AnyLight::Quad(QuadLight {
+        LightKind::Quad { side } if sized(side) => AnyLight::Quad(QuadLight {
             centre,
-            side: size,
+            side,
             power,
         }),
+        LightKind::Sphere { .. } | LightKind::Quad { .. } => point,
+        LightKind::Spot(cone) => AnyLight::Spot(SpotLight::new(centre, power, cone)),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::light::{LightShape, SpotCone};
     use crate::sampling::Rng;
 
     #[test]
@@ -147,20 +169,28 @@ mod tests {
         assert!(serde_json::from_str::<LightShape>("\"Sphere\"").is_err());
     }
 
-    /// `emitter` centres each shape on the lab's light with its power per channel; no size
-    /// gives the point light.
-    #[test]
-    fn emitter_makes_each_shape_from_the_labs_light() {
-        let lab = PointLight {
+    /// The lab's light of kind `shape`, with `size` for a sphere's radius or a square's side.
+    fn lab_of(shape: LightShape, size: f32) -> LightSpec {
+        LightSpec {
             colour: Vec3::new(1.0, 0.5, 0.25),
-            radius: 0.3,
-            shape: LightShape::Point,
-            ..PointLight::default()
-        };
+            kind: LightKind::sized(shape, size),
+            ..LightSpec::default()
+        }
+    }
+
+    /// `emitter` centres each kind on the lab's light with its power per channel; a sphere or
+    /// square of no size gives the point light.
+    #[test]
+    fn emitter_makes_each_kind_from_the_labs_light() {
         let power = Vec3::new(14.0, 7.0, 3.5);
-        assert_eq!(emitter(&lab, LightShape::Point, 0.2), AnyLight::Point(lab));
+        let lab = lab_of(LightShape::Point, 0.0);
+        let point = AnyLight::Point(PointLight {
+            position: lab.position,
+            power,
+        });
+        assert_eq!(emitter(&lab_of(LightShape::Point, 0.2)), point);
         assert_eq!(
-            emitter(&lab, LightShape::Sphere, 0.2),
+            emitter(&lab_of(LightShape::Sphere, 0.2)),
             AnyLight::Sphere(SphereLight {
                 centre: lab.position,
                 radius: 0.2,
@@ -168,36 +198,42 @@ mod tests {
             })
         );
         assert_eq!(
-            emitter(&lab, LightShape::Quad, 0.5),
+            emitter(&lab_of(LightShape::Quad, 0.5)),
             AnyLight::Quad(QuadLight {
                 centre: lab.position,
                 side: 0.5,
                 power
             })
         );
-        for shape in LightShape::ALL {
-            assert_eq!(emitter(&lab, shape, 0.2).power(), power);
+        let spot = emitter(&lab_of(LightShape::Spot, 0.0));
+        assert_eq!(
+            spot,
+            AnyLight::Spot(SpotLight::new(lab.position, power, SpotCone::default()))
+        );
+        for shape in [LightShape::Point, LightShape::Sphere, LightShape::Quad] {
+            assert_eq!(emitter(&lab_of(shape, 0.2)).power(), power);
             for size in [0.0, -1.0, f32::NAN, f32::INFINITY] {
-                assert_eq!(emitter(&lab, shape, size), AnyLight::Point(lab));
+                assert_eq!(emitter(&lab_of(shape, size)), point);
             }
         }
-        assert!(emitter(&lab, LightShape::Point, 0.2).is_delta());
-        assert!(!emitter(&lab, LightShape::Sphere, 0.2).is_delta());
-        assert!(!emitter(&lab, LightShape::Quad, 0.2).is_delta());
+        assert!(emitter(&lab_of(LightShape::Point, 0.2)).is_delta());
+        assert!(!emitter(&lab_of(LightShape::Sphere, 0.2)).is_delta());
+        assert!(!emitter(&lab_of(LightShape::Quad, 0.2)).is_delta());
+        assert!(spot.is_delta());
     }
 
     /// `AnyLight` answers exactly as the light inside it, and the interface is object safe
     /// (the lights can be held as `Box<dyn Light + Send + Sync>` too).
     #[test]
     fn any_light_answers_as_the_light_inside() {
-        let lab = PointLight::default();
         let mut rng = Rng::new(17);
         for shape in LightShape::ALL {
-            let any = emitter(&lab, shape, 0.3);
+            let any = emitter(&lab_of(shape, 0.3));
             let inner: Box<dyn Light + Send + Sync> = match any {
                 AnyLight::Point(l) => Box::new(l),
                 AnyLight::Sphere(l) => Box::new(l),
                 AnyLight::Quad(l) => Box::new(l),
+                AnyLight::Spot(l) => Box::new(l),
             };
             for _ in 0..200 {
                 let p = Vec3::new(
@@ -229,10 +265,10 @@ mod tests {
     /// square, inside it and toward +y only, E[cos θ] = 2/3 too. Unit directions throughout.
     #[test]
     fn photon_rays_leave_each_light_as_it_emits() {
-        let lab = PointLight::default();
+        let lab = LightSpec::default();
         let n = 40_000;
         for shape in LightShape::ALL {
-            let light = emitter(&lab, shape, 0.25);
+            let light = emitter(&lab_of(shape, 0.25));
             let mut rng = Rng::new(3);
             let (mut mean_direction, mut mean_cos) = (Vec3::ZERO, 0.0f64);
             for _ in 0..n {
@@ -242,7 +278,7 @@ mod tests {
                 assert!((ray.direction.length() - 1.0).abs() < 1e-5);
                 mean_direction += ray.direction / n as f32;
                 let cos = match shape {
-                    LightShape::Point => {
+                    LightShape::Point | LightShape::Spot => {
                         assert_eq!(ray.origin, lab.position);
                         continue;
                     }
@@ -265,12 +301,16 @@ mod tests {
             }
             match shape {
                 LightShape::Point => assert!(mean_direction.length() < 0.02, "{mean_direction}"),
-                _ => assert!((mean_cos - 2.0 / 3.0).abs() < 0.005, "{shape}: {mean_cos}"),
+                // The spot's photons: its own test (`spot::tests`) checks their angles.
+                LightShape::Spot => assert!(mean_direction.dot(Vec3::Y) > 0.9),
+                LightShape::Sphere | LightShape::Quad => {
+                    assert!((mean_cos - 2.0 / 3.0).abs() < 0.005, "{shape}: {mean_cos}")
+                }
             }
         }
         let nowhere = PointLight {
             position: Vec3::NAN,
-            ..lab
+            power: Vec3::ONE,
         };
         assert_eq!(nowhere.sample_le(Vec2::ZERO, Vec2::ZERO), None);
     }

@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::{Light, LightSample, PointLight};
+use super::{Light, LightSample, sphere_point};
 use crate::geometry::Ray;
 use crate::sampling::{cosine_hemisphere, hemisphere_around, uniform_sphere};
 
@@ -12,7 +12,7 @@ use crate::sampling::{cosine_hemisphere, hemisphere_around, uniform_sphere};
 /// share of the squared distance `d²` from the ray's origin to the centre: a ray whose line
 /// passes at `a` from the centre meets the sphere if `a² ≤ R² + GRAZING · d²`.
 ///
-/// [`PointLight::sample_point`] computes its cone's directions in `f32` with `sin θ` from
+/// [`sphere_point`] computes its cone's directions in `f32` with `sin θ` from
 /// `1 − cos² θ`, which near the cone's edge is off by about `ε · d² / R²` relative, so some of
 /// its points lie where the ray from the surface point passes just outside the sphere (by up to
 /// `0.15 ε · d²` in `a²` over 200,000 samples at 100 radii). Counting those as hits widens the
@@ -48,20 +48,6 @@ impl SphereLight {
         self.power / (4.0 * PI * self.radius * self.radius)
     }
 
-    /// The lab's soft-shadow light with this sphere's centre and radius, whose
-    /// [`PointLight::sample_point`] draws the points [`Light::sample_li`] returns: the lab's
-    /// soft shadows and this light aim their shadow rays at the very same points.
-    #[inline]
-    fn as_lab_light(&self) -> PointLight {
-        PointLight {
-            position: self.centre,
-            power: 0.0,
-            colour: Vec3::ONE,
-            radius: self.radius,
-            shape: crate::light::LightShape::Sphere,
-        }
-    }
-
     /// The density (per solid angle) of directions drawn uniformly from the cone the sphere
     /// fills as seen from `p`, `1 / (2π (1 − cos θmax))` with `sin² θmax = R² / d²`; `None`
     /// from inside or on the sphere (`d ≤ R`). `1 − cos θmax` is computed as
@@ -83,14 +69,14 @@ impl SphereLight {
 
 impl Light for SphereLight {
     /// A direction drawn uniformly from the cone the sphere fills as seen from `p`, and the
-    /// point where it meets the sphere's near side: [`PointLight::sample_point`]'s point, the
+    /// point where it meets the sphere's near side: [`sphere_point`]'s point, the
     /// lab's own soft-shadow geometry, with `wi` the unit direction toward it. Every direction
     /// of the cone carries the same radiance, so `li · cos θ / pdf` varies only with cos θ.
     /// `None` from inside or on the sphere.
     #[inline]
     fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         let pdf = self.cone_pdf(p)?;
-        let point = self.as_lab_light().sample_point(p, u.x, u.y);
+        let point = sphere_point(self.centre, self.radius, p, u.x, u.y);
         Some(LightSample::area(p, point, self.radiance(), |_| pdf))
     }
 
@@ -205,12 +191,11 @@ mod tests {
     #[test]
     fn sphere_lights_like_a_point_of_the_same_power() {
         let light = sphere();
-        let point = PointLight {
+        let point = crate::light::LightSpec {
             position: light.centre,
             power: 14.0,
             colour: Vec3::ONE,
-            radius: 0.0,
-            shape: crate::light::LightShape::Point,
+            kind: crate::light::LightKind::Point,
         };
         let axis = Vec3::new(0.0, 0.6, 0.8);
         let p = light.centre + axis;

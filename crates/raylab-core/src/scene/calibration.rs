@@ -10,7 +10,7 @@ use crate::accel::calibrate::{Calibration, Workload};
 use crate::accel::{Accel, AccelKind, Isa};
 use crate::camera::{Camera, primary_rays};
 use crate::geometry::Triangle;
-use crate::light::{PointLight, shadow_ray};
+use crate::light::{LightSpec, shadow_ray};
 
 /// The camera's resolution for the workload: 96 × 96 rays.
 const SIDE: u32 = 96;
@@ -38,7 +38,7 @@ fn workload(triangles: Vec<Triangle>) -> Workload {
     let reference = Accel::build(&triangles, AccelKind::Bvh2, Isa::Scalar);
     // The lab's shadow rays (`light::shadow_ray`), from the hits of the reference
     // traversal (no kernel set is chosen yet).
-    let light = PointLight::default();
+    let light = LightSpec::default();
     let shadow = primary
         .iter()
         .filter_map(|ray| {

@@ -540,7 +540,7 @@ impl SceneError {
 /// see [`light::shadow_ray`].
 pub fn in_shadow(
     scene: &Scene,
-    light: &light::PointLight,
+    light: &light::LightSpec,
     position: Vec3,
     normal: Vec3,
     at_edge: Option<Vec3>,
