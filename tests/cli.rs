@@ -1240,3 +1240,63 @@ fn pitch_reaches_the_image() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+/// `--material-preset plastic` in the lab stage and the path stage: the image is the
+/// library's for the plastic preset at α 0.1 (the preset's own roughness when `--roughness`
+/// is not given), and the tall block shows a white highlight from the light over its blue: at
+/// its brightest pixel the red channel, 0.15·D on the diffuse block, is several times as
+/// bright, and in the lab stage red equals green (the coating reflects every channel alike,
+/// and the block's ρ is 0.15 in both). `--roughness`
+/// reaches the coating.
+#[test]
+fn the_plastic_preset_shows_a_highlight_on_the_tall_block() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let path = dir.path().join(name);
+        let mut args = vec!["render", "--out", path.to_str().unwrap(), "--width", "48"];
+        args.extend_from_slice(&["--height", "48"]);
+        args.extend_from_slice(extra);
+        let out = raylab(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        image::open(&path).unwrap().to_rgb32f()
+    };
+    for (stage, extra) in [
+        (Stage::Lab, &[][..]),
+        (Stage::Path, &["--samples", "4", "--seed", "2"][..]),
+    ] {
+        let mut args = vec!["--stage", stage.name()];
+        args.extend_from_slice(extra);
+        let diffuse = render("diffuse.exr", &args);
+        args.extend_from_slice(&["--material-preset", "plastic"]);
+        let plastic = render("plastic.exr", &args);
+        let mut s = settings(stage, 48);
+        if stage == Stage::Path {
+            s.samples_per_pixel = 4;
+            s.seed = 2;
+        }
+        s.material_preset = raylab_core::MaterialPreset::Plastic;
+        s.roughness = 0.1;
+        assert_eq!(plastic.as_raw(), &library_exr(&s), "{stage:?}");
+        // The tall block: the pixels blue in the diffuse image.
+        let block = diffuse
+            .enumerate_pixels()
+            .filter(|(_, _, p)| p[2] > 4.0 * p[0] && p[2] > 0.05);
+        let (x, y, _) = block
+            .max_by(|a, b| {
+                let red = |(x, y, _): &(u32, u32, _)| plastic.get_pixel(*x, *y)[0];
+                red(a).total_cmp(&red(b))
+            })
+            .unwrap();
+        let (p, d) = (plastic.get_pixel(x, y), diffuse.get_pixel(x, y));
+        assert!(p[0] > 3.0 * d[0] && p[0] > 0.2, "{stage:?} ({x}, {y}): {p:?} vs {d:?}");
+        if stage == Stage::Lab {
+            // Under the white light alone red and green are alike (the path stage's walls
+            // add their colours).
+            assert!((p[0] - p[1]).abs() <= 1e-6 * p[0], "{p:?}");
+            args.extend_from_slice(&["--roughness", "0.3"]);
+            let rougher = render("rougher.exr", &args);
+            s.roughness = 0.3;
+            assert_eq!(rougher.as_raw(), &library_exr(&s));
+        }
+    }
+}

@@ -209,7 +209,10 @@ fn see(tracer: &Tracer, scene: &Scene, mut ray: Ray, first: Option<Intersection>
         if !bsdf.is_delta() || bounce == FEATURE_SPECULAR_BOUNCES {
             let albedo = match bsdf {
                 Bsdf::RoughConductor { tint, .. } => tint,
-                _ => scattering.surface.rho,
+                Bsdf::Lambertian { .. }
+                | Bsdf::Mirror { .. }
+                | Bsdf::Glass { .. }
+                | Bsdf::Plastic(_) => scattering.surface.rho,
             };
             let normal = frame.shading_normal();
             return Some(Seen::at(tint, albedo, normal, scattering.wo, travelled));

@@ -261,6 +261,14 @@ impl Shading {
             (MaterialPreset::Rough, _) => {
                 text.push_str("; rough metal tall block: its GGX highlight from the light");
             }
+            (MaterialPreset::Plastic, Stage::Path) => {
+                text.push_str("; glossy plastic tall block sampled (coating and base)");
+            }
+            // The plastic likewise: π·f toward the light's centre, its coating's highlight
+            // over its base's diffuse colour.
+            (MaterialPreset::Plastic, _) => {
+                text.push_str("; glossy plastic tall block: its coating's highlight from the light");
+            }
             (_, Stage::Path) => text.push_str(&format!("; {} sampled", named())),
             _ => text.push_str(&format!(
                 "; {} followed up to {} deep (Whitted)",
