@@ -431,9 +431,17 @@ impl SurfaceV2 {
 enum MaterialV2 {
     // A struct variant, not a unit one: only then are unknown fields refused.
     Diffuse {},
-    Mirror { tint: Floats<3> },
-    Glass { ior: f32, tint: Floats<3> },
-    Rough { alpha: f32, tint: Floats<3> },
+    Mirror {
+        tint: Floats<3>,
+    },
+    Glass {
+        ior: f32,
+        tint: Floats<3>,
+    },
+    Rough {
+        alpha: f32,
+        tint: Floats<3>,
+    },
     Plastic {
         alpha: f32,
         int_ior: f32,
@@ -1375,14 +1383,27 @@ mod tests {
         ] {
             assert!(text.contains(line), "{line}: {text}");
         }
-        let e = parse(&text.replace("int_ior = 1.4", "int_ior = 1.0"), Path::new("/x"))
-            .unwrap_err();
+        let e = parse(
+            &text.replace("int_ior = 1.4", "int_ior = 1.0"),
+            Path::new("/x"),
+        )
+        .unwrap_err();
         assert!(e.contains("material") && e.contains("differ"), "{e}");
-        let e = parse(&text.replace("alpha = 0.25", "alpha = 2.0"), Path::new("/x")).unwrap_err();
+        let e = parse(
+            &text.replace("alpha = 0.25", "alpha = 2.0"),
+            Path::new("/x"),
+        )
+        .unwrap_err();
         assert!(e.contains("roughness must be in [0.01, 1]"), "{e}");
-        let e = parse(&text.replace("ext_ior = 1.0", "ext_ior = 1.0\ntint = 1"), Path::new("/x"))
-            .unwrap_err();
-        assert!(e.starts_with("line ") && e.contains("unknown field `tint`"), "{e}");
+        let e = parse(
+            &text.replace("ext_ior = 1.0", "ext_ior = 1.0\ntint = 1"),
+            Path::new("/x"),
+        )
+        .unwrap_err();
+        assert!(
+            e.starts_with("line ") && e.contains("unknown field `tint`"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -995,7 +995,12 @@ mod tests {
 
     /// ∫ g(ω) dω over the sphere, or over the upper hemisphere with `upper_only`, by the
     /// midpoint rule in (θ, φ) with dω = sin θ dθ dφ, in f64.
-    pub(super) fn integrate(g: impl Fn(Vec3) -> f64, upper_only: bool, n_theta: usize, n_phi: usize) -> f64 {
+    pub(super) fn integrate(
+        g: impl Fn(Vec3) -> f64,
+        upper_only: bool,
+        n_theta: usize,
+        n_phi: usize,
+    ) -> f64 {
         let top = if upper_only {
             FRAC_PI_2_F64
         } else {

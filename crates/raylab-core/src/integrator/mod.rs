@@ -828,7 +828,8 @@ impl<'a> Tracer<'a> {
         let wo = -incoming;
         let wi = (self.light.position - surface.position).normalize_or_zero();
         let frame = ShadingFrame::new(surface.normal, surface.geometric, wo);
-        let pi_f = |bsdf: &crate::bsdf::Bsdf| std::f32::consts::PI * frame.eval_world(bsdf, wo, wi).0;
+        let pi_f =
+            |bsdf: &crate::bsdf::Bsdf| std::f32::consts::PI * frame.eval_world(bsdf, wo, wi).0;
         match material.bsdf(surface.rho) {
             crate::bsdf::Bsdf::Plastic(plastic) => {
                 let (coating, base) = plastic.lobes();

@@ -267,7 +267,9 @@ impl Shading {
             // The plastic likewise: π·f toward the light's centre, its coating's highlight
             // over its base's diffuse colour.
             (MaterialPreset::Plastic, _) => {
-                text.push_str("; glossy plastic tall block: its coating's highlight from the light");
+                text.push_str(
+                    "; glossy plastic tall block: its coating's highlight from the light",
+                );
             }
             (_, Stage::Path) => text.push_str(&format!("; {} sampled", named())),
             _ => text.push_str(&format!(
