@@ -361,10 +361,14 @@ mod tests {
     /// the same quadrature over visible normals sampled by Heitz's 2018 mapping rather than
     /// Mitsuba's slope form of it (to 2e-3).
     #[test]
+    // The values as Mitsuba printed them, seven digits.
+    #[allow(clippy::excessive_precision)]
     fn agrees_with_mitsuba() {
         use std::f32::consts::PI;
+        /// α, (θ_o, φ_o, θ_i, φ_i), f_s, f_d's red and blue, pdf.
+        type Case = (f32, [f32; 4], f32, [f32; 2], f32);
         #[rustfmt::skip]
-        let cases: [(f32, [f32; 4], f32, [f32; 2], f32); 14] = [
+        let cases: [Case; 14] = [
             (0.1, [0.0, 0.0, 0.0, 0.0], 3.183099e-01, [4.360352e-02, 2.180176e-01], 1.139342e+00),
             (0.1, [0.3, 0.0, 0.3, PI], 3.498362e-01, [4.355695e-02, 2.177848e-01], 1.176579e+00),
             (0.1, [0.3, 0.0, 0.35, PI], 3.159440e-01, [4.354472e-02, 2.177236e-01], 1.069612e+00),
