@@ -20,7 +20,7 @@ use raylab_core::film::OutputFormat;
 use raylab_core::inspect::{InspectError, inspect_pixel};
 use raylab_core::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
 use raylab_core::light::{LightKind, LightShape, SpotCone};
-use raylab_core::material::{DEFAULT_ROUGHNESS, TexturePreset};
+use raylab_core::material::TexturePreset;
 use raylab_core::render::try_render;
 use raylab_core::scene::SceneChoice;
 use raylab_core::settings::{
@@ -278,12 +278,15 @@ pub struct RenderOptions {
     /// paths); 0 is direct light only.
     #[arg(long, default_value = "unlimited", value_parser = parse_bounces, value_name = "B|unlimited")]
     pub bounces: Bounces,
-    /// Mirror, glass and rough metal: none (the lab's diffuse box), mirror (the tall block is a
-    /// mirror of reflectance 0.9), glass (the short block is clear glass, index 1.5), both, or
-    /// rough (the tall block is a rough metal of reflectance 0.9, roughness --roughness).
+    /// Mirror, glass, rough metal and plastic: none (the lab's diffuse box), mirror (the tall
+    /// block is a mirror of reflectance 0.9), glass (the short block is clear glass, index 1.5),
+    /// both, rough (the tall block is a rough metal of reflectance 0.9, roughness --roughness)
+    /// or plastic (the tall block is a glossy plastic: its blue under a clear coating of index
+    /// 1.5, roughness --roughness).
     #[arg(long, default_value = "none", value_name = "PRESET")]
     pub material_preset: MaterialPreset,
-    /// The rough metal's GGX roughness α, from 0.01 (nearly a mirror) to 1 [default: 0.2].
+    /// The rough metal's or the plastic coating's GGX roughness α, from 0.01 (nearly a mirror)
+    /// to 1 [default: 0.2 for the metal, 0.1 for the plastic].
     #[arg(long, value_parser = parse_finite, value_name = "A", allow_hyphen_values = true)]
     pub roughness: Option<f32>,
     /// Textures: none (the lab's plain colours), checker-floor (a checkerboard floor),
@@ -534,7 +537,9 @@ impl RenderOptions {
                 ..Shading::for_stage(self.stage)
             },
             material_preset: self.material_preset,
-            roughness: self.roughness.unwrap_or(DEFAULT_ROUGHNESS),
+            roughness: self
+                .roughness
+                .unwrap_or(self.material_preset.default_roughness()),
             texture_preset: self.texture_preset,
             display: Display {
                 transform: self.display,

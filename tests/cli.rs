@@ -1335,3 +1335,70 @@ fn a_spot_light_on_the_command_line() {
         assert_refused(&args, says, &refused);
     }
 }
+
+/// `--material-preset plastic` in the lab stage and the path stage: the image is the
+/// library's for the plastic preset at α 0.1 (the preset's own roughness when `--roughness`
+/// is not given). In the lab stage the tall block shows a white highlight from the light over
+/// its blue: at its brightest pixel the red channel is well above the diffuse block's
+/// 0.15·(D + N), and red equals green (the coating reflects every channel alike, and the
+/// block's ρ is 0.15 in both). `--roughness` reaches the coating.
+#[test]
+fn the_plastic_preset_shows_a_highlight_on_the_tall_block() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let path = dir.path().join(name);
+        let mut args = vec!["render", "--out", path.to_str().unwrap(), "--width", "48"];
+        args.extend_from_slice(&["--height", "48"]);
+        args.extend_from_slice(extra);
+        let out = raylab(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        image::open(&path).unwrap().to_rgb32f()
+    };
+    for (stage, extra) in [
+        (Stage::Lab, &[][..]),
+        (Stage::Path, &["--samples", "4", "--seed", "2"][..]),
+    ] {
+        let mut args = vec!["--stage", stage.name()];
+        args.extend_from_slice(extra);
+        let diffuse = render("diffuse.exr", &args);
+        args.extend_from_slice(&["--material-preset", "plastic"]);
+        let plastic = render("plastic.exr", &args);
+        let mut s = settings(stage, 48);
+        if stage == Stage::Path {
+            s.samples_per_pixel = 4;
+            s.seed = 2;
+        }
+        s.material_preset = raylab_core::MaterialPreset::Plastic;
+        s.roughness = 0.1;
+        assert_eq!(plastic.as_raw(), &library_exr(&s), "{stage:?}");
+        if stage == Stage::Path {
+            // Through the coating the base's blue is dimmer and the coating reflects the
+            // room: the block changes.
+            assert_ne!(plastic.as_raw(), diffuse.as_raw());
+            continue;
+        }
+        // The tall block: in the lab stage the only pixels that change.
+        let (x, y, _) = diffuse
+            .enumerate_pixels()
+            .filter(|(x, y, p)| plastic.get_pixel(*x, *y) != *p)
+            .max_by(|a, b| {
+                let red = |(x, y, _): &(u32, u32, _)| plastic.get_pixel(*x, *y)[0];
+                red(a).total_cmp(&red(b))
+            })
+            .unwrap();
+        let (p, d) = (plastic.get_pixel(x, y), diffuse.get_pixel(x, y));
+        // The base alone is dimmer than the diffuse block (through the coating, 0.9 of its
+        // red at most pixels); the highlight lifts the brightest pixel's red above it: 0.373
+        // against 0.302 at (18, 21).
+        assert!(
+            p[0] > 1.15 * d[0] && p[0] > 0.3,
+            "({x}, {y}): {p:?} vs {d:?}"
+        );
+        // Under the white light red and green are alike.
+        assert!((p[0] - p[1]).abs() <= 1e-6 * p[0], "{p:?}");
+        args.extend_from_slice(&["--roughness", "0.3"]);
+        let rougher = render("rougher.exr", &args);
+        s.roughness = 0.3;
+        assert_eq!(rougher.as_raw(), &library_exr(&s));
+    }
+}

@@ -972,6 +972,10 @@ fn material_hover(preset: MaterialPreset) -> &'static str {
             "The tall blue block becomes a rough metal reflecting 90 % (GGX microfacets of \
              roughness α): a highlight under the light, blurred reflections in the path stage"
         }
+        MaterialPreset::Plastic => {
+            "The tall blue block becomes a glossy plastic: its blue base under a clear coating \
+             (index 1.5, GGX roughness α): a white highlight under the light over the blue"
+        }
     }
 }
 
@@ -991,6 +995,7 @@ pub fn shading_ui(
     let path = shading.stage == Stage::Path;
     view_ui(ui, view, legend);
     ui.horizontal_wrapped(|ui| {
+        let before = *materials;
         choice_ui(
             ui,
             "materials",
@@ -998,19 +1003,23 @@ pub fn shading_ui(
             materials,
             Some(material_hover),
         );
+        if *materials != before {
+            // Each preset starts at its own roughness (the plastic's coating 0.1).
+            *roughness = materials.default_roughness();
+        }
         if let Some(hint) = materials.front_face_note(path, *roughness) {
             ui.weak(hint);
         }
     });
-    if *materials == MaterialPreset::Rough {
+    if matches!(*materials, MaterialPreset::Rough | MaterialPreset::Plastic) {
         ui.add(
             egui::Slider::new(roughness, MIN_ROUGHNESS..=1.0)
                 .logarithmic(true)
                 .text("Roughness α"),
         )
         .on_hover_text(
-            "The rough metal's GGX roughness α: small is nearly a mirror, 1 spreads the \
-             reflection over the whole hemisphere",
+            "The rough metal's or the plastic coating's GGX roughness α: small is nearly a \
+             mirror, 1 spreads the reflection over the whole hemisphere",
         );
     }
     choice_ui(ui, "textures", "Textures", textures, None).on_hover_text(

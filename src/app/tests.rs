@@ -1589,6 +1589,29 @@ fn choosing_the_spot_light_re_renders_with_its_cone() {
     assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
 }
 
+/// The plastic from the Materials choice: its roughness slider starts at the coating's 0.1 and
+/// sets α; the image is the library's for those settings, its tall block lit by a highlight
+/// the diffuse block does not have.
+#[test]
+fn the_plastic_is_chosen_in_the_panels() {
+    let mut h = harness(tiny_state());
+    settle(&mut h);
+    let diffuse = shown(&h);
+    choose(&mut h, "Materials", "Glossy plastic tall block");
+    settle(&mut h);
+    let frame = shown(&h);
+    assert_eq!(frame.settings.material_preset, MaterialPreset::Plastic);
+    assert_eq!(frame.settings.roughness, 0.1);
+    assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
+    assert_ne!(*frame.image, *diffuse.image);
+    h.get_by_role_and_label(Role::Slider, "Roughness α")
+        .set_value_accesskit(0.3);
+    settle(&mut h);
+    let frame = shown(&h);
+    assert_eq!(frame.settings.roughness, 0.3);
+    assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
+}
+
 /// A saved state whose scene cannot be loaded (here a FIFO given as the model, which would
 /// keep the loader waiting for ever) never keeps the window from starting: it opens on the
 /// lab's box, and a notice says why.

@@ -138,6 +138,10 @@ pub struct LightTerms {
     pub rho: Option<Vec3>,
     /// Whether ρ came from a texture.
     pub textured: bool,
+    /// At a glossy hit (the rough metal, the plastic) in the lab's stages, where `rho` is π·f
+    /// toward the light's centre: f's parts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub glossy: Option<GlossyTerms>,
     /// r, the vector from the hit to the light's centre.
     pub to_light: Option<Vec3>,
     /// |r| (at least [`crate::light::MIN_LIGHT_DISTANCE`]).
@@ -170,6 +174,16 @@ pub struct LightTerms {
     pub shadow_blocked: bool,
     /// What blocks it.
     pub blocker: Option<Blocker>,
+}
+
+/// π·f at a glossy hit, toward the viewer and the light's centre, in its two parts
+/// ([`Tracer::glossy_parts`]): the lab's stages use it as ρ.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct GlossyTerms {
+    /// π·f_s: the coating's (the metal's) microfacet reflection, the highlight.
+    pub specular: Vec3,
+    /// π·f_d: the plastic's diffuse base seen through its coating (0 for the metal).
+    pub diffuse: Vec3,
 }
 
 /// A shadow ray (§5.1): from just off the surface toward a point of the light, stopping
@@ -469,10 +483,17 @@ fn scatter_kind(kind: &MaterialKind, incoming: Vec3, outgoing: Vec3, normal: Vec
 
 impl LightTerms {
     /// The terms of a hit as the tracer left them, with the parts of D and the blocker.
-    fn of(tracer: &Tracer, stage: Stage, terms: &HitTerms, material: &Material) -> Self {
+    fn of(
+        tracer: &Tracer,
+        stage: Stage,
+        terms: &HitTerms,
+        material: &Material,
+        glossy: Option<GlossyTerms>,
+    ) -> Self {
         let mut out = LightTerms {
             rho: Some(terms.rho),
             textured: material.texture.is_some(),
+            glossy,
             ..LightTerms::default()
         };
         if stage == Stage::Flat {
@@ -620,7 +641,8 @@ impl Inspection {
                             photons: None,
                         });
                     }
-                    if material.is_diffuse() {
+                    // Diffuse hits and, in the lab's stages, glossy ones are shaded.
+                    if !material.is_specular() {
                         waiting.push_back((*ray, *hit, *depth));
                     }
                     latest = Some((*ray, *hit));
@@ -671,10 +693,16 @@ impl Inspection {
                     value,
                     weight,
                 } => {
-                    let Some((_, hit, depth)) = waiting.pop_front() else {
+                    let Some((ray, hit, depth)) = waiting.pop_front() else {
                         continue;
                     };
                     let material = tracer.material_of(hit.triangle_index);
+                    let glossy = (!material.is_diffuse()).then(|| {
+                        let surface = tracer.surface(&hit, material, ray.direction);
+                        let (specular, diffuse) =
+                            tracer.glossy_parts(material, &surface, ray.direction);
+                        GlossyTerms { specular, diffuse }
+                    });
                     let contribution = *weight * *value;
                     let shaded = ShadedHit {
                         depth,
@@ -685,7 +713,7 @@ impl Inspection {
                         v: hit.v,
                         position: terms.position,
                         normal: terms.normal,
-                        terms: LightTerms::of(tracer, stage, terms, material),
+                        terms: LightTerms::of(tracer, stage, terms, material, glossy),
                         n: *n,
                         value: *value,
                         weight: *weight,
@@ -1150,7 +1178,21 @@ impl Inspection {
         } else {
             format!("the reflectance of {}", hit.surface)
         };
-        lines.push("§5", format!("{indent}ρ = {} ({from})", colour(rho)));
+        match t.glossy {
+            None => lines.push("§5", format!("{indent}ρ = {} ({from})", colour(rho))),
+            Some(g) => lines.push(
+                "§5",
+                format!(
+                    "{indent}ρ = π·f(toward the viewer, toward the light) = π·f_s + π·f_d = {} \
+                     (highlight) + {} (diffuse base) = {} (the glossy {}, in place of the lab's \
+                     ρ)",
+                    colour(g.specular),
+                    colour(g.diffuse),
+                    colour(rho),
+                    hit.surface
+                ),
+            ),
+        }
         let (Some(r), Some(dist), Some(r2), Some(cos), Some(p), Some(area), Some(d)) = (
             t.to_light,
             t.light_distance,
@@ -1527,6 +1569,48 @@ mod tests {
             unreachable!()
         };
         assert_eq!((*value, *weight), (out[0], Vec3::ONE));
+    }
+
+    /// At the plastic tall block in the lab stage the inspector shows f's two parts: π·f_s
+    /// (the coating's highlight) and π·f_d (the base) sum to the ρ the pixel was shaded
+    /// with, R is the rendered pixel bit for bit, and where the light's highlight falls on the
+    /// block's visible faces the coating adds at least a quarter of the base's red.
+    #[test]
+    fn the_inspector_shows_the_plastics_two_parts() {
+        let scene = crate::scene::cornell_box();
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(48, 48);
+        s.material_preset = crate::material::MaterialPreset::Plastic;
+        s.roughness = 0.1;
+        let (mut on_block, mut highlight) = (0, 0);
+        for y in 0..48 {
+            for x in 0..48 {
+                let i = inspect_pixel(&scene, &s, x, y).unwrap();
+                let rendered = crate::render::trace_pixel(&scene, &s, x, y, 0);
+                assert_eq!(
+                    i.r.to_array().map(f32::to_bits),
+                    rendered.to_array().map(f32::to_bits)
+                );
+                let Some(g) = i.terms.glossy else { continue };
+                assert_eq!(i.surface.as_deref(), Some("blue"));
+                on_block += 1;
+                let rho = i.terms.rho.unwrap();
+                let sum = g.specular + g.diffuse;
+                assert!(
+                    (sum - rho).abs().max_element() <= 1e-5 * rho.max_element(),
+                    "{g:?} {rho}"
+                );
+                // The coating is white, the base the block's blue.
+                assert_eq!(g.specular.x, g.specular.z);
+                assert!(g.diffuse.z >= 4.0 * g.diffuse.x);
+                if g.specular.x > 0.25 * g.diffuse.x {
+                    highlight += 1;
+                    let text: Vec<String> = i.lines().into_iter().map(|l| l.text).collect();
+                    assert!(text.iter().any(|l| l.contains("π·f_s + π·f_d")), "{text:?}");
+                }
+            }
+        }
+        assert!(on_block > 20 && highlight > 0, "{on_block} {highlight}");
     }
 
     /// Under the quad light the general path tracer runs, and the inspector shows each

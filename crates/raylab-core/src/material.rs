@@ -20,7 +20,7 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::bsdf::{Bsdf, ShadingFrame, snell_cos_t};
+use crate::bsdf::{Bsdf, RoughPlastic, ShadingFrame, snell_cos_t};
 pub use crate::bsdf::{fresnel_dielectric, reflect};
 use crate::named::named_enum;
 use crate::relief::Relief;
@@ -43,6 +43,16 @@ pub enum MaterialKind {
     /// A rough metal: microfacets of GGX roughness `alpha` (0 is a mirror, 1 very rough) that
     /// reflect `tint` of the light, with no Fresnel falloff ([`crate::bsdf::Bsdf::RoughConductor`]).
     Rough { alpha: f32, tint: Vec3 },
+    /// A glossy plastic: the diffuse base of reflectance ρ (the material's `reflectance`)
+    /// under a rough dielectric coating of GGX roughness `alpha`, indices `int_ior` inside
+    /// and `ext_ior` outside, whose reflection is scaled by `specular`
+    /// ([`crate::bsdf::RoughPlastic`], Mitsuba 3's `roughplastic`).
+    Plastic {
+        alpha: f32,
+        int_ior: f32,
+        ext_ior: f32,
+        specular: Vec3,
+    },
 }
 
 impl MaterialKind {
@@ -53,6 +63,7 @@ impl MaterialKind {
             MaterialKind::Mirror { .. } => "mirror",
             MaterialKind::Glass { .. } => "glass",
             MaterialKind::Rough { .. } => "rough",
+            MaterialKind::Plastic { .. } => "plastic",
         }
     }
 }
@@ -134,7 +145,7 @@ impl Material {
     pub fn specular_branches(&self, direction: Vec3, normal: Vec3) -> Branches {
         let mut out = Branches::default();
         match self.kind {
-            MaterialKind::Diffuse | MaterialKind::Rough { .. } => {}
+            MaterialKind::Diffuse | MaterialKind::Rough { .. } | MaterialKind::Plastic { .. } => {}
             MaterialKind::Mirror { tint } => out.push(reflect(direction, normal), tint),
             MaterialKind::Glass { ior, tint } => {
                 let g = GlassHit::new(direction, normal, ior);
@@ -157,6 +168,12 @@ impl Material {
             MaterialKind::Mirror { tint } => Bsdf::Mirror { tint },
             MaterialKind::Glass { ior, tint } => Bsdf::Glass { ior, tint },
             MaterialKind::Rough { alpha, tint } => Bsdf::RoughConductor { alpha, tint },
+            MaterialKind::Plastic {
+                alpha,
+                int_ior,
+                ext_ior,
+                specular,
+            } => Bsdf::Plastic(RoughPlastic::new(alpha, int_ior, ext_ior, rho, specular)),
         }
     }
 
@@ -282,6 +299,10 @@ pub enum MaterialPreset {
     /// The tall blue block becomes a rough metal reflecting 0.9 in every channel, of roughness
     /// [`crate::RenderSettings::roughness`] (0.2 by default).
     Rough,
+    /// The tall blue block becomes a glossy plastic: its own ρ under a rough dielectric
+    /// coating (interior index 1.5, exterior 1, specular reflectance 1) of roughness
+    /// [`crate::RenderSettings::roughness`] (0.1 when the preset is chosen).
+    Plastic,
 }
 
 /// The material name of the Cornell box's tall block, which the mirror presets change.
@@ -300,6 +321,17 @@ pub const DEFAULT_ROUGHNESS: f32 = 0.2;
 /// The smallest roughness α a rough metal may have (below it the microfacet distribution's
 /// peak exceeds what `f32` evaluates well; a mirror is its own material).
 pub const MIN_ROUGHNESS: f32 = 0.01;
+/// The plastic preset's coating unless the settings say otherwise.
+pub const DEFAULT_PLASTIC_ROUGHNESS: f32 = 0.1;
+/// The plastic preset's coating, of roughness `alpha`, over the block's own ρ.
+pub fn preset_plastic(alpha: f32) -> MaterialKind {
+    MaterialKind::Plastic {
+        alpha,
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        specular: Vec3::ONE,
+    }
+}
 /// The glass of the presets.
 pub const PRESET_GLASS: MaterialKind = MaterialKind::Glass {
     ior: 1.5,
@@ -319,9 +351,23 @@ named_enum!(MaterialPreset as "material preset" {
     Glass => "glass", "Glass short block";
     Both => "both", "Mirror and glass";
     Rough => "rough", "Rough metal tall block";
+    Plastic => "plastic", "Glossy plastic tall block";
 });
 
 impl MaterialPreset {
+    /// The roughness α the preset starts with: the plastic's coating 0.1, the rough metal's
+    /// (and the setting's otherwise) 0.2.
+    pub fn default_roughness(self) -> f32 {
+        match self {
+            MaterialPreset::Plastic => DEFAULT_PLASTIC_ROUGHNESS,
+            MaterialPreset::None
+            | MaterialPreset::Mirror
+            | MaterialPreset::Glass
+            | MaterialPreset::Both
+            | MaterialPreset::Rough => DEFAULT_ROUGHNESS,
+        }
+    }
+
     /// What the tall block's front face shows in the lab's box, and why, for the workbench's
     /// Materials row; `None` where it is not a reflector's (diffuse, glass) or where the lab's
     /// stages shade the rough metal by its highlight alone (`path` false). The face looks at
@@ -346,17 +392,21 @@ impl MaterialPreset {
                  light toward the camera; a smoother metal reflects the box's open front, the \
                  void behind the camera",
             ),
-            _ => None,
+            MaterialPreset::Rough
+            | MaterialPreset::None
+            | MaterialPreset::Glass
+            | MaterialPreset::Plastic => None,
         }
     }
 
     /// The materials with the preset applied: by name, the tall block's (`blue`) becomes the
-    /// mirror (or the rough metal of roughness `roughness`), the short block's (`red`) the
+    /// mirror (or the rough metal or the plastic of roughness `roughness`), the short block's (`red`) the
     /// glass. Scenes without those names are unchanged.
     pub fn apply(self, materials: &[Material], roughness: f32) -> Vec<Material> {
         let mirror = matches!(self, MaterialPreset::Mirror | MaterialPreset::Both);
         let glass = matches!(self, MaterialPreset::Glass | MaterialPreset::Both);
         let rough = self == MaterialPreset::Rough;
+        let plastic = self == MaterialPreset::Plastic;
         materials
             .iter()
             .map(|m| {
@@ -368,6 +418,8 @@ impl MaterialPreset {
                         alpha: roughness,
                         tint: PRESET_ROUGH_TINT,
                     };
+                } else if plastic && m.name == TALL_BLOCK {
+                    m.kind = preset_plastic(roughness);
                 } else if glass && m.name == SHORT_BLOCK {
                     m.kind = PRESET_GLASS;
                 }

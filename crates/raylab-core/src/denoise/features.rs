@@ -202,7 +202,9 @@ fn see(tracer: &Tracer, ray: Ray, first: Option<Intersection>) -> Option<Seen> {
     let scattering = tracer.scattering(&hit, ray.direction);
     let albedo = match scattering.bsdf {
         Bsdf::RoughConductor { tint, .. } => tint,
-        _ => scattering.surface.rho,
+        Bsdf::Lambertian { .. } | Bsdf::Mirror { .. } | Bsdf::Glass { .. } | Bsdf::Plastic(_) => {
+            scattering.surface.rho
+        }
     };
     let normal = scattering.frame.shading_normal();
     Some(Seen::at(

@@ -824,6 +824,32 @@ impl<'a> Tracer<'a> {
         std::f32::consts::PI * f
     }
 
+    /// [`Tracer::glossy_reflectance`]'s two parts, π·f_s (the microfacet highlight: a
+    /// plastic's coating, all of a rough metal) and π·f_d (a plastic's diffuse base), each
+    /// evaluated as the whole is: for the inspector.
+    pub fn glossy_parts(
+        &self,
+        material: &Material,
+        surface: &Surface,
+        incoming: Vec3,
+    ) -> (Vec3, Vec3) {
+        let wo = -incoming;
+        let wi = (self.light.position - surface.position).normalize_or_zero();
+        let frame = ShadingFrame::new(surface.normal, surface.geometric, wo);
+        let pi_f =
+            |bsdf: &crate::bsdf::Bsdf| std::f32::consts::PI * frame.eval_world(bsdf, wo, wi).0;
+        match material.bsdf(surface.rho) {
+            crate::bsdf::Bsdf::Plastic(plastic) => {
+                let (coating, base) = plastic.lobes();
+                (pi_f(&coating), pi_f(&base))
+            }
+            bsdf @ (crate::bsdf::Bsdf::RoughConductor { .. }
+            | crate::bsdf::Bsdf::Lambertian { .. }
+            | crate::bsdf::Bsdf::Mirror { .. }
+            | crate::bsdf::Bsdf::Glass { .. }) => (pi_f(&bsdf), Vec3::ZERO),
+        }
+    }
+
     /// The scene's light as an emitter.
     #[inline]
     pub fn emitter(&self) -> &AnyLight {

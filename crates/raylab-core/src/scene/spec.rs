@@ -376,6 +376,7 @@ impl SceneSpec {
                 MaterialKind::Mirror { tint }
                 | MaterialKind::Glass { tint, .. }
                 | MaterialKind::Rough { tint, .. }
+                | MaterialKind::Plastic { specular: tint, .. }
                     if !(tint.is_finite()
                         && tint.min_element() >= 0.0
                         && tint.max_element() <= 1.0) =>
@@ -386,7 +387,7 @@ impl SceneSpec {
                         "a tint must be in [0, 1]",
                     ));
                 }
-                MaterialKind::Rough { alpha, .. }
+                MaterialKind::Rough { alpha, .. } | MaterialKind::Plastic { alpha, .. }
                     if !(crate::material::MIN_ROUGHNESS..=1.0).contains(&alpha) =>
                 {
                     return Err(bad(
@@ -404,7 +405,23 @@ impl SceneSpec {
                         "an index of refraction must be in [1, 4]",
                     ));
                 }
-                _ => {}
+                MaterialKind::Plastic {
+                    int_ior, ext_ior, ..
+                } if !([int_ior, ext_ior]
+                    .iter()
+                    .all(|i| i.is_finite() && (1.0..=4.0).contains(i))
+                    && int_ior != ext_ior) =>
+                {
+                    return Err(bad(
+                        field("material"),
+                        format!("{int_ior}, {ext_ior}"),
+                        "the indices of refraction must be in [1, 4] and differ",
+                    ));
+                }
+                MaterialKind::Mirror { .. }
+                | MaterialKind::Glass { .. }
+                | MaterialKind::Rough { .. }
+                | MaterialKind::Plastic { .. } => {}
             }
             m.relief.validate(field)?;
         }

@@ -293,6 +293,16 @@ impl Shading {
             (MaterialPreset::Rough, Integrator::Lab) => {
                 text.push_str("; rough metal tall block: its GGX highlight from the light");
             }
+            (MaterialPreset::Plastic, Integrator::Path) => {
+                text.push_str("; glossy plastic tall block sampled (coating and base)");
+            }
+            // The plastic likewise: π·f toward the light's centre, its coating's highlight
+            // over its base's diffuse colour.
+            (MaterialPreset::Plastic, Integrator::Lab) => {
+                text.push_str(
+                    "; glossy plastic tall block: its coating's highlight from the light",
+                );
+            }
             (_, Integrator::Path) => text.push_str(&format!("; {} sampled", named())),
             (_, Integrator::Lab) => text.push_str(&format!(
                 "; {} followed up to {} deep (Whitted)",

@@ -58,6 +58,9 @@ use glam::{Vec2, Vec3};
 
 use crate::sampling::{concentric_disk, cosine_hemisphere, orthonormal_basis};
 
+mod plastic;
+pub use plastic::{Coating, PlasticParts, RoughPlastic};
+
 /// The smallest cos θ_o a [`ShadingFrame`] leaves between `wo` and its shading normal: a bent
 /// normal keeps `wo` at least this far above the shading hemisphere (about 0.06° from
 /// grazing), so BSDFs never see `wo` on or below their horizon.
@@ -192,6 +195,9 @@ pub enum Bsdf {
         /// The specular reflectance, per colour channel.
         tint: Vec3,
     },
+    /// A glossy plastic, a diffuse base under a rough dielectric coating: Mitsuba 3's
+    /// `roughplastic` ([`RoughPlastic`]).
+    Plastic(RoughPlastic),
 }
 
 /// Whether two local directions are strictly on the same side of the surface.
@@ -256,6 +262,10 @@ impl Bsdf {
                 let ggx = Ggx::new(alpha);
                 tint * (ggx.d(h) * ggx.g1(wo) * ggx.g1(wi) / (4.0 * wo.z * wi.z))
             }
+            Bsdf::Plastic(plastic) => {
+                let (wo, wi, _) = to_upper(wo, wi);
+                plastic.eval(wo, wi)
+            }
         }
     }
 
@@ -289,6 +299,10 @@ impl Bsdf {
                 let h = (wo + wi).normalize();
                 let ggx = Ggx::new(alpha);
                 ggx.g1(wo) * ggx.d(h) / (4.0 * wo.z)
+            }
+            Bsdf::Plastic(plastic) => {
+                let (wo, wi, _) = to_upper(wo, wi);
+                plastic.pdf(wo, wi)
             }
         }
     }
@@ -355,6 +369,14 @@ impl Bsdf {
                     weight: tint * ggx.g1(wi),
                     pdf,
                     is_delta: false,
+                })
+            }
+            Bsdf::Plastic(plastic) => {
+                let (wo, _, flipped) = to_upper(wo, Vec3::ZERO);
+                let s = plastic.sample(wo, uc, u)?;
+                Some(BsdfSample {
+                    wi: if flipped { flip_z(s.wi) } else { s.wi },
+                    ..s
                 })
             }
         }
@@ -706,7 +728,7 @@ mod tests {
     use crate::sampling::{Rng, uniform_hemisphere};
 
     /// The unit direction at polar angle `theta` and azimuth `phi` (radians), local frame.
-    fn dir(theta: f32, phi: f32) -> Vec3 {
+    pub(super) fn dir(theta: f32, phi: f32) -> Vec3 {
         let (sin_t, cos_t) = theta.sin_cos();
         let (sin_p, cos_p) = phi.sin_cos();
         Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t)
@@ -718,7 +740,7 @@ mod tests {
     }
 
     /// Two uniform numbers for [`Bsdf::sample`]'s `u`.
-    fn u2(rng: &mut Rng) -> Vec2 {
+    pub(super) fn u2(rng: &mut Rng) -> Vec2 {
         Vec2::new(rng.next_f32(), rng.next_f32())
     }
 
@@ -734,12 +756,12 @@ mod tests {
     const COLOUR: Vec3 = Vec3::new(0.9, 0.6, 0.3);
 
     /// Whether `a` and `b` agree to `rel` relative to the larger (and 1e-12 absolute).
-    fn close(a: f32, b: f32, rel: f32) -> bool {
+    pub(super) fn close(a: f32, b: f32, rel: f32) -> bool {
         (a - b).abs() <= rel * a.abs().max(b.abs()) + 1e-12
     }
 
     /// Whether every channel of `a` and `b` agrees to `rel` ([`close`]).
-    fn close3(a: Vec3, b: Vec3, rel: f32) -> bool {
+    pub(super) fn close3(a: Vec3, b: Vec3, rel: f32) -> bool {
         (0..3).all(|i| close(a[i], b[i], rel))
     }
 
@@ -842,7 +864,7 @@ mod tests {
     /// refused (`None`). A bin's expected count is N × the pdf integrated over it by a 24 × 24
     /// midpoint rule in (θ, φ) with dω = sin θ dθ dφ; the refusals' is N × (1 − the sum).
     /// The statistic must be below the 0.999 quantile ([`chi_square_quantile_999`]).
-    fn assert_sampling_matches_pdf(bsdf: Bsdf, wo: Vec3, seed: u64) {
+    pub(super) fn assert_sampling_matches_pdf(bsdf: Bsdf, wo: Vec3, seed: u64) {
         const THETA: usize = 10;
         const PHI: usize = 20;
         const SUB: usize = 24;
@@ -973,7 +995,12 @@ mod tests {
 
     /// ∫ g(ω) dω over the sphere, or over the upper hemisphere with `upper_only`, by the
     /// midpoint rule in (θ, φ) with dω = sin θ dθ dφ, in f64.
-    fn integrate(g: impl Fn(Vec3) -> f64, upper_only: bool, n_theta: usize, n_phi: usize) -> f64 {
+    pub(super) fn integrate(
+        g: impl Fn(Vec3) -> f64,
+        upper_only: bool,
+        n_theta: usize,
+        n_phi: usize,
+    ) -> f64 {
         let top = if upper_only {
             FRAC_PI_2_F64
         } else {
@@ -1052,7 +1079,7 @@ mod tests {
     /// with ξ defined by tan²θ_h = α² ξ/(1 − ξ) (the GGX normals' own distribution),
     /// D(h) cos θ_h dω_h = dξ dφ/(2π). So the albedo is the mean over (ξ, φ) ∈ [0,1)×[0,2π)
     /// of f·cos θ_i·4 (wo·h)/(D(h) cos θ_h), by a 600 × 600 midpoint rule.
-    fn rough_albedo(bsdf: Bsdf, alpha: f32, wo: Vec3) -> f64 {
+    pub(super) fn rough_albedo(bsdf: Bsdf, alpha: f32, wo: Vec3) -> f64 {
         const N: usize = 600;
         let ggx = Ggx::new(alpha);
         let a2 = f64::from(ggx.alpha * ggx.alpha);
