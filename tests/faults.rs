@@ -1675,8 +1675,7 @@ fn a_point_light_with_a_size_is_refused() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
         err.contains(
-            "invalid light size 0.3: a point light has no size: for an area light of this size \
-             choose the shape sphere or quad (--light-shape), or give the size 0"
+            "--light-size 0.3: a point light has no size (--light-shape sphere or quad have one)"
         ),
         "{err}"
     );
