@@ -302,10 +302,12 @@ impl RenderSettings {
         }
         if let (true, LightKind::Spot(cone)) = (lit, self.light.kind) {
             add(format!(
-                "a spot light aimed at {}, cutoff {}°, beam {}°",
-                vector(cone.aim),
-                crate::camera::degrees(cone.cutoff),
-                crate::camera::degrees(cone.beam)
+                "a spot light aimed at ({}, {}, {}), cutoff {}°, beam {}°",
+                short(cone.aim.x),
+                short(cone.aim.y),
+                short(cone.aim.z),
+                short(crate::camera::degrees(cone.cutoff) as f32),
+                short(crate::camera::degrees(cone.beam) as f32)
             ));
         }
         if lit && self.light.colour != Vec3::ONE {
@@ -751,6 +753,24 @@ mod tests {
 
     /// The description names each extension in force, once, and none that does nothing in
     /// the stage.
+    /// The Computes line gives a dragged spot's aim and angles to three decimals, not every
+    /// digit of the f32 the drag left.
+    #[test]
+    fn the_spot_in_the_description_is_rounded() {
+        use crate::light::{LightKind, SpotCone};
+        let mut s = RenderSettings::default();
+        s.light.kind = LightKind::Spot(SpotCone {
+            aim: Vec3::new(0.370_090_34, 0.995_348_4, -0.200_000_05),
+            cutoff: crate::camera::radians(25.346_7),
+            beam: crate::camera::radians(15.0),
+        });
+        let text = s.description();
+        assert!(
+            text.contains("a spot light aimed at (0.37, 0.995, -0.2), cutoff 25.347°, beam 15°"),
+            "{text}"
+        );
+    }
+
     #[test]
     fn the_description_names_the_extensions() {
         let mut s = RenderSettings::default();
