@@ -273,8 +273,14 @@ fn figure_differences(settings: &RenderSettings) -> Vec<String> {
         if s.indirect && figure_n && s.indirect_light != raylab_core::Shading::LAB_INDIRECT_LIGHT {
             differs.push("another N".to_owned());
         }
-        if settings.light.is_area() {
-            differs.push("an area light".to_owned());
+        match settings.light.kind {
+            LightKind::Point => {}
+            LightKind::Sphere { .. } | LightKind::Quad { .. } => {
+                if settings.light.is_area() {
+                    differs.push("an area light".to_owned());
+                }
+            }
+            LightKind::Spot(_) => differs.push("a spot light".to_owned()),
         }
     }
     if settings.scene != SceneChoice::Cornell {

@@ -69,6 +69,23 @@ fn the_figure_and_the_stage_are_at_the_top_and_in_the_title() {
     assert_eq!(settings(&h).shading, Shading::for_stage(Stage::Shadows));
 }
 
+/// The lab's light made a spot is not the lab's figure: the heading says so, as it does for an
+/// area light.
+#[test]
+fn a_spot_light_is_not_the_figure() {
+    use raylab_core::light::{LightKind, SpotCone};
+    let mut settings = small_state().settings;
+    let heading = crate::app::panels::figure_heading;
+    assert_eq!(
+        heading(&settings),
+        "Figure 7: ρ·(D + N) with shadows (eq. 30)"
+    );
+    settings.light.kind = LightKind::Spot(SpotCone::default());
+    assert_eq!(heading(&settings), "Lab stage, not figure 7: a spot light");
+    settings.light.kind = LightKind::Sphere { radius: 0.1 };
+    assert_eq!(heading(&settings), "Lab stage, not figure 7: an area light");
+}
+
 /// While an image is checked, Enter in the File field with another image checks that one: a
 /// screenshot's settings (here its yaw of −10°) are not loaded under the check. The check
 /// dialog's name field starts empty, not with the typed file's name.
