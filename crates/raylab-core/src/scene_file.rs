@@ -642,28 +642,18 @@ impl LightV2 {
     /// The file's light as written: its kind's own fields and none of another's (a field of
     /// another kind is refused at its line, a missing one at the `[light]` table's).
     fn of(l: &LightSpec) -> Self {
-        let mut light = LightV2 {
+        let k = l.kind.fields();
+        LightV2 {
             position: l.position.into(),
             power: l.power,
             colour: l.colour.into(),
             shape: Some(l.kind.shape()),
-            radius: None,
-            side: None,
-            aim: None,
-            cutoff: None,
-            beam: None,
-        };
-        match l.kind {
-            LightKind::Point => {}
-            LightKind::Sphere { radius } => light.radius = Some(radius),
-            LightKind::Quad { side } => light.side = Some(side),
-            LightKind::Spot(cone) => {
-                light.aim = Some(cone.aim.into());
-                light.cutoff = Some(camera::degrees(cone.cutoff));
-                light.beam = Some(camera::degrees(cone.beam));
-            }
+            radius: k.radius,
+            side: k.side,
+            aim: k.aim.map(Into::into),
+            cutoff: k.cutoff.map(camera::degrees),
+            beam: k.beam.map(camera::degrees),
         }
-        light
     }
 
     /// The light's kind, its fields checked against its shape; errors name the line and field.

@@ -105,7 +105,42 @@ impl Default for SpotCone {
     }
 }
 
+/// A kind's own parameters as optional fields, every other kind's `None`: the one place a
+/// [`LightKind`] is taken apart into the fields the settings JSON and scene files write.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KindFields {
+    pub radius: Option<f32>,
+    pub side: Option<f32>,
+    pub aim: Option<Vec3>,
+    /// Radians.
+    pub cutoff: Option<f32>,
+    /// Radians.
+    pub beam: Option<f32>,
+}
+
 impl LightKind {
+    /// The kind's own parameters, each in its field ([`KindFields`]).
+    pub fn fields(&self) -> KindFields {
+        let none = KindFields::default();
+        match *self {
+            LightKind::Point => none,
+            LightKind::Sphere { radius } => KindFields {
+                radius: Some(radius),
+                ..none
+            },
+            LightKind::Quad { side } => KindFields {
+                side: Some(side),
+                ..none
+            },
+            LightKind::Spot(cone) => KindFields {
+                aim: Some(cone.aim),
+                cutoff: Some(cone.cutoff),
+                beam: Some(cone.beam),
+                ..none
+            },
+        }
+    }
+
     /// The kind's name ([`LightShape`]).
     pub fn shape(&self) -> LightShape {
         match self {
@@ -311,26 +346,18 @@ impl Default for LightFields {
 
 impl From<LightSpec> for LightFields {
     fn from(l: LightSpec) -> Self {
-        let mut f = LightFields {
+        let k = l.kind.fields();
+        LightFields {
             position: l.position,
             power: PowerField::Watts(l.power),
             colour: Some(l.colour),
             shape: Some(l.kind.shape()),
-            radius: None,
-            side: None,
-            aim: None,
-            cutoff: None,
-            beam: None,
-        };
-        match l.kind {
-            LightKind::Point => {}
-            LightKind::Sphere { radius } => f.radius = Some(radius),
-            LightKind::Quad { side } => f.side = Some(side),
-            LightKind::Spot(cone) => {
-                (f.aim, f.cutoff, f.beam) = (Some(cone.aim), Some(cone.cutoff), Some(cone.beam))
-            }
+            radius: k.radius,
+            side: k.side,
+            aim: k.aim,
+            cutoff: k.cutoff,
+            beam: k.beam,
         }
-        f
     }
 }
 
