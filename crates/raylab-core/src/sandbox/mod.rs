@@ -20,6 +20,7 @@ pub mod error;
 pub mod lex;
 pub mod parse;
 pub mod tape;
+mod trace;
 
 #[cfg(test)]
 mod tests;
@@ -27,6 +28,7 @@ mod tests;
 pub use compile::{Equations, compile};
 pub use error::{SandboxError, Span};
 pub use tape::{Tape, Ty};
+pub use trace::{MAGENTA, Recording, Rendered, record, render};
 
 /// The longest text accepted, in bytes.
 pub const MAX_SOURCE_BYTES: usize = 16 * 1024;
