@@ -17,6 +17,7 @@
 
 pub mod compile;
 pub mod error;
+pub mod judge;
 pub mod lex;
 pub mod parse;
 pub mod tape;
@@ -27,6 +28,7 @@ mod tests;
 
 pub use compile::{Equations, compile};
 pub use error::{SandboxError, Span};
+pub use judge::{Verdict, judge};
 pub use tape::{Tape, Ty};
 pub use trace::{MAGENTA, Recording, Rendered, record, render};
 
