@@ -370,10 +370,7 @@ impl Parser<'_> {
             return self.unary();
         }
         let mut left = self.binary(level + 1)?;
-        loop {
-            let Tok::Punct(p) = self.peek().tok else {
-                break;
-            };
+        while let Tok::Punct(p) = self.peek().tok {
             let Some(&(_, op)) = LEVELS[level].iter().find(|(s, _)| *s == p) else {
                 break;
             };
