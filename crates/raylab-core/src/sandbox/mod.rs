@@ -177,7 +177,29 @@ pub fn input(name: &str) -> Option<&'static Input> {
     INPUTS.iter().find(|i| i.name == name)
 }
 
-/// The component offset of input `name` (which exists: the names are this module's).
-pub(crate) fn offset(name: &str) -> usize {
-    input(name).map_or(0, |i| usize::from(i.offset))
+/// The component offset of input `name`, which must be one of [`INPUTS`]: called with the
+/// names written in this module's code, in `const` blocks where it runs per pixel.
+pub(crate) const fn offset(name: &str) -> usize {
+    let mut i = 0;
+    while i < INPUTS.len() {
+        if same(INPUTS[i].name.as_bytes(), name.as_bytes()) {
+            return INPUTS[i].offset as usize;
+        }
+        i += 1;
+    }
+    panic!("not an input's name")
+}
+
+const fn same(a: &[u8], b: &[u8]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
 }

@@ -315,30 +315,30 @@ fn hit_of(
 /// Calls `put(component, value)` for every input a hit gives (all but `x`, `y`, `shadowed`
 /// and `D`).
 fn hit_inputs(hit: &Hit, u: &Uniforms, mut put: impl FnMut(usize, f32)) {
-    let mut vec = |name: &str, v: Vec3| {
+    let mut vec = |first: usize, v: Vec3| {
         for (k, c) in v.to_array().into_iter().enumerate() {
-            put(offset(name) + k, c);
+            put(first + k, c);
         }
     };
-    vec("cameraPos", u.camera);
-    vec("right", u.right);
-    vec("down", u.down);
-    vec("forward", u.forward);
-    vec("lightPos", u.light);
-    vec("lightColor", u.light_color);
-    vec("position", hit.position);
-    vec("normal", hit.normal);
-    vec("color", hit.color);
-    vec("indirectLight", u.indirect);
-    vec("shadowStart", hit.shadow_start);
-    for (name, v) in [
-        ("W", u.width),
-        ("H", u.height),
-        ("focalLength", u.focal_length),
-        ("distance", hit.distance),
-        ("shadowDistance", hit.shadow_distance),
+    vec(const { offset("cameraPos") }, u.camera);
+    vec(const { offset("right") }, u.right);
+    vec(const { offset("down") }, u.down);
+    vec(const { offset("forward") }, u.forward);
+    vec(const { offset("lightPos") }, u.light);
+    vec(const { offset("lightColor") }, u.light_color);
+    vec(const { offset("position") }, hit.position);
+    vec(const { offset("normal") }, hit.normal);
+    vec(const { offset("color") }, hit.color);
+    vec(const { offset("indirectLight") }, u.indirect);
+    vec(const { offset("shadowStart") }, hit.shadow_start);
+    for (k, v) in [
+        (const { offset("W") }, u.width),
+        (const { offset("H") }, u.height),
+        (const { offset("focalLength") }, u.focal_length),
+        (const { offset("distance") }, hit.distance),
+        (const { offset("shadowDistance") }, hit.shadow_distance),
     ] {
-        put(offset(name), v);
+        put(k, v);
     }
 }
 
@@ -428,10 +428,10 @@ impl Recording {
                 .map(|i| Vec3::new(v[0][i], v[1][i], v[2][i]))
                 .collect()
         };
-        let set_vec3s = |inputs: &mut Vec<[f32; N]>, name: &str, vs: &[Vec3]| {
+        let set_vec3s = |inputs: &mut Vec<[f32; N]>, first: usize, vs: &[Vec3]| {
             for (i, v) in vs.iter().enumerate() {
                 for (k, c) in v.to_array().into_iter().enumerate() {
-                    inputs[offset(name) + k][i] = c;
+                    inputs[first + k][i] = c;
                 }
             }
         };
@@ -446,7 +446,7 @@ impl Recording {
                 // Where the lab cast no shadow ray, light arrives if the student's D, unshadowed,
                 // is not 0.
                 let unshadowed: Option<Vec<Vec3>> = d_tape.map(|tape| {
-                    for l in inputs[offset("shadowed")].iter_mut() {
+                    for l in inputs[const { offset("shadowed") }].iter_mut() {
                         *l = 0.0;
                     }
                     vec3s(tape.run::<N>(&inputs, slots))
@@ -463,7 +463,7 @@ impl Recording {
             }
         };
         for (i, s) in shadowed.iter().enumerate() {
-            inputs[offset("shadowed")][i] = if *s { 1.0 } else { 0.0 };
+            inputs[const { offset("shadowed") }][i] = if *s { 1.0 } else { 0.0 };
         }
         let d: Vec<Vec3> = match d_tape {
             Some(tape) => vec3s(tape.run::<N>(&inputs, slots)),
@@ -473,7 +473,7 @@ impl Recording {
                 .map(|(h, s)| if *s { Vec3::ZERO } else { h.lab_d })
                 .collect(),
         };
-        set_vec3s(&mut inputs, "D", &d);
+        set_vec3s(&mut inputs, const { offset("D") }, &d);
         match equations.tape(Quantity::Value) {
             Some(tape) => out.extend(vec3s(tape.run::<N>(&inputs, slots))),
             None => out.extend(
