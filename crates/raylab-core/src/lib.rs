@@ -43,6 +43,7 @@ pub mod progressive;
 pub mod relief;
 pub mod render;
 pub mod sampling;
+pub mod sandbox;
 pub mod scene;
 pub mod scene_file;
 pub mod settings;

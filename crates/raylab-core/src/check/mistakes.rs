@@ -292,47 +292,10 @@ pub fn formula_figures(
                 .map(|x| camera.primary_ray_rotated(&rotation, x as f32 + 0.5, y as f32 + 0.5))
                 .collect();
             let mut row = vec![Vec3::ZERO; w * wanted.len()];
-            let mut put = |x: usize, values: &mut dyn Iterator<Item = Vec3>| {
-                for (k, v) in values.enumerate() {
-                    row[k * w + x] = v;
-                }
-            };
-            let mut out = vec![Vec3::ZERO; BATCH];
-            // A batch at a time, as the integrator takes them: its camera rays are traced
-            // first, so the first hits recorded are theirs, in order.
-            for (c, rays) in rays.chunks(BATCH).enumerate() {
-                let mut recording = HitRecording::default();
-                tracer.trace_recorded(rays, &mut [], &mut out[..rays.len()], &mut recording);
-                let camera_hits = &recording.hits[..rays.len()];
-                let mut shaded = recording.shaded_hits().into_iter();
-                for (i, traced) in camera_hits.iter().enumerate() {
-                    let x = c * BATCH + i;
-                    if traced.specular {
-                        // Its branches' hits are recorded among the others' in waves: the
-                        // pixel is traced again alone, where every hit recorded is its own.
-                        let mut alone = HitRecording::default();
-                        tracer.trace_recorded(&rays[i..=i], &mut [], &mut out[..1], &mut alone);
-                        let branches = alone.shaded_hits();
-                        put(
-                            x,
-                            &mut wanted.iter().map(|r| {
-                                branches.iter().fold(Vec3::ZERO, |sum, s| {
-                                    sum + s.weight
-                                        * recombine.value(*r, &s.hit, s.incoming, &s.terms)
-                                })
-                            }),
-                        );
-                    } else if traced.hit.is_some() {
-                        // A diffuse hit, whose terms are the next recorded: its value is the
-                        // pixel's, as the integrator writes a camera ray's.
-                        let Some(s) = shaded.next() else { break };
-                        put(
-                            x,
-                            &mut wanted
-                                .iter()
-                                .map(|r| recombine.value(*r, &s.hit, s.incoming, &s.terms)),
-                        );
-                    }
+            for (x, pixel) in pixel_hits(&tracer, &rays).iter().enumerate() {
+                for (k, r) in wanted.iter().enumerate() {
+                    let value = |s: &ShadedHit| recombine.value(*r, &s.hit, s.incoming, &s.terms);
+                    row[k * w + x] = pixel.value(value);
                 }
             }
             row
@@ -352,6 +315,62 @@ pub fn formula_figures(
         .collect()
 }
 
+/// What a camera ray's pixel is, as the lab's integrator shades it.
+pub(crate) enum PixelHits {
+    /// The ray leaves the scene: black.
+    Miss,
+    /// A diffuse hit: the pixel is its value.
+    Diffuse(ShadedHit),
+    /// Mirror or glass: the pixel is the sum of the diffuse hits its Whitted branches find,
+    /// each times its weight, in the integrator's order.
+    Specular(Vec<ShadedHit>),
+}
+
+impl PixelHits {
+    /// The pixel's value with each shaded hit valued by `value`: as the integrator writes it
+    /// when `value` is [`HitTerms::value`].
+    pub(crate) fn value(&self, mut value: impl FnMut(&ShadedHit) -> Vec3) -> Vec3 {
+        match self {
+            PixelHits::Miss => Vec3::ZERO,
+            PixelHits::Diffuse(s) => value(s),
+            PixelHits::Specular(branches) => branches
+                .iter()
+                .fold(Vec3::ZERO, |sum, s| sum + s.weight * value(s)),
+        }
+    }
+}
+
+/// The shaded hits of each of `rays` (camera rays, a row's or fewer), traced by the lab's own
+/// integrator a batch at a time and recorded ([`Tracer::trace_recorded`]).
+pub(crate) fn pixel_hits(tracer: &Tracer, rays: &[Ray]) -> Vec<PixelHits> {
+    let mut pixels: Vec<PixelHits> = rays.iter().map(|_| PixelHits::Miss).collect();
+    let mut out = vec![Vec3::ZERO; BATCH];
+    // A batch at a time, as the integrator takes them: its camera rays are traced first, so
+    // the first hits recorded are theirs, in order.
+    for (c, rays) in rays.chunks(BATCH).enumerate() {
+        let mut recording = HitRecording::default();
+        tracer.trace_recorded(rays, &mut [], &mut out[..rays.len()], &mut recording);
+        let camera_hits = &recording.hits[..rays.len()];
+        let mut shaded = recording.shaded_hits().into_iter();
+        for (i, traced) in camera_hits.iter().enumerate() {
+            let x = c * BATCH + i;
+            if traced.specular {
+                // Its branches' hits are recorded among the others' in waves: the pixel is
+                // traced again alone, where every hit recorded is its own.
+                let mut alone = HitRecording::default();
+                tracer.trace_recorded(&rays[i..=i], &mut [], &mut out[..1], &mut alone);
+                pixels[x] = PixelHits::Specular(alone.shaded_hits());
+            } else if traced.hit.is_some() {
+                // A diffuse hit, whose terms are the next recorded: its value is the pixel's,
+                // as the integrator writes a camera ray's.
+                let Some(s) = shaded.next() else { break };
+                pixels[x] = PixelHits::Diffuse(s);
+            }
+        }
+    }
+    pixels
+}
+
 /// One ray traced by a formula pass: its closest hit (and direction), and whether that hit
 /// was mirror or glass (followed by branches, not shaded).
 struct Traced {
@@ -369,11 +388,11 @@ struct HitRecording {
 
 /// A shaded hit: where, found by a ray going which way, its terms, and its weight (1 for a
 /// camera ray; the product of the specular weights along a Whitted branch).
-struct ShadedHit {
-    hit: Intersection,
-    incoming: Vec3,
-    terms: HitTerms,
-    weight: Vec3,
+pub(crate) struct ShadedHit {
+    pub(crate) hit: Intersection,
+    pub(crate) incoming: Vec3,
+    pub(crate) terms: HitTerms,
+    pub(crate) weight: Vec3,
 }
 
 impl HitRecording {
@@ -466,7 +485,7 @@ impl Recombine<'_> {
                 } else {
                     terms.normal
                 };
-                let d = self.mistaken_d(mistake, terms.position, normal);
+                let d = mistaken_direct(&self.light, mistake, terms.position, normal);
                 let blocked = self.blocked_with(d, hit, incoming, terms);
                 HitTerms {
                     d,
@@ -491,23 +510,6 @@ impl Recombine<'_> {
             ShadowDropsIndirect if terms.blocked => Vec3::ZERO,
             _ => terms.value(stage, n),
         }
-    }
-
-    /// D (equation 27) as the mistake computes it, from the lab's own parts of the equation
-    /// ([`DirectLight::at`]: r², r̂·n̂, 4πr² and a spot's falloff) with `normal`.
-    fn mistaken_d(&self, mistake: Mistake, position: Vec3, normal: Vec3) -> Vec3 {
-        let parts = DirectLight::at(&self.light, position, normal);
-        let cos = match mistake {
-            Mistake::UnclampedCos => parts.cos,
-            _ => parts.cos.max(0.0),
-        };
-        let area = match mistake {
-            Mistake::No4Pi => parts.r2,
-            Mistake::InverseR => 4.0 * PI * parts.r2.sqrt(),
-            _ => parts.four_pi_r2,
-        };
-        // A spot's falloff is 1 for every other light: the product is `cos` itself.
-        self.light.channel_power() * (parts.falloff * cos) / area
     }
 
     /// Whether a hit given a mistaken D is in shadow: the lab's answer where it cast a shadow
@@ -543,6 +545,29 @@ impl Recombine<'_> {
         self.scene
             .occluded(&Ray::new(terms.position, to_light), distance)
     }
+}
+
+/// D (equation 27) as `mistake` (`no-4pi`, `inverse-r`, `unclamped-cos`; any other gives the
+/// lab's) computes it, from the lab's own parts of the equation ([`DirectLight::at`]: r², r̂·n̂,
+/// 4πr² and a spot's falloff) with `normal`.
+pub(crate) fn mistaken_direct(
+    light: &LightSpec,
+    mistake: Mistake,
+    position: Vec3,
+    normal: Vec3,
+) -> Vec3 {
+    let parts = DirectLight::at(light, position, normal);
+    let cos = match mistake {
+        Mistake::UnclampedCos => parts.cos,
+        _ => parts.cos.max(0.0),
+    };
+    let area = match mistake {
+        Mistake::No4Pi => parts.r2,
+        Mistake::InverseR => 4.0 * PI * parts.r2.sqrt(),
+        _ => parts.four_pi_r2,
+    };
+    // A spot's falloff is 1 for every other light: the product is `cos` itself.
+    light.channel_power() * (parts.falloff * cos) / area
 }
 
 /// The settings a settings mistake renders with, and the part of that render the student's

@@ -1,0 +1,698 @@
+//! The quantities bound to the tracer: the camera rays traced (with the student's `d`), each
+//! diffuse hit's terms recorded once with its shadow ray's answer ([`Recording`]), then
+//! `shadowed`, `D` and `R` evaluated over the recorded terms, sixteen hits at a time, without
+//! tracing again ([`Recording::evaluate`]).
+//!
+//! The hits are the lab integrator's own ([`pixel_hits`], which [`check`]'s formula mistakes
+//! use too): a pixel whose camera ray meets mirror or glass is the sum of its Whitted
+//! branches' diffuse hits, each times its weight. Where the student writes no quantity, it is
+//! the lab's, with the renderer's bits:
+//!
+//! * `d`: `right·(x + ½ − W/2) + down·(y + ½ − H/2) + forward·f` ([`Camera::primary_ray`]);
+//! * `shadowStart`: the lab's shadow ray's start, [`SHADOW_OFFSET`] off the surface on the
+//!   light's side ([`shadow_ray`]);
+//! * `shadowed`: the shadow ray blocked before the light, tested (with shadows on) where light
+//!   arrives: where the lab's D is not 0, or the student's D would not be 0 unshadowed;
+//! * `D`: `shadowed ? 0 : D` of equation 27 as the lab computes it ([`DirectLight::at`]);
+//! * `R`: equations 28–30 as the stage combines them ([`shaded_value`]).
+//!
+//! `shadowDistance` is the distance along the shadow ray from `shadowStart` to the nearest
+//! surface (infinity when none). With the lab's start the lab's test, `shadowDistance <
+//! length(lightPos - shadowStart)`, is the renderer's up to a surface within 2·10⁻⁴ of the
+//! light.
+//!
+//! [`check`]: crate::check
+//! [`Camera::primary_ray`]: crate::Camera::primary_ray
+//! [`DirectLight::at`]: crate::light::DirectLight::at
+//! [`SHADOW_OFFSET`]: crate::light::SHADOW_OFFSET
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::{INPUT_COMPONENTS, Quantity, compile::Equations, offset};
+use crate::check::mistakes::{PixelHits, ShadedHit, pixel_hits};
+use crate::film::Image;
+use crate::geometry::Ray;
+use crate::integrator::{Stage, Tracer, shaded_value};
+use crate::light::shadow_ray;
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+
+/// The colour of a pixel that came out NaN or infinite.
+pub const MAGENTA: Vec3 = Vec3::new(1.0, 0.0, 1.0);
+
+/// A diffuse hit's terms, as the student's quantities read them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Hit {
+    position: Vec3,
+    normal: Vec3,
+    distance: f32,
+    color: Vec3,
+    shadow_start: Vec3,
+    shadow_distance: f32,
+    /// D of equation 27 before shadows, as the lab computed it.
+    lab_d: Vec3,
+    /// Whether the lab cast a shadow ray here (shadows on, light arriving).
+    lab_cast: bool,
+    /// The shadow test's answer from `shadow_start`: the lab's own where it cast one.
+    blocked: bool,
+    /// What the pixel gets this hit's value times.
+    weight: Vec3,
+}
+
+/// What a pixel is made of.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Pixel {
+    Miss,
+    /// The camera ray's direction was not finite, or 0: the pixel is counted as NaN.
+    BadRay,
+    /// One diffuse hit, `hits[first]`: the pixel is its value.
+    Diffuse {
+        first: u32,
+    },
+    /// Mirror or glass: the sum of `hits[first..first + count]`, each times its weight.
+    Specular {
+        first: u32,
+        count: u32,
+    },
+}
+
+/// The values the quantities read that are one for the whole image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Uniforms {
+    width: f32,
+    height: f32,
+    focal_length: f32,
+    camera: Vec3,
+    right: Vec3,
+    down: Vec3,
+    forward: Vec3,
+    light: Vec3,
+    light_color: Vec3,
+    indirect: Vec3,
+    stage: Stage,
+    shadows: bool,
+}
+
+/// Every pixel's diffuse hits and their terms, traced once with the student's `d` and
+/// `shadowStart` (or the lab's): what `shadowed`, `D` and `R` are evaluated over.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    width: u32,
+    height: u32,
+    pixels: Vec<Pixel>,
+    hits: Vec<Hit>,
+    uniforms: Uniforms,
+    /// The `d` and `shadowStart` it was traced with (`None`: the lab's).
+    traced_with: Equations,
+}
+
+/// An image the student's quantities made.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rendered {
+    /// Linear, as the renderer's; pixels that came out NaN or infinite are [`MAGENTA`].
+    pub image: Image,
+    /// How many pixels came out NaN or infinite.
+    pub non_finite: usize,
+}
+
+/// [`record`] then [`Recording::evaluate`].
+pub fn render(scene: &Scene, settings: &RenderSettings, equations: &Equations) -> Rendered {
+    record(scene, settings, equations).evaluate(equations)
+}
+
+/// Traces the camera rays (with `equations`' `d`) through the lab's integrator and records
+/// every pixel's diffuse hits with their shadow rays (from `equations`' `shadowStart`)
+/// answered, rows in parallel.
+pub fn record(scene: &Scene, settings: &RenderSettings, equations: &Equations) -> Recording {
+    let camera = &settings.camera;
+    let rotation = camera.rotation();
+    let uniforms = Uniforms {
+        width: camera.width as f32,
+        height: camera.height as f32,
+        focal_length: camera.focal_length,
+        camera: camera.position,
+        right: rotation.x_axis,
+        down: rotation.y_axis,
+        forward: rotation.z_axis,
+        light: settings.light.position,
+        light_color: settings.light.channel_power(),
+        indirect: settings.shading.indirect_term(),
+        stage: settings.shading.stage,
+        shadows: settings.shading.shadows,
+    };
+    let tracer = Tracer::new(scene, settings);
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let rows: Vec<(Vec<Pixel>, Vec<Hit>)> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let rays = camera_rays(equations, &uniforms, y, w, |x| {
+                camera.primary_ray_rotated(&rotation, x as f32 + 0.5, y as f32 + 0.5)
+            });
+            let good: Vec<Ray> = rays
+                .iter()
+                .map(|r| r.unwrap_or(Ray::new(Vec3::ZERO, Vec3::Z)))
+                .collect();
+            let traced = pixel_hits(&tracer, &good);
+            let mut pixels = Vec::with_capacity(w);
+            let mut hits = Vec::new();
+            let mut slots = Vec::new();
+            for (ray, pixel) in rays.iter().zip(&traced) {
+                let first = hits.len() as u32;
+                let mut add = |s: &ShadedHit| {
+                    hits.push(hit_of(scene, settings, equations, &uniforms, s, &mut slots));
+                };
+                pixels.push(match (ray, pixel) {
+                    (None, _) => Pixel::BadRay,
+                    (_, PixelHits::Miss) => Pixel::Miss,
+                    (_, PixelHits::Diffuse(s)) => {
+                        add(s);
+                        Pixel::Diffuse { first }
+                    }
+                    (_, PixelHits::Specular(branches)) => {
+                        branches.iter().for_each(&mut add);
+                        Pixel::Specular {
+                            first,
+                            count: branches.len() as u32,
+                        }
+                    }
+                });
+            }
+            (pixels, hits)
+        })
+        .collect();
+    let mut pixels = Vec::with_capacity(w * h);
+    let mut hits = Vec::new();
+    for (row, row_hits) in rows {
+        let base = hits.len() as u32;
+        pixels.extend(row.into_iter().map(|p| match p {
+            Pixel::Diffuse { first } => Pixel::Diffuse {
+                first: first + base,
+            },
+            Pixel::Specular { first, count } => Pixel::Specular {
+                first: first + base,
+                count,
+            },
+            other => other,
+        }));
+        hits.extend(row_hits);
+    }
+    Recording {
+        width: camera.width,
+        height: camera.height,
+        pixels,
+        hits,
+        uniforms,
+        traced_with: retraced_part(equations),
+    }
+}
+
+/// Only the quantities that change what is traced.
+fn retraced_part(equations: &Equations) -> Equations {
+    let mut e = equations.clone();
+    e.keep_only(Quantity::retraces);
+    e
+}
+
+/// Row `y`'s camera rays: the lab's (`lab(x)`), or along the student's `d`, sixteen pixels at
+/// a time; `None` where `d` is not finite or is 0.
+fn camera_rays(
+    equations: &Equations,
+    u: &Uniforms,
+    y: usize,
+    w: usize,
+    lab: impl Fn(usize) -> Ray,
+) -> Vec<Option<Ray>> {
+    let Some(tape) = equations.tape(Quantity::Direction) else {
+        return (0..w).map(|x| Some(lab(x))).collect();
+    };
+    let mut inputs = [[0.0f32; 16]; INPUT_COMPONENTS];
+    let mut put = |name: &str, v: &[f32]| {
+        for (k, c) in v.iter().enumerate() {
+            inputs[offset(name) + k] = [*c; 16];
+        }
+    };
+    put("y", &[y as f32]);
+    put("W", &[u.width]);
+    put("H", &[u.height]);
+    put("focalLength", &[u.focal_length]);
+    put("cameraPos", &u.camera.to_array());
+    put("right", &u.right.to_array());
+    put("down", &u.down.to_array());
+    put("forward", &u.forward.to_array());
+    let mut slots = Vec::new();
+    let mut rays = Vec::with_capacity(w);
+    for x0 in (0..w).step_by(16) {
+        inputs[offset("x")] = std::array::from_fn(|i| (x0 + i) as f32);
+        let d = tape.run::<16>(&inputs, &mut slots);
+        for i in 0..16.min(w - x0) {
+            let d = Vec3::new(d[0][i], d[1][i], d[2][i]);
+            rays.push((d.is_finite() && d != Vec3::ZERO).then(|| Ray::new(u.camera, d)));
+        }
+    }
+    rays
+}
+
+/// A shaded hit's terms, its shadow ray cast from the student's `shadowStart` or the lab's.
+fn hit_of(
+    scene: &Scene,
+    settings: &RenderSettings,
+    equations: &Equations,
+    u: &Uniforms,
+    s: &ShadedHit,
+    slots: &mut Vec<[f32; 1]>,
+) -> Hit {
+    let t = &s.terms;
+    let mut hit = Hit {
+        position: t.position,
+        normal: t.normal,
+        distance: s.hit.distance,
+        color: t.rho,
+        shadow_start: t.position,
+        shadow_distance: f32::INFINITY,
+        lab_d: t.d,
+        lab_cast: t.shadow_ray.is_some(),
+        blocked: false,
+        weight: s.weight,
+    };
+    let nearest = |ray: &Ray| {
+        scene
+            .closest_intersection(ray, f32::INFINITY)
+            .map_or(f32::INFINITY, |h| h.distance)
+    };
+    if let Some(tape) = equations.tape(Quantity::ShadowStart) {
+        let mut inputs = [0.0f32; INPUT_COMPONENTS];
+        hit_inputs(&hit, u, |k, v| inputs[k] = v);
+        let start = Vec3::from_array(tape.run_one(&inputs, slots));
+        hit.shadow_start = start;
+        let to_light = u.light - start;
+        if start.is_finite() && to_light != Vec3::ZERO {
+            hit.shadow_distance = nearest(&Ray::new(start, to_light));
+            hit.blocked = hit.shadow_distance < to_light.length();
+        } else {
+            hit.shadow_distance = f32::NAN;
+        }
+        return hit;
+    }
+    // The lab's shadow ray: the one it cast, or (where it cast none, as no light arrived) the
+    // one it would have ([`crate::scene::in_shadow`]).
+    let lab_ray = t.shadow_ray.or_else(|| {
+        let at_edge = scene.approach_at_edge(s.hit.triangle_index, s.hit.u, s.hit.v, s.incoming);
+        shadow_ray(&settings.light, t.position, t.normal, at_edge)
+    });
+    if let Some((ray, t_max)) = lab_ray {
+        hit.shadow_start = ray.origin;
+        hit.shadow_distance = nearest(&ray);
+        hit.blocked = if hit.lab_cast {
+            t.blocked
+        } else {
+            hit.shadow_distance < t_max
+        };
+    }
+    hit
+}
+
+/// Calls `put(component, value)` for every input a hit gives (all but `x`, `y`, `shadowed`
+/// and `D`).
+fn hit_inputs(hit: &Hit, u: &Uniforms, mut put: impl FnMut(usize, f32)) {
+    let mut vec = |first: usize, v: Vec3| {
+        for (k, c) in v.to_array().into_iter().enumerate() {
+            put(first + k, c);
+        }
+    };
+    vec(const { offset("cameraPos") }, u.camera);
+    vec(const { offset("right") }, u.right);
+    vec(const { offset("down") }, u.down);
+    vec(const { offset("forward") }, u.forward);
+    vec(const { offset("lightPos") }, u.light);
+    vec(const { offset("lightColor") }, u.light_color);
+    vec(const { offset("position") }, hit.position);
+    vec(const { offset("normal") }, hit.normal);
+    vec(const { offset("color") }, hit.color);
+    vec(const { offset("indirectLight") }, u.indirect);
+    vec(const { offset("shadowStart") }, hit.shadow_start);
+    for (k, v) in [
+        (const { offset("W") }, u.width),
+        (const { offset("H") }, u.height),
+        (const { offset("focalLength") }, u.focal_length),
+        (const { offset("distance") }, hit.distance),
+        (const { offset("shadowDistance") }, hit.shadow_distance),
+    ] {
+        put(k, v);
+    }
+}
+
+impl Recording {
+    /// Whether `equations` can be evaluated over this recording, or need tracing again (their
+    /// `d` or `shadowStart` differ from those it was traced with).
+    pub fn fits(&self, equations: &Equations) -> bool {
+        !self.traced_with.retraces_from(equations)
+    }
+
+    pub fn hits(&self) -> usize {
+        self.hits.len()
+    }
+
+    /// The image of `equations`' `shadowed`, `D` and `R` (the lab's where not written) over
+    /// the recorded hits, sixteen at a time. `equations` should [`Recording::fits`] it: their
+    /// `d` and `shadowStart` are those traced.
+    pub fn evaluate(&self, equations: &Equations) -> Rendered {
+        self.evaluate_lanes::<16>(equations)
+    }
+
+    /// [`Recording::evaluate`] `N` hits at a time: 16, or 1 (the same bits).
+    pub fn evaluate_lanes<const N: usize>(&self, equations: &Equations) -> Rendered {
+        let values: Vec<Vec3> = self
+            .hits
+            .par_chunks(256)
+            .flat_map_iter(|chunk| {
+                let mut slots = Vec::new();
+                let mut out = Vec::with_capacity(chunk.len());
+                for group in chunk.chunks(N) {
+                    self.values::<N>(equations, group, &mut slots, &mut out);
+                }
+                out
+            })
+            .collect();
+        let mut non_finite = 0;
+        let pixels = self
+            .pixels
+            .iter()
+            .map(|p| {
+                let v = match *p {
+                    Pixel::Miss => Vec3::ZERO,
+                    Pixel::BadRay => Vec3::NAN,
+                    Pixel::Diffuse { first } => values[first as usize],
+                    Pixel::Specular { first, count } => {
+                        let range = first as usize..(first + count) as usize;
+                        self.hits[range.clone()]
+                            .iter()
+                            .zip(&values[range])
+                            .fold(Vec3::ZERO, |sum, (h, v)| sum + h.weight * *v)
+                    }
+                };
+                if v.is_finite() {
+                    v
+                } else {
+                    non_finite += 1;
+                    MAGENTA
+                }
+            })
+            .collect();
+        Rendered {
+            image: Image {
+                width: self.width,
+                height: self.height,
+                pixels,
+            },
+            non_finite,
+        }
+    }
+
+    /// R at each hit of `group` (at most `N`), appended to `out`.
+    fn values<const N: usize>(
+        &self,
+        equations: &Equations,
+        group: &[Hit],
+        slots: &mut Vec<[f32; N]>,
+        out: &mut Vec<Vec3>,
+    ) {
+        let u = &self.uniforms;
+        let mut inputs = vec![[0.0f32; N]; INPUT_COMPONENTS];
+        for (i, hit) in group.iter().enumerate() {
+            hit_inputs(hit, u, |k, v| inputs[k][i] = v);
+        }
+        let lanes = group.len();
+        let vec3s = |v: [[f32; N]; 3]| -> Vec<Vec3> {
+            (0..lanes)
+                .map(|i| Vec3::new(v[0][i], v[1][i], v[2][i]))
+                .collect()
+        };
+        let set_vec3s = |inputs: &mut Vec<[f32; N]>, first: usize, vs: &[Vec3]| {
+            for (i, v) in vs.iter().enumerate() {
+                for (k, c) in v.to_array().into_iter().enumerate() {
+                    inputs[first + k][i] = c;
+                }
+            }
+        };
+        let d_tape = equations.tape(Quantity::Direct);
+        // shadowed: the student's, or the lab's test where light arrives.
+        let shadowed: Vec<bool> = match equations.tape(Quantity::Shadowed) {
+            Some(tape) => {
+                let s = tape.run::<N>(&inputs, slots);
+                (0..lanes).map(|i| s[0][i] != 0.0).collect()
+            }
+            None => {
+                // Where the lab cast no shadow ray, light arrives if the student's D, unshadowed,
+                // is not 0.
+                let unshadowed: Option<Vec<Vec3>> = d_tape.map(|tape| {
+                    for l in inputs[const { offset("shadowed") }].iter_mut() {
+                        *l = 0.0;
+                    }
+                    vec3s(tape.run::<N>(&inputs, slots))
+                });
+                group
+                    .iter()
+                    .enumerate()
+                    .map(|(i, h)| {
+                        let arrives =
+                            h.lab_cast || unshadowed.as_ref().is_some_and(|d| d[i] != Vec3::ZERO);
+                        u.shadows && arrives && h.blocked
+                    })
+                    .collect()
+            }
+        };
+        for (i, s) in shadowed.iter().enumerate() {
+            inputs[const { offset("shadowed") }][i] = if *s { 1.0 } else { 0.0 };
+        }
+        let d: Vec<Vec3> = match d_tape {
+            Some(tape) => vec3s(tape.run::<N>(&inputs, slots)),
+            None => group
+                .iter()
+                .zip(&shadowed)
+                .map(|(h, s)| if *s { Vec3::ZERO } else { h.lab_d })
+                .collect(),
+        };
+        set_vec3s(&mut inputs, const { offset("D") }, &d);
+        match equations.tape(Quantity::Value) {
+            Some(tape) => out.extend(vec3s(tape.run::<N>(&inputs, slots))),
+            None => out.extend(
+                group
+                    .iter()
+                    .zip(&d)
+                    .map(|(h, d)| shaded_value(u.stage, h.color, *d, false, u.indirect)),
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::check::mistakes::{self, Mistake, Recombined};
+    use crate::render::render as render_figure;
+    use crate::sandbox::compile;
+    use crate::scene::cornell_box;
+    use crate::settings::Shading;
+
+    fn settings(stage: Stage, side: u32) -> RenderSettings {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(side, side);
+        s.shading = Shading::for_stage(stage);
+        s
+    }
+
+    /// Every pixel of `got` within `tolerance` relative of `want`'s.
+    fn assert_close(got: &Image, want: &Image, tolerance: f32, what: &str) {
+        assert_eq!((got.width, got.height), (want.width, want.height), "{what}");
+        let mut worst = (0.0f32, 0);
+        for (i, (g, w)) in got.pixels.iter().zip(&want.pixels).enumerate() {
+            for (a, b) in g.to_array().into_iter().zip(w.to_array()) {
+                let error = (a - b).abs() / a.abs().max(b.abs()).max(f32::MIN_POSITIVE);
+                if !(a == b || error <= tolerance) && (error > worst.0 || error.is_nan()) {
+                    worst = (error, i);
+                }
+            }
+        }
+        let i = worst.1;
+        assert!(
+            worst.0 == 0.0,
+            "{what}: pixel {i} ({}, {}) is {} where {} (relative error {})",
+            i % got.width as usize,
+            i / got.width as usize,
+            got.pixels[i],
+            want.pixels[i],
+            worst.0
+        );
+    }
+
+    /// The lab's quantities, typed as a student would write them, for `stage`'s figure.
+    fn lab_text(stage: Stage) -> String {
+        let (shadows, _) = stage.preset_switches();
+        let mut text = String::from(
+            "d = right * (x + 0.5 - W / 2) + down * (y + 0.5 - H / 2) + forward * focalLength\n\
+             vec3 r = lightPos - position; // from the surface to the light\n\
+             float r2 = dot(r, r);\n",
+        );
+        if shadows {
+            text.push_str("shadowed = shadowDistance < length(lightPos - shadowStart)\n");
+        } else {
+            text.push_str("shadowed = false\n");
+        }
+        text.push_str(
+            "D = shadowed ? vec3(0) : lightColor * max(dot(r / sqrt(r2), normal), 0.0f) / (4 * M_PI * r2)\n",
+        );
+        text.push_str(match stage {
+            Stage::Flat => "R = color",
+            Stage::Incoming => "R = D + indirectLight",
+            _ => "R = color * (D + indirectLight)",
+        });
+        text
+    }
+
+    /// The lab's own equations typed in the language give figures 2 to 7 within 10⁻⁶
+    /// relative in every pixel.
+    #[test]
+    fn the_labs_equations_typed_give_figures_2_to_7() {
+        let scene = cornell_box();
+        for stage in Stage::LAB {
+            let s = settings(stage, 64);
+            let text = lab_text(stage);
+            let equations = compile(&text).unwrap_or_else(|e| panic!("{text}: {e:?}"));
+            assert_eq!(equations.written().count(), 4);
+            let got = render(&scene, &s, &equations);
+            assert_eq!(got.non_finite, 0);
+            let figure = render_figure(&scene, &s);
+            assert_close(&got.image, &figure, 1e-6, &format!("{stage}"));
+            // With nothing written, the lab's own quantities: the figure bit for bit.
+            let lab = render(&scene, &s, &Equations::lab());
+            assert_eq!(lab.image, figure, "{stage}");
+        }
+    }
+
+    /// Each formula mistake of the catalogue, typed, as `check` renders it.
+    fn mistake_text(m: Mistake) -> Option<&'static str> {
+        match m {
+            Mistake::No4Pi => Some(
+                "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * max(dot(normalize(r), normal), 0.0) / dot(r, r)",
+            ),
+            Mistake::InverseR => Some(
+                "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * max(dot(r / length(r), normal), 0.0) / (4 * pi * length(r))",
+            ),
+            Mistake::UnclampedCos => Some(
+                "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * dot(r / length(r), normal) / (4 * pi * dot(r, r))",
+            ),
+            Mistake::FlippedNormal => Some(
+                "vec3 r = lightPos - position;\nvec3 n = -normal;\nD = shadowed ? vec3(0) : lightColor * max(dot(r / length(r), n), 0.0) / (4 * pi * dot(r, r))",
+            ),
+            Mistake::NoRho => Some("R = D + indirectLight"),
+            Mistake::IndirectOutsideRho => Some("R = color * D + indirectLight"),
+            Mistake::ShadowAcne => Some("shadowStart = position"),
+            Mistake::ShadowBeyondLight => Some("shadowed = shadowDistance < 1e30"),
+            Mistake::ShadowDropsIndirect => {
+                Some("R = shadowed ? vec3(0) : color * (D + indirectLight)")
+            }
+            Mistake::PixelCorner => {
+                Some("d = right * (x - W / 2) + down * (y - H / 2) + forward * focalLength")
+            }
+            _ => None,
+        }
+    }
+
+    /// Typing each formula mistake of the catalogue (and the pixel's corner) gives the image
+    /// `check` renders for it.
+    #[test]
+    fn typed_mistakes_give_the_catalogues_figures() {
+        let scene = cornell_box();
+        let s = settings(Stage::Lab, 64);
+        let mut typed = 0;
+        for m in Mistake::catalogue() {
+            let Some(text) = mistake_text(m) else {
+                assert_ne!(m.kind(), mistakes::Kind::Formula, "{m} has no text");
+                continue;
+            };
+            let equations = compile(text).unwrap_or_else(|e| panic!("{m}: {e:?}"));
+            let got = render(&scene, &s, &equations);
+            let want = match m.kind() {
+                mistakes::Kind::Formula => {
+                    mistakes::formula_figures(&scene, &s, &[Recombined::Mistake(m)]).remove(0)
+                }
+                _ => mistakes::settings_figure(&scene, &s, m),
+            };
+            // Where the mistake shows in the catalogue's figure, it shows in the typed one
+            // (an unclamped cosine does not show in the lab's box: the faces turned away from
+            // the light are in shadow).
+            if want != render_figure(&scene, &s) {
+                assert!(
+                    got.image != render_figure(&scene, &s),
+                    "{m} shows no mistake"
+                );
+            }
+            assert_close(&got.image, &want, 1e-6, &format!("{m}"));
+            typed += 1;
+        }
+        assert_eq!(typed, 10);
+    }
+
+    /// Evaluating one hit at a time gives the sixteen-lane image's bits.
+    #[test]
+    fn one_lane_and_sixteen_give_the_same_image() {
+        let scene = cornell_box();
+        let s = settings(Stage::Lab, 48);
+        let text = format!(
+            "{}\nlet k = pow(abs(dot(normal, normalize(position))), 0.7)\nR = mix(color * (D + indirectLight), vec3(k), 0.3)",
+            lab_text(Stage::Lab)
+                .lines()
+                .filter(|l| !l.starts_with('R'))
+                .collect::<Vec<_>>()
+                .join("\n")
+        );
+        let equations = compile(&text).unwrap();
+        let recording = record(&scene, &s, &equations);
+        let sixteen = recording.evaluate_lanes::<16>(&equations);
+        let one = recording.evaluate_lanes::<1>(&equations);
+        let bits = |r: &Rendered| -> Vec<u32> {
+            r.image
+                .pixels
+                .iter()
+                .flat_map(|p| p.to_array().map(f32::to_bits))
+                .collect()
+        };
+        assert_eq!(bits(&sixteen), bits(&one));
+    }
+
+    /// Pixels that come out NaN or infinite are counted and drawn magenta; a camera ray with
+    /// no direction is one of them.
+    #[test]
+    fn nan_and_infinity_are_counted() {
+        let scene = cornell_box();
+        let s = settings(Stage::Lab, 32);
+        let all = render(&scene, &s, &compile("R = vec3(sqrt(-1.0))").unwrap());
+        assert_eq!(all.non_finite, 32 * 32);
+        assert!(all.image.pixels.iter().all(|p| *p == MAGENTA));
+        let infinite = render(&scene, &s, &compile("R = color / 0").unwrap());
+        assert_eq!(infinite.non_finite, 32 * 32);
+        let half = "d = x < W / 2 ? vec3(0) : right * (x + 0.5 - W / 2) + down * (y + 0.5 - H / 2) + forward * focalLength";
+        let half = render(&scene, &s, &compile(half).unwrap());
+        assert_eq!(half.non_finite, 32 * 16);
+        let figure = render_figure(&scene, &s);
+        for (i, (p, f)) in half.image.pixels.iter().zip(&figure.pixels).enumerate() {
+            let want = if i % 32 < 16 { MAGENTA } else { *f };
+            assert_eq!(*p, want, "pixel {i}");
+        }
+    }
+
+    /// A recording is evaluated again for a new `shadowed`, `D` or `R`; a new `d` or
+    /// `shadowStart` needs tracing again.
+    #[test]
+    fn only_d_and_shadow_start_retrace() {
+        let scene = cornell_box();
+        let s = settings(Stage::Lab, 16);
+        let first = compile("R = color").unwrap();
+        let recording = record(&scene, &s, &first);
+        assert!(recording.fits(&compile("D = vec3(1)\nR = D\nshadowed = true").unwrap()));
+        assert!(recording.fits(&Equations::lab()));
+        assert!(!recording.fits(&compile("shadowStart = position").unwrap()));
+        assert!(!recording.fits(&compile("d = forward").unwrap()));
+    }
+}
