@@ -30,6 +30,7 @@ use raylab_core::view::View;
 use raylab_core::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 mod class;
+mod equations;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -127,6 +128,13 @@ pub struct RenderArgs {
     /// a denoised image's (a screenshot of the denoised image) are denoised either way.
     #[arg(long, default_value = "off", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
     pub denoise: bool,
+    /// Your own equations, in place of the lab's: a text file of `NAME = EXPRESSION` lines
+    /// (and `let NAME = …` lines) for d (the ray direction, equation 24), shadowStart,
+    /// shadowed (section 5.1), D (equation 27, DirectLight) and R (equations 28 and 30), in
+    /// the lab's C++ style. Prints how many pixels match the exact figure and, for each
+    /// quantity written, how it differs from the lab's. The lab's stages only.
+    #[arg(long, value_name = "FILE")]
+    pub equations: Option<PathBuf>,
     #[command(flatten)]
     pub options: RenderOptions,
 }
@@ -152,8 +160,13 @@ pub struct CheckArgs {
     /// Your render: PNG, BMP (what SDL saves), PPM or JPEG, 8 bits a channel, any size. Or a
     /// class: a folder of renders (its subfolders too: a folder a student) or several files,
     /// each checked, a line each; see --report.
-    #[arg(value_name = "IMAGE|FOLDER", required = true, num_args = 1..)]
+    #[arg(value_name = "IMAGE|FOLDER", required_unless_present = "equations", num_args = 1..)]
     pub images: Vec<PathBuf>,
+    /// Check your own equations instead of an image: the image they render (see render's
+    /// --equations) is checked against the exact figure, naming the classic mistake that
+    /// explains it, and each quantity written is judged against the lab's at random inputs.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["images", "report", "csv", "screenshot_settings", "diff_out"])]
+    pub equations: Option<PathBuf>,
     /// Print one JSON object (the match, the verdict and every candidate mistake, best first)
     /// instead of the report; for a class, report.json's.
     #[arg(long)]
@@ -681,7 +694,11 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            print_error_line(&format!("error: {e:#}"));
+            match e.downcast_ref::<equations::CompileErrors>() {
+                // A compiler's errors: a location and message, the line and a caret, each.
+                Some(errors) => eprint!("{}", printable_lines(&errors.0)),
+                None => print_error_line(&format!("error: {e:#}")),
+            }
             // A pixel outside the image is a bad argument, as clap's refusals are.
             let bad_argument = e
                 .downcast_ref::<InspectError>()
@@ -757,6 +774,14 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     settings.denoise |= args.denoise;
     // A screenshot made with a debug view is that view again, unless --view says otherwise.
     let view = args.view.unwrap_or(settings.view);
+    let equations = match &args.equations {
+        Some(path) => {
+            let written = equations::read(path)?;
+            equations::refuse_unless_lab(&settings, view)?;
+            Some(written)
+        }
+        None => None,
+    };
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;
     // Denoising holds a film with its variance, brightest samples and its samples' features'
@@ -803,35 +828,50 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let start = Instant::now();
     let mut denoised_note = None;
-    let (image, display, legend) = match view {
-        raylab_core::view::View::Shaded if settings.denoise => {
-            let (raw, denoised) =
-                pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
-            denoised_note = Some(if denoised.is_some() {
-                "denoised (the accumulated image filtered by the denoiser; --denoise off writes \
+    // With --equations: the pixels that came out NaN or infinite, and the share of pixels
+    // within 2/255 of the exact figure.
+    let mut sandbox_figures = None;
+    let (image, display, legend) = if let Some(written) = &equations {
+        let yours = pool.install(|| raylab_core::sandbox::render(&scene, &settings, written));
+        let figure = pool.install(|| try_render(&scene, &settings))?;
+        let share = raylab_core::check::compare::share_within(
+            &raylab_core::check::Rgb8::from_linear(&yours.image),
+            &raylab_core::check::Rgb8::from_linear(&figure),
+        );
+        sandbox_figures = Some((yours.non_finite, share));
+        (yours.image, settings.display, None)
+    } else {
+        match view {
+            raylab_core::view::View::Shaded if settings.denoise => {
+                let (raw, denoised) =
+                    pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
+                denoised_note = Some(if denoised.is_some() {
+                    "denoised (the accumulated image filtered by the denoiser; --denoise off writes \
                  the unbiased estimate)"
-            } else {
-                "not denoised: nothing in this render is noisy (no path tracing, soft shadows \
+                } else {
+                    "not denoised: nothing in this render is noisy (no path tracing, soft shadows \
                  or depth of field)"
-            });
-            (denoised.unwrap_or(raw), settings.display, None)
-        }
-        raylab_core::view::View::Shaded => (
-            pool.install(|| try_render(&scene, &settings))?,
-            settings.display,
-            None,
-        ),
-        view @ (View::Normals
-        | View::Depth
-        | View::Barycentric
-        | View::Triangle
-        | View::BvhCost
-        | View::Shadow
-        | View::Variance
-        | View::Photons) => {
-            let v = pool
-                .install(|| raylab_core::view::render_view(&scene, &settings, view, &|| false))?;
-            (v.image, Display::default(), Some(v.legend))
+                });
+                (denoised.unwrap_or(raw), settings.display, None)
+            }
+            raylab_core::view::View::Shaded => (
+                pool.install(|| try_render(&scene, &settings))?,
+                settings.display,
+                None,
+            ),
+            view @ (View::Normals
+            | View::Depth
+            | View::Barycentric
+            | View::Triangle
+            | View::BvhCost
+            | View::Shadow
+            | View::Variance
+            | View::Photons) => {
+                let v = pool.install(|| {
+                    raylab_core::view::render_view(&scene, &settings, view, &|| false)
+                })?;
+                (v.image, Display::default(), Some(v.legend))
+            }
         }
     };
     let elapsed = start.elapsed();
@@ -878,6 +918,9 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             asked.display()
         );
     }
+    if let (Some((non_finite, share)), Some(written)) = (sandbox_figures, &equations) {
+        text += &equations_text(written, settings.shading.stage, non_finite, share);
+    }
     if let Some(legend) = legend {
         text += &format!("{} view:\n", legend.title);
         for line in &legend.lines {
@@ -896,6 +939,80 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             args.out.display()
         )),
     }
+}
+
+/// What `--equations` found, a line each: the match with the exact figure, the pixels that
+/// came out NaN or infinite (magenta), and each written quantity's verdict.
+fn equations_text(
+    written: &raylab_core::sandbox::Equations,
+    stage: Stage,
+    non_finite: usize,
+    share: f64,
+) -> String {
+    let mut text = format!(
+        "your equations: {:.1} % of pixels within 2/255 of the exact figure\n",
+        share * 100.0
+    );
+    if non_finite > 0 {
+        text += &format!("{non_finite} pixels came out NaN or infinite (shown magenta)\n");
+    }
+    let verdicts = equations::verdicts(written, stage);
+    if verdicts.is_empty() {
+        text += "no quantity written: the image is the lab's own\n";
+    }
+    for (quantity, verdict) in verdicts {
+        text += &format!("{}: {verdict}\n", quantity.name());
+    }
+    text
+}
+
+/// `check --equations FILE`: the image the student's equations render, checked as their
+/// image would be, and each quantity judged.
+fn check_equations(args: &CheckArgs, path: &std::path::Path) -> anyhow::Result<()> {
+    use raylab_core::check;
+    let written = equations::read(path)?;
+    let settings = args.options.resolve_settings()?;
+    equations::refuse_unless_lab(&settings, View::Shaded)?;
+    check::check_settings(&settings)?;
+    let c = &settings.camera;
+    raylab_core::memory::check(
+        format!("checking a {}×{} image", c.width, c.height),
+        check::memory_estimate(c.width, c.height) + settings.scene.memory_estimate(),
+    )?;
+    let pool = thread_pool("check", args.options.threads)?;
+    let (checked, rendered) = pool.install(|| -> anyhow::Result<_> {
+        let scene = settings.scene.load()?;
+        let rendered = raylab_core::sandbox::render(&scene, &settings, &written);
+        let image = check::Rgb8::from_linear(&rendered.image);
+        Ok((check::check(&scene, &settings, &image)?, rendered))
+    })?;
+    let verdicts = equations::verdicts(&written, settings.shading.stage);
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        let quantities: serde_json::Map<String, serde_json::Value> = verdicts
+            .iter()
+            .map(|(q, v)| (q.name().to_string(), serde_json::Value::from(v.as_str())))
+            .collect();
+        let json = serde_json::json!({
+            "check": checked.report,
+            "non_finite_pixels": rendered.non_finite,
+            "quantities": quantities,
+        });
+        writeln!(out, "{json}")?;
+    } else {
+        write!(out, "{}", printable_lines(&checked.report.to_text()))?;
+        if rendered.non_finite > 0 {
+            writeln!(
+                out,
+                "{} pixels came out NaN or infinite (shown magenta)",
+                rendered.non_finite
+            )?;
+        }
+        for (quantity, verdict) in verdicts {
+            writeln!(out, "{}: {}", quantity.name(), printable_lines(&verdict))?;
+        }
+    }
+    Ok(())
 }
 
 /// The files a command given `options` reads, beside the image it checks: the file given to
@@ -1055,6 +1172,9 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
 
 fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     use raylab_core::check;
+    if let Some(path) = &args.equations {
+        return check_equations(args, path);
+    }
     if class::is_class(args) {
         return class::run(args);
     }

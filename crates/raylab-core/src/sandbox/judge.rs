@@ -277,10 +277,14 @@ fn agree(q: Quantity, samples: &[Sample], a: &[Vec3], b: &[Vec3]) -> bool {
     })
 }
 
-/// Whether `a` and `b` are within [`EQUAL`] of the larger of them and `scale`.
+/// Whether `a` and `b` are within [`EQUAL`] of the larger of them and `scale` (a NaN or an
+/// infinity is close only to the same value).
 fn close(a: Vec3, b: Vec3, scale: f32) -> bool {
     if a == b {
         return true;
+    }
+    if !a.is_finite() || !b.is_finite() {
+        return false;
     }
     let scale = a.length().max(b.length()).max(scale);
     (a - b).length() <= EQUAL * scale
@@ -656,5 +660,21 @@ mod tests {
                 .starts_with("differs from the lab's: at color = ("),
             "{v}"
         );
+    }
+
+    /// A quantity that comes out infinite or NaN is never equal to the lab's, nor a factor of
+    /// it (an infinity is within any relative tolerance of anything).
+    #[test]
+    fn infinities_and_nans_are_not_equal() {
+        for text in [
+            "R = color * (D + indirectLight) / 0",
+            "R = color * (D + indirectLight) * (0 / 0)",
+            "R = vec3(1 / 0)",
+        ] {
+            let v = verdict(text, Quantity::Value);
+            assert!(matches!(v, Verdict::Differs { .. }), "{text}: {v:?}");
+        }
+        let v = d("lightColor / (dot(normal, normal) - 1)");
+        assert!(matches!(v, Verdict::Differs { .. }), "{v:?}");
     }
 }
