@@ -291,14 +291,14 @@ pub struct RenderOptions {
     /// to 1 [default: 0.2 for the metal, 0.1 for the plastic].
     #[arg(long, value_parser = parse_finite, value_name = "A", allow_hyphen_values = true)]
     pub roughness: Option<f32>,
-    /// A part of the box given a material of its own, over --material-preset: PART=KIND, then
-    /// optionally :FIELD=VALUE,… (a colour's three channels separated by commas too, or one
-    /// number for a grey); fields left out keep their defaults. PART: tall (the tall block),
-    /// short, floor, left-wall, right-wall, back-wall, ceiling (or tall-block, short-block).
-    /// KIND and its fields: diffuse; mirror (tint); glass (ior, tint); rough (alpha, tint);
-    /// plastic (alpha, int_ior, ext_ior, specular). Repeat for more parts, e.g.
-    /// --material tall=plastic:alpha=0.2,int_ior=1.5 --material short=mirror:tint=0.9,0.8,0.7
-    #[arg(long, value_parser = parse_part_material, value_name = "PART=KIND[:FIELD=V,…]")]
+    /// A part of the box given a material of its own, over --material-preset (repeatable):
+    /// PART=KIND[:FIELD=VALUE,…], e.g. tall=plastic:alpha=0.2,int_ior=1.5
+    #[arg(
+        long,
+        value_parser = parse_part_material,
+        value_name = "PART=KIND[:FIELD=V,…]",
+        long_help = part_material_help()
+    )]
     pub material: Vec<PartMaterial>,
     /// Textures: none (the lab's plain colours), checker-floor (a checkerboard floor),
     /// grid-walls (grid lines on the walls and ceiling), both, clouds (fBm clouds on the
@@ -1423,6 +1423,36 @@ fn thread_pool(what: &'static str, threads: Option<u16>) -> anyhow::Result<rayon
 
 fn parse_finite(s: &str) -> Result<f32, String> {
     finite(s)
+}
+
+/// `--material`'s long help: the kinds and their fields as the kinds' table lists them.
+fn part_material_help() -> String {
+    let kinds: Vec<String> = MaterialKind::DEFAULTS
+        .iter()
+        .map(|k| {
+            let fields: Vec<String> = k
+                .fields()
+                .iter()
+                .map(|f| {
+                    let [lo, hi] = f.range;
+                    format!("{} in [{lo}, {hi}]: {}", f.name, f.what)
+                })
+                .collect();
+            match fields.is_empty() {
+                true => format!("  {}: no fields", k.name()),
+                false => format!("  {}: {}", k.name(), fields.join("; ")),
+            }
+        })
+        .collect();
+    format!(
+        "A part of the box given a material of its own, over --material-preset: PART=KIND, \
+         then optionally :FIELD=VALUE,… (a colour's three channels separated by commas too, or \
+         one number for a grey); fields left out keep their defaults. Repeat for more parts. \
+         PART: tall (the tall block), short, floor, left-wall, right-wall, back-wall, ceiling. \
+         KIND and its fields:\n{}\nFor example --material tall=plastic:alpha=0.2,int_ior=1.5 \
+         --material short=mirror:tint=0.9,0.8,0.7",
+        kinds.join("\n")
+    )
 }
 
 /// `--material PART=KIND[:FIELD=VALUE,…]`: the part by its name (`tall` and `short` for the
