@@ -20,9 +20,10 @@ use raylab_core::film::OutputFormat;
 use raylab_core::inspect::{InspectError, inspect_pixel};
 use raylab_core::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
 use raylab_core::light::{LightKind, LightShape, SpotCone};
-use raylab_core::material::TexturePreset;
+use raylab_core::material::{MaterialKind, TexturePreset};
 use raylab_core::render::try_render;
 use raylab_core::scene::SceneChoice;
+use raylab_core::scene::spec::{BoxPart, PartMaterial};
 use raylab_core::settings::{
     Caustics, DEFAULT_PHOTONS, MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_PHOTONS, MAX_SAMPLES,
 };
@@ -209,7 +210,7 @@ pub struct Pixel(pub u32, pub u32);
 
 /// The options that set what a file given with `--settings` or `--scene-file` holds: either
 /// file takes them all, so none combines with it.
-const SETTINGS_OPTIONS: [&str; 37] = [
+const SETTINGS_OPTIONS: [&str; 38] = [
     "scene",
     "obj",
     "stage",
@@ -228,6 +229,7 @@ const SETTINGS_OPTIONS: [&str; 37] = [
     "bounces",
     "material_preset",
     "roughness",
+    "material",
     "specular_depth",
     "caustics",
     "photons",
@@ -302,6 +304,15 @@ pub struct RenderOptions {
     /// to 1 [default: 0.2 for the metal, 0.1 for the plastic].
     #[arg(long, value_parser = parse_finite, value_name = "A", allow_hyphen_values = true)]
     pub roughness: Option<f32>,
+    /// A part of the box given a material of its own, over --material-preset (repeatable):
+    /// PART=KIND[:FIELD=VALUE,…], e.g. tall=plastic:alpha=0.2,int_ior=1.5
+    #[arg(
+        long,
+        value_parser = parse_part_material,
+        value_name = "PART=KIND[:FIELD=V,…]",
+        long_help = part_material_help()
+    )]
+    pub material: Vec<PartMaterial>,
     /// Textures: none (the lab's plain colours), checker-floor (a checkerboard floor),
     /// grid-walls (grid lines on the walls and ceiling), both, clouds (fBm clouds on the
     /// ceiling), bumpy-walls (a normal map of rounded bricks on the back and side walls) or
@@ -553,6 +564,7 @@ impl RenderOptions {
             roughness: self
                 .roughness
                 .unwrap_or(self.material_preset.default_roughness()),
+            part_materials: self.material.clone(),
             texture_preset: self.texture_preset,
             display: Display {
                 transform: self.display,
@@ -1531,6 +1543,55 @@ fn thread_pool(what: &'static str, threads: Option<u16>) -> anyhow::Result<rayon
 
 fn parse_finite(s: &str) -> Result<f32, String> {
     finite(s)
+}
+
+/// `--material`'s long help: the kinds and their fields as the kinds' table lists them.
+fn part_material_help() -> String {
+    let kinds: Vec<String> = MaterialKind::DEFAULTS
+        .iter()
+        .map(|k| {
+            let fields: Vec<String> = k
+                .fields()
+                .iter()
+                .map(|f| {
+                    let [lo, hi] = f.range;
+                    format!("{} in [{lo}, {hi}]: {}", f.name, f.what)
+                })
+                .collect();
+            match fields.is_empty() {
+                true => format!("  {}: no fields", k.name()),
+                false => format!("  {}: {}", k.name(), fields.join("; ")),
+            }
+        })
+        .collect();
+    format!(
+        "A part of the box given a material of its own, over --material-preset: PART=KIND, \
+         then optionally :FIELD=VALUE,… (a colour's three channels separated by commas too, or \
+         one number for a grey); fields left out keep their defaults. Repeat for more parts. \
+         PART: tall (the tall block), short, floor, left-wall, right-wall, back-wall, ceiling. \
+         KIND and its fields:\n{}\nFor example --material tall=plastic:alpha=0.2,int_ior=1.5 \
+         --material short=mirror:tint=0.9,0.8,0.7",
+        kinds.join("\n")
+    )
+}
+
+/// `--material PART=KIND[:FIELD=VALUE,…]`: the part by its name (`tall` and `short` for the
+/// blocks), the material through its kind's table ([`MaterialKind::parse`]).
+fn parse_part_material(s: &str) -> Result<PartMaterial, String> {
+    let Some((part, material)) = s.split_once('=') else {
+        return Err(format!(
+            "'{s}': give the part and its material as PART=KIND, e.g. tall=plastic:alpha=0.2"
+        ));
+    };
+    let part = match part.trim() {
+        "tall" => BoxPart::TallBlock,
+        "short" => BoxPart::ShortBlock,
+        other => other
+            .parse::<BoxPart>()
+            .map_err(|e| format!("{e}; or tall, short for the blocks"))?,
+    };
+    let kind = MaterialKind::parse(material)?;
+    Ok(PartMaterial { part, kind })
 }
 
 /// An angle in degrees (`--yaw`, `--pitch`), read as an `f64`: the same number gives the same

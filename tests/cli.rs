@@ -1402,3 +1402,71 @@ fn the_plastic_preset_shows_a_highlight_on_the_tall_block() {
         assert_eq!(rougher.as_raw(), &library_exr(&s));
     }
 }
+
+/// `--material PART=KIND:FIELD=VALUE,…` gives a part of the box any material through the
+/// kinds' table: the image is the library's with that part material, `--save-scene` writes
+/// it, and a wrong kind, field or value is refused on one line naming it, with no file.
+#[test]
+fn a_part_material_on_the_command_line() {
+    use raylab_core::material::MaterialKind;
+    use raylab_core::scene::spec::{BoxPart, PartMaterial};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.exr");
+    let scene = dir.path().join("m.toml");
+    let o = out.to_str().unwrap();
+    let args = [
+        "render",
+        "--out",
+        o,
+        "--width",
+        "48",
+        "--height",
+        "48",
+        "--save-scene",
+        scene.to_str().unwrap(),
+        "--material",
+        "tall=plastic:alpha=0.2,int_ior=1.6",
+        "--material",
+        "short=mirror:tint=0.9,0.8,0.7",
+    ];
+    let run = raylab(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let mut s = settings(Stage::Lab, 48);
+    s.part_materials = vec![
+        PartMaterial {
+            part: BoxPart::TallBlock,
+            kind: MaterialKind::Plastic {
+                alpha: 0.2,
+                int_ior: 1.6,
+                ext_ior: 1.0,
+                specular: glam::Vec3::ONE,
+            },
+        },
+        PartMaterial {
+            part: BoxPart::ShortBlock,
+            kind: MaterialKind::Mirror {
+                tint: glam::Vec3::new(0.9, 0.8, 0.7),
+            },
+        },
+    ];
+    let image = image::open(&out).unwrap().to_rgb32f();
+    assert_eq!(image.as_raw(), &library_exr(&s));
+    let saved = raylab_core::scene_file::load(&scene).unwrap();
+    assert_eq!(saved.part_materials, s.part_materials);
+    std::fs::remove_file(&out).unwrap();
+    for (material, names) in [
+        ("tall=gold", "unknown material kind 'gold'"),
+        (
+            "tall=mirror:ior=1.5",
+            "unknown field `ior` for a mirror material (its fields: tint)",
+        ),
+        (
+            "tall=rough:alpha=3",
+            "invalid material alpha 3: must be in [0.01, 1]",
+        ),
+        ("roof=mirror", "unknown box part 'roof'"),
+        ("mirror", "give the part and its material as PART=KIND"),
+    ] {
+        assert_refused(&["render", "--out", o, "--material", material], names, &out);
+    }
+}

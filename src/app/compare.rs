@@ -670,6 +670,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
         shading,
         material_preset,
         roughness,
+        part_materials,
         texture_preset,
         display,
         view,
@@ -749,6 +750,7 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     differ("photons per pass", *photons != s.photons);
     differ("materials", *material_preset != b.material_preset);
     differ("roughness", *roughness != b.roughness);
+    differ("part materials", *part_materials != b.part_materials);
     differ("textures", *texture_preset != b.texture_preset);
     differ("samples", *samples_per_pixel != b.samples_per_pixel);
     differ("seed", *seed != b.seed);

@@ -17,7 +17,7 @@ use raylab_core::settings_file::{self, Loaded};
 #[derive(Debug)]
 pub enum Opened {
     /// Settings (a scene file, a screenshot or its JSON), checked and valid.
-    Settings(Loaded),
+    Settings(Box<Loaded>),
     /// An OBJ model, to stand in the box (it is read by the scene loader, off this thread).
     Model(PathBuf),
     /// An image that is no raylab screenshot (a BMP, PPM or JPEG, or a PNG without settings):
@@ -67,7 +67,7 @@ pub fn open(path: &Path) -> Result<Opened, String> {
         .settings
         .validate()
         .map_err(|e| format!("'{}' was not opened: {e}", path.display()))?;
-    Ok(Opened::Settings(loaded))
+    Ok(Opened::Settings(Box::new(loaded)))
 }
 
 /// The scene file a typed or chosen `path` names: `.toml` added when it has no extension;

@@ -11,6 +11,7 @@ mod check;
 mod compare;
 mod files;
 mod input;
+mod material_editor;
 mod panels;
 mod persistence;
 mod screenshot;

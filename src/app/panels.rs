@@ -289,6 +289,13 @@ fn figure_differences(settings: &RenderSettings) -> Vec<String> {
     if settings.material_preset != MaterialPreset::None {
         differs.push(settings.material_preset.label().to_lowercase());
     }
+    for p in &settings.part_materials {
+        differs.push(format!(
+            "a {} {}",
+            p.kind.name(),
+            p.part.name().replace('-', " ")
+        ));
+    }
     if settings.texture_preset != TexturePreset::None {
         differs.push("textures".to_owned());
     }
@@ -993,13 +1000,10 @@ pub fn shading_ui(
     limited_bounces: &mut u32,
     legend: Option<&Legend>,
 ) {
-    let view = &mut settings.view;
+    let path = settings.shading.stage == Stage::Path;
+    view_ui(ui, &mut settings.view, legend);
     let roughness = &mut settings.roughness;
     let materials = &mut settings.material_preset;
-    let textures = &mut settings.texture_preset;
-    let shading = &mut settings.shading;
-    let path = shading.stage == Stage::Path;
-    view_ui(ui, view, legend);
     ui.horizontal_wrapped(|ui| {
         let before = *materials;
         choice_ui(
@@ -1028,6 +1032,15 @@ pub fn shading_ui(
              mirror, 1 spreads the reflection over the whole hemisphere",
         );
     }
+    egui::CollapsingHeader::new("Material editor")
+        .default_open(!settings.part_materials.is_empty())
+        .show(ui, |ui| {
+            super::material_editor::material_editor_ui(ui, settings)
+        });
+    let materials_changed =
+        settings.material_preset != MaterialPreset::None || !settings.part_materials.is_empty();
+    let textures = &mut settings.texture_preset;
+    let shading = &mut settings.shading;
     choice_ui(ui, "textures", "Textures", textures, None).on_hover_text(
         "Textures for the box: ρ read from a checkerboard or a grid at each hit (a textured \
              model keeps its own)",
@@ -1129,7 +1142,7 @@ pub fn shading_ui(
     }
 
     // The lab stages follow mirror and glass Whitted-style.
-    let whitted = !path && *materials != MaterialPreset::None;
+    let whitted = !path && materials_changed;
     ui.add_enabled(
         whitted,
         egui::Slider::new(&mut shading.specular_depth, 0..=MAX_SPECULAR_DEPTH)

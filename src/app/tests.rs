@@ -26,6 +26,7 @@ mod check_ui;
 mod denoise_ui;
 mod files_ui;
 mod inspector_ui;
+mod materials_ui;
 mod panels_ui;
 mod relief_ui;
 mod steps_ui;

@@ -1,13 +1,12 @@
 //! Materials: how a surface scatters the light that reaches it.
 //!
 //! The lab models every surface as ideally diffuse with reflectance ρ (its figure 4, left) and
-//! lists specular materials among its extensions. raylab has three kinds, as pbrt splits them
-//! from the shapes that carry them:
-//!
-//! * [`MaterialKind::Diffuse`]: the lab's surface. Its BRDF is ρ/π.
-//! * [`MaterialKind::Mirror`]: an ideal mirror that reflects a `tint` of what it sees.
-//! * [`MaterialKind::Glass`]: a smooth dielectric (index of refraction `ior`, transmission
-//!   `tint`) that reflects and refracts by the exact Fresnel equations.
+//! lists specular materials among its extensions. raylab's kinds, as pbrt splits them from the
+//! shapes that carry them, are one table (`material_kinds!`): diffuse (the lab's, BRDF ρ/π),
+//! mirror, glass (exact Fresnel reflection and refraction), a rough metal and a glossy
+//! plastic, each with its parameters' names, defaults and ranges. The scene file, the settings
+//! JSON, `--material` and the workbench's material editor all read and write a material
+//! through that table; [`Material::bsdf`] is where a kind becomes the [`Bsdf`] it scatters by.
 //!
 //! Every quantity here is in raylab's image units, π × radiance (see [`crate::integrator`]).
 //! In those units a diffuse bounce sampled with pdf cos θ/π carries the weight ρ exactly:
@@ -22,49 +21,458 @@ use serde::{Deserialize, Serialize};
 
 use crate::bsdf::{Bsdf, RoughPlastic, ShadingFrame, snell_cos_t};
 pub use crate::bsdf::{fresnel_dielectric, reflect};
+use crate::invalid::SettingsError;
 use crate::named::named_enum;
 use crate::relief::Relief;
 use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
 use crate::texture::Texture;
 use std::sync::Arc;
 
-/// How a surface scatters light.
-#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "lowercase")]
-pub enum MaterialKind {
+/// Declares [`MaterialKind`] from one table: each kind's variant, its name (in files and on
+/// the command line), its label (in the workbench) and its parameters, each with its type
+/// (`f32`, or `Vec3` for a colour), its default, its range and what it is. Everything that
+/// reads or writes a material's parameters (the scene file, the settings JSON, `--material`,
+/// the workbench's material editor, [`MaterialKind::check`]) goes through what this writes:
+/// [`MaterialKind::DEFAULTS`], [`MaterialKind::name`], [`MaterialKind::label`],
+/// [`MaterialKind::fields`], [`MaterialKind::values`] and [`MaterialKind::set`].
+macro_rules! material_kinds {
+    ($(
+        $(#[$meta:meta])*
+        $variant:ident => $name:literal, $label:literal $({
+            $(
+                $(#[$fmeta:meta])*
+                $field:ident: $ty:ty = $default:expr, [$lo:literal, $hi:literal], $what:literal;
+            )*
+        })?
+    )+) => {
+        /// How a surface scatters light: a kind and its parameters (`material_kinds!`).
+        #[derive(Clone, Copy, Debug, PartialEq, Default)]
+        pub enum MaterialKind {
+            $(
+                $(#[$meta])*
+                $variant $({ $( $(#[$fmeta])* $field: $ty, )* })?,
+            )+
+        }
+
+        impl MaterialKind {
+            /// Every kind with its default parameters, in the order the workbench lists them.
+            pub const DEFAULTS: &'static [MaterialKind] = &[
+                $( MaterialKind::$variant $({ $( $field: $default, )* })?, )+
+            ];
+
+            /// The kind's name in files and on the command line: `diffuse`, `mirror`, …
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $( MaterialKind::$variant { .. } => $name, )+
+                }
+            }
+
+            /// The kind's label in the workbench.
+            pub fn label(&self) -> &'static str {
+                match self {
+                    $( MaterialKind::$variant { .. } => $label, )+
+                }
+            }
+
+            /// The kind's parameters: name, range and what each is.
+            pub fn fields(&self) -> &'static [Field] {
+                match self {
+                    $( MaterialKind::$variant { .. } => &[
+                        $($( Field {
+                            name: stringify!($field),
+                            what: $what,
+                            range: [$lo as f32, $hi as f32],
+                            colour: <$ty as FieldType>::COLOUR,
+                            reason: concat!("must be in [", stringify!($lo), ", ",
+                                stringify!($hi), "]"),
+                        }, )*)?
+                    ], )+
+                }
+            }
+
+            /// The kind's parameters' values, in the order of [`MaterialKind::fields`].
+            pub fn values(&self) -> Vec<FieldValue> {
+                match *self {
+                    $( MaterialKind::$variant $({ $( $field, )* })? => vec![
+                        $($( FieldType::value($field), )*)?
+                    ], )+
+                }
+            }
+
+            /// Sets the parameter `name` to `value`: an error if the kind has no such
+            /// parameter or `value` is not of its type (a number, or a colour). The value's
+            /// range is [`MaterialKind::check`]'s.
+            pub fn set(&mut self, name: &str, value: FieldValue) -> Result<(), String> {
+                match self {
+                    $( MaterialKind::$variant $({ $( $field, )* })? => {
+                        $($(
+                            if name == stringify!($field) {
+                                return match FieldType::of_value(value) {
+                                    Some(v) => { *$field = v; Ok(()) }
+                                    None => Err(wrong_type(stringify!($field), <$ty as FieldType>::COLOUR)),
+                                };
+                            }
+                        )*)?
+                    } )+
+                }
+                Err(self.unknown_field(name))
+            }
+        }
+    };
+}
+
+material_kinds! {
     /// The lab's surface: light reflected equally in every direction, by ρ.
     #[default]
-    Diffuse,
+    Diffuse => "diffuse", "Diffuse"
     /// An ideal mirror: the reflected ray carries `tint` of what it sees.
-    Mirror { tint: Vec3 },
+    Mirror => "mirror", "Mirror" {
+        tint: Vec3 = Vec3::splat(0.9), [0, 1], "tint: the share reflected per channel";
+    }
     /// Clear glass: exact Fresnel reflection and refraction at index of refraction `ior`
     /// (outside is 1.0); refracted light is multiplied by `tint`.
-    Glass { ior: f32, tint: Vec3 },
+    Glass => "glass", "Glass" {
+        ior: f32 = 1.5, [1, 4], "index of refraction (outside 1)";
+        tint: Vec3 = Vec3::ONE, [0, 1], "tint: the share refracted per channel";
+    }
     /// A rough metal: microfacets of GGX roughness `alpha` (0 is a mirror, 1 very rough) that
     /// reflect `tint` of the light, with no Fresnel falloff ([`crate::bsdf::Bsdf::RoughConductor`]).
-    Rough { alpha: f32, tint: Vec3 },
+    Rough => "rough", "Rough metal" {
+        alpha: f32 = DEFAULT_ROUGHNESS, [0.01, 1], "GGX roughness α (0.01 nearly a mirror, 1 very rough)";
+        tint: Vec3 = PRESET_ROUGH_TINT, [0, 1], "tint: the share reflected per channel";
+    }
     /// A glossy plastic: the diffuse base of reflectance ρ (the material's `reflectance`)
     /// under a rough dielectric coating of GGX roughness `alpha`, indices `int_ior` inside
     /// and `ext_ior` outside, whose reflection is scaled by `specular`
     /// ([`crate::bsdf::RoughPlastic`], Mitsuba 3's `roughplastic`).
-    Plastic {
-        alpha: f32,
-        int_ior: f32,
-        ext_ior: f32,
-        specular: Vec3,
-    },
+    Plastic => "plastic", "Glossy plastic" {
+        alpha: f32 = DEFAULT_PLASTIC_ROUGHNESS, [0.01, 1], "the coating's GGX roughness α";
+        int_ior: f32 = 1.5, [1, 4], "index of refraction inside the coating";
+        ext_ior: f32 = 1.0, [1, 4], "index of refraction outside";
+        specular: Vec3 = Vec3::ONE, [0, 1], "specular reflectance: the coating's reflection per channel";
+    }
+}
+
+/// A material parameter, as `material_kinds!` lists it: what the scene file, the settings
+/// JSON, `--material` and the workbench's editor know of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Field {
+    /// Its name in files and on the command line (`alpha`, `int_ior`, `tint`).
+    pub name: &'static str,
+    /// What it is, for the workbench and `--help`.
+    pub what: &'static str,
+    /// The values it may take, `[low, high]` (each channel's, for a colour).
+    pub range: [f32; 2],
+    /// Whether it is a colour (three channels) rather than one number.
+    pub colour: bool,
+    /// Why a value outside `range` is refused: "must be in [low, high]".
+    pub reason: &'static str,
+}
+
+/// A parameter's value: one number, or a colour's three channels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FieldValue {
+    Number(f32),
+    Colour(Vec3),
+}
+
+impl FieldValue {
+    /// The channels: a number's once, a colour's three.
+    pub fn channels(self) -> Vec<f32> {
+        match self {
+            FieldValue::Number(x) => vec![x],
+            FieldValue::Colour(c) => c.to_array().to_vec(),
+        }
+    }
+}
+
+impl std::fmt::Display for FieldValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FieldValue::Number(x) => write!(f, "{x}"),
+            FieldValue::Colour(c) => write!(f, "[{}, {}, {}]", c.x, c.y, c.z),
+        }
+    }
+}
+
+/// The Rust types a material parameter may have: `f32` or `Vec3` (a colour).
+pub trait FieldType: Copy {
+    const COLOUR: bool;
+    fn value(self) -> FieldValue;
+    fn of_value(value: FieldValue) -> Option<Self>;
+}
+
+impl FieldType for f32 {
+    const COLOUR: bool = false;
+    fn value(self) -> FieldValue {
+        FieldValue::Number(self)
+    }
+    fn of_value(value: FieldValue) -> Option<Self> {
+        match value {
+            FieldValue::Number(x) => Some(x),
+            FieldValue::Colour(_) => None,
+        }
+    }
+}
+
+impl FieldType for Vec3 {
+    const COLOUR: bool = true;
+    fn value(self) -> FieldValue {
+        FieldValue::Colour(self)
+    }
+    /// A colour, or one number for a grey (every channel the same).
+    fn of_value(value: FieldValue) -> Option<Self> {
+        match value {
+            FieldValue::Number(x) => Some(Vec3::splat(x)),
+            FieldValue::Colour(c) => Some(c),
+        }
+    }
+}
+
+fn wrong_type(name: &str, colour: bool) -> String {
+    match colour {
+        true => format!("'{name}' is a colour: give three numbers (or one for a grey)"),
+        false => format!("'{name}' is one number, not a colour"),
+    }
+}
+
+/// "a, b or c".
+fn listed<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
+    let names: Vec<&str> = names.into_iter().collect();
+    match names.split_last() {
+        None => "none".to_owned(),
+        Some((last, [])) => (*last).to_owned(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+    }
 }
 
 impl MaterialKind {
-    /// The kind's name: diffuse, mirror or glass.
-    pub fn name(&self) -> &'static str {
-        match self {
-            MaterialKind::Diffuse => "diffuse",
-            MaterialKind::Mirror { .. } => "mirror",
-            MaterialKind::Glass { .. } => "glass",
-            MaterialKind::Rough { .. } => "rough",
-            MaterialKind::Plastic { .. } => "plastic",
+    /// The kind named `name` with its default parameters; the error lists the kinds.
+    pub fn of_name(name: &str) -> Result<MaterialKind, String> {
+        MaterialKind::DEFAULTS
+            .iter()
+            .find(|k| k.name() == name)
+            .copied()
+            .ok_or_else(|| {
+                crate::named::unknown(
+                    "material kind",
+                    name,
+                    MaterialKind::DEFAULTS.iter().map(|k| k.name()),
+                )
+            })
+    }
+
+    /// This kind's default parameters.
+    pub fn defaults(&self) -> MaterialKind {
+        MaterialKind::of_name(self.name()).unwrap_or_default()
+    }
+
+    /// The parameters with their values, in the table's order.
+    pub fn fields_and_values(&self) -> impl Iterator<Item = (&'static Field, FieldValue)> + use<> {
+        self.fields().iter().zip(self.values())
+    }
+
+    fn unknown_field(&self, name: &str) -> String {
+        let fields = self.fields().iter().map(|f| f.name);
+        match self.fields().is_empty() {
+            true => format!(
+                "unknown field `{name}`: a {} material has no fields",
+                self.name()
+            ),
+            false => format!(
+                "unknown field `{name}` for a {} material (its fields: {})",
+                self.name(),
+                listed(fields)
+            ),
         }
+    }
+
+    /// Checks every parameter against its range (each channel of a colour), and that a
+    /// plastic's two indices differ (equal, the coating would not reflect). The error names
+    /// the parameter as `field` makes its path (`scene.models[0].material.alpha`).
+    pub fn check(&self, field: impl Fn(&str) -> String) -> Result<(), SettingsError> {
+        for (f, value) in self.fields_and_values() {
+            let [lo, hi] = f.range;
+            if !value.channels().iter().all(|x| (lo..=hi).contains(x)) {
+                return Err(SettingsError {
+                    name: field(f.name).into(),
+                    value: value.to_string(),
+                    reason: f.reason,
+                });
+            }
+        }
+        if let MaterialKind::Plastic {
+            int_ior, ext_ior, ..
+        } = *self
+            && int_ior == ext_ior
+        {
+            return Err(SettingsError {
+                name: field("int_ior").into(),
+                value: format!("{int_ior}"),
+                reason: "must differ from ext_ior (equal indices make no coating)",
+            });
+        }
+        Ok(())
+    }
+
+    /// Reads a material as the command line gives it: its kind's name, then optionally `:`
+    /// and `field=value` pairs separated by commas, a colour's three channels separated by
+    /// commas too (or one number for a grey): `plastic:alpha=0.2,int_ior=1.5`,
+    /// `mirror:tint=0.9,0.8,0.7`. Fields not given keep their defaults; every value is
+    /// checked against its range. Errors are one line, naming the kind or field.
+    pub fn parse(text: &str) -> Result<MaterialKind, String> {
+        let (name, rest) = text.split_once(':').unwrap_or((text, ""));
+        let mut kind = MaterialKind::of_name(name.trim())?;
+        let mut pairs: Vec<(String, Vec<f32>)> = Vec::new();
+        for token in rest.split(',').map(str::trim).filter(|t| !t.is_empty()) {
+            let (field, number) = match token.split_once('=') {
+                Some((field, number)) => (Some(field.trim()), number.trim()),
+                None => (None, token),
+            };
+            let x: f32 = number
+                .parse()
+                .map_err(|_| format!("'{number}' in '{token}' is not a number"))?;
+            match (field, pairs.last_mut()) {
+                (Some(field), _) => pairs.push((field.to_owned(), vec![x])),
+                (None, Some((_, channels))) => channels.push(x),
+                (None, None) => return Err(format!("'{token}': give each value as field=value")),
+            }
+        }
+        for (field, channels) in pairs {
+            let value = match channels[..] {
+                [x] => FieldValue::Number(x),
+                [r, g, b] => FieldValue::Colour(Vec3::new(r, g, b)),
+                _ => {
+                    return Err(format!(
+                        "'{field}' has {} numbers: give one, or a colour's three",
+                        channels.len()
+                    ));
+                }
+            };
+            kind.set(&field, value)?;
+        }
+        kind.check(|f| format!("material {f}"))
+            .map_err(|e| e.to_string())?;
+        Ok(kind)
+    }
+}
+
+/// As the scene file and the settings JSON hold it: `{ kind = "plastic", alpha = 0.1,
+/// int_ior = 1.5, ext_ior = 1.0, specular = [1.0, 1.0, 1.0] }`, the kind's every field and
+/// no other.
+impl Serialize for MaterialKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let mut map = s.serialize_map(Some(1 + self.fields().len()))?;
+        map.serialize_entry("kind", self.name())?;
+        for (f, value) in self.fields_and_values() {
+            match value {
+                FieldValue::Number(x) => map.serialize_entry(f.name, &x)?,
+                FieldValue::Colour(c) => map.serialize_entry(f.name, &c.to_array())?,
+            }
+        }
+        map.end()
+    }
+}
+
+/// One value of a material's table as read: a number or an array of numbers.
+enum RawValue {
+    Number(f32),
+    Array(Vec<f32>),
+}
+
+impl<'de> Deserialize<'de> for RawValue {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = RawValue;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "a number or an array of 3 numbers")
+            }
+            fn visit_f64<E>(self, x: f64) -> Result<RawValue, E> {
+                Ok(RawValue::Number(x as f32))
+            }
+            fn visit_i64<E>(self, x: i64) -> Result<RawValue, E> {
+                Ok(RawValue::Number(x as f32))
+            }
+            fn visit_u64<E>(self, x: u64) -> Result<RawValue, E> {
+                Ok(RawValue::Number(x as f32))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<RawValue, A::Error> {
+                let mut out = Vec::with_capacity(3);
+                while let Some(x) = seq.next_element::<f32>()? {
+                    if out.len() == 3 {
+                        return Err(serde::de::Error::custom(
+                            "invalid length: more than 3 elements, expected an array of exactly 3 numbers",
+                        ));
+                    }
+                    out.push(x);
+                }
+                Ok(RawValue::Array(out))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+impl<'de> Deserialize<'de> for MaterialKind {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = MaterialKind;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "a material: its kind and its fields")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<MaterialKind, A::Error> {
+                use serde::de::Error as _;
+                let mut name: Option<String> = None;
+                let mut given: Vec<(String, RawValue)> = Vec::new();
+                while let Some(key) = map.next_key::<String>()? {
+                    if key == "kind" {
+                        name = Some(map.next_value()?);
+                    } else if given.iter().any(|(k, _)| *k == key) {
+                        return Err(A::Error::custom(format_args!("duplicate field `{key}`")));
+                    } else {
+                        let value = map.next_value()?;
+                        given.push((key, value));
+                    }
+                }
+                let name = name.ok_or_else(|| A::Error::missing_field("kind"))?;
+                let mut kind = MaterialKind::of_name(&name).map_err(A::Error::custom)?;
+                for (key, raw) in &given {
+                    let value = match raw {
+                        RawValue::Number(x) => FieldValue::Number(*x),
+                        RawValue::Array(c) if c.len() == 3 => {
+                            FieldValue::Colour(Vec3::new(c[0], c[1], c[2]))
+                        }
+                        RawValue::Array(c) => {
+                            return Err(A::Error::custom(format_args!(
+                                "`{key}`: invalid length {}, expected an array of exactly 3 \
+                                 numbers",
+                                c.len()
+                            )));
+                        }
+                    };
+                    kind.set(key, value).map_err(A::Error::custom)?;
+                }
+                // Every field is written, so a file that leaves one out was edited by hand.
+                if let Some(f) = kind
+                    .fields()
+                    .iter()
+                    .find(|f| !given.iter().any(|(k, _)| k == f.name))
+                {
+                    return Err(A::Error::missing_field(f.name));
+                }
+                Ok(kind)
+            }
+        }
+        d.deserialize_map(Visitor)
     }
 }
 
@@ -779,6 +1187,176 @@ mod tests {
                 assert!((s.direction.length() - 1.0).abs() < 1e-5);
                 assert_eq!(s.weight, Vec3::splat(0.75));
             }
+        }
+    }
+
+    /// The table describes each kind once: unique names, every default within its ranges,
+    /// and `values`/`set` agreeing field by field with `fields`.
+    #[test]
+    fn the_kinds_table_is_consistent() {
+        let names: Vec<&str> = MaterialKind::DEFAULTS.iter().map(|k| k.name()).collect();
+        assert_eq!(names, ["diffuse", "mirror", "glass", "rough", "plastic"]);
+        for kind in MaterialKind::DEFAULTS {
+            assert_eq!(MaterialKind::of_name(kind.name()), Ok(*kind));
+            kind.check(|f| f.to_owned()).unwrap();
+            assert_eq!(kind.fields().len(), kind.values().len());
+            let mut copy = *kind;
+            for (field, value) in kind.fields_and_values() {
+                assert_eq!(field.colour, matches!(value, FieldValue::Colour(_)));
+                // Setting each field to its top of range changes that field alone.
+                let top = match value {
+                    FieldValue::Number(_) => FieldValue::Number(field.range[1]),
+                    FieldValue::Colour(_) => FieldValue::Colour(Vec3::splat(field.range[1])),
+                };
+                copy.set(field.name, top).unwrap();
+                let i = kind
+                    .fields()
+                    .iter()
+                    .position(|f| f.name == field.name)
+                    .unwrap();
+                assert_eq!(copy.values()[i], top);
+            }
+        }
+        assert_eq!(MaterialKind::of_name("plastic"), Ok(preset_plastic(0.1)));
+        assert_eq!(MaterialKind::of_name("mirror"), Ok(PRESET_MIRROR));
+        assert_eq!(MaterialKind::of_name("glass"), Ok(PRESET_GLASS));
+    }
+
+    /// Materials in the form the scene file and the settings JSON held before the table
+    /// (serde's tagged enum) read as the same kinds, and every kind is written back to it.
+    #[test]
+    fn materials_read_and_write_the_earlier_format() {
+        let old = [
+            (r#"{"kind":"diffuse"}"#, MaterialKind::Diffuse),
+            (r#"{"kind":"mirror","tint":[0.9,0.9,0.9]}"#, PRESET_MIRROR),
+            (
+                r#"{"kind":"glass","ior":1.5,"tint":[1.0,1.0,1.0]}"#,
+                PRESET_GLASS,
+            ),
+            (
+                r#"{"kind":"rough","alpha":0.2,"tint":[0.9,0.9,0.9]}"#,
+                MaterialKind::Rough {
+                    alpha: 0.2,
+                    tint: Vec3::splat(0.9),
+                },
+            ),
+            (
+                r#"{"kind":"plastic","alpha":0.25,"int_ior":1.4,"ext_ior":1.0,"specular":[1.0,0.9,0.8]}"#,
+                MaterialKind::Plastic {
+                    alpha: 0.25,
+                    int_ior: 1.4,
+                    ext_ior: 1.0,
+                    specular: Vec3::new(1.0, 0.9, 0.8),
+                },
+            ),
+        ];
+        for (text, kind) in old {
+            assert_eq!(
+                serde_json::from_str::<MaterialKind>(text).unwrap(),
+                kind,
+                "{text}"
+            );
+            assert_eq!(serde_json::to_string(&kind).unwrap(), text);
+        }
+        // The kind may come after its fields; integers are numbers.
+        let k: MaterialKind =
+            serde_json::from_str(r#"{"ior":2,"tint":[1,1,1],"kind":"glass"}"#).unwrap();
+        assert_eq!(
+            k,
+            MaterialKind::Glass {
+                ior: 2.0,
+                tint: Vec3::ONE
+            }
+        );
+        for (text, error) in [
+            (
+                r#"{"kind":"gold"}"#,
+                "unknown material kind 'gold' (expected diffuse, mirror",
+            ),
+            (
+                r#"{"kind":"mirror","tint":[1,1,1],"ior":1.5}"#,
+                "unknown field `ior`",
+            ),
+            (r#"{"kind":"mirror"}"#, "missing field `tint`"),
+            (r#"{"tint":[1,1,1]}"#, "missing field `kind`"),
+            (r#"{"kind":"mirror","tint":[1,1]}"#, "invalid length 2"),
+            (
+                r#"{"kind":"mirror","tint":[1,1,1,1]}"#,
+                "more than 3 elements",
+            ),
+            (
+                r#"{"kind":"glass","ior":[1,1,1],"tint":[1,1,1]}"#,
+                "'ior' is one number",
+            ),
+        ] {
+            let e = serde_json::from_str::<MaterialKind>(text)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(error), "{text}: {e}");
+        }
+    }
+
+    /// `--material`'s form: the kind, then fields by name; defaults for the rest; one-line
+    /// errors naming the kind, the field or the range.
+    #[test]
+    fn a_material_parses_from_its_kind_and_fields() {
+        assert_eq!(
+            MaterialKind::parse("plastic:alpha=0.2,int_ior=1.6"),
+            Ok(MaterialKind::Plastic {
+                alpha: 0.2,
+                int_ior: 1.6,
+                ext_ior: 1.0,
+                specular: Vec3::ONE
+            })
+        );
+        assert_eq!(
+            MaterialKind::parse("mirror:tint=0.9,0.8,0.7"),
+            Ok(MaterialKind::Mirror {
+                tint: Vec3::new(0.9, 0.8, 0.7)
+            })
+        );
+        assert_eq!(
+            MaterialKind::parse("rough:tint=0.5,alpha=0.3"),
+            Ok(MaterialKind::Rough {
+                alpha: 0.3,
+                tint: Vec3::splat(0.5)
+            })
+        );
+        assert_eq!(MaterialKind::parse("diffuse"), Ok(MaterialKind::Diffuse));
+        assert_eq!(MaterialKind::parse("glass"), Ok(PRESET_GLASS));
+        for (text, error) in [
+            (
+                "gold",
+                "unknown material kind 'gold' (expected diffuse, mirror, glass, rough or plastic)",
+            ),
+            (
+                "mirror:ior=1.5",
+                "unknown field `ior` for a mirror material (its fields: tint)",
+            ),
+            (
+                "diffuse:tint=1",
+                "unknown field `tint`: a diffuse material has no fields",
+            ),
+            (
+                "rough:alpha=2",
+                "invalid material alpha 2: must be in [0.01, 1]",
+            ),
+            (
+                "glass:tint=1,1.5,1",
+                "invalid material tint [1, 1.5, 1]: must be in [0, 1]",
+            ),
+            (
+                "plastic:int_ior=1",
+                "invalid material int_ior 1: must differ from ext_ior",
+            ),
+            ("rough:alpha=x", "'x' in 'alpha=x' is not a number"),
+            ("mirror:0.5", "'0.5': give each value as field=value"),
+            ("mirror:tint=1,1", "'tint' has 2 numbers"),
+            ("glass:ior=1,1,1", "'ior' is one number, not a colour"),
+        ] {
+            let e = MaterialKind::parse(text).unwrap_err();
+            assert!(e.contains(error), "{text}: {e}");
+            assert!(!e.contains('\n'), "{e}");
         }
     }
 

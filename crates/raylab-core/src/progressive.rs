@@ -219,7 +219,7 @@ pub const INJECTED_PANIC: &str = "injected panic (Controller::inject_panic_on_ne
 enum Message {
     Job {
         generation: u64,
-        settings: RenderSettings,
+        settings: Box<RenderSettings>,
         scene: Arc<Scene>,
         submitted: Instant,
     },
@@ -356,7 +356,7 @@ impl Controller {
         let submitted = Instant::now();
         self.bump_and_send(|generation| Message::Job {
             generation,
-            settings: settings.clone(),
+            settings: Box::new(settings.clone()),
             scene: Arc::clone(scene),
             submitted,
         })
@@ -731,7 +731,7 @@ impl Worker {
                     } => {
                         self.job = Some(Job {
                             generation,
-                            settings,
+                            settings: *settings,
                             scene,
                             submitted,
                         });

@@ -81,7 +81,9 @@ use crate::integrator::{Shading, Stage};
 use crate::light::{LightKind, LightShape, LightSpec, SpotCone};
 use crate::material::{MaterialKind, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
-use crate::scene::spec::{self, BoxPart, ModelSpec, PartRelief, ReliefSpec, SceneSpec};
+use crate::scene::spec::{
+    self, BoxPart, ModelSpec, PartMaterial, PartRelief, ReliefSpec, SceneSpec,
+};
 use crate::scene::terrain::TerrainSpec;
 use crate::scene::water::WaterSpec;
 use crate::settings::{Caustics, DEFAULT_PHOTONS, RenderSettings};
@@ -169,6 +171,11 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
         "radius"
     };
     let settings = file.into_settings(folder, kind);
+    PartMaterial::validate(&settings.part_materials, |i, f| match f {
+        "part" => format!("scene.materials[{i}].part"),
+        f => format!("scene.materials[{i}].material.{f}"),
+    })
+    .map_err(|e| at_key(text, &key_path(&e.name), &e.to_string()))?;
     // The scene's parts are checked too (`SceneSpec::validate`).
     settings.validate().map_err(|e| {
         let path = match &*e.name {
@@ -348,6 +355,18 @@ struct SceneV2 {
     /// Water over the floor, `[scene.water]`: depth, ior, waves (amplitude), time (seconds).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     water: Option<WaterV2>,
+    /// Parts of the box with materials of their own over the preset's, `[[scene.materials]]`
+    /// with `part = "tall-block"` and `material = { kind = "plastic", … }` as a model's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    materials: Vec<PartMaterialV2>,
+}
+
+/// A part of the box and its material.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PartMaterialV2 {
+    part: BoxPart,
+    material: MaterialKind,
 }
 
 fn default_roughness() -> f32 {
@@ -401,11 +420,9 @@ struct ModelV2 {
     /// Degrees (radians in version 1).
     yaw: f64,
     reflectance: Floats<3>,
-    /// `{ kind = "diffuse" }`, `{ kind = "mirror", tint = [r, g, b] }`,
-    /// `{ kind = "glass", ior = 1.5, tint = [r, g, b] }` or
-    /// `{ kind = "rough", alpha = 0.2, tint = [r, g, b] }` or
-    /// `{ kind = "plastic", alpha = 0.1, int_ior = 1.5, ext_ior = 1.0, specular = [r, g, b] }`.
-    material: MaterialV2,
+    /// `{ kind = "diffuse" }`, `{ kind = "mirror", tint = [r, g, b] }`, …: the kind and
+    /// exactly its fields, as [`MaterialKind`]'s table lists them.
+    material: MaterialKind,
     /// A tangent-space normal map (PNG or JPEG, +Y up), relative to the scene file; replaces
     /// one the model's material library names. Optional, as are the three below.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -434,87 +451,6 @@ impl SurfaceV2 {
             normal_strength: self.normal_strength,
             height_map: self.height_map.clone(),
             height_scale: self.height_scale,
-        }
-    }
-}
-
-/// A model's material: each kind with exactly its own fields (a mirror has no `ior`).
-#[derive(Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
-enum MaterialV2 {
-    // A struct variant, not a unit one: only then are unknown fields refused.
-    Diffuse {},
-    Mirror {
-        tint: Floats<3>,
-    },
-    Glass {
-        ior: f32,
-        tint: Floats<3>,
-    },
-    Rough {
-        alpha: f32,
-        tint: Floats<3>,
-    },
-    Plastic {
-        alpha: f32,
-        int_ior: f32,
-        ext_ior: f32,
-        specular: Floats<3>,
-    },
-}
-
-impl From<MaterialKind> for MaterialV2 {
-    fn from(kind: MaterialKind) -> Self {
-        match kind {
-            MaterialKind::Diffuse => MaterialV2::Diffuse {},
-            MaterialKind::Mirror { tint } => MaterialV2::Mirror { tint: tint.into() },
-            MaterialKind::Glass { ior, tint } => MaterialV2::Glass {
-                ior,
-                tint: tint.into(),
-            },
-            MaterialKind::Rough { alpha, tint } => MaterialV2::Rough {
-                alpha,
-                tint: tint.into(),
-            },
-            MaterialKind::Plastic {
-                alpha,
-                int_ior,
-                ext_ior,
-                specular,
-            } => MaterialV2::Plastic {
-                alpha,
-                int_ior,
-                ext_ior,
-                specular: specular.into(),
-            },
-        }
-    }
-}
-
-impl From<MaterialV2> for MaterialKind {
-    fn from(kind: MaterialV2) -> Self {
-        match kind {
-            MaterialV2::Diffuse {} => MaterialKind::Diffuse,
-            MaterialV2::Mirror { tint } => MaterialKind::Mirror { tint: tint.into() },
-            MaterialV2::Glass { ior, tint } => MaterialKind::Glass {
-                ior,
-                tint: tint.into(),
-            },
-            MaterialV2::Rough { alpha, tint } => MaterialKind::Rough {
-                alpha,
-                tint: tint.into(),
-            },
-            MaterialV2::Plastic {
-                alpha,
-                int_ior,
-                ext_ior,
-                specular,
-            } => MaterialKind::Plastic {
-                alpha,
-                int_ior,
-                ext_ior,
-                specular: specular.into(),
-            },
         }
     }
 }
@@ -848,7 +784,7 @@ impl FileV2 {
                         floor_position: Floats(m.floor_position),
                         yaw: camera::degrees(m.yaw),
                         reflectance: m.reflectance.into(),
-                        material: m.kind.into(),
+                        material: m.kind,
                         normal_map: m.relief.normal_map,
                         normal_strength: m.relief.normal_strength,
                         height_map: m.relief.height_map,
@@ -878,6 +814,14 @@ impl FileV2 {
                     waves: w.waves,
                     time: w.time,
                 }),
+                materials: s
+                    .part_materials
+                    .iter()
+                    .map(|p| PartMaterialV2 {
+                        part: p.part,
+                        material: p.kind,
+                    })
+                    .collect(),
             },
             camera: CameraV2 {
                 position: c.position.into(),
@@ -931,7 +875,7 @@ impl FileV2 {
                     floor_position: m.floor_position.0,
                     yaw: angle.radians(m.yaw),
                     reflectance: m.reflectance.into(),
-                    kind: m.material.into(),
+                    kind: m.material,
                     relief: ReliefSpec {
                         normal_map: m.normal_map,
                         normal_strength: m.normal_strength,
@@ -997,6 +941,14 @@ impl FileV2 {
             },
             material_preset: scene.material_preset,
             roughness: scene.roughness,
+            part_materials: scene
+                .materials
+                .iter()
+                .map(|p| PartMaterial {
+                    part: p.part,
+                    kind: p.material,
+                })
+                .collect(),
             texture_preset: scene.texture_preset,
             display: Display {
                 transform: self.display.transform,
@@ -1455,6 +1407,50 @@ mod tests {
         assert!(e.contains("more than 3 elements"), "{e}");
     }
 
+    /// A part of the box with a material of its own is written as `[[scene.materials]]`, read
+    /// back the same, and a value out of its range or a part given twice is refused at its
+    /// line.
+    #[test]
+    fn a_part_material_round_trips_and_is_checked_at_its_line() {
+        let s = RenderSettings {
+            part_materials: vec![PartMaterial {
+                part: BoxPart::TallBlock,
+                kind: MaterialKind::Rough {
+                    alpha: 0.3,
+                    tint: Vec3::new(0.9, 0.8, 0.7),
+                },
+            }],
+            ..RenderSettings::default()
+        };
+        let text = to_text(&s, Path::new("/x")).unwrap();
+        assert_eq!(parse(&text, Path::new("/x")).unwrap(), s);
+        for line in [
+            "[[scene.materials]]",
+            "part = \"tall-block\"",
+            "kind = \"rough\"",
+            "alpha = 0.3",
+        ] {
+            assert!(text.contains(line), "{line}: {text}");
+        }
+        let e = parse(&text.replace("alpha = 0.3", "alpha = 1.5"), Path::new("/x")).unwrap_err();
+        assert!(
+            e.starts_with("line ")
+                && e.contains(
+                    "invalid scene.materials[0].material.alpha 1.5: must be in [0.01, 1]"
+                ),
+            "{e}"
+        );
+        let twice = format!(
+            "{text}\n[[scene.materials]]\npart = \"tall-block\"\n\n[scene.materials.material]\nkind = \"diffuse\"\n"
+        );
+        let e = parse(&twice, Path::new("/x")).unwrap_err();
+        assert!(
+            e.starts_with("line ")
+                && e.contains("invalid scene.materials[1].part \"tall-block\": has a material"),
+            "{e}"
+        );
+    }
+
     /// A plastic model and the plastic preset are written and read back as they were, the
     /// plastic's fields by name; a bad index or roughness is refused naming the field.
     #[test]
@@ -1498,7 +1494,7 @@ mod tests {
             Path::new("/x"),
         )
         .unwrap_err();
-        assert!(e.contains("roughness must be in [0.01, 1]"), "{e}");
+        assert!(e.contains("material.alpha 2: must be in [0.01, 1]"), "{e}");
         let e = parse(
             &text.replace("ext_ior = 1.0", "ext_ior = 1.0\ntint = 1"),
             Path::new("/x"),

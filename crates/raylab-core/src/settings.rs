@@ -24,6 +24,7 @@ use crate::display::Display;
 use crate::light::{LightKind, LightSpec};
 use crate::material::{DEFAULT_ROUGHNESS, MIN_ROUGHNESS, MaterialPreset, TexturePreset};
 use crate::scene::SceneChoice;
+use crate::scene::spec::PartMaterial;
 
 /// The largest image side raylab renders: 16384 px (a 16384² float image is 3 GiB).
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
@@ -98,6 +99,10 @@ pub struct RenderSettings {
     pub material_preset: MaterialPreset,
     /// The GGX roughness α of the rough preset's metal (0.2 by default; in (0, 1]).
     pub roughness: f32,
+    /// Parts of the box given materials of their own, over the preset's (`--material`, the
+    /// workbench's material editor). Written only when there are some.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub part_materials: Vec<PartMaterial>,
     /// Textures for the Cornell box's floor and walls (none: the lab's plain colours).
     pub texture_preset: TexturePreset,
     /// How linear values are shown and written to PNG (the lab's clamp by default). Changing
@@ -130,6 +135,7 @@ impl Default for RenderSettings {
             shading: Shading::default(),
             material_preset: MaterialPreset::None,
             roughness: DEFAULT_ROUGHNESS,
+            part_materials: Vec::new(),
             texture_preset: TexturePreset::None,
             display: Display::default(),
             view: View::Shaded,
@@ -445,6 +451,8 @@ impl RenderSettings {
         }
         check_light_size(light)?;
         check_roughness("roughness", self.roughness)?;
+        let parts = &self.part_materials;
+        PartMaterial::validate(parts, |i, f| format!("{} material's {f}", parts[i].part))?;
         check_finite("exposure", self.display.exposure)?;
         if self.display.exposure.abs() > MAX_EXPOSURE {
             return Err(err(

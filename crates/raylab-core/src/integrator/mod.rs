@@ -58,6 +58,7 @@ use crate::memory::with_thread_memory;
 use crate::photon_map::PhotonMap;
 use crate::sampling::Rng;
 use crate::scene::Scene;
+use crate::scene::spec::PartMaterial;
 use crate::settings::RenderSettings;
 use crate::texture::planar_uv;
 
@@ -625,6 +626,11 @@ impl<'a> Tracer<'a> {
             MaterialPreset::None => Cow::Borrowed(scene.materials.as_slice()),
             preset => Cow::Owned(preset.apply(&scene.materials, settings.roughness)),
         };
+        if !settings.part_materials.is_empty() {
+            let mut own = materials.into_owned();
+            PartMaterial::apply(&settings.part_materials, &mut own);
+            materials = Cow::Owned(own);
+        }
         if settings.texture_preset != TexturePreset::None {
             materials = Cow::Owned(settings.texture_preset.apply(&materials));
         }

@@ -250,6 +250,52 @@ pub struct PartRelief {
     pub relief: ReliefSpec,
 }
 
+/// A part of the box given a material of its own, over the scene's and the material preset's:
+/// what `--material tall=plastic:alpha=0.2`, a scene file's `[[scene.materials]]` and the
+/// workbench's material editor set.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PartMaterial {
+    pub part: BoxPart,
+    pub kind: MaterialKind,
+}
+
+impl PartMaterial {
+    /// The box's `materials` (the first of a scene's, in the order of [`cornell_box`]) with
+    /// each of `parts` given its kind, found by the part's material name.
+    pub fn apply(parts: &[PartMaterial], materials: &mut [Material]) {
+        let box_materials = cornell_box().materials.len().min(materials.len());
+        for p in parts {
+            let name = p.part.material();
+            if let Some(m) = materials[..box_materials]
+                .iter_mut()
+                .find(|m| m.name == name)
+            {
+                m.kind = p.kind;
+            }
+        }
+    }
+
+    /// Checks each part's parameters against their ranges ([`MaterialKind::check`]) and
+    /// that no part is given twice; `field(i, name)` names the `i`th part's field `name` in
+    /// the error (`part` for the part itself).
+    pub fn validate(
+        parts: &[PartMaterial],
+        field: impl Fn(usize, &str) -> String,
+    ) -> Result<(), SettingsError> {
+        for (i, p) in parts.iter().enumerate() {
+            p.kind.check(|f| field(i, f))?;
+            if parts[..i].iter().any(|q| q.part == p.part) {
+                return Err(SettingsError {
+                    name: field(i, "part").into(),
+                    value: format!("\"{}\"", p.part),
+                    reason: "has a material already: give each part one",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The models compiled into raylab, by the name a [`ModelSpec::file`] gives them.
 pub const BUILT_IN_MODELS: [&str; 3] = ["bunny", "teapot", "textured-teapot"];
 
@@ -371,58 +417,7 @@ impl SceneSpec {
                     "must be in [0, 1] in each channel",
                 ));
             }
-            match m.kind {
-                MaterialKind::Diffuse => {}
-                MaterialKind::Mirror { tint }
-                | MaterialKind::Glass { tint, .. }
-                | MaterialKind::Rough { tint, .. }
-                | MaterialKind::Plastic { specular: tint, .. }
-                    if !(tint.is_finite()
-                        && tint.min_element() >= 0.0
-                        && tint.max_element() <= 1.0) =>
-                {
-                    return Err(bad(
-                        field("material"),
-                        tint.to_string(),
-                        "a tint must be in [0, 1]",
-                    ));
-                }
-                MaterialKind::Rough { alpha, .. } | MaterialKind::Plastic { alpha, .. }
-                    if !(crate::material::MIN_ROUGHNESS..=1.0).contains(&alpha) =>
-                {
-                    return Err(bad(
-                        field("material"),
-                        alpha.to_string(),
-                        "a roughness must be in [0.01, 1]",
-                    ));
-                }
-                MaterialKind::Glass { ior, .. }
-                    if !(ior.is_finite() && (1.0..=4.0).contains(&ior)) =>
-                {
-                    return Err(bad(
-                        field("material"),
-                        ior.to_string(),
-                        "an index of refraction must be in [1, 4]",
-                    ));
-                }
-                MaterialKind::Plastic {
-                    int_ior, ext_ior, ..
-                } if !([int_ior, ext_ior]
-                    .iter()
-                    .all(|i| i.is_finite() && (1.0..=4.0).contains(i))
-                    && int_ior != ext_ior) =>
-                {
-                    return Err(bad(
-                        field("material"),
-                        format!("{int_ior}, {ext_ior}"),
-                        "the indices of refraction must be in [1, 4] and differ",
-                    ));
-                }
-                MaterialKind::Mirror { .. }
-                | MaterialKind::Glass { .. }
-                | MaterialKind::Rough { .. }
-                | MaterialKind::Plastic { .. } => {}
-            }
+            m.kind.check(|f| field(&format!("material.{f}")))?;
             m.relief.validate(field)?;
         }
         for (i, part) in self.surfaces.iter().enumerate() {
