@@ -714,6 +714,7 @@ mod x86 {
 mod tests {
     use glam::Vec3;
 
+    use super::super::portable::Portable;
     use super::*;
     use crate::geometry::{Ray, Triangle};
     use crate::intersect::intersect_triangle;
@@ -792,6 +793,8 @@ mod tests {
             };
             let p8 = Packet8::new(&tris, &ids[..8]);
             assert_eq!(Scalar.nearest(&p8, &r, limit), as_hit(want8));
+            assert_eq!(Portable.nearest(&p8, &r, limit), as_hit(want8));
+            assert_eq!(Portable.any(&p8, &r, limit), want8.is_some());
             if let Some(k) = avx2 {
                 assert_eq!(k.nearest(&p8, &r, limit), as_hit(want8));
                 assert_eq!(k.any(&p8, &r, limit), want8.is_some());
@@ -887,6 +890,7 @@ mod tests {
             };
             let want = nearest_packet_by_packet(&packets, limit, |p, l| Scalar.nearest(p, &r, l));
             assert_eq!(bits(Scalar.nearest_among(&packets, &r, limit)), bits(want));
+            assert_eq!(bits(Portable.nearest_among(&packets, &r, limit)), bits(want));
             if let Some(k) = avx2 {
                 assert_eq!(bits(k.nearest_among(&packets, &r, limit)), bits(want));
             }
@@ -903,9 +907,10 @@ mod tests {
     #[test]
     fn box_kernels_agree_with_the_scalar_twin() {
         let mut rng = Rng::new(12);
-        let Some(k) = Avx2::detect() else {
-            return crate::accel::skip_unless_required("avx2", "box_kernels_agree");
-        };
+        let avx2 = Avx2::detect();
+        if avx2.is_none() {
+            crate::accel::skip_unless_required("avx2", "box_kernels_agree");
+        }
         let mut disagreements = 0;
         for _ in 0..20_000 {
             let mut node = Node8 {
@@ -927,6 +932,13 @@ mod tests {
             let r = RayK::new(&Ray::new(v(&mut rng, 2.0), d));
             let limit = rng.uniform(0.0, 4.0);
             let (ms, ts) = Scalar.boxes(&node, &r, limit);
+            // The portable kernels compute the scalar twin's form: the same answers exactly.
+            let (mp, tp) = Portable.boxes(&node, &r, limit);
+            assert_eq!(mp, ms);
+            for i in (0..LANES).filter(|i| ms & (1 << i) != 0) {
+                assert_eq!(tp[i].to_bits(), ts[i].to_bits());
+            }
+            let Some(k) = avx2 else { continue };
             let (mv, tv) = k.boxes(&node, &r, limit);
             for i in 0..LANES {
                 if (ms ^ mv) & (1 << i) != 0 {
