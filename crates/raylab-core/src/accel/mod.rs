@@ -47,6 +47,7 @@
 pub mod bvh;
 pub mod calibrate;
 pub mod cull;
+pub mod kernels;
 pub mod lane_io;
 pub mod packet;
 pub mod portable;
@@ -65,8 +66,8 @@ use crate::named::named_enum;
 use self::bvh::Bvh;
 use self::calibrate::Calibration;
 use self::cull::Cone;
-use self::simd::RayK;
 use self::portable::Portable;
+use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
 use self::wide::{Bvh8Big, Flat, KernelSet};
 

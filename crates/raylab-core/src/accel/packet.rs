@@ -1,5 +1,5 @@
 //! Coherent rays together: a packet of rays through the 8-wide BVH, one SIMD lane a ray —
-//! sixteen rays with AVX-512, eight with AVX2.
+//! sixteen rays with AVX-512, eight with AVX2 and the portable set.
 //!
 //! Camera rays through neighbouring pixels, and the shadow rays from their hits towards the
 //! point light, meet the same nodes in the same order. Ray by ray, each of them loads a node's
@@ -11,12 +11,13 @@
 //! The traversal is written once, generic over [`PacketIsa`]: the lane width, a lane type
 //! with the arithmetic of [`crate::lanes`], and the few operations it needs beyond (masks as
 //! bits, blends, a masked horizontal minimum, the gather of the rays), implemented by the
-//! AVX-512 and the AVX2 kernel proof types. Every function of it is `#[inline(always)]`, so it
-//! is compiled inside the `#[target_feature]` entry points of [`super`] for each instruction
-//! set, where the intrinsics inline.
+//! AVX-512 and the AVX2 kernel proof types (with their intrinsics, in this module's `x86`
+//! part) and by the portable set ([`super::portable`]). Every function of it is
+//! `#[inline(always)]`, so it is compiled inside the `#[target_feature]` entry points of
+//! [`super`] for each instruction set, where the intrinsics inline.
 //!
 //! Each lane computes exactly what [`super::simd::Kernels::boxes`] computes for its ray (the
-//! same planes, the same fused multiply-subtract, the same order of `max` and `min`), against
+//! same planes, the same [`PacketIsa::plane_distance`], the same order of `max` and `min`), against
 //! its own best hit; leaves are tested a triangle at a time against every lane by the single
 //! ray's triangle test itself ([`crate::intersect::intersect_lanes`], a lane per ray), with
 //! the same rule for ties. So a packet returns exactly what each ray returns alone (tests/packets.rs checks
@@ -101,8 +102,10 @@ fn directions_agree(mut directions: impl ExactSizeIterator<Item = glam::Vec3>) -
 /// per ray ([`Real`]: the arithmetic and comparisons of [`crate::lanes`]), a register of `u32`
 /// (the best triangle's index), a comparison's result, and the few operations below, each one
 /// instruction or a short fixed sequence. Implemented by the kernel proof types, whose values
-/// exist only on a CPU that runs them: [`Avx512`] (sixteen rays, masks in mask registers) and
-/// [`Avx2`] (eight rays, masks as all-ones lanes).
+/// exist only on a CPU that runs them: `Avx512` (sixteen rays, masks in mask registers) and
+/// `Avx2` (eight rays, masks as all-ones lanes); and by [`super::portable::Portable`] (eight
+/// rays in two four-lane registers), which every CPU runs. The single-ray kernels are written
+/// over it too ([`super::kernels`]).
 ///
 /// Every method is `#[inline(always)]` and every caller in this module too: the traversal is
 /// compiled inside the `#[target_feature]` entry points of [`super`] (one generic body per
@@ -129,14 +132,26 @@ pub(super) trait PacketIsa: KernelSet {
     }
     /// The first `WIDTH` floats of `a`.
     fn load(self, a: &[f32; MAX_WIDTH]) -> Self::F;
+    /// The first `WIDTH` floats of `a` (`N ≥ WIDTH`: checked).
+    fn load_lanes<const N: usize>(self, a: &[f32; N]) -> Self::F;
+    /// Lane `i` of `v` (`i < WIDTH`), moved to lane 0 in registers where the set can: a
+    /// store and a read back of one float would stall on the store (store forwarding).
+    fn lane(self, v: Self::F, i: usize) -> f32;
+    /// Lane `i` of `v` (`i < WIDTH`).
+    fn lane_u32(self, v: Self::U, i: usize) -> u32;
     /// Into the first `WIDTH` floats of `a`.
     fn store(self, a: &mut [f32; MAX_WIDTH], v: Self::F);
     /// Each lane's distance along its ray to the plane `plane` (of the axis whose origin,
     /// reciprocal direction and their product are given): `plane·inv − o·inv` in one rounding
     /// where the set has a fused multiply-subtract, else `(plane − o)·inv`. Either way close
     /// enough for the padding of the boxes (`bvh`).
-    fn plane_distance(self, plane: Self::F, origin: Self::F, inv: Self::F, origin_inv: Self::F)
-    -> Self::F;
+    fn plane_distance(
+        self,
+        plane: Self::F,
+        origin: Self::F,
+        inv: Self::F,
+        origin_inv: Self::F,
+    ) -> Self::F;
     /// The instruction's maximum: `b` where either is NaN (unlike [`Real::simd_max`]).
     fn max(self, a: Self::F, b: Self::F) -> Self::F;
     /// The instruction's minimum: `b` where either is NaN (unlike [`Real::simd_min`]).
@@ -176,8 +191,8 @@ mod x86 {
 
     use super::super::simd::{Avx2, Avx512};
     use super::super::x86_lanes::{Avx2F32, Avx2Mask, Avx512F32, Avx512Mask};
-    use super::{MAX_WIDTH, PacketIsa, RAY_FLOATS, SEGMENT_FLOATS};
     use super::{CMP_EQ_OQ, CMP_GE_OQ, CMP_GT_OQ, CMP_LE_OQ, CMP_LT_OQ, CMP_NGT_UQ};
+    use super::{MAX_WIDTH, PacketIsa, RAY_FLOATS, SEGMENT_FLOATS};
     use crate::geometry::Ray;
     // The comparisons are numbered as the `_CMP_*` predicates, which these sets take as they are.
     const _: () = assert!(
@@ -198,7 +213,11 @@ mod x86 {
     /// # Safety
     /// AVX-512 F; `base` points to `len` (1 to 16) records of `stride ≥ K` floats.
     #[inline(always)]
-    pub(super) unsafe fn gather16<const K: usize>(base: *const f32, stride: i32, len: usize) -> [__m512; K] {
+    pub(super) unsafe fn gather16<const K: usize>(
+        base: *const f32,
+        stride: i32,
+        len: usize,
+    ) -> [__m512; K] {
         // SAFETY: every index gathered is stride·i + c for a record i < len and c < K ≤ stride.
         unsafe {
             let lane = _mm512_min_epi32(
@@ -334,6 +353,23 @@ mod x86 {
             Avx512F32::load(a)
         }
         #[inline(always)]
+        fn load_lanes<const N: usize>(self, a: &[f32; N]) -> Avx512F32 {
+            Avx512F32::load(a.first_chunk().expect("at least sixteen floats"))
+        }
+        #[inline(always)]
+        fn lane(self, v: Avx512F32, i: usize) -> f32 {
+            // SAFETY: AVX-512 F.
+            unsafe { _mm512_cvtss_f32(_mm512_permutexvar_ps(_mm512_set1_epi32(i as i32), v.0)) }
+        }
+        #[inline(always)]
+        fn lane_u32(self, v: __m512i, i: usize) -> u32 {
+            // SAFETY: AVX-512 F.
+            unsafe {
+                let v = _mm512_permutexvar_epi32(_mm512_set1_epi32(i as i32), v);
+                _mm_cvtsi128_si32(_mm512_castsi512_si128(v)) as u32
+            }
+        }
+        #[inline(always)]
         fn store(self, a: &mut [f32; MAX_WIDTH], v: Avx512F32) {
             // SAFETY: AVX-512 F; `a` is sixteen writable f32.
             unsafe { _mm512_storeu_ps(a.as_mut_ptr(), v.0) }
@@ -443,12 +479,30 @@ mod x86 {
         fn segments(self, segments: &[(Ray, f32)]) -> [Avx2F32; 7] {
             debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
             // SAFETY: `segments` holds segments.len() records of SEGMENT_FLOATS floats.
-            unsafe { gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }.map(Avx2F32)
+            unsafe { gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }
+                .map(Avx2F32)
         }
 
         #[inline(always)]
         fn load(self, a: &[f32; MAX_WIDTH]) -> Avx2F32 {
             Avx2F32::load(a.first_chunk().expect("sixteen floats hold eight"))
+        }
+        #[inline(always)]
+        fn load_lanes<const N: usize>(self, a: &[f32; N]) -> Avx2F32 {
+            Avx2F32::load(a.first_chunk().expect("at least eight floats"))
+        }
+        #[inline(always)]
+        fn lane(self, v: Avx2F32, i: usize) -> f32 {
+            // SAFETY: AVX2.
+            unsafe { _mm256_cvtss_f32(_mm256_permutevar8x32_ps(v.0, _mm256_set1_epi32(i as i32))) }
+        }
+        #[inline(always)]
+        fn lane_u32(self, v: __m256i, i: usize) -> u32 {
+            // SAFETY: AVX2.
+            unsafe {
+                let v = _mm256_permutevar8x32_epi32(v, _mm256_set1_epi32(i as i32));
+                _mm_cvtsi128_si32(_mm256_castsi256_si128(v)) as u32
+            }
         }
         #[inline(always)]
         fn store(self, a: &mut [f32; MAX_WIDTH], v: Avx2F32) {
@@ -1160,13 +1214,13 @@ impl Bvh8 {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     #[cfg(target_arch = "x86_64")]
     use super::super::simd::{Avx2, Avx512};
     #[cfg(target_arch = "x86_64")]
     use super::super::x86_lanes::Avx512F32;
     #[cfg(target_arch = "x86_64")]
     use super::x86::gather16;
+    use super::*;
 
     /// A full packet's rays and shadow rays read by plain loads and rearranged
     /// (`transpose16`) equal the same read lane by lane (`gather16`), every float.

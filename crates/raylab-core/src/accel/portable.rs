@@ -14,17 +14,14 @@
 //! test computes `(plane − o)·inv` as the readable traversal does; boxes only decide which
 //! triangles are tested, never what a test returns.
 
-use glam::Vec3;
-
 use super::Hit;
 use super::packet::{
     CMP_EQ_OQ, CMP_GE_OQ, CMP_GT_OQ, CMP_LE_OQ, CMP_LT_OQ, CMP_NGT_UQ, MAX_WIDTH, PacketIsa,
 };
-use super::simd::{Kernels, LANES, LaneHit, Node8, Packet8, RayK};
+use super::simd::{LANES, RayK};
 use super::wide::{Flat, KernelSet};
 use crate::geometry::Ray;
-use crate::intersect::intersect_lanes;
-use crate::lanes::{Mask, Real, Vec3x, Vector};
+use crate::lanes::{Mask, Real};
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
@@ -510,8 +507,7 @@ impl Real for F8 {
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         let bit = F8::splat(-0.0);
-        bit.zip(self, Q::andnot)
-            .zip(bit.zip(sign, Q::and), Q::or)
+        bit.zip(self, Q::andnot).zip(bit.zip(sign, Q::and), Q::or)
     }
 
     #[inline(always)]
@@ -568,7 +564,11 @@ fn lanes_of_records<T, const K: usize>(records: &[T], float: impl Fn(&T, usize) 
 /// Float `c` of a ray: origin x, y, z, then direction x, y, z.
 #[inline(always)]
 fn ray_float(r: &Ray, c: usize) -> f32 {
-    if c < 3 { r.origin[c] } else { r.direction[c - 3] }
+    if c < 3 {
+        r.origin[c]
+    } else {
+        r.direction[c - 3]
+    }
 }
 
 impl PacketIsa for Portable {
@@ -586,7 +586,10 @@ impl PacketIsa for Portable {
     #[inline(always)]
     fn segments(self, segments: &[(Ray, f32)]) -> [F8; 7] {
         debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
-        lanes_of_records(segments, |(r, t), c| if c < 6 { ray_float(r, c) } else { *t })
+        lanes_of_records(
+            segments,
+            |(r, t), c| if c < 6 { ray_float(r, c) } else { *t },
+        )
     }
 
     #[inline(always)]
@@ -598,6 +601,18 @@ impl PacketIsa for Portable {
         let (lo, hi) = a.split_at_mut(4);
         v.0[0].store(lo.first_chunk_mut().expect("four"));
         v.0[1].store(hi.first_chunk_mut().expect("four"));
+    }
+    #[inline(always)]
+    fn load_lanes<const N: usize>(self, a: &[f32; N]) -> F8 {
+        F8::load8(a.first_chunk().expect("at least eight floats"))
+    }
+    #[inline(always)]
+    fn lane(self, v: F8, i: usize) -> f32 {
+        v.to_array()[i & (LANES - 1)]
+    }
+    #[inline(always)]
+    fn lane_u32(self, v: U8, i: usize) -> u32 {
+        F8(v.0).to_array()[i & (LANES - 1)].to_bits()
     }
     #[inline(always)]
     fn plane_distance(self, plane: F8, origin: F8, inv: F8, _origin_inv: F8) -> F8 {
@@ -678,123 +693,6 @@ impl PacketIsa for Portable {
     #[inline(always)]
     fn blend_u32(self, m: M8, a: U8, b: U8) -> U8 {
         U8(m.blend(a.0, b.0))
-    }
-}
-
-/// A packet's rows of x, y and z as lanes.
-#[inline(always)]
-fn rows8(rows: &[[f32; LANES]; 3]) -> Vec3x<F8> {
-    Vec3x::new(
-        F8::load8(&rows[0]),
-        F8::load8(&rows[1]),
-        F8::load8(&rows[2]),
-    )
-}
-
-/// `t`, `u`, `v` of every lane (meaningless for a miss) and the mask of hits: one ray against
-/// a lane per triangle ([`intersect_lanes`]).
-#[inline(always)]
-fn hits(p: &Packet8, r: &RayK, t_limit: f32) -> ([F8; 3], M8) {
-    let (e1, e2) = (rows8(&p.e1), rows8(&p.e2));
-    let n = e1.cross(e2);
-    let origin = Vec3x::splat(Vec3::from(r.origin));
-    let direction = Vec3x::splat(Vec3::from(r.direction));
-    let h = intersect_lanes(
-        origin,
-        direction,
-        rows8(&p.v0),
-        e1,
-        e2,
-        n,
-        F8::splat(t_limit),
-    );
-    ([h.t, h.u, h.v], h.hit)
-}
-
-impl Kernels for Portable {
-    #[inline(always)]
-    fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-        let mut t0 = F8::ZERO;
-        let mut t1 = F8::splat(t_limit);
-        for axis in 0..3 {
-            let (o, inv) = (F8::splat(r.origin[axis]), F8::splat(r.inv[axis]));
-            let near = (F8::load8(&node.bounds[r.near[axis]]) - o) * inv;
-            let far = (F8::load8(&node.bounds[r.far[axis]]) - o) * inv;
-            t0 = near.zip(t0, Q::max);
-            t1 = far.zip(t1, Q::min);
-        }
-        (t0.test(t1, Q::le).bits(), t0.to_array())
-    }
-
-    #[inline(always)]
-    fn nearest(self, p: &Packet8, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-        let ([t, u, v], hit) = hits(p, r, t_limit);
-        let bits = hit.bits();
-        if bits == 0 {
-            return None;
-        }
-        let m = self.min_of(hit, t);
-        let at_min = (t.test(F8::splat(m), Q::eq) & hit).bits();
-        let lane = at_min.trailing_zeros() as usize & (LANES - 1);
-        Some(LaneHit {
-            lane,
-            t: m,
-            u: u.to_array()[lane],
-            v: v.to_array()[lane],
-        })
-    }
-
-    /// Each lane's nearest kept across the packets and reduced to one at the end, as the AVX2
-    /// kernels do.
-    #[inline(always)]
-    fn nearest_among(
-        self,
-        packets: &[Packet8],
-        r: &RayK,
-        t_limit: f32,
-    ) -> Option<(usize, LaneHit)> {
-        let mut t_best = F8::splat(f32::INFINITY);
-        let (mut u_best, mut v_best) = (F8::ZERO, F8::ZERO);
-        let mut packet_best = self.splat_u32(0);
-        let mut hit_any = M8::NONE;
-        for (i, p) in packets.iter().enumerate() {
-            let ([t, u, v], hit) = hits(p, r, t_limit);
-            // Strictly nearer: a lane keeps its first packet's hit among equal `t`.
-            let nearer = hit & t.test(t_best, Q::lt);
-            t_best = F8::select(nearer, t, t_best);
-            u_best = F8::select(nearer, u, u_best);
-            v_best = F8::select(nearer, v, v_best);
-            packet_best = self.blend_u32(nearer, packet_best, self.splat_u32(i as u32));
-            hit_any = hit_any | hit;
-        }
-        if !hit_any.any() {
-            return None;
-        }
-        let m = self.min_of(hit_any, t_best);
-        let at_min = (t_best.test(F8::splat(m), Q::eq) & hit_any).bits();
-        let mut packets_of = [0u32; MAX_WIDTH];
-        self.store_u32(&mut packets_of, packet_best);
-        // Equal `t` in several lanes (rare): the first packet among them, then the lowest lane.
-        let mut lane = at_min.trailing_zeros() as usize & (LANES - 1);
-        for other in lane + 1..LANES {
-            if at_min & (1 << other) != 0 && packets_of[other] < packets_of[lane] {
-                lane = other;
-            }
-        }
-        Some((
-            packets_of[lane] as usize,
-            LaneHit {
-                lane,
-                t: m,
-                u: u_best.to_array()[lane],
-                v: v_best.to_array()[lane],
-            },
-        ))
-    }
-
-    #[inline(always)]
-    fn any(self, p: &Packet8, r: &RayK, t_limit: f32) -> bool {
-        hits(p, r, t_limit).1.any()
     }
 }
 
