@@ -225,11 +225,8 @@ impl Cone {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
 mod lanes {
-    use std::arch::x86_64::*;
-
-    use super::super::packet::{MAX_WIDTH, PacketIsa};
+    use super::super::packet::{CMP_EQ_OQ, CMP_GT_OQ, CMP_LE_OQ, MAX_WIDTH, PacketIsa};
     use crate::lanes::Real;
 
     use super::super::SegmentLanes;
@@ -269,8 +266,8 @@ mod lanes {
         fn add_lanes(&mut self, k: P, (x, y, z): (P::F, P::F, P::F), active: u32) {
             let (sx, sy) = (x / z, y / z);
             let max = k.splat(MAX_SLOPE);
-            let good = k.cmp::<_CMP_GT_OQ>(z, k.splat(0.0))
-                & (k.cmp::<_CMP_LE_OQ>(k.abs(sx), max) & k.cmp::<_CMP_LE_OQ>(k.abs(sy), max));
+            let good = k.cmp::<CMP_GT_OQ>(z, k.splat(0.0))
+                & (k.cmp::<CMP_LE_OQ>(k.abs(sx), max) & k.cmp::<CMP_LE_OQ>(k.abs(sy), max));
             self.bad |= !k.bits(good) & active;
             let (m, inf) = (k.mask(active), k.splat(f32::INFINITY));
             let neg_inf = k.splat(f32::NEG_INFINITY);
@@ -356,8 +353,8 @@ mod lanes {
                 // Lanes past the end repeat the last ray: the bounds do not change.
                 let [ox, oy, oz, dx, dy, dz] = k.rays(chunk);
                 // Every origin the apex (`==` as `Vec3`'s: a NaN is never equal).
-                let same = k.cmp::<_CMP_EQ_OQ>(ox, apex[0])
-                    & (k.cmp::<_CMP_EQ_OQ>(oy, apex[1]) & k.cmp::<_CMP_EQ_OQ>(oz, apex[2]));
+                let same = k.cmp::<CMP_EQ_OQ>(ox, apex[0])
+                    & (k.cmp::<CMP_EQ_OQ>(oy, apex[1]) & k.cmp::<CMP_EQ_OQ>(oz, apex[2]));
                 acc.bad |= !k.bits(same) & ((1 << P::WIDTH) - 1);
                 acc.add(k, local(k, &cone, [dx, dy, dz]));
                 if acc.bad != 0 {
@@ -490,10 +487,10 @@ mod lanes {
                 for (s, &(slope, across, norm)) in sides.iter().enumerate() {
                     let c = if s < 2 { x } else { y };
                     let value = k.splat(across) * (c - k.splat(slope) * z);
-                    let past = k.cmp::<_CMP_GT_OQ>(value, base * k.splat(norm));
+                    let past = k.cmp::<CMP_GT_OQ>(value, base * k.splat(norm));
                     outside[s] = outside[s] & past;
                 }
-                let behind = k.cmp::<_CMP_GT_OQ>(k.xor(z, k.splat(-0.0)), base);
+                let behind = k.cmp::<CMP_GT_OQ>(k.xor(z, k.splat(-0.0)), base);
                 outside[4] = outside[4] & behind;
             }
             let mut culled = none;
@@ -524,7 +521,6 @@ mod lanes {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
 pub(super) use lanes::kept;
 
 #[cfg(test)]
@@ -663,10 +659,11 @@ mod tests {
 
     /// The SIMD cones and culls, for every kernel set this CPU has, equal the readable ones:
     /// the same cone bit for bit, the same triangles kept.
-    #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_simd_cone_equals_the_readable_one() {
         use super::super::packet::PacketIsa;
+        use super::super::portable::Portable;
+        #[cfg(target_arch = "x86_64")]
         use super::super::simd::{Avx2, Avx512};
 
         fn same<P: PacketIsa>(k: P, rays: &[Ray], segments: &[(Ray, f32)], tris: &[Triangle]) {
@@ -703,9 +700,12 @@ mod tests {
                 &rays[..n.min(rays.len())],
                 &segments[..n.min(segments.len())],
             );
+            same(Portable, rays, segments, &scene.triangles);
+            #[cfg(target_arch = "x86_64")]
             if let Some(k) = Avx512::detect() {
                 same(k, rays, segments, &scene.triangles);
             }
+            #[cfg(target_arch = "x86_64")]
             if let Some(k) = Avx2::detect() {
                 same(k, rays, segments, &scene.triangles);
             }
@@ -730,9 +730,12 @@ mod tests {
             let tris: Vec<Triangle> = (0..40)
                 .map(|_| Triangle::new(v(&mut rng, 4.0), v(&mut rng, 4.0), v(&mut rng, 4.0), 0))
                 .collect();
+            same(Portable, &rays, &segments, &tris);
+            #[cfg(target_arch = "x86_64")]
             if let Some(k) = Avx512::detect() {
                 same(k, &rays, &segments, &tris);
             }
+            #[cfg(target_arch = "x86_64")]
             if let Some(k) = Avx2::detect() {
                 same(k, &rays, &segments, &tris);
             }

@@ -6,7 +6,10 @@
 //!   and the flat packet list (a SIMD loop over every triangle).
 //! * [`simd`]: the box and triangle kernels, AVX2 with a scalar twin.
 //! * [`packet`]: coherent rays (a camera's, the shadow rays to a point light) through the wide
-//!   BVH as packets, one SIMD lane a ray: sixteen at a time with AVX-512, eight with AVX2.
+//!   BVH as packets, one SIMD lane a ray: sixteen at a time with AVX-512, eight with AVX2 and
+//!   the portable set.
+//! * [`portable`]: the kernel set every CPU runs — the same packets, culling and batches,
+//!   eight lanes in two four-lane registers (SSE2 on x86-64, NEON on aarch64).
 //! * [`cull`]: a batch of camera rays, or of shadow rays to a point light, bounded by a cone:
 //!   the flat list skips the triangles outside it for the whole batch.
 //! * [`calibrate`]: which kernel set is fastest on this CPU, measured at start-up.
@@ -44,9 +47,10 @@
 pub mod bvh;
 pub mod calibrate;
 pub mod cull;
+pub mod kernels;
 pub mod lane_io;
-#[cfg(target_arch = "x86_64")]
 pub mod packet;
+pub mod portable;
 pub mod simd;
 pub mod wide;
 #[cfg(target_arch = "x86_64")]
@@ -62,6 +66,7 @@ use crate::named::named_enum;
 use self::bvh::Bvh;
 use self::calibrate::Calibration;
 use self::cull::Cone;
+use self::portable::Portable;
 use self::simd::RayK;
 use self::simd::{Avx2, Avx512, Scalar};
 use self::wide::{Bvh8Big, Flat, KernelSet};
@@ -211,6 +216,9 @@ named_enum!(AccelKind as "accelerator" {
 /// Which kernels run the flat list and the wide BVH.
 #[derive(Clone, Copy, Debug)]
 pub enum Isa {
+    /// The portable kernels ([`portable`], named `scalar` on the command line): the SIMD sets'
+    /// packets, culling and batches, eight lanes wide in the registers every CPU of the
+    /// architecture has (SSE2 on x86-64).
     Scalar,
     /// AVX2 + FMA: 8-wide everything.
     Avx2(Avx2),
@@ -442,16 +450,9 @@ impl Accel {
     }
 
     /// The closest hit with `0 < t < t_max`: the lowest index among hits at the same
-    /// distance, exactly as the brute-force loop. With SIMD kernels a batch of one
-    /// ([`Accel::closest_batch`]); the scalar kernels answer here, inlined into the caller.
-    /// (That inlining is kept on purpose: without it the compiler inlined the integrators' own
-    /// code differently, and the path pass ran more instructions,
-    /// `scripts/count-instructions.sh`.)
+    /// distance, exactly as the brute-force loop. A batch of one ([`Accel::closest_batch`]).
     #[inline(always)]
     pub fn closest(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
-        if let Isa::Scalar = self.isa {
-            return self.structure.closest_with(Scalar, triangles, ray, t_max);
-        }
         let mut hit = [None];
         self.closest_batch(triangles, std::slice::from_ref(ray), t_max, &mut hit);
         hit[0]
@@ -507,12 +508,9 @@ impl Accel {
     }
 
     /// Whether anything is hit with `0 < t < t_max` (a shadow ray's any-hit query). As
-    /// [`Accel::closest`]: with SIMD kernels a batch of one ([`Accel::occluded_batch`]).
+    /// [`Accel::closest`]: a batch of one ([`Accel::occluded_batch`]).
     #[inline(always)]
     pub fn occluded(&self, triangles: &[Triangle], ray: &Ray, t_max: f32) -> bool {
-        if let Isa::Scalar = self.isa {
-            return self.structure.occluded_with(Scalar, triangles, ray, t_max);
-        }
         let mut blocked = [false];
         self.occluded_batch(triangles, &[(*ray, t_max)], &mut blocked);
         blocked[0]
@@ -643,8 +641,8 @@ impl Accel {
 }
 
 /// `$body` with `$k` the kernels of `$isa`: the same source instantiated for each set (`$k`
-/// is an [`Avx512`], an [`Avx2`] or the [`Scalar`] kernels; elsewhere than x86-64 the SIMD
-/// sets are never detected, and only the scalar arm is compiled).
+/// is an [`Avx512`], an [`Avx2`] or the [`Portable`] kernels; elsewhere than x86-64 the x86
+/// sets are never detected, and only the portable arm is compiled).
 macro_rules! with_kernels {
     ($isa:expr, |$k:ident| $body:expr) => {
         match $isa {
@@ -653,7 +651,7 @@ macro_rules! with_kernels {
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2($k) => $body,
             _ => {
-                let $k = Scalar;
+                let $k = Portable;
                 $body
             }
         }
@@ -662,10 +660,11 @@ macro_rules! with_kernels {
 use with_kernels;
 
 /// A structure's queries for a batch of rays with one kernel set: by default a ray at a time
-/// (the scalar kernels; kept out of line, so that the SIMD sets' batches hand the structures
-/// without kernels over to it rather than compile them in); the SIMD sets run them compiled
-/// with their instruction set ([`simd_batches!`]), so the kernels inline. A single query is a
-/// batch of one, so each is written once.
+/// (the readable [`Scalar`] kernels, for the structures without kernels; kept out of line, so
+/// that the other sets' batches hand those structures over to it rather than compile them in);
+/// every kernel set runs them as packets ([`closest_packets`]), the SIMD sets compiled with
+/// their instruction set ([`simd_batches!`]), so the kernels inline. A single query is a batch
+/// of one, so each is written once.
 trait Batches: KernelSet {
     #[inline(never)]
     fn closest_batch(
@@ -871,9 +870,54 @@ macro_rules! simd_batches {
 simd_batches!(Avx512, "avx512f,avx512dq,avx2,fma");
 simd_batches!(Avx2, "avx2,fma");
 
+/// The portable set's batch queries: the same functions, compiled for the baseline every CPU
+/// of the architecture runs.
+impl Batches for Portable {
+    fn closest_batch(
+        self,
+        s: &Structure,
+        triangles: &[Triangle],
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [Option<Hit>],
+    ) {
+        closest_packets(self, s, triangles, rays, t_max, out)
+    }
+
+    fn closest_lanes(
+        self,
+        s: &Structure,
+        triangles: &[Triangle],
+        rays: &[Ray],
+        t_max: f32,
+        out: &mut [HitLanes],
+    ) {
+        closest_lanes_packets(self, s, triangles, rays, t_max, out)
+    }
+
+    fn occluded_batch(
+        self,
+        s: &Structure,
+        triangles: &[Triangle],
+        rays: &[(Ray, f32)],
+        out: &mut [bool],
+    ) {
+        occluded_packets(self, s, triangles, rays, out)
+    }
+
+    fn occluded_lanes(
+        self,
+        f: &Flat,
+        groups: &[SegmentLanes],
+        neighbours: bool,
+        blocked: &mut [u16],
+    ) -> bool {
+        occluded_lanes_in(self, f, groups, neighbours, blocked)
+    }
+}
+
 /// Closest hits of a batch with a SIMD kernel set: the flat list culled for the batch where
 /// the batch has a cone, the wide BVH a packet of coherent rays at a time, the rest ray by ray.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn closest_packets<P: packet::PacketIsa>(
     k: P,
@@ -915,7 +959,6 @@ fn closest_packets<P: packet::PacketIsa>(
 /// [`closest_packets`] into lanes ([`Accel::closest_lanes`]): a culled flat list's packets
 /// keep their lanes; any other batch is answered by [`closest_packets`], sixteen rays at a time,
 /// and its hits put in lanes.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn closest_lanes_packets<P: packet::PacketIsa>(
     k: P,
@@ -958,7 +1001,6 @@ fn closest_lanes_packets<P: packet::PacketIsa>(
 }
 
 /// [`closest_packets`] for shadow rays, each with its own `t_max`.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn occluded_packets<P: packet::PacketIsa>(
     k: P,
@@ -997,7 +1039,6 @@ fn occluded_packets<P: packet::PacketIsa>(
 /// The flat list's culled closest hits for a batch of rays from one point ([`cull`]): the
 /// triangles the batch's cone may reach, a triangle at a time against a packet of rays. False
 /// (nothing done) when the list is too long to cull or the rays have no cone.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn flat_closest_culled<P: packet::PacketIsa>(
     k: P,
@@ -1020,7 +1061,6 @@ fn flat_closest_culled<P: packet::PacketIsa>(
 }
 
 /// [`flat_closest_culled`] for shadow rays ending near one point.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn flat_occluded_culled<P: packet::PacketIsa>(
     k: P,
@@ -1044,7 +1084,6 @@ fn flat_occluded_culled<P: packet::PacketIsa>(
 /// [`flat_closest_culled`] for shadow rays given as lanes; unlike the batches of rays, lanes
 /// without a cone are tested from the lanes too, against every triangle (the path tracer's
 /// shadow rays: cheaper than copying them out of the lanes).
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn occluded_lanes_in<P: packet::PacketIsa>(
     k: P,

@@ -1,13 +1,14 @@
 //! The two inner loops of tracing, eight lanes at a time: a ray against the eight boxes of a
-//! wide node, and a ray against a packet of eight triangles.
+//! wide node, and a ray against a packet of eight triangles — their data ([`Node8`],
+//! [`Packet`], [`RayK`]), what the traversals ask of them ([`Kernels`]), the kernel sets'
+//! proof types ([`Avx2`], [`Avx512`]: a value exists only on a CPU that runs the set) and the
+//! readable scalar twin ([`Scalar`]): plain loops over the lanes, the definition.
 //!
-//! Each kernel has a scalar twin ([`Scalar`]) — plain loops over the lanes, the readable
-//! definition — and an AVX2 version ([`Avx2`]) chosen at run time when the CPU has AVX2 and
-//! FMA (and sixteen-wide AVX-512 ones for the flat list, [`Avx512`]). The triangle kernels are
-//! the scalar test's own source, [`crate::intersect::intersect_lanes`], a lane per triangle
-//! (no fused multiply-add), so every lane's `t`, `u`, `v` are bit-identical to
-//! [`crate::intersect::intersect_triangle`]'s: the fast path accepts the very same edges and
-//! returns the very same hits as the brute-force loop.
+//! The kernels every set runs are written once, generic over the set's lanes
+//! ([`super::kernels`]). The triangle kernels are the scalar test's own source,
+//! [`crate::intersect::intersect_lanes`], a lane per triangle (no fused multiply-add), so every
+//! lane's `t`, `u`, `v` are bit-identical to [`crate::intersect::intersect_triangle`]'s: the
+//! fast path accepts the very same edges and returns the very same hits as the brute-force loop.
 
 use glam::Vec3;
 
@@ -29,7 +30,7 @@ pub struct Packet<const N: usize> {
     pub index: [u32; N],
 }
 
-/// The packet of the wide BVH's leaves and the AVX2 kernels.
+/// The packet of the wide BVH's leaves and the eight-lane kernels.
 pub type Packet8 = Packet<LANES>;
 /// The packet of the AVX-512 flat loop: sixteen triangles and their normals `n = e1 × e2`.
 ///
@@ -317,55 +318,6 @@ impl Avx512 {
     pub fn avx2(self) -> Avx2 {
         self.avx2
     }
-
-    /// The nearest hit in a 16-wide packet, lowest lane among equal `t`.
-    #[inline(always)]
-    pub fn nearest16(self, p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: an `Avx512` value is only made by `detect`, after checking for AVX-512.
-            unsafe { x86::nearest16(p, r, t_limit) }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        p.nearest_scalar(r, t_limit)
-    }
-
-    /// The nearest hit among 16-wide `packets`: the packet's position in the slice, and the
-    /// hit. The same answer as [`nearest_packet_by_packet`], bit for bit: among equal `t`,
-    /// the first packet's, then its lowest lane's.
-    ///
-    /// Each lane keeps its own nearest `t`, `u`, `v` and packet from packet to packet, and the
-    /// sixteen are reduced to one only at the end. Packet by packet, every packet with a hit
-    /// reduced its lanes to one at once, a chain of about fifteen dependent instructions
-    /// that the next packet's limit waited for: most of the closest-hit time of the path
-    /// tracer's bounce rays, which each meet two packets of the Cornell box.
-    #[inline(always)]
-    pub fn nearest16_among(
-        self,
-        packets: &[Packet16],
-        r: &RayK,
-        t_limit: f32,
-    ) -> Option<(usize, LaneHit)> {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: as above.
-            unsafe { x86::nearest16_among(packets, r, t_limit) }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        nearest_packet_by_packet(packets, t_limit, |p, limit| self.nearest16(p, r, limit))
-    }
-
-    /// Whether any triangle of a 16-wide packet is hit.
-    #[inline(always)]
-    pub fn any16(self, p: &Packet16, r: &RayK, t_limit: f32) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: as above.
-            unsafe { x86::any16(p, r, t_limit) }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        p.any_scalar(r, t_limit)
-    }
 }
 
 /// The nearest hit among `packets`, one packet after another, each tested by `nearest` with
@@ -388,332 +340,11 @@ pub fn nearest_packet_by_packet<P>(
     best
 }
 
-#[cfg(target_arch = "x86_64")]
-impl Kernels for Avx2 {
-    #[inline(always)]
-    fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-        // SAFETY: an `Avx2` value is only made by `detect`, after checking for AVX2 and FMA.
-        unsafe { x86::boxes(node, ray, t_limit) }
-    }
-
-    #[inline(always)]
-    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit> {
-        // SAFETY: as above.
-        unsafe { x86::nearest(packet, ray, t_limit) }
-    }
-
-    #[inline(always)]
-    fn nearest_among(
-        self,
-        packets: &[Packet8],
-        ray: &RayK,
-        t_limit: f32,
-    ) -> Option<(usize, LaneHit)> {
-        // SAFETY: as above.
-        unsafe { x86::nearest_among(packets, ray, t_limit) }
-    }
-
-    #[inline(always)]
-    fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool {
-        // SAFETY: as above.
-        unsafe { x86::any(packet, ray, t_limit) }
-    }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-impl Kernels for Avx2 {
-    fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-        Scalar.boxes(node, ray, t_limit)
-    }
-    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit> {
-        Scalar.nearest(packet, ray, t_limit)
-    }
-    fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool {
-        Scalar.any(packet, ray, t_limit)
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-mod x86 {
-    use std::arch::x86_64::*;
-
-    use glam::Vec3;
-
-    use super::super::x86_lanes::{Avx2F32, Avx512F32};
-    use super::{LANES, LaneHit, Node8, Packet8, Packet16, RayK};
-    use crate::intersect::{Hits, intersect_lanes};
-    use crate::lanes::{Real, Vec3x, Vector};
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    fn load(a: &[f32; LANES]) -> __m256 {
-        // SAFETY: `a` is a valid reference to eight f32, readable as 32 bytes.
-        unsafe { _mm256_loadu_ps(a.as_ptr()) }
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    pub fn boxes(node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-        let mut t0 = _mm256_setzero_ps();
-        let mut t1 = _mm256_set1_ps(t_limit);
-        for axis in 0..3 {
-            let inv = _mm256_set1_ps(r.inv[axis]);
-            let oinv = _mm256_set1_ps(r.origin_inv[axis]);
-            // (plane − o)·inv as plane·inv − o·inv in one rounding; the padding of the boxes
-            // covers the difference from the scalar form.
-            let near = _mm256_fmsub_ps(load(&node.bounds[r.near[axis]]), inv, oinv);
-            let far = _mm256_fmsub_ps(load(&node.bounds[r.far[axis]]), inv, oinv);
-            t0 = _mm256_max_ps(t0, near);
-            t1 = _mm256_min_ps(t1, far);
-        }
-        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1)) as u32;
-        let mut t_near = [0.0f32; LANES];
-        // SAFETY: `t_near` is writable for eight f32.
-        unsafe { _mm256_storeu_ps(t_near.as_mut_ptr(), t0) };
-        (mask, t_near)
-    }
-
-    /// `t`, `u`, `v` of every lane (meaningless for a miss) and the mask of hits:
-    /// [`intersect_lanes`], a lane per triangle.
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    fn hits(p: &Packet8, r: &RayK, t_limit: f32) -> ([__m256; 3], __m256) {
-        let (e1, e2) = (rows8(&p.e1), rows8(&p.e2));
-        let n = e1.cross(e2);
-        let h = ray_lanes(r, rows8(&p.v0), e1, e2, n, t_limit);
-        ([h.t.0, h.u.0, h.v.0], h.hit.0)
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    pub fn nearest(p: &Packet8, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-        let ([t, u, v], hit) = hits(p, r, t_limit);
-        if _mm256_movemask_ps(hit) == 0 {
-            return None;
-        }
-        let t = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), t, hit);
-        let m = min_of_lanes(t);
-        let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t, m), hit);
-        let lane = (_mm256_movemask_ps(at_min) as u32).trailing_zeros() as usize;
-        let mut uv = [[0.0f32; LANES]; 2];
-        // SAFETY: each row of `uv` is writable for eight f32.
-        unsafe {
-            _mm256_storeu_ps(uv[0].as_mut_ptr(), u);
-            _mm256_storeu_ps(uv[1].as_mut_ptr(), v);
-        }
-        Some(LaneHit {
-            lane,
-            t: _mm256_cvtss_f32(m),
-            u: uv[0][lane & (LANES - 1)],
-            v: uv[1][lane & (LANES - 1)],
-        })
-    }
-
-    /// [`super::Kernels::nearest_among`]: each lane's nearest kept across the packets, as in
-    /// `nearest16_among`, and reduced to one at the end.
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    pub fn nearest_among(packets: &[Packet8], r: &RayK, t_limit: f32) -> Option<(usize, LaneHit)> {
-        let mut t_best = _mm256_set1_ps(f32::INFINITY);
-        let (mut u_best, mut v_best) = (_mm256_setzero_ps(), _mm256_setzero_ps());
-        let mut packet_best = _mm256_setzero_ps();
-        let mut hit_any = _mm256_setzero_ps();
-        for (i, p) in packets.iter().enumerate() {
-            let ([t, u, v], hit) = hits(p, r, t_limit);
-            // Strictly nearer: a lane keeps its first packet's hit among equal `t`.
-            let nearer = _mm256_and_ps(hit, _mm256_cmp_ps::<_CMP_LT_OQ>(t, t_best));
-            t_best = _mm256_blendv_ps(t_best, t, nearer);
-            u_best = _mm256_blendv_ps(u_best, u, nearer);
-            v_best = _mm256_blendv_ps(v_best, v, nearer);
-            let i = _mm256_castsi256_ps(_mm256_set1_epi32(i as i32));
-            packet_best = _mm256_blendv_ps(packet_best, i, nearer);
-            hit_any = _mm256_or_ps(hit_any, hit);
-        }
-        if _mm256_movemask_ps(hit_any) == 0 {
-            return None;
-        }
-        let m = min_of_lanes(t_best);
-        let at_min = _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(t_best, m), hit_any);
-        let at_min = _mm256_movemask_ps(at_min) as u32;
-        let mut lane = at_min.trailing_zeros() as usize & (LANES - 1);
-        let mut packet = lane_of(packet_best, lane).to_bits();
-        if at_min.count_ones() > 1 {
-            // Equal `t` in several lanes (rare): the first packet among them, then the lowest
-            // lane.
-            for other in lane + 1..LANES {
-                let other_packet = lane_of(packet_best, other).to_bits();
-                if at_min & (1 << other) != 0 && other_packet < packet {
-                    (lane, packet) = (other, other_packet);
-                }
-            }
-        }
-        Some((
-            packet as usize,
-            LaneHit {
-                lane,
-                t: _mm256_cvtss_f32(m),
-                u: lane_of(u_best, lane),
-                v: lane_of(v_best, lane),
-            },
-        ))
-    }
-
-    /// The smallest of `a`'s lanes, in every lane.
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    fn min_of_lanes(a: __m256) -> __m256 {
-        let m = _mm256_min_ps(a, _mm256_permute2f128_ps::<1>(a, a));
-        let m = _mm256_min_ps(m, _mm256_permute_ps::<0b01_00_11_10>(m));
-        _mm256_min_ps(m, _mm256_permute_ps::<0b10_11_00_01>(m))
-    }
-
-    /// Lane `lane` of `a`, moved to lane 0 in registers (see `nearest16`). (Not a closure: a
-    /// closure inside a `#[target_feature]` function may be compiled without its features.)
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    fn lane_of(a: __m256, lane: usize) -> f32 {
-        _mm256_cvtss_f32(_mm256_permutevar8x32_ps(a, _mm256_set1_epi32(lane as i32)))
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    pub fn any(p: &Packet8, r: &RayK, t_limit: f32) -> bool {
-        let (_, hit) = hits(p, r, t_limit);
-        _mm256_movemask_ps(hit) != 0
-    }
-
-    /// The AVX-512 form of `hits`: sixteen lanes, the normals read from the packet.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn hits16(p: &Packet16, r: &RayK, t_limit: f32) -> ([__m512; 3], __mmask16) {
-        let h = ray_lanes(
-            r,
-            rows16(&p.v0),
-            rows16(&p.e1),
-            rows16(&p.e2),
-            rows16(&p.n),
-            t_limit,
-        );
-        ([h.t.0, h.u.0, h.v.0], h.hit.0)
-    }
-
-    /// A packet's rows of x, y and z as lanes. (Not closures: a closure inside a
-    /// `#[target_feature]` function may be compiled without its features.)
-    #[inline(always)]
-    fn rows8(rows: &[[f32; LANES]; 3]) -> Vec3x<Avx2F32> {
-        Vec3x::new(
-            Avx2F32::load(&rows[0]),
-            Avx2F32::load(&rows[1]),
-            Avx2F32::load(&rows[2]),
-        )
-    }
-
-    #[inline(always)]
-    fn rows16(rows: &[[f32; 16]; 3]) -> Vec3x<Avx512F32> {
-        Vec3x::new(
-            Avx512F32::load(&rows[0]),
-            Avx512F32::load(&rows[1]),
-            Avx512F32::load(&rows[2]),
-        )
-    }
-
-    /// One ray, in every lane, against a lane per triangle.
-    #[inline(always)]
-    fn ray_lanes<R: Real>(
-        r: &RayK,
-        v0: Vec3x<R>,
-        e1: Vec3x<R>,
-        e2: Vec3x<R>,
-        n: Vec3x<R>,
-        t_limit: f32,
-    ) -> Hits<R> {
-        let origin = Vec3x::splat(Vec3::from(r.origin));
-        let direction = Vec3x::splat(Vec3::from(r.direction));
-        intersect_lanes(origin, direction, v0, e1, e2, n, R::splat(t_limit))
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    pub fn nearest16(p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-        let ([t, u, v], hit) = hits16(p, r, t_limit);
-        if hit == 0 {
-            return None;
-        }
-        let t = _mm512_mask_blend_ps(hit, _mm512_set1_ps(f32::INFINITY), t);
-        let m = _mm512_reduce_min_ps(t);
-        let at_min = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(hit, t, _mm512_set1_ps(m));
-        let lane = (at_min as u32).trailing_zeros() as usize & 15;
-        // The lane's u and v moved to lane 0 in registers: storing the vectors and reading one
-        // float back would stall on the store (store forwarding).
-        let pick = _mm512_set1_epi32(lane as i32);
-        Some(LaneHit {
-            lane,
-            t: m,
-            u: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, u)),
-            v: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, v)),
-        })
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    pub fn nearest16_among(
-        packets: &[Packet16],
-        r: &RayK,
-        t_limit: f32,
-    ) -> Option<(usize, LaneHit)> {
-        let mut t_best = _mm512_set1_ps(f32::INFINITY);
-        let (mut u_best, mut v_best) = (_mm512_setzero_ps(), _mm512_setzero_ps());
-        let mut packet_best = _mm512_setzero_si512();
-        let mut hit_any: __mmask16 = 0;
-        for (i, p) in packets.iter().enumerate() {
-            let ([t, u, v], hit) = hits16(p, r, t_limit);
-            // Strictly nearer: a lane keeps its first packet's hit among equal `t`.
-            let nearer = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(hit, t, t_best);
-            t_best = _mm512_mask_blend_ps(nearer, t_best, t);
-            u_best = _mm512_mask_blend_ps(nearer, u_best, u);
-            v_best = _mm512_mask_blend_ps(nearer, v_best, v);
-            packet_best = _mm512_mask_blend_epi32(nearer, packet_best, _mm512_set1_epi32(i as i32));
-            hit_any |= hit;
-        }
-        if hit_any == 0 {
-            return None;
-        }
-        let m = _mm512_reduce_min_ps(t_best);
-        let at_min = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(hit_any, t_best, _mm512_set1_ps(m));
-        // Equal `t` in several lanes (rare): the first packet among them, then the lowest lane.
-        let first = match at_min.count_ones() {
-            1 => at_min,
-            _ => {
-                let p = _mm512_mask_reduce_min_epu32(at_min, packet_best);
-                _mm512_mask_cmpeq_epi32_mask(at_min, packet_best, _mm512_set1_epi32(p as i32))
-            }
-        };
-        let lane = (first as u32).trailing_zeros() as usize & 15;
-        // Moved to lane 0 in registers (see `nearest16`).
-        let pick = _mm512_set1_epi32(lane as i32);
-        let packet = _mm512_permutexvar_epi32(pick, packet_best);
-        Some((
-            _mm_cvtsi128_si32(_mm512_castsi512_si128(packet)) as usize,
-            LaneHit {
-                lane,
-                t: m,
-                u: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, u_best)),
-                v: _mm512_cvtss_f32(_mm512_permutexvar_ps(pick, v_best)),
-            },
-        ))
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    pub fn any16(p: &Packet16, r: &RayK, t_limit: f32) -> bool {
-        hits16(p, r, t_limit).1 != 0
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
 
+    use super::super::portable::Portable;
     use super::*;
     use crate::geometry::{Ray, Triangle};
     use crate::intersect::intersect_triangle;
@@ -775,6 +406,7 @@ mod tests {
             let p16 = Packet16::new(&tris, &ids);
             assert_eq!(p16.nearest_scalar(&r, limit), as_hit(want));
             assert_eq!(p16.any_scalar(&r, limit), want.is_some());
+            #[cfg(target_arch = "x86_64")]
             if let Some(k) = avx512 {
                 assert_eq!(k.nearest16(&p16, &r, limit), as_hit(want));
                 assert_eq!(k.any16(&p16, &r, limit), want.is_some());
@@ -792,6 +424,9 @@ mod tests {
             };
             let p8 = Packet8::new(&tris, &ids[..8]);
             assert_eq!(Scalar.nearest(&p8, &r, limit), as_hit(want8));
+            assert_eq!(Portable.nearest(&p8, &r, limit), as_hit(want8));
+            assert_eq!(Portable.any(&p8, &r, limit), want8.is_some());
+            #[cfg(target_arch = "x86_64")]
             if let Some(k) = avx2 {
                 assert_eq!(k.nearest(&p8, &r, limit), as_hit(want8));
                 assert_eq!(k.any(&p8, &r, limit), want8.is_some());
@@ -804,6 +439,7 @@ mod tests {
     /// The lanes' running nearest across packets gives exactly the packet-by-packet answer,
     /// ties included: the same triangles repeated in later packets and other lanes (equal `t`
     /// in several lanes and packets) must come back as their first copy.
+    #[cfg(target_arch = "x86_64")]
     #[test]
     fn nearest_among_packets_equals_packet_by_packet() {
         let Some(k) = Avx512::detect() else {
@@ -887,6 +523,11 @@ mod tests {
             };
             let want = nearest_packet_by_packet(&packets, limit, |p, l| Scalar.nearest(p, &r, l));
             assert_eq!(bits(Scalar.nearest_among(&packets, &r, limit)), bits(want));
+            assert_eq!(
+                bits(Portable.nearest_among(&packets, &r, limit)),
+                bits(want)
+            );
+            #[cfg(target_arch = "x86_64")]
             if let Some(k) = avx2 {
                 assert_eq!(bits(k.nearest_among(&packets, &r, limit)), bits(want));
             }
@@ -903,9 +544,10 @@ mod tests {
     #[test]
     fn box_kernels_agree_with_the_scalar_twin() {
         let mut rng = Rng::new(12);
-        let Some(k) = Avx2::detect() else {
-            return crate::accel::skip_unless_required("avx2", "box_kernels_agree");
-        };
+        let avx2 = Avx2::detect();
+        if avx2.is_none() {
+            crate::accel::skip_unless_required("avx2", "box_kernels_agree");
+        }
         let mut disagreements = 0;
         for _ in 0..20_000 {
             let mut node = Node8 {
@@ -927,12 +569,21 @@ mod tests {
             let r = RayK::new(&Ray::new(v(&mut rng, 2.0), d));
             let limit = rng.uniform(0.0, 4.0);
             let (ms, ts) = Scalar.boxes(&node, &r, limit);
-            let (mv, tv) = k.boxes(&node, &r, limit);
-            for i in 0..LANES {
-                if (ms ^ mv) & (1 << i) != 0 {
-                    disagreements += 1;
-                } else if ms & (1 << i) != 0 {
-                    assert!((ts[i] - tv[i]).abs() <= 1e-5 * ts[i].abs().max(1.0));
+            // The portable kernels compute the scalar twin's form: the same answers exactly.
+            let (mp, tp) = Portable.boxes(&node, &r, limit);
+            assert_eq!(mp, ms);
+            for i in (0..LANES).filter(|i| ms & (1 << i) != 0) {
+                assert_eq!(tp[i].to_bits(), ts[i].to_bits());
+            }
+            #[cfg(target_arch = "x86_64")]
+            if let Some(k) = avx2 {
+                let (mv, tv) = k.boxes(&node, &r, limit);
+                for i in 0..LANES {
+                    if (ms ^ mv) & (1 << i) != 0 {
+                        disagreements += 1;
+                    } else if ms & (1 << i) != 0 {
+                        assert!((ts[i] - tv[i]).abs() <= 1e-5 * ts[i].abs().max(1.0));
+                    }
                 }
             }
         }

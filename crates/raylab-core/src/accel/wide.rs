@@ -14,7 +14,9 @@ use glam::Vec3;
 use crate::geometry::{Ray, Triangle};
 
 use super::bvh::{BOX_T_SLACK, Bvh};
-use super::simd::{Avx2, Avx512, Kernels, LANES, LaneHit, Node8, Packet8, Packet16, RayK, Scalar};
+#[cfg(target_arch = "x86_64")]
+use super::simd::{Avx2, Avx512};
+use super::simd::{Kernels, LANES, LaneHit, Node8, Packet8, Packet16, RayK, Scalar};
 use super::{Hit, TraversalCost};
 
 pub const LEAF: u32 = 1 << 31;
@@ -147,12 +149,14 @@ impl Flat {
     }
 
     /// [`Flat::closest`] on 16-wide packets with the AVX-512 kernels.
+    #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn closest16(&self, k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
         closest16_in(&self.packets16, k, r, t_max)
     }
 
     /// [`Flat::occluded`] on 16-wide packets with the AVX-512 kernels.
+    #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn occluded16(&self, k: Avx512, r: &RayK, t_max: f32) -> bool {
         self.packets16.iter().any(|p| k.any16(p, r, t_max))
@@ -200,6 +204,7 @@ impl KernelSet for Scalar {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
 impl KernelSet for Avx2 {
     type Tree = Avx2;
     #[inline(always)]
@@ -216,6 +221,7 @@ impl KernelSet for Avx2 {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
 impl KernelSet for Avx512 {
     type Tree = Avx2;
     #[inline(always)]
@@ -233,6 +239,7 @@ impl KernelSet for Avx512 {
 }
 
 /// The nearest hit among 16-wide `packets` (the flat list, or its culled copy).
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 pub fn closest16_in(packets: &[Packet16], k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
     let (p, h) = k.nearest16_among(packets, r, t_max)?;
@@ -443,6 +450,8 @@ impl Bvh8 {
     /// wait on memory more than they compute.
     #[inline(always)]
     fn prefetch(&self, item: u32) {
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = item;
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};

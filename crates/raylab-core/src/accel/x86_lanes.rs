@@ -2,8 +2,8 @@
 //! ([`Avx2F32`]) and sixteen of AVX-512 ([`Avx512F32`]), with their masks, implementing
 //! [`Real`] and [`Mask`] one instruction an operation. So the ray–triangle arithmetic
 //! ([`crate::intersect::intersect_lanes`]) is one source for one ray and one triangle (`f32`),
-//! for one ray against a packet of triangles ([`super::simd`]) and for a packet of rays against
-//! one triangle ([`super::packet`]).
+//! for one ray against a packet of triangles ([`super::kernels`]) and for a packet of rays
+//! against one triangle ([`super::packet`]).
 //!
 //! Every operation is the `f32` one in each lane, exactly rounded, never fused: the same bits
 //! as the scalar code.

@@ -42,8 +42,12 @@ use std::cell::RefCell;
 
 use glam::Vec3;
 
-use crate::accel::simd::{Avx2, Avx512};
-use crate::accel::{Isa, SegmentLanes};
+use crate::accel::SegmentLanes;
+#[cfg(target_arch = "x86_64")]
+use crate::accel::{
+    Isa,
+    simd::{Avx2, Avx512},
+};
 use crate::bsdf::ShadingFrame;
 use crate::camera::ImagePoints;
 use crate::film::Seen;
