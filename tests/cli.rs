@@ -1470,3 +1470,152 @@ fn a_part_material_on_the_command_line() {
         assert_refused(&["render", "--out", o, "--material", material], names, &out);
     }
 }
+
+/// `render --equations`: the lab's D typed as a student types it gives the lab's own image
+/// bit for bit; a formula mistake is named; NaN pixels are counted.
+#[test]
+fn render_with_the_students_equations() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_owned()
+    };
+    let lab = write(
+        "lab.txt",
+        "// DirectLight, pasted from C++\n\
+         vec3 r = lightPos - position;\n\
+         float r2 = glm::dot(r, r);\n\
+         vec3 D = shadowed ? vec3(0) : lightColor * std::max(dot(normalize(r), normal), 0.f) / (4.f * M_PI * r2);\n",
+    );
+    let inverse_r = write(
+        "inverse.txt",
+        "let r = lightPos - position\n\
+         D = shadowed ? vec3(0) : lightColor * max(dot(normalize(r), normal), 0.0) / (4 * pi * length(r))\n",
+    );
+    let nan = write("nan.txt", "R = color * (D + indirectLight) * (0 / 0)\n");
+    let size = ["--width", "48", "--height", "40"];
+    let render = |equations: Option<&str>, out: &Path| {
+        let mut args = vec!["render", "--out", out.to_str().unwrap()];
+        args.extend(size);
+        if let Some(e) = equations {
+            args.extend(["--equations", e]);
+        }
+        let out = raylab(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let figure = dir.path().join("figure.png");
+    render(None, &figure);
+    let typed = dir.path().join("typed.png");
+    let text = render(Some(&lab), &typed);
+    assert!(
+        text.contains("100.0 % of pixels within 2/255 of the exact figure"),
+        "{text}"
+    );
+    assert!(text.contains("D: equal to the lab's"), "{text}");
+    let pixels = |p: &Path| image::open(p).unwrap().to_rgb8().into_raw();
+    assert_eq!(pixels(&typed), pixels(&figure));
+
+    let text = render(Some(&inverse_r), &dir.path().join("inverse.png"));
+    assert!(text.contains("D: the classic mistake inverse-r"), "{text}");
+    assert!(!text.contains("100.0 %"), "{text}");
+
+    let text = render(Some(&nan), &dir.path().join("nan.png"));
+    assert!(
+        text.contains("1920 pixels came out NaN or infinite (shown magenta)"),
+        "{text}"
+    );
+    let magenta = pixels(&dir.path().join("nan.png"));
+    assert!(magenta.chunks(3).all(|p| p == [255, 0, 255]));
+}
+
+/// `check --equations`: the image the equations make is checked as a student's image is (the
+/// mistake named), and each quantity is judged; text and JSON.
+#[test]
+fn check_the_students_equations() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("corner.txt");
+    std::fs::write(
+        &path,
+        "d = right * (x - W / 2) + down * (y - H / 2) + forward * focalLength\n",
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let size = ["--width", "64", "--height", "64"];
+    let mut args = vec!["check", "--equations", path];
+    args.extend(size);
+    let out = raylab(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("verdict: pixel-corner"), "{text}");
+    assert!(
+        text.contains("d: the classic mistake pixel-corner"),
+        "{text}"
+    );
+    args.push("--json");
+    let out = raylab(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["check"]["best"]["mistake"], "pixel-corner", "{json}");
+    assert!(
+        json["quantities"]["d"]
+            .as_str()
+            .is_some_and(|v| v.contains("pixel-corner")),
+        "{json}"
+    );
+    assert_eq!(json["non_finite_pixels"], 0);
+}
+
+/// Equations that do not compile are refused with each error's file, line and column, the
+/// line and a caret under the offending text; nothing is written. What the sandbox does not
+/// compute (the path stage) is refused by name.
+#[test]
+fn equations_that_do_not_compile_are_refused_where_they_are_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("typo.txt");
+    std::fs::write(
+        &path,
+        "let r = lightpos - position\nD = lightColor * dot(normal, 2.0)\n",
+    )
+    .unwrap();
+    let out_png = dir.path().join("out.png");
+    let out = raylab(&[
+        "render",
+        "--equations",
+        path.to_str().unwrap(),
+        "--out",
+        out_png.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    let lines: Vec<&str> = err.lines().collect();
+    assert!(
+        lines[0].ends_with("typo.txt:1:9: unknown name `lightpos`: did you mean `lightPos`?"),
+        "{err}"
+    );
+    assert_eq!(lines[1], "  let r = lightpos - position", "{err}");
+    assert_eq!(lines[2], "          ^^^^^^^^", "{err}");
+    assert!(
+        lines[3].ends_with("typo.txt:2:18: `dot` takes two vec3, got vec3 and a number"),
+        "{err}"
+    );
+    assert!(!out_png.exists());
+
+    std::fs::write(&path, "D = vec3(0)\n").unwrap();
+    let out = raylab(&[
+        "render",
+        "--equations",
+        path.to_str().unwrap(),
+        "--stage",
+        "path",
+        "--out",
+        out_png.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("--equations computes the lab's stages"),
+        "{}",
+        stderr(&out)
+    );
+}
