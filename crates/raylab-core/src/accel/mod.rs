@@ -663,7 +663,7 @@ use with_kernels;
 /// (the readable [`Scalar`] kernels, for the structures without kernels; kept out of line, so
 /// that the other sets' batches hand those structures over to it rather than compile them in);
 /// every kernel set runs them as packets ([`closest_packets`]), the SIMD sets compiled with
-/// their instruction set ([`simd_batches!`]), so the kernels inline. A single query is a batch
+/// their instruction set ([`packet_batches!`]), so the kernels inline. A single query is a batch
 /// of one, so each is written once.
 trait Batches: KernelSet {
     #[inline(never)]
@@ -769,12 +769,14 @@ impl Structure {
     }
 }
 
-/// The batch queries of a SIMD kernel set: [`closest_packets`], [`occluded_packets`] and
-/// [`occluded_lanes_in`], each compiled inside a `#[target_feature(enable = $features)]`
-/// function, where the kernels and the packet traversal inline.
-macro_rules! simd_batches {
-    ($isa:ty, $features:literal) => {
-        #[cfg(target_arch = "x86_64")]
+/// The batch queries of a packet kernel set: [`closest_packets`], [`occluded_packets`] and
+/// [`occluded_lanes_in`], each compiled inside a function with the set's instruction set
+/// (`$(#[target_feature(enable = $features)])?`; none for the portable set, which every CPU of the
+/// architecture runs), where the kernels and the packet traversal inline.
+macro_rules! packet_batches {
+    ($isa:ty $(, $features:literal)?) => {
+        // Without features, `compiled` is safe to call and the `unsafe` blocks are unused.
+        #[allow(unused_unsafe)]
         impl Batches for $isa {
             fn closest_batch(
                 self,
@@ -784,7 +786,7 @@ macro_rules! simd_batches {
                 t_max: f32,
                 out: &mut [Option<Hit>],
             ) {
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(
                     k: $isa,
                     s: &Structure,
@@ -807,7 +809,7 @@ macro_rules! simd_batches {
                 t_max: f32,
                 out: &mut [HitLanes],
             ) {
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(
                     k: $isa,
                     s: &Structure,
@@ -829,7 +831,7 @@ macro_rules! simd_batches {
                 rays: &[(Ray, f32)],
                 out: &mut [bool],
             ) {
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(
                     k: $isa,
                     s: &Structure,
@@ -850,7 +852,7 @@ macro_rules! simd_batches {
                 neighbours: bool,
                 blocked: &mut [u16],
             ) -> bool {
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(
                     k: $isa,
                     f: &Flat,
@@ -867,54 +869,12 @@ macro_rules! simd_batches {
     };
 }
 
-simd_batches!(Avx512, "avx512f,avx512dq,avx2,fma");
-simd_batches!(Avx2, "avx2,fma");
-
-/// The portable set's batch queries: the same functions, compiled for the baseline every CPU
-/// of the architecture runs.
-impl Batches for Portable {
-    fn closest_batch(
-        self,
-        s: &Structure,
-        triangles: &[Triangle],
-        rays: &[Ray],
-        t_max: f32,
-        out: &mut [Option<Hit>],
-    ) {
-        closest_packets(self, s, triangles, rays, t_max, out)
-    }
-
-    fn closest_lanes(
-        self,
-        s: &Structure,
-        triangles: &[Triangle],
-        rays: &[Ray],
-        t_max: f32,
-        out: &mut [HitLanes],
-    ) {
-        closest_lanes_packets(self, s, triangles, rays, t_max, out)
-    }
-
-    fn occluded_batch(
-        self,
-        s: &Structure,
-        triangles: &[Triangle],
-        rays: &[(Ray, f32)],
-        out: &mut [bool],
-    ) {
-        occluded_packets(self, s, triangles, rays, out)
-    }
-
-    fn occluded_lanes(
-        self,
-        f: &Flat,
-        groups: &[SegmentLanes],
-        neighbours: bool,
-        blocked: &mut [u16],
-    ) -> bool {
-        occluded_lanes_in(self, f, groups, neighbours, blocked)
-    }
-}
+#[cfg(target_arch = "x86_64")]
+packet_batches!(Avx512, "avx512f,avx512dq,avx2,fma");
+#[cfg(target_arch = "x86_64")]
+packet_batches!(Avx2, "avx2,fma");
+// The portable set: the same functions, compiled for the baseline every CPU runs.
+packet_batches!(Portable);
 
 /// Closest hits of a batch with a SIMD kernel set: the flat list culled for the batch where
 /// the batch has a cone, the wide BVH a packet of coherent rays at a time, the rest ray by ray.
