@@ -194,39 +194,17 @@ pub(super) fn any<P: PacketIsa, T: TriangleLanes>(k: P, p: &T, r: &RayK, t_limit
 }
 
 /// [`Kernels`] for a set whose lanes are eight wide: the functions above, each compiled with
-/// the set's instruction set (`$features`) when it has one.
+/// the set's instruction set (`$features`) when it has one (the portable set has none: every
+/// CPU of the architecture runs it, and `compiled` is then an ordinary function).
 macro_rules! compiled_kernels {
-    ($set:ty) => {
-        impl Kernels for $set {
-            #[inline(always)]
-            fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-                boxes(self, node, r, t_limit)
-            }
-            #[inline(always)]
-            fn nearest(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-                nearest(self, p, r, t_limit)
-            }
-            #[inline(always)]
-            fn nearest_among(
-                self,
-                packets: &[Packet<LANES>],
-                r: &RayK,
-                t_limit: f32,
-            ) -> Option<(usize, LaneHit)> {
-                nearest_among(self, packets, r, t_limit)
-            }
-            #[inline(always)]
-            fn any(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> bool {
-                any(self, p, r, t_limit)
-            }
-        }
-    };
-    ($set:ty, $features:literal) => {
+    ($set:ty $(, $features:literal)?) => {
+        // Without features, `compiled` is safe to call and the `unsafe` blocks are unused.
+        #[allow(unused_unsafe)]
         impl Kernels for $set {
             #[inline(always)]
             fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
                 #[inline]
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(k: $set, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; 8]) {
                     boxes(k, node, r, t_limit)
                 }
@@ -236,7 +214,7 @@ macro_rules! compiled_kernels {
             #[inline(always)]
             fn nearest(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> Option<LaneHit> {
                 #[inline]
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(k: $set, p: &Packet<8>, r: &RayK, t: f32) -> Option<LaneHit> {
                     nearest(k, p, r, t)
                 }
@@ -251,7 +229,7 @@ macro_rules! compiled_kernels {
                 t_limit: f32,
             ) -> Option<(usize, LaneHit)> {
                 #[inline]
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(
                     k: $set,
                     packets: &[Packet<8>],
@@ -266,7 +244,7 @@ macro_rules! compiled_kernels {
             #[inline(always)]
             fn any(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> bool {
                 #[inline]
-                #[target_feature(enable = $features)]
+                $(#[target_feature(enable = $features)])?
                 fn compiled(k: $set, p: &Packet<8>, r: &RayK, t: f32) -> bool {
                     any(k, p, r, t)
                 }

@@ -696,18 +696,4 @@ impl PacketIsa for Portable {
     }
 }
 
-impl KernelSet for Portable {
-    type Tree = Portable;
-    #[inline(always)]
-    fn tree(self) -> Portable {
-        self
-    }
-    #[inline(always)]
-    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
-        f.closest(self, r, t_max)
-    }
-    #[inline(always)]
-    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
-        f.occluded(self, r, t_max)
-    }
-}
+super::wide::one_width_kernel_set!(Portable);

@@ -188,38 +188,31 @@ pub trait KernelSet: Copy {
     fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool;
 }
 
-impl KernelSet for Scalar {
-    type Tree = Scalar;
-    #[inline(always)]
-    fn tree(self) -> Scalar {
-        self
-    }
-    #[inline(always)]
-    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
-        f.closest(self, r, t_max)
-    }
-    #[inline(always)]
-    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
-        f.occluded(self, r, t_max)
-    }
+/// A [`KernelSet`] whose one set of kernels serves the wide tree and the flat list alike.
+macro_rules! one_width_kernel_set {
+    ($set:ty) => {
+        impl KernelSet for $set {
+            type Tree = $set;
+            #[inline(always)]
+            fn tree(self) -> $set {
+                self
+            }
+            #[inline(always)]
+            fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
+                f.closest(self, r, t_max)
+            }
+            #[inline(always)]
+            fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
+                f.occluded(self, r, t_max)
+            }
+        }
+    };
 }
+pub(super) use one_width_kernel_set;
 
+one_width_kernel_set!(Scalar);
 #[cfg(target_arch = "x86_64")]
-impl KernelSet for Avx2 {
-    type Tree = Avx2;
-    #[inline(always)]
-    fn tree(self) -> Avx2 {
-        self
-    }
-    #[inline(always)]
-    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
-        f.closest(self, r, t_max)
-    }
-    #[inline(always)]
-    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
-        f.occluded(self, r, t_max)
-    }
-}
+one_width_kernel_set!(Avx2);
 
 #[cfg(target_arch = "x86_64")]
 impl KernelSet for Avx512 {

@@ -1,4 +1,4 @@
-//! Which term is off (issue 40, item 6a): the student's quantity and the lab's evaluated at a
+//! Which term is off: the student's quantity and the lab's evaluated at a
 //! few thousand random valid inputs (hit points, normals, lights, cameras), as WeBWorK checks a
 //! typed formula at random points. The answer: equal to the lab's (any algebraic rewrite), a
 //! classic mistake of the catalogue, two inputs swapped, a constant factor (such as 4π), a

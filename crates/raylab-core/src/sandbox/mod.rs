@@ -1,4 +1,4 @@
-//! The equation sandbox (issue 40): the lab's quantities as a student writes them, in a small
+//! The equation sandbox: the lab's quantities as a student writes them, in a small
 //! safe language that reads like the lab's C++, compiled and evaluated over the tracer's own
 //! per-pixel terms.
 //!
