@@ -786,13 +786,17 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     settings.denoise |= args.denoise;
     // A screenshot made with a debug view is that view again, unless --view says otherwise.
     let view = args.view.unwrap_or(settings.view);
-    let equations = match &args.equations {
-        Some(path) => {
-            let written = equations::read(path)?;
-            equations::refuse_unless_lab(&settings, view)?;
-            Some(written)
-        }
-        None => None,
+    // The student's equations: a file's (then carried by the PNG), or those a screenshot or
+    // scene file carries.
+    if let Some(path) = &args.equations {
+        settings.equations = equations::read_texts(path)?;
+    }
+    let equations = if settings.equations.is_empty() {
+        None
+    } else {
+        let written = raylab_core::sandbox::carried::compile_texts(&settings.equations)?;
+        equations::refuse_unless_lab(&settings, view)?;
+        Some(written)
     };
     // Refused before any work if it cannot fit (a 16384² image alone is 3 GiB).
     let c = &settings.camera;

@@ -1530,6 +1530,75 @@ fn render_with_the_students_equations() {
     assert!(magenta.chunks(3).all(|p| p == [255, 0, 255]));
 }
 
+/// A render of the student's equations carries them in its PNG: `--settings` with that PNG
+/// renders the same image again, as does the scene file `--save-scene` wrote; equations in a
+/// settings file that do not compile are refused with their quantity, line and column, and
+/// nothing is written.
+#[test]
+fn a_render_carries_the_equations_and_its_settings_render_it_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("mine.txt");
+    std::fs::write(
+        &file,
+        "vec3 r = lightPos - position;\n\
+         D = shadowed ? vec3(0) : lightColor * max(dot(normalize(r), normal), 0.0) / dot(r, r)\n\
+         R = D + indirectLight\n",
+    )
+    .unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let run = |args: &[&str]| {
+        let out = raylab(args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let (first, again, scene) = (path("first.png"), path("again.png"), path("mine.toml"));
+    let text = run(&[
+        "render",
+        "--width",
+        "40",
+        "--height",
+        "32",
+        "--equations",
+        file.to_str().unwrap(),
+        "--out",
+        &first,
+        "--save-scene",
+        &scene,
+    ]);
+    assert!(text.contains("D: the classic mistake no-4pi"), "{text}");
+    let text = run(&["render", "--settings", &first, "--out", &again]);
+    assert!(text.contains("D: the classic mistake no-4pi"), "{text}");
+    assert!(text.contains("R: the classic mistake no-rho"), "{text}");
+    let pixels = |p: &str| image::open(p).unwrap().to_rgb8().into_raw();
+    assert_eq!(pixels(&again), pixels(&first));
+    let from_scene = path("scene.png");
+    run(&["render", "--scene-file", &scene, "--out", &from_scene]);
+    assert_eq!(pixels(&from_scene), pixels(&first));
+    // The lab's figure differs: the equations made the image.
+    let figure = path("figure.png");
+    run(&[
+        "render", "--width", "40", "--height", "32", "--out", &figure,
+    ]);
+    assert_ne!(pixels(&figure), pixels(&first));
+
+    let settings = raylab_core::settings_file::read_file(std::path::Path::new(&first))
+        .unwrap()
+        .settings;
+    let mut json = serde_json::to_value(&settings).unwrap();
+    json["equations"]["R"] = serde_json::json!("// mine\nR = D + indirectlight");
+    let bad = path("bad.json");
+    std::fs::write(&bad, json.to_string()).unwrap();
+    let out_png = path("never.png");
+    let out = raylab(&["render", "--settings", &bad, "--out", &out_png]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("equation `R`, line 2, column 9: unknown name `indirectlight`"),
+        "{err}"
+    );
+    assert!(!std::path::Path::new(&out_png).exists());
+}
+
 /// `check --equations`: the image the equations make is checked as a student's image is (the
 /// mistake named), and each quantity is judged; text and JSON.
 #[test]

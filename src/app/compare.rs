@@ -678,6 +678,8 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
         seed,
         // The window's Denoise switch is its own (not among the settings it traces with).
         denoise: _,
+        // The window's own equations are the Your equations panel's (not traced by A/B).
+        equations: _,
     } = a;
     let mut out = Vec::new();
     let mut differ = |name, differs: bool| {

@@ -9,6 +9,7 @@
 
 mod check;
 mod compare;
+mod equations;
 mod files;
 mod input;
 mod material_editor;
@@ -210,6 +211,9 @@ pub struct WorkbenchApp {
     compare: Option<compare::Compare>,
     /// Check my image: a student's render held against the exact figure ([`check`]).
     check: Option<check::StudentCheck>,
+    /// Your equations: the student's own quantities rendered beside the exact figure
+    /// ([`equations`]).
+    equations: equations::YourEquations,
     /// The Open or Save scene dialog, while shown.
     file_dialog: Option<files::FileDialog>,
     /// Scenes loaded before, newest first, so switching back is instant (at most
@@ -456,6 +460,7 @@ impl WorkbenchApp {
             started: Instant::now(),
             compare: None,
             check: None,
+            equations: equations::YourEquations::default(),
             file_dialog: None,
             scene_cache: Vec::new(),
             restore_on_failure: None,
@@ -728,6 +733,9 @@ impl WorkbenchApp {
                 if std::mem::take(&mut loaded.settings.denoise) {
                     self.state.denoise = true;
                 }
+                // The equations go to the Your equations panel (the live render is the lab's).
+                self.equations
+                    .load(&std::mem::take(&mut loaded.settings.equations));
                 let old = std::mem::replace(&mut self.state.settings, loaded.settings);
                 if self.state.settings.scene != self.scene_choice {
                     self.restore_on_failure = Some(old);
@@ -756,7 +764,10 @@ impl WorkbenchApp {
     /// Saves the scene file at `path`; a file there is replaced only when `replace` (the Save
     /// dialog asked), otherwise the scene goes to the next free name, as the status says.
     fn save_scene_to(&mut self, path: &std::path::Path, replace: bool) {
-        match files::save_scene(&self.state.settings, path, replace) {
+        // The scene file carries the student's equations.
+        let mut settings = self.state.settings.clone();
+        settings.equations = self.equations.carried();
+        match files::save_scene(&settings, path, replace) {
             Ok(written) => {
                 self.state.obj_path = written.display().to_string();
                 self.set_status(
@@ -1474,6 +1485,12 @@ impl WorkbenchApp {
         };
         // The display in force now, which the screenshot's PNG is shown through.
         settings.display = self.state.settings.display;
+        // While the student's equations are shown: their image, with the settings (and
+        // equations) that make it again.
+        let (image, settings) = self
+            .equations
+            .screenshot(&self.state.settings)
+            .unwrap_or((image, settings));
         let request = screenshot::Request {
             folder: self.state.screenshot_folder.clone(),
             image,
@@ -1649,6 +1666,7 @@ impl WorkbenchApp {
                 .check
                 .as_ref()
                 .is_none_or(|c| c.is_settled(&self.state.settings))
+            && self.equations.is_settled(&self.state.settings)
     }
 }
 
@@ -1664,6 +1682,9 @@ impl eframe::App for WorkbenchApp {
         self.receive_frames(&ctx);
         self.receive_compare(&ctx);
         self.receive_check(&ctx);
+        let scene_ready = self.state.settings.scene == self.scene_choice;
+        self.equations
+            .update(&ctx, &self.state.settings, &self.scene, scene_ready);
         self.receive_screenshots();
         self.clear_fixed_error();
 
@@ -1682,6 +1703,7 @@ impl eframe::App for WorkbenchApp {
                     loading,
                     self.compare.as_mut(),
                     self.check.as_mut(),
+                    &mut self.equations,
                 ));
             });
         if self.state.inspect_mode {
@@ -1716,9 +1738,11 @@ impl eframe::App for WorkbenchApp {
                         )
                     });
             let marker = light_marker(&self.state.settings);
+            let equations_shown = self.equations.active(&self.state.settings);
             let overlay: Option<&mut dyn viewport::Overlay> =
                 match (&mut self.check, &mut self.compare) {
                     (Some(check), _) => Some(check),
+                    (None, _) if equations_shown => Some(&mut self.equations),
                     (None, Some(compare)) => Some(compare),
                     (None, None) => None,
                 };

@@ -109,6 +109,7 @@ pub fn controls_ui(
     loading: Option<&SceneChoice>,
     mut compare: Option<&mut super::compare::Compare>,
     check: Option<&mut super::check::StudentCheck>,
+    equations: &mut super::equations::YourEquations,
 ) -> Vec<Command> {
     let mut commands = Vec::new();
     // What is shown comes first: which figure (or stage), the stage selector and what it
@@ -159,6 +160,11 @@ pub fn controls_ui(
             .open(check.is_some().then_some(true))
             .show(ui, |ui| {
                 super::check::check_ui(ui, check, &state.settings, &mut commands)
+            });
+        egui::CollapsingHeader::new("Your equations")
+            .default_open(false)
+            .show(ui, |ui| {
+                super::equations::equations_ui(ui, equations, &state.settings)
             });
         egui::CollapsingHeader::new("Scene")
             .default_open(true)

@@ -24,6 +24,7 @@ use super::*;
 mod caustics_ui;
 mod check_ui;
 mod denoise_ui;
+mod equations_ui;
 mod files_ui;
 mod inspector_ui;
 mod materials_ui;

@@ -6,12 +6,24 @@ use std::path::Path;
 
 use raylab_core::light::LightKind;
 use raylab_core::sandbox::{self, Equations, MAX_SOURCE_BYTES, Quantity, SandboxError};
+use raylab_core::settings::EquationTexts;
 use raylab_core::view::View;
 use raylab_core::{RenderSettings, Stage};
 
 /// Reads and compiles the equations in `path`; a text that does not compile is refused with
 /// every error as `FILE:LINE:COLUMN: message`, the line and a caret under the offending text.
 pub fn read(path: &Path) -> anyhow::Result<Equations> {
+    read_with_text(path).map(|(equations, _)| equations)
+}
+
+/// [`read`], with a text per quantity as the settings carry them (a screenshot, a scene file).
+pub fn read_texts(path: &Path) -> anyhow::Result<EquationTexts> {
+    let (equations, text) = read_with_text(path)?;
+    sandbox::carried::split(&text, &equations)
+        .map_err(|e| anyhow::anyhow!("--equations '{}': {e}", path.display()))
+}
+
+fn read_with_text(path: &Path) -> anyhow::Result<(Equations, String)> {
     let size = std::fs::metadata(path)
         .map_err(|e| anyhow::anyhow!("--equations '{}': {e}", path.display()))?
         .len();
@@ -29,7 +41,10 @@ pub fn read(path: &Path) -> anyhow::Result<Equations> {
             path.display()
         )
     })?;
-    sandbox::compile(&text).map_err(|errors| CompileErrors(describe(path, &text, &errors)).into())
+    match sandbox::compile(&text) {
+        Ok(equations) => Ok((equations, text)),
+        Err(errors) => Err(CompileErrors(describe(path, &text, &errors)).into()),
+    }
 }
 
 /// Equations that do not compile: every error with its line and caret, several lines of text

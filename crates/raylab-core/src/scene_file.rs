@@ -86,7 +86,7 @@ use crate::scene::spec::{
 };
 use crate::scene::terrain::TerrainSpec;
 use crate::scene::water::WaterSpec;
-use crate::settings::{Caustics, DEFAULT_PHOTONS, RenderSettings};
+use crate::settings::{Caustics, DEFAULT_PHOTONS, EquationTexts, RenderSettings};
 use crate::view::View;
 
 /// The version this raylab writes (and reads, with version 1).
@@ -184,6 +184,9 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
         };
         at_key(text, &path, &e.to_string())
     })?;
+    // The equations compile, or the error names the quantity, its line and column.
+    crate::sandbox::carried::compile_texts(&settings.equations)
+        .map_err(|e| at_key(text, &["equations", e.quantity.name()], &e.to_string()))?;
     Ok(settings)
 }
 
@@ -325,6 +328,10 @@ struct FileV2 {
     shading: ShadingV2,
     display: DisplayV2,
     render: RenderV2,
+    /// A student's own equations (`d`, `shadowStart`, `shadowed`, `D`, `R`), a text each:
+    /// written only when there are some.
+    #[serde(default, skip_serializing_if = "EquationTexts::is_empty")]
+    equations: EquationTexts,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -855,6 +862,7 @@ impl FileV2 {
                 seed: s.seed,
                 denoise: s.denoise,
             },
+            equations: s.equations.clone(),
         })
     }
 
@@ -958,6 +966,7 @@ impl FileV2 {
             samples_per_pixel: self.render.samples_per_pixel,
             seed: self.render.seed,
             denoise: self.render.denoise,
+            equations: self.equations,
         }
     }
 }

@@ -4,8 +4,11 @@
 //! [`RenderSettings`]; the renderer takes nothing else. `#[serde(default)]` everywhere means an
 //! older or partial settings file still loads, with the lab's values for what it lacks.
 
+mod equations;
 mod stage;
 mod view_choice;
+
+pub use equations::EquationTexts;
 
 pub use stage::{
     Caustics, DEFAULT_PHOTONS, DEFAULT_SPECULAR_DEPTH, Integrator, MAX_PHOTONS, MAX_SPECULAR_DEPTH,
@@ -123,6 +126,12 @@ pub struct RenderSettings {
     /// image carries it, so that its settings reproduce what was saved. Written only when set.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub denoise: bool,
+    /// A student's own equations (the equation sandbox, [`crate::sandbox`]), each quantity's
+    /// text in place of the lab's: the command line's `render` renders them when given, and
+    /// screenshots and scene files carry them. [`crate::render::render`] ignores them.
+    /// Written only when there are some.
+    #[serde(skip_serializing_if = "EquationTexts::is_empty")]
+    pub equations: EquationTexts,
 }
 
 impl Default for RenderSettings {
@@ -142,6 +151,7 @@ impl Default for RenderSettings {
             samples_per_pixel: 1,
             seed: 0,
             denoise: false,
+            equations: EquationTexts::default(),
         }
     }
 }

@@ -87,6 +87,9 @@ pub fn read_file(path: &Path) -> Result<Loaded, ReadError> {
         })?
     };
     let mut loaded = from_json(&json).map_err(invalid)?;
+    // The equations compile, or the error names the quantity, its line and column.
+    crate::sandbox::carried::compile_texts(&loaded.settings.equations)
+        .map_err(|e| invalid(e.to_string()))?;
     loaded
         .settings
         .resolve_paths(path.parent().unwrap_or(Path::new("")));

@@ -36,7 +36,7 @@ const FUNCTIONS: [&str; 14] = [
 ];
 
 /// The named constants: `pi` and C's `M_PI`.
-const CONSTANTS: [&str; 2] = ["pi", "M_PI"];
+pub const CONSTANTS: [&str; 2] = ["pi", "M_PI"];
 
 /// The student's quantities, compiled: a tape for each one written.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -74,6 +74,13 @@ impl Equations {
             self.tapes[q as usize] = None;
             self.spans[q as usize] = None;
         }
+    }
+
+    /// Takes quantity `q` from `other` (its tape and where it is written there, or the lab's
+    /// if `other` does not write it): equations put together from texts compiled apart.
+    pub fn take(&mut self, q: Quantity, other: &Equations) {
+        self.tapes[q as usize] = other.tapes[q as usize].clone();
+        self.spans[q as usize] = other.spans[q as usize];
     }
 
     /// Whether going from `self` to `other` means tracing again (`d` or `shadowStart`

@@ -15,8 +15,10 @@
 //!   and their diffuse hits are recorded once ([`Recording`]), and `shadowed`, `D` and `R` are
 //!   evaluated over the recorded terms without tracing again.
 
+pub mod carried;
 pub mod compile;
 pub mod error;
+pub mod examples;
 pub mod judge;
 pub mod lex;
 pub mod parse;
