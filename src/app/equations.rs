@@ -73,6 +73,8 @@ pub struct YourEquations {
     compiled_for: Option<([String; 5], [bool; 5])>,
     /// The equations of the texts, when every one compiles.
     equations: Option<Equations>,
+    /// Each written text compiled on its own, when it compiles.
+    compiled_one: [Option<Equations>; 5],
     /// The newest job sent: its generation, settings and equations.
     sent: Option<(u64, RenderSettings, Equations)>,
     jobs: Option<Sender<Job>>,
@@ -97,6 +99,7 @@ impl Default for YourEquations {
             errors: Default::default(),
             compiled_for: None,
             equations: Some(Equations::lab()),
+            compiled_one: Default::default(),
             sent: None,
             jobs: None,
             results: None,
@@ -191,6 +194,23 @@ impl YourEquations {
             Some((s, e, Ok(evaluated))) if *s == settings && *e == equations => Some(evaluated),
             _ => None,
         }
+    }
+
+    /// Quantity `q`'s verdict, if the newest image made judged the text in its editor now
+    /// (for the stage in force): a verdict stays while another text is being fixed.
+    pub fn verdict(&self, q: Quantity, live: &RenderSettings) -> Option<&str> {
+        let one = self.compiled_one[q as usize].as_ref()?;
+        let (settings, equations, Ok(evaluated)) = self.done.as_ref()? else {
+            return None;
+        };
+        if settings.shading.stage != live.shading.stage || equations.tape(q) != one.tape(q) {
+            return None;
+        }
+        evaluated
+            .verdicts
+            .iter()
+            .find(|(v, _)| *v == q)
+            .map(|(_, text)| text.as_str())
     }
 
     /// The newest image made, fresh or not.
@@ -297,11 +317,15 @@ impl YourEquations {
         let mut ok = true;
         for q in Quantity::ALL {
             self.errors[q as usize].clear();
+            self.compiled_one[q as usize] = None;
             if !self.written[q as usize] {
                 continue;
             }
             match carried::compile_one(q, &self.texts[q as usize]) {
-                Ok(one) => equations.take(q, &one),
+                Ok(one) => {
+                    equations.take(q, &one);
+                    self.compiled_one[q as usize] = Some(one);
+                }
                 Err(errors) => {
                     self.errors[q as usize] = errors;
                     ok = false;
@@ -686,10 +710,6 @@ pub fn equations_ui(ui: &mut egui::Ui, eq: &mut YourEquations, live: &RenderSett
         }
     });
     summary_ui(ui, eq, live);
-    let fresh_verdicts: Vec<(Quantity, String)> = eq
-        .fresh(live)
-        .map(|e| e.verdicts.clone())
-        .unwrap_or_default();
     for q in Quantity::ALL {
         ui.separator();
         let label = ui.horizontal(|ui| {
@@ -737,8 +757,8 @@ pub fn equations_ui(ui: &mut egui::Ui, eq: &mut YourEquations, live: &RenderSett
         if !eq.written[q as usize] {
             ui.weak("The lab's (edit to write your own)");
         } else if errors.is_empty() {
-            match fresh_verdicts.iter().find(|(v, _)| *v == q) {
-                Some((_, verdict)) => {
+            match eq.verdict(q, live) {
+                Some(verdict) => {
                     let equal = verdict.starts_with("equal to the lab's");
                     let text = format!("Verdict: {verdict}");
                     if equal {
