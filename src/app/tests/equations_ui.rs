@@ -34,7 +34,7 @@ fn type_into(h: &mut Harness<'_, WorkbenchApp>, name: &str, text: &str) {
     h.step();
 }
 
-fn fresh(h: &Harness<'_, WorkbenchApp>) -> &Evaluated {
+fn fresh<'a>(h: &'a Harness<'_, WorkbenchApp>) -> &'a Evaluated {
     let app = h.state();
     app.equations
         .fresh(&app.state.settings)
