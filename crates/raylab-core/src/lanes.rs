@@ -112,6 +112,39 @@ macro_rules! select_lazy {
 }
 pub(crate) use select_lazy;
 
+/// A function compiled for one instruction set: `compiled!(Avx512: fn …)`,
+/// `compiled!(Avx2: fn …)` or `compiled!(Portable: fn …)`, the set named as its proof type
+/// (`accel::simd::Avx512`, `Avx2`: a value exists only on a CPU that runs the set) or the
+/// portable set every CPU of the architecture runs. The one place that says which features each
+/// set enables: the generic code that inlines into the function (the lanes' operations, the
+/// kernels, the packet traversal) is compiled with them, so one source serves every set.
+///
+/// `Avx512` and `Avx2` functions exist only on x86-64, and calling one is `unsafe` where the
+/// caller is not compiled with the set: its caller holds the proof value (or checks as
+/// `detect` does) and says so in a `// SAFETY:` comment. `Portable` functions are ordinary ones.
+/// AVX-512 is F, DQ and VL with AVX2 and FMA, what `Avx512::detect` checks; AVX2 is AVX2 and
+/// FMA, what `Avx2::detect` checks. Rust never fuses a multiply and an add on its own, so the
+/// sets give the same bits (see the module docs).
+macro_rules! compiled {
+    (Avx512: $(#[$attr:meta])* $vis:vis fn $($rest:tt)*) => {
+        $(#[$attr])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
+        $vis fn $($rest)*
+    };
+    (Avx2: $(#[$attr:meta])* $vis:vis fn $($rest:tt)*) => {
+        $(#[$attr])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,fma")]
+        $vis fn $($rest)*
+    };
+    (Portable: $(#[$attr:meta])* $vis:vis fn $($rest:tt)*) => {
+        $(#[$attr])*
+        $vis fn $($rest)*
+    };
+}
+pub(crate) use compiled;
+
 /// The mask type of a [`Vector`]'s lanes.
 pub type MaskOf<V> = <<V as Vector>::Real as Real>::Mask;
 

@@ -22,7 +22,7 @@ use super::portable::Portable;
 use super::simd::{Avx2, Avx512};
 use super::simd::{Kernels, LANES, LaneHit, Node8, Packet, Packet16, RayK};
 use crate::intersect::intersect_lanes;
-use crate::lanes::{Mask, Vec3x};
+use crate::lanes::{Mask, Vec3x, compiled};
 
 /// A packet of triangles as lanes: `v0`, `e1`, `e2` and the normal `n = e1 × e2` (stored by
 /// [`Packet16`], computed for the 8-wide packets, by the same expression: the same bits).
@@ -193,31 +193,31 @@ pub(super) fn any<P: PacketIsa, T: TriangleLanes>(k: P, p: &T, r: &RayK, t_limit
     hits(k, p, r, t_limit).1.any()
 }
 
-/// [`Kernels`] for a set whose lanes are eight wide: the functions above, each compiled with
-/// the set's instruction set (`$features`) when it has one (the portable set has none: every
-/// CPU of the architecture runs it, and `compiled` is then an ordinary function).
+/// [`Kernels`] for a set whose lanes are eight wide: the functions above, each compiled for
+/// the set ([`compiled!`]; for the portable set, which every CPU of the architecture runs, an
+/// ordinary function).
 macro_rules! compiled_kernels {
-    ($set:ty $(, $features:literal)?) => {
+    ($set:ident) => {
         // Without features, `compiled` is safe to call and the `unsafe` blocks are unused.
         #[allow(unused_unsafe)]
         impl Kernels for $set {
             #[inline(always)]
             fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(k: $set, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; 8]) {
+                compiled!($set: #[inline] fn compiled(
+                    k: $set, node: &Node8, r: &RayK, t_limit: f32,
+                ) -> (u32, [f32; 8]) {
                     boxes(k, node, r, t_limit)
-                }
+                });
                 // SAFETY: a value of the kernel set proves that the CPU runs its features.
                 unsafe { compiled(self, node, r, t_limit) }
             }
             #[inline(always)]
             fn nearest(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(k: $set, p: &Packet<8>, r: &RayK, t: f32) -> Option<LaneHit> {
+                compiled!($set: #[inline] fn compiled(
+                    k: $set, p: &Packet<8>, r: &RayK, t: f32,
+                ) -> Option<LaneHit> {
                     nearest(k, p, r, t)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, p, r, t_limit) }
             }
@@ -228,26 +228,24 @@ macro_rules! compiled_kernels {
                 r: &RayK,
                 t_limit: f32,
             ) -> Option<(usize, LaneHit)> {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(
+                compiled!($set: #[inline] fn compiled(
                     k: $set,
                     packets: &[Packet<8>],
                     r: &RayK,
                     t: f32,
                 ) -> Option<(usize, LaneHit)> {
                     nearest_among(k, packets, r, t)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, packets, r, t_limit) }
             }
             #[inline(always)]
             fn any(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> bool {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(k: $set, p: &Packet<8>, r: &RayK, t: f32) -> bool {
+                compiled!($set: #[inline] fn compiled(
+                    k: $set, p: &Packet<8>, r: &RayK, t: f32,
+                ) -> bool {
                     any(k, p, r, t)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, p, r, t_limit) }
             }
@@ -257,34 +255,32 @@ macro_rules! compiled_kernels {
 
 compiled_kernels!(Portable);
 #[cfg(target_arch = "x86_64")]
-compiled_kernels!(Avx2, "avx2,fma");
+compiled_kernels!(Avx2);
 
 /// The AVX-512 kernels for the flat list's 16-wide packets: the functions above, sixteen lanes.
 #[cfg(target_arch = "x86_64")]
 impl Avx512 {
-    /// The nearest hit in a 16-wide packet, lowest lane among equal `t`.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn nearest16_compiled(self, p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+    compiled!(Avx512: #[inline] fn nearest16_compiled(
+        self, p: &Packet16, r: &RayK, t_limit: f32,
+    ) -> Option<LaneHit> {
         nearest(self, p, r, t_limit)
-    }
+    });
 
+    /// The nearest hit in a 16-wide packet, lowest lane among equal `t`.
     #[inline(always)]
     pub fn nearest16(self, p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
         // SAFETY: an `Avx512` value is only made by `detect`, after checking for AVX-512.
         unsafe { self.nearest16_compiled(p, r, t_limit) }
     }
 
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn nearest16_among_compiled(
+    compiled!(Avx512: #[inline] fn nearest16_among_compiled(
         self,
         packets: &[Packet16],
         r: &RayK,
         t_limit: f32,
     ) -> Option<(usize, LaneHit)> {
         nearest_among(self, packets, r, t_limit)
-    }
+    });
 
     /// The nearest hit among 16-wide `packets` ([`nearest_among`]).
     #[inline(always)]
@@ -298,11 +294,11 @@ impl Avx512 {
         unsafe { self.nearest16_among_compiled(packets, r, t_limit) }
     }
 
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn any16_compiled(self, p: &Packet16, r: &RayK, t_limit: f32) -> bool {
+    compiled!(Avx512: #[inline] fn any16_compiled(
+        self, p: &Packet16, r: &RayK, t_limit: f32,
+    ) -> bool {
         any(self, p, r, t_limit)
-    }
+    });
 
     /// Whether any triangle of a 16-wide packet is hit.
     #[inline(always)]

@@ -19,6 +19,7 @@ use super::simd::Avx512;
 #[cfg(target_arch = "x86_64")]
 use super::x86_lanes::Avx512F32;
 use crate::geometry::Ray;
+use crate::lanes::compiled;
 
 /// The entries of a table of at most 32 at `index[i]` (its low five bits) for each lane set in
 /// `lanes`, 0 in the others: one two-register permute with AVX-512, where a gather reads each
@@ -27,8 +28,8 @@ use crate::geometry::Ray;
 pub fn table_lanes(isa: Isa, table: &[f32; 32], index: &[u32; 16], lanes: u16) -> [f32; 16] {
     #[cfg(target_arch = "x86_64")]
     if let Isa::Avx512(_) = isa {
-        // SAFETY: `Isa::Avx512` exists only on a CPU with AVX-512 F; nothing is read from
-        // memory but `table` and `index`, whole.
+        // SAFETY: `Isa::Avx512` exists only on a CPU with the features `permute_avx512` is
+        // compiled with; nothing is read from memory but `table` and `index`, whole.
         return unsafe { permute_avx512(table, index, lanes) };
     }
     let _ = isa;
@@ -38,15 +39,10 @@ pub fn table_lanes(isa: Isa, table: &[f32; 32], index: &[u32; 16], lanes: u16) -
     })
 }
 
+compiled!(Avx512:
 /// [`table_lanes`] with AVX-512's `vpermt2ps`.
-///
-/// # Safety
-///
-/// The CPU runs AVX-512 F.
-#[cfg(target_arch = "x86_64")]
 #[inline]
-#[target_feature(enable = "avx512f")]
-unsafe fn permute_avx512(table: &[f32; 32], index: &[u32; 16], lanes: u16) -> [f32; 16] {
+fn permute_avx512(table: &[f32; 32], index: &[u32; 16], lanes: u16) -> [f32; 16] {
     use std::arch::x86_64::*;
     // SAFETY: the loads read `table`'s 128 bytes and `index`'s 64, unaligned.
     unsafe {
@@ -56,7 +52,7 @@ unsafe fn permute_avx512(table: &[f32; 32], index: &[u32; 16], lanes: u16) -> [f
         let values = _mm512_maskz_permutex2var_ps(lanes, low, index, high);
         std::mem::transmute::<__m512, [f32; 16]>(values)
     }
-}
+});
 
 /// Up to sixteen rays in lanes: `[origin x, y, z, direction x, y, z]`, ray `i` in lane `i`,
 /// the lanes past the last ray repeating it. With AVX-512, the packet traversal's own loads
@@ -77,19 +73,14 @@ pub fn ray_lanes(isa: Isa, rays: &[Ray]) -> [[f32; 16]; 6] {
     [o(0), o(1), o(2), d(0), d(1), d(2)]
 }
 
+compiled!(Avx512:
 /// [`ray_lanes`] with AVX-512.
-///
-/// # Safety
-///
-/// The CPU runs AVX-512 F, DQ and VL, AVX2 and FMA (which `k` proves).
-#[cfg(target_arch = "x86_64")]
 #[inline]
-#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
-unsafe fn rays_avx512(k: Avx512, rays: &[Ray]) -> [[f32; 16]; 6] {
+fn rays_avx512(k: Avx512, rays: &[Ray]) -> [[f32; 16]; 6] {
     // SAFETY: an `Avx512F32` is an `__m512` (`repr(transparent)`), the same 64 bytes as
     // `[f32; 16]`.
     unsafe { std::mem::transmute::<[Avx512F32; 6], [[f32; 16]; 6]>(k.rays(rays)) }
-}
+});
 
 /// Sixteen 3-vectors given as lanes (`x`, `y`, `z`) stored one after another into `out`, as
 /// an array of `Vec3`: with AVX-512, six register permutes and three stores, where lane by lane
@@ -98,7 +89,7 @@ unsafe fn rays_avx512(k: Avx512, rays: &[Ray]) -> [[f32; 16]; 6] {
 pub fn store_vec3s(isa: Isa, x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
     #[cfg(target_arch = "x86_64")]
     if let Isa::Avx512(_) = isa {
-        // SAFETY: `Isa::Avx512` exists only on a CPU with AVX-512 F.
+        // SAFETY: `Isa::Avx512` exists only on a CPU with the features of `compiled!(Avx512)`.
         return unsafe { store_vec3s_avx512(x, y, z, out) };
     }
     let _ = isa;
@@ -107,17 +98,12 @@ pub fn store_vec3s(isa: Isa, x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &
     }
 }
 
+compiled!(Avx512:
 /// [`store_vec3s`] with AVX-512. Float `f` of the output (`16k + p` of its vector `k`) is
 /// component `f % 3` of vector `f / 3`: the first permute of each output vector picks the `x`
 /// and `y` components from those two inputs, the second keeps them and picks `z`.
-///
-/// # Safety
-///
-/// The CPU runs AVX-512 F.
-#[cfg(target_arch = "x86_64")]
 #[inline]
-#[target_feature(enable = "avx512f")]
-unsafe fn store_vec3s_avx512(x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
+fn store_vec3s_avx512(x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
     use std::arch::x86_64::*;
     /// For output vector `k`: the indices into (x, y), then into (that, z).
     const fn picks(k: usize) -> ([i32; 16], [i32; 16]) {
@@ -152,7 +138,7 @@ unsafe fn store_vec3s_avx512(x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &
             _mm512_storeu_ps(base.add(16 * k), v);
         }
     }
-}
+});
 
 #[cfg(test)]
 mod tests {
