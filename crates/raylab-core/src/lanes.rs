@@ -41,6 +41,10 @@ pub trait Mask:
     fn splat(b: bool) -> Self;
     /// Whether any lane is true.
     fn any(self) -> bool;
+    /// Lane `i`'s answer as bit `i`.
+    fn bitmask(self) -> u32;
+    /// Bit `i` as lane `i`'s answer (bits past the last lane are ignored).
+    fn from_bitmask(bits: u32) -> Self;
 }
 
 /// A number, or sixteen: `f32` or [`F32x16`]. Every operation is the `f32` one, lane by lane.
@@ -64,6 +68,29 @@ pub trait Real:
     fn simd_min(self, other: Self) -> Self;
     /// `f32::copysign`: the magnitude of `self` with the sign of `sign`.
     fn copysign(self, sign: Self) -> Self;
+    /// `f32::abs`: the sign bit cleared.
+    fn abs(self) -> Self;
+    /// The maximum instruction's: `self` where `self > other`, else `other` (so `other` where
+    /// either is NaN, unlike [`Real::simd_max`]).
+    #[inline(always)]
+    fn max_or_other(self, other: Self) -> Self {
+        Self::select(self.simd_gt(other), self, other)
+    }
+    /// The minimum instruction's: `self` where `self < other`, else `other`.
+    #[inline(always)]
+    fn min_or_other(self, other: Self) -> Self {
+        Self::select(self.simd_lt(other), self, other)
+    }
+    /// `==`: false for a NaN.
+    #[inline(always)]
+    fn simd_eq(self, other: Self) -> Self::Mask {
+        !self.simd_ne(other)
+    }
+    /// `!(self > other)`: true for a NaN.
+    #[inline(always)]
+    fn simd_ngt(self, other: Self) -> Self::Mask {
+        !self.simd_gt(other)
+    }
     fn simd_lt(self, other: Self) -> Self::Mask;
     fn simd_le(self, other: Self) -> Self::Mask;
     fn simd_gt(self, other: Self) -> Self::Mask;
@@ -236,6 +263,16 @@ impl Mask for bool {
     fn any(self) -> bool {
         self
     }
+
+    #[inline(always)]
+    fn bitmask(self) -> u32 {
+        u32::from(self)
+    }
+
+    #[inline(always)]
+    fn from_bitmask(bits: u32) -> Self {
+        bits & 1 != 0
+    }
 }
 
 impl Real for f32 {
@@ -265,6 +302,11 @@ impl Real for f32 {
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         f32::copysign(self, sign)
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
     }
 
     #[inline(always)]
@@ -465,6 +507,16 @@ impl Mask for M16 {
         // `|` over all lanes, no early exit: one vector test.
         self.0.iter().fold(false, |a, &b| a | b)
     }
+
+    #[inline(always)]
+    fn bitmask(self) -> u32 {
+        u32::from(self.bits())
+    }
+
+    #[inline(always)]
+    fn from_bitmask(bits: u32) -> Self {
+        Self::from_bits(bits as u16)
+    }
 }
 
 impl Real for F32x16 {
@@ -495,6 +547,11 @@ impl Real for F32x16 {
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         Self(lanewise(self.0, sign.0, f32::copysign))
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Self(self.0.map(f32::abs))
     }
 
     #[inline(always)]
