@@ -336,6 +336,7 @@ pub fn try_primary_rays(camera: &Camera) -> Result<Vec<Ray>, AllocError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lanes::compiled;
 
     /// [`ImagePoints::rays`], as the tracer calls it.
     #[inline(always)]
@@ -346,19 +347,17 @@ mod tests {
     /// How the test calls one build of [`rays_of`].
     type RaysFn = fn(&ImagePoints, &mut [Ray]);
 
+    compiled!(Avx512:
     /// [`rays_of`] compiled for AVX-512, as `Tracer::trace_camera` is.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
     fn rays_avx512(points: &ImagePoints, out: &mut [Ray]) {
         rays_of(points, out);
-    }
+    });
 
+    compiled!(Avx2:
     /// [`rays_of`] compiled for AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
     fn rays_avx2(points: &ImagePoints, out: &mut [Ray]) {
         rays_of(points, out);
-    }
+    });
 
     /// The camera rays made a batch at a time ([`ImagePoints::rays`], compiled portably and for
     /// each instruction set the CPU has) are the rays [`Camera::primary_ray_rotated`] and

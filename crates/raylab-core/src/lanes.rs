@@ -41,6 +41,10 @@ pub trait Mask:
     fn splat(b: bool) -> Self;
     /// Whether any lane is true.
     fn any(self) -> bool;
+    /// Lane `i`'s answer as bit `i`.
+    fn bitmask(self) -> u32;
+    /// Bit `i` as lane `i`'s answer (bits past the last lane are ignored).
+    fn from_bitmask(bits: u32) -> Self;
 }
 
 /// A number, or sixteen: `f32` or [`F32x16`]. Every operation is the `f32` one, lane by lane.
@@ -64,6 +68,29 @@ pub trait Real:
     fn simd_min(self, other: Self) -> Self;
     /// `f32::copysign`: the magnitude of `self` with the sign of `sign`.
     fn copysign(self, sign: Self) -> Self;
+    /// `f32::abs`: the sign bit cleared.
+    fn abs(self) -> Self;
+    /// The maximum instruction's: `self` where `self > other`, else `other` (so `other` where
+    /// either is NaN, unlike [`Real::simd_max`]).
+    #[inline(always)]
+    fn max_or_other(self, other: Self) -> Self {
+        Self::select(self.simd_gt(other), self, other)
+    }
+    /// The minimum instruction's: `self` where `self < other`, else `other`.
+    #[inline(always)]
+    fn min_or_other(self, other: Self) -> Self {
+        Self::select(self.simd_lt(other), self, other)
+    }
+    /// `==`: false for a NaN.
+    #[inline(always)]
+    fn simd_eq(self, other: Self) -> Self::Mask {
+        !self.simd_ne(other)
+    }
+    /// `!(self > other)`: true for a NaN.
+    #[inline(always)]
+    fn simd_ngt(self, other: Self) -> Self::Mask {
+        !self.simd_gt(other)
+    }
     fn simd_lt(self, other: Self) -> Self::Mask;
     fn simd_le(self, other: Self) -> Self::Mask;
     fn simd_gt(self, other: Self) -> Self::Mask;
@@ -111,6 +138,39 @@ macro_rules! select_lazy {
     }};
 }
 pub(crate) use select_lazy;
+
+/// A function compiled for one instruction set: `compiled!(Avx512: fn …)`,
+/// `compiled!(Avx2: fn …)` or `compiled!(Portable: fn …)`, the set named as its proof type
+/// (`accel::simd::Avx512`, `Avx2`: a value exists only on a CPU that runs the set) or the
+/// portable set every CPU of the architecture runs. The one place that says which features each
+/// set enables: the generic code that inlines into the function (the lanes' operations, the
+/// kernels, the packet traversal) is compiled with them, so one source serves every set.
+///
+/// `Avx512` and `Avx2` functions exist only on x86-64, and calling one is `unsafe` where the
+/// caller is not compiled with the set: its caller holds the proof value (or checks as
+/// `detect` does) and says so in a `// SAFETY:` comment. `Portable` functions are ordinary ones.
+/// AVX-512 is F, DQ and VL with AVX2 and FMA, what `Avx512::detect` checks; AVX2 is AVX2 and
+/// FMA, what `Avx2::detect` checks. Rust never fuses a multiply and an add on its own, so the
+/// sets give the same bits (see the module docs).
+macro_rules! compiled {
+    (Avx512: $(#[$attr:meta])* $vis:vis fn $($rest:tt)*) => {
+        $(#[$attr])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
+        $vis fn $($rest)*
+    };
+    (Avx2: $(#[$attr:meta])* $vis:vis fn $($rest:tt)*) => {
+        $(#[$attr])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,fma")]
+        $vis fn $($rest)*
+    };
+    (Portable: $(#[$attr:meta])* $vis:vis fn $($rest:tt)*) => {
+        $(#[$attr])*
+        $vis fn $($rest)*
+    };
+}
+pub(crate) use compiled;
 
 /// The mask type of a [`Vector`]'s lanes.
 pub type MaskOf<V> = <<V as Vector>::Real as Real>::Mask;
@@ -203,6 +263,16 @@ impl Mask for bool {
     fn any(self) -> bool {
         self
     }
+
+    #[inline(always)]
+    fn bitmask(self) -> u32 {
+        u32::from(self)
+    }
+
+    #[inline(always)]
+    fn from_bitmask(bits: u32) -> Self {
+        bits & 1 != 0
+    }
 }
 
 impl Real for f32 {
@@ -232,6 +302,11 @@ impl Real for f32 {
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         f32::copysign(self, sign)
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
     }
 
     #[inline(always)]
@@ -432,6 +507,16 @@ impl Mask for M16 {
         // `|` over all lanes, no early exit: one vector test.
         self.0.iter().fold(false, |a, &b| a | b)
     }
+
+    #[inline(always)]
+    fn bitmask(self) -> u32 {
+        u32::from(self.bits())
+    }
+
+    #[inline(always)]
+    fn from_bitmask(bits: u32) -> Self {
+        Self::from_bits(bits as u16)
+    }
 }
 
 impl Real for F32x16 {
@@ -462,6 +547,11 @@ impl Real for F32x16 {
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         Self(lanewise(self.0, sign.0, f32::copysign))
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Self(self.0.map(f32::abs))
     }
 
     #[inline(always)]

@@ -21,6 +21,7 @@ use crate::camera::ImagePoints;
 use crate::film::{Film, Image, Seen, rows_per_job};
 use crate::geometry::Ray;
 use crate::integrator::{BATCH, PATH_BATCH, Scratch, Tracer};
+use crate::lanes::compiled;
 use crate::memory::{AllocError, with_thread_memory};
 use crate::sampling::{Rng, concentric_disk, pixel_offset, pixel_sample};
 use crate::scene::Scene;
@@ -524,10 +525,9 @@ fn jittered_points_portable(
     }
 }
 
+compiled!(Avx512:
 /// [`jittered_points_portable`] compiled with AVX-512 (64-bit multiplies and rotates sixteen
 /// lanes wide).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
 fn jittered_points_avx512(
     _proof: Avx512,
     seed: u64,
@@ -538,7 +538,7 @@ fn jittered_points_avx512(
     rngs: &mut [Rng],
 ) {
     jittered_points_portable(seed, y, samples, px, py, rngs);
-}
+});
 
 /// The full image: `samples_per_pixel` passes averaged. Not cancellable; for the command line
 /// and tests.

@@ -226,8 +226,8 @@ impl Cone {
 }
 
 mod lanes {
-    use super::super::packet::{CMP_EQ_OQ, CMP_GT_OQ, CMP_LE_OQ, MAX_WIDTH, PacketIsa};
-    use crate::lanes::Real;
+    use super::super::packet::{MAX_WIDTH, PacketIsa};
+    use crate::lanes::{Mask, Real};
 
     use super::super::SegmentLanes;
     use super::super::wide::Corners;
@@ -266,15 +266,14 @@ mod lanes {
         fn add_lanes(&mut self, k: P, (x, y, z): (P::F, P::F, P::F), active: u32) {
             let (sx, sy) = (x / z, y / z);
             let max = k.splat(MAX_SLOPE);
-            let good = k.cmp::<CMP_GT_OQ>(z, k.splat(0.0))
-                & (k.cmp::<CMP_LE_OQ>(k.abs(sx), max) & k.cmp::<CMP_LE_OQ>(k.abs(sy), max));
-            self.bad |= !k.bits(good) & active;
-            let (m, inf) = (k.mask(active), k.splat(f32::INFINITY));
+            let good = z.simd_gt(k.splat(0.0)) & (sx.abs().simd_le(max) & sy.abs().simd_le(max));
+            self.bad |= !good.bitmask() & active;
+            let (m, inf) = (P::Mask::from_bitmask(active), k.splat(f32::INFINITY));
             let neg_inf = k.splat(f32::NEG_INFINITY);
-            self.x_lo = k.min(self.x_lo, k.blend(m, inf, sx));
-            self.x_hi = k.max(self.x_hi, k.blend(m, neg_inf, sx));
-            self.y_lo = k.min(self.y_lo, k.blend(m, inf, sy));
-            self.y_hi = k.max(self.y_hi, k.blend(m, neg_inf, sy));
+            self.x_lo = self.x_lo.min_or_other(P::F::select(m, sx, inf));
+            self.x_hi = self.x_hi.max_or_other(P::F::select(m, sx, neg_inf));
+            self.y_lo = self.y_lo.min_or_other(P::F::select(m, sy, inf));
+            self.y_hi = self.y_hi.max_or_other(P::F::select(m, sy, neg_inf));
         }
 
         /// The slopes over all lanes, or `None` if any lane failed.
@@ -296,13 +295,13 @@ mod lanes {
     /// The least lane.
     #[inline(always)]
     fn least<P: PacketIsa>(k: P, v: P::F) -> f32 {
-        k.min_of(k.mask((1 << P::WIDTH) - 1), v)
+        k.min_of(P::Mask::from_bitmask((1 << P::WIDTH) - 1), v)
     }
 
     /// The greatest lane (exactly: −least(−v)).
     #[inline(always)]
     fn greatest<P: PacketIsa>(k: P, v: P::F) -> f32 {
-        -least(k, k.xor(v, k.splat(-0.0)))
+        -least(k, -v)
     }
 
     /// `a − b` per axis.
@@ -353,9 +352,8 @@ mod lanes {
                 // Lanes past the end repeat the last ray: the bounds do not change.
                 let [ox, oy, oz, dx, dy, dz] = k.rays(chunk);
                 // Every origin the apex (`==` as `Vec3`'s: a NaN is never equal).
-                let same = k.cmp::<CMP_EQ_OQ>(ox, apex[0])
-                    & (k.cmp::<CMP_EQ_OQ>(oy, apex[1]) & k.cmp::<CMP_EQ_OQ>(oz, apex[2]));
-                acc.bad |= !k.bits(same) & ((1 << P::WIDTH) - 1);
+                let same = ox.simd_eq(apex[0]) & (oy.simd_eq(apex[1]) & oz.simd_eq(apex[2]));
+                acc.bad |= !same.bitmask() & ((1 << P::WIDTH) - 1);
                 acc.add(k, local(k, &cone, [dx, dy, dz]));
                 if acc.bad != 0 {
                     return None;
@@ -398,9 +396,9 @@ mod lanes {
                 let [ox, oy, oz, dx, dy, dz, t] = k.segments(chunk);
                 // end = origin + t·direction, as `Vec3` computes it: lane by lane.
                 let end = [ox + t * dx, oy + t * dy, oz + t * dz];
-                spread2 = k.max(spread2, length2(sub3(end, a)));
+                spread2 = spread2.max_or_other(length2(sub3(end, a)));
                 let start = sub3([ox, oy, oz], a);
-                near2 = k.min(near2, length2(start));
+                near2 = near2.min_or_other(length2(start));
                 acc.add(k, local(k, &cone, start));
                 if acc.bad != 0 {
                     return None; // the path tracer's scattered shadow rays stop here
@@ -436,7 +434,7 @@ mod lanes {
                     if active == 0 {
                         continue;
                     }
-                    let m = k.mask(active);
+                    let m = P::Mask::from_bitmask(active);
                     let ox = load_at(k, g.origin[0], offset);
                     let oy = load_at(k, g.origin[1], offset);
                     let oz = load_at(k, g.origin[2], offset);
@@ -446,10 +444,10 @@ mod lanes {
                     let t = load_at(k, g.t_max, offset);
                     let end = [ox + t * dx, oy + t * dy, oz + t * dz];
                     let s2 = length2(sub3(end, a));
-                    spread2 = k.max(spread2, k.blend(m, k.splat(0.0), s2));
+                    spread2 = spread2.max_or_other(P::F::select(m, s2, k.splat(0.0)));
                     let start = sub3([ox, oy, oz], a);
                     let n2 = length2(start);
-                    near2 = k.min(near2, k.blend(m, k.splat(f32::INFINITY), n2));
+                    near2 = near2.min_or_other(P::F::select(m, n2, k.splat(f32::INFINITY)));
                     acc.add_lanes(k, local(k, &cone, start), active);
                     if acc.bad != 0 {
                         return None;
@@ -473,8 +471,8 @@ mod lanes {
             let sides = self.sides();
             let size = load_at(k, &corners.size, offset);
             let (delta, margin) = (k.splat(self.delta), k.splat(MARGIN));
-            let none = k.mask(0);
-            let mut outside = [k.mask((1 << P::WIDTH) - 1); 5];
+            let none = P::Mask::from_bitmask(0);
+            let mut outside = [P::Mask::from_bitmask((1 << P::WIDTH) - 1); 5];
             for corner in &corners.at {
                 let v = [
                     load_at(k, &corner[0], offset),
@@ -482,22 +480,22 @@ mod lanes {
                     load_at(k, &corner[2], offset),
                 ];
                 let (x, y, z) = local(k, self, sub3(v, apex));
-                let distance = k.abs(x) + k.abs(y) + k.abs(z);
+                let distance = x.abs() + y.abs() + z.abs();
                 let base = delta + margin * (size + distance);
                 for (s, &(slope, across, norm)) in sides.iter().enumerate() {
                     let c = if s < 2 { x } else { y };
                     let value = k.splat(across) * (c - k.splat(slope) * z);
-                    let past = k.cmp::<CMP_GT_OQ>(value, base * k.splat(norm));
+                    let past = value.simd_gt(base * k.splat(norm));
                     outside[s] = outside[s] & past;
                 }
-                let behind = k.cmp::<CMP_GT_OQ>(k.xor(z, k.splat(-0.0)), base);
+                let behind = (-z).simd_gt(base);
                 outside[4] = outside[4] & behind;
             }
             let mut culled = none;
             for o in outside {
                 culled = culled | o;
             }
-            !k.bits(culled) & ((1 << P::WIDTH) - 1)
+            !culled.bitmask() & ((1 << P::WIDTH) - 1)
         }
     }
 

@@ -16,13 +16,13 @@
 
 use glam::Vec3;
 
-use super::packet::{CMP_EQ_OQ, CMP_LE_OQ, CMP_LT_OQ, MAX_WIDTH, PacketIsa};
+use super::packet::{MAX_WIDTH, PacketIsa};
 use super::portable::Portable;
 #[cfg(target_arch = "x86_64")]
 use super::simd::{Avx2, Avx512};
 use super::simd::{Kernels, LANES, LaneHit, Node8, Packet, Packet16, RayK};
 use crate::intersect::intersect_lanes;
-use crate::lanes::{Mask, Vec3x};
+use crate::lanes::{Mask, Real, Vec3x, compiled};
 
 /// A packet of triangles as lanes: `v0`, `e1`, `e2` and the normal `n = e1 × e2` (stored by
 /// [`Packet16`], computed for the 8-wide packets, by the same expression: the same bits).
@@ -93,13 +93,13 @@ pub(super) fn boxes<P: PacketIsa>(k: P, node: &Node8, r: &RayK, t_limit: f32) ->
         let o_inv = k.splat(r.origin_inv[axis]);
         let near = k.plane_distance(k.load_lanes(&node.bounds[r.near[axis]]), o, inv, o_inv);
         let far = k.plane_distance(k.load_lanes(&node.bounds[r.far[axis]]), o, inv, o_inv);
-        t0 = k.max(t0, near);
-        t1 = k.min(t1, far);
+        t0 = t0.max_or_other(near);
+        t1 = t1.min_or_other(far);
     }
     let mut t_near = [0.0f32; MAX_WIDTH];
     k.store(&mut t_near, t0);
     let t_near = *t_near.first_chunk().expect("sixteen floats hold eight");
-    (k.bits(k.cmp::<CMP_LE_OQ>(t0, t1)), t_near)
+    (t0.simd_le(t1).bitmask(), t_near)
 }
 
 /// The nearest hit in the packet with `0 < t < t_limit`, the lowest lane among equal `t`.
@@ -111,11 +111,11 @@ pub(super) fn nearest<P: PacketIsa, T: TriangleLanes>(
     t_limit: f32,
 ) -> Option<LaneHit> {
     let ([t, u, v], hit) = hits(k, p, r, t_limit);
-    if k.bits(hit) == 0 {
+    if hit.bitmask() == 0 {
         return None;
     }
     let m = k.min_of(hit, t);
-    let at_min = k.bits(hit & k.cmp::<CMP_EQ_OQ>(t, k.splat(m)));
+    let at_min = (hit & t.simd_eq(k.splat(m))).bitmask();
     let lane = at_min.trailing_zeros() as usize & (P::WIDTH - 1);
     // The lane's u and v moved to lane 0 in registers where the set can: storing the vectors
     // and reading one float back would stall on the store (store forwarding).
@@ -146,23 +146,23 @@ pub(super) fn nearest_among<P: PacketIsa, T: TriangleLanes>(
     let mut t_best = k.splat(f32::INFINITY);
     let (mut u_best, mut v_best) = (k.splat(0.0), k.splat(0.0));
     let mut packet_best = k.splat_u32(0);
-    let mut hit_any = k.mask(0);
+    let mut hit_any = P::Mask::from_bitmask(0);
     for (i, p) in packets.iter().enumerate() {
         let ([t, u, v], hit) = hits(k, p, r, t_limit);
         // Strictly nearer: a lane keeps its first packet's hit among equal `t`.
-        let nearer = hit & k.cmp::<CMP_LT_OQ>(t, t_best);
-        t_best = k.blend(nearer, t_best, t);
-        u_best = k.blend(nearer, u_best, u);
-        v_best = k.blend(nearer, v_best, v);
+        let nearer = hit & t.simd_lt(t_best);
+        t_best = P::F::select(nearer, t, t_best);
+        u_best = P::F::select(nearer, u, u_best);
+        v_best = P::F::select(nearer, v, v_best);
         packet_best = k.blend_u32(nearer, packet_best, k.splat_u32(i as u32));
         hit_any = hit_any | hit;
     }
-    if k.bits(hit_any) == 0 {
+    if hit_any.bitmask() == 0 {
         return None;
     }
     // Lanes without a hit hold +∞: the least of all lanes is the least hit.
     let m = k.min_of(P::Mask::splat(true), t_best);
-    let at_min = k.bits(hit_any & k.cmp::<CMP_EQ_OQ>(t_best, k.splat(m)));
+    let at_min = (hit_any & t_best.simd_eq(k.splat(m))).bitmask();
     let mut lane = at_min.trailing_zeros() as usize & (P::WIDTH - 1);
     let mut packet = k.lane_u32(packet_best, lane);
     if at_min.count_ones() > 1 {
@@ -193,31 +193,31 @@ pub(super) fn any<P: PacketIsa, T: TriangleLanes>(k: P, p: &T, r: &RayK, t_limit
     hits(k, p, r, t_limit).1.any()
 }
 
-/// [`Kernels`] for a set whose lanes are eight wide: the functions above, each compiled with
-/// the set's instruction set (`$features`) when it has one (the portable set has none: every
-/// CPU of the architecture runs it, and `compiled` is then an ordinary function).
+/// [`Kernels`] for a set whose lanes are eight wide: the functions above, each compiled for
+/// the set ([`compiled!`]; for the portable set, which every CPU of the architecture runs, an
+/// ordinary function).
 macro_rules! compiled_kernels {
-    ($set:ty $(, $features:literal)?) => {
+    ($set:ident) => {
         // Without features, `compiled` is safe to call and the `unsafe` blocks are unused.
         #[allow(unused_unsafe)]
         impl Kernels for $set {
             #[inline(always)]
             fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(k: $set, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; 8]) {
+                compiled!($set: #[inline] fn compiled(
+                    k: $set, node: &Node8, r: &RayK, t_limit: f32,
+                ) -> (u32, [f32; 8]) {
                     boxes(k, node, r, t_limit)
-                }
+                });
                 // SAFETY: a value of the kernel set proves that the CPU runs its features.
                 unsafe { compiled(self, node, r, t_limit) }
             }
             #[inline(always)]
             fn nearest(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(k: $set, p: &Packet<8>, r: &RayK, t: f32) -> Option<LaneHit> {
+                compiled!($set: #[inline] fn compiled(
+                    k: $set, p: &Packet<8>, r: &RayK, t: f32,
+                ) -> Option<LaneHit> {
                     nearest(k, p, r, t)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, p, r, t_limit) }
             }
@@ -228,26 +228,24 @@ macro_rules! compiled_kernels {
                 r: &RayK,
                 t_limit: f32,
             ) -> Option<(usize, LaneHit)> {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(
+                compiled!($set: #[inline] fn compiled(
                     k: $set,
                     packets: &[Packet<8>],
                     r: &RayK,
                     t: f32,
                 ) -> Option<(usize, LaneHit)> {
                     nearest_among(k, packets, r, t)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, packets, r, t_limit) }
             }
             #[inline(always)]
             fn any(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> bool {
-                #[inline]
-                $(#[target_feature(enable = $features)])?
-                fn compiled(k: $set, p: &Packet<8>, r: &RayK, t: f32) -> bool {
+                compiled!($set: #[inline] fn compiled(
+                    k: $set, p: &Packet<8>, r: &RayK, t: f32,
+                ) -> bool {
                     any(k, p, r, t)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, p, r, t_limit) }
             }
@@ -257,34 +255,32 @@ macro_rules! compiled_kernels {
 
 compiled_kernels!(Portable);
 #[cfg(target_arch = "x86_64")]
-compiled_kernels!(Avx2, "avx2,fma");
+compiled_kernels!(Avx2);
 
 /// The AVX-512 kernels for the flat list's 16-wide packets: the functions above, sixteen lanes.
 #[cfg(target_arch = "x86_64")]
 impl Avx512 {
-    /// The nearest hit in a 16-wide packet, lowest lane among equal `t`.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn nearest16_compiled(self, p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+    compiled!(Avx512: #[inline] fn nearest16_compiled(
+        self, p: &Packet16, r: &RayK, t_limit: f32,
+    ) -> Option<LaneHit> {
         nearest(self, p, r, t_limit)
-    }
+    });
 
+    /// The nearest hit in a 16-wide packet, lowest lane among equal `t`.
     #[inline(always)]
     pub fn nearest16(self, p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
         // SAFETY: an `Avx512` value is only made by `detect`, after checking for AVX-512.
         unsafe { self.nearest16_compiled(p, r, t_limit) }
     }
 
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn nearest16_among_compiled(
+    compiled!(Avx512: #[inline] fn nearest16_among_compiled(
         self,
         packets: &[Packet16],
         r: &RayK,
         t_limit: f32,
     ) -> Option<(usize, LaneHit)> {
         nearest_among(self, packets, r, t_limit)
-    }
+    });
 
     /// The nearest hit among 16-wide `packets` ([`nearest_among`]).
     #[inline(always)]
@@ -298,11 +294,11 @@ impl Avx512 {
         unsafe { self.nearest16_among_compiled(packets, r, t_limit) }
     }
 
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    fn any16_compiled(self, p: &Packet16, r: &RayK, t_limit: f32) -> bool {
+    compiled!(Avx512: #[inline] fn any16_compiled(
+        self, p: &Packet16, r: &RayK, t_limit: f32,
+    ) -> bool {
         any(self, p, r, t_limit)
-    }
+    });
 
     /// Whether any triangle of a 16-wide packet is hit.
     #[inline(always)]

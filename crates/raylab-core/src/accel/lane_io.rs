@@ -17,8 +17,9 @@ use super::packet::PacketIsa;
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx512;
 #[cfg(target_arch = "x86_64")]
-use super::x86_lanes::Avx512F32;
+use super::x86_lanes;
 use crate::geometry::Ray;
+use crate::lanes::compiled;
 
 /// The entries of a table of at most 32 at `index[i]` (its low five bits) for each lane set in
 /// `lanes`, 0 in the others: one two-register permute with AVX-512, where a gather reads each
@@ -27,35 +28,15 @@ use crate::geometry::Ray;
 pub fn table_lanes(isa: Isa, table: &[f32; 32], index: &[u32; 16], lanes: u16) -> [f32; 16] {
     #[cfg(target_arch = "x86_64")]
     if let Isa::Avx512(_) = isa {
-        // SAFETY: `Isa::Avx512` exists only on a CPU with AVX-512 F; nothing is read from
-        // memory but `table` and `index`, whole.
-        return unsafe { permute_avx512(table, index, lanes) };
+        // SAFETY: `Isa::Avx512` exists only on a CPU with the features `permute_avx512` is
+        // compiled with; nothing is read from memory but `table` and `index`, whole.
+        return unsafe { x86_lanes::permute_avx512(table, index, lanes) };
     }
     let _ = isa;
     std::array::from_fn(|lane| match lanes & (1 << lane) {
         0 => 0.0,
         _ => table[index[lane] as usize % 32],
     })
-}
-
-/// [`table_lanes`] with AVX-512's `vpermt2ps`.
-///
-/// # Safety
-///
-/// The CPU runs AVX-512 F.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-#[target_feature(enable = "avx512f")]
-unsafe fn permute_avx512(table: &[f32; 32], index: &[u32; 16], lanes: u16) -> [f32; 16] {
-    use std::arch::x86_64::*;
-    // SAFETY: the loads read `table`'s 128 bytes and `index`'s 64, unaligned.
-    unsafe {
-        let low = _mm512_loadu_ps(table.as_ptr());
-        let high = _mm512_loadu_ps(table.as_ptr().add(16));
-        let index = _mm512_loadu_si512(index.as_ptr().cast());
-        let values = _mm512_maskz_permutex2var_ps(lanes, low, index, high);
-        std::mem::transmute::<__m512, [f32; 16]>(values)
-    }
 }
 
 /// Up to sixteen rays in lanes: `[origin x, y, z, direction x, y, z]`, ray `i` in lane `i`,
@@ -77,19 +58,17 @@ pub fn ray_lanes(isa: Isa, rays: &[Ray]) -> [[f32; 16]; 6] {
     [o(0), o(1), o(2), d(0), d(1), d(2)]
 }
 
+compiled!(Avx512:
 /// [`ray_lanes`] with AVX-512.
-///
-/// # Safety
-///
-/// The CPU runs AVX-512 F, DQ and VL, AVX2 and FMA (which `k` proves).
-#[cfg(target_arch = "x86_64")]
 #[inline]
-#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
-unsafe fn rays_avx512(k: Avx512, rays: &[Ray]) -> [[f32; 16]; 6] {
-    // SAFETY: an `Avx512F32` is an `__m512` (`repr(transparent)`), the same 64 bytes as
-    // `[f32; 16]`.
-    unsafe { std::mem::transmute::<[Avx512F32; 6], [[f32; 16]; 6]>(k.rays(rays)) }
-}
+fn rays_avx512(k: Avx512, rays: &[Ray]) -> [[f32; 16]; 6] {
+    let lanes = k.rays(rays);
+    let mut out = [[0.0; 16]; 6];
+    for (out, &v) in out.iter_mut().zip(&lanes) {
+        k.store(out, v);
+    }
+    out
+});
 
 /// Sixteen 3-vectors given as lanes (`x`, `y`, `z`) stored one after another into `out`, as
 /// an array of `Vec3`: with AVX-512, six register permutes and three stores, where lane by lane
@@ -98,59 +77,12 @@ unsafe fn rays_avx512(k: Avx512, rays: &[Ray]) -> [[f32; 16]; 6] {
 pub fn store_vec3s(isa: Isa, x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
     #[cfg(target_arch = "x86_64")]
     if let Isa::Avx512(_) = isa {
-        // SAFETY: `Isa::Avx512` exists only on a CPU with AVX-512 F.
-        return unsafe { store_vec3s_avx512(x, y, z, out) };
+        // SAFETY: `Isa::Avx512` exists only on a CPU with the features of `compiled!(Avx512)`.
+        return unsafe { x86_lanes::store_vec3s_avx512(x, y, z, out) };
     }
     let _ = isa;
     for (lane, v) in out.iter_mut().enumerate() {
         *v = Vec3::new(x[lane], y[lane], z[lane]);
-    }
-}
-
-/// [`store_vec3s`] with AVX-512. Float `f` of the output (`16k + p` of its vector `k`) is
-/// component `f % 3` of vector `f / 3`: the first permute of each output vector picks the `x`
-/// and `y` components from those two inputs, the second keeps them and picks `z`.
-///
-/// # Safety
-///
-/// The CPU runs AVX-512 F.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-#[target_feature(enable = "avx512f")]
-unsafe fn store_vec3s_avx512(x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
-    use std::arch::x86_64::*;
-    /// For output vector `k`: the indices into (x, y), then into (that, z).
-    const fn picks(k: usize) -> ([i32; 16], [i32; 16]) {
-        let (mut xy, mut then_z) = ([0; 16], [0; 16]);
-        let mut p = 0;
-        while p < 16 {
-            let f = 16 * k + p;
-            let (vector, component) = ((f / 3) as i32, f % 3);
-            xy[p] = if component == 1 { 16 + vector } else { vector };
-            then_z[p] = if component == 2 {
-                16 + vector
-            } else {
-                p as i32
-            };
-            p += 1;
-        }
-        (xy, then_z)
-    }
-    const PICKS: [([i32; 16], [i32; 16]); 3] = [picks(0), picks(1), picks(2)];
-    // SAFETY: the loads read the three inputs' 64 bytes each and the index tables; the stores
-    // write `out`'s 192 bytes (sixteen `Vec3`s of three `f32`, `repr(C)`), unaligned.
-    unsafe {
-        let (x, y, z) = (
-            _mm512_loadu_ps(x.as_ptr()),
-            _mm512_loadu_ps(y.as_ptr()),
-            _mm512_loadu_ps(z.as_ptr()),
-        );
-        let base = out.as_mut_ptr().cast::<f32>();
-        for (k, (xy, then_z)) in PICKS.iter().enumerate() {
-            let xy = _mm512_permutex2var_ps(x, _mm512_loadu_si512(xy.as_ptr().cast()), y);
-            let v = _mm512_permutex2var_ps(xy, _mm512_loadu_si512(then_z.as_ptr().cast()), z);
-            _mm512_storeu_ps(base.add(16 * k), v);
-        }
     }
 }
 

@@ -61,6 +61,7 @@ use std::time::{Duration, Instant};
 
 use crate::geometry::{Ray, Triangle};
 use crate::intersect;
+use crate::lanes::compiled;
 use crate::named::named_enum;
 
 use self::bvh::Bvh;
@@ -770,11 +771,10 @@ impl Structure {
 }
 
 /// The batch queries of a packet kernel set: [`closest_packets`], [`occluded_packets`] and
-/// [`occluded_lanes_in`], each compiled inside a function with the set's instruction set
-/// (`$(#[target_feature(enable = $features)])?`; none for the portable set, which every CPU of the
-/// architecture runs), where the kernels and the packet traversal inline.
+/// [`occluded_lanes_in`], each compiled for the set ([`compiled!`]), where the kernels and the
+/// packet traversal inline.
 macro_rules! packet_batches {
-    ($isa:ty $(, $features:literal)?) => {
+    ($isa:ident) => {
         // Without features, `compiled` is safe to call and the `unsafe` blocks are unused.
         #[allow(unused_unsafe)]
         impl Batches for $isa {
@@ -786,8 +786,7 @@ macro_rules! packet_batches {
                 t_max: f32,
                 out: &mut [Option<Hit>],
             ) {
-                $(#[target_feature(enable = $features)])?
-                fn compiled(
+                compiled!($isa: fn compiled(
                     k: $isa,
                     s: &Structure,
                     triangles: &[Triangle],
@@ -796,7 +795,7 @@ macro_rules! packet_batches {
                     out: &mut [Option<Hit>],
                 ) {
                     closest_packets(k, s, triangles, rays, t_max, out)
-                }
+                });
                 // SAFETY: a value of the kernel set proves that the CPU runs its features.
                 unsafe { compiled(self, s, triangles, rays, t_max, out) }
             }
@@ -809,8 +808,7 @@ macro_rules! packet_batches {
                 t_max: f32,
                 out: &mut [HitLanes],
             ) {
-                $(#[target_feature(enable = $features)])?
-                fn compiled(
+                compiled!($isa: fn compiled(
                     k: $isa,
                     s: &Structure,
                     triangles: &[Triangle],
@@ -819,7 +817,7 @@ macro_rules! packet_batches {
                     out: &mut [HitLanes],
                 ) {
                     closest_lanes_packets(k, s, triangles, rays, t_max, out)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, s, triangles, rays, t_max, out) }
             }
@@ -831,8 +829,7 @@ macro_rules! packet_batches {
                 rays: &[(Ray, f32)],
                 out: &mut [bool],
             ) {
-                $(#[target_feature(enable = $features)])?
-                fn compiled(
+                compiled!($isa: fn compiled(
                     k: $isa,
                     s: &Structure,
                     triangles: &[Triangle],
@@ -840,7 +837,7 @@ macro_rules! packet_batches {
                     out: &mut [bool],
                 ) {
                     occluded_packets(k, s, triangles, rays, out)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, s, triangles, rays, out) }
             }
@@ -852,8 +849,7 @@ macro_rules! packet_batches {
                 neighbours: bool,
                 blocked: &mut [u16],
             ) -> bool {
-                $(#[target_feature(enable = $features)])?
-                fn compiled(
+                compiled!($isa: fn compiled(
                     k: $isa,
                     f: &Flat,
                     groups: &[SegmentLanes],
@@ -861,7 +857,7 @@ macro_rules! packet_batches {
                     blocked: &mut [u16],
                 ) -> bool {
                     occluded_lanes_in(k, f, groups, neighbours, blocked)
-                }
+                });
                 // SAFETY: as above.
                 unsafe { compiled(self, f, groups, neighbours, blocked) }
             }
@@ -870,9 +866,9 @@ macro_rules! packet_batches {
 }
 
 #[cfg(target_arch = "x86_64")]
-packet_batches!(Avx512, "avx512f,avx512dq,avx2,fma");
+packet_batches!(Avx512);
 #[cfg(target_arch = "x86_64")]
-packet_batches!(Avx2, "avx2,fma");
+packet_batches!(Avx2);
 // The portable set: the same functions, compiled for the baseline every CPU runs.
 packet_batches!(Portable);
 

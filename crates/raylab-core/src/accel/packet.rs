@@ -9,12 +9,12 @@
 //! buys).
 //!
 //! The traversal is written once, generic over [`PacketIsa`]: the lane width, a lane type
-//! with the arithmetic of [`crate::lanes`], and the few operations it needs beyond (masks as
-//! bits, blends, a masked horizontal minimum, the gather of the rays), implemented by the
-//! AVX-512 and the AVX2 kernel proof types (with their intrinsics, in this module's `x86`
-//! part) and by the portable set ([`super::portable`]). Every function of it is
-//! `#[inline(always)]`, so it is compiled inside the `#[target_feature]` entry points of
-//! [`super`] for each instruction set, where the intrinsics inline.
+//! with the arithmetic, comparisons and masks of [`crate::lanes`] (`Real`, `Mask`), and the
+//! few operations a packet needs beyond (loads and stores of lanes, a masked horizontal
+//! minimum, the gather of the rays), implemented by the AVX-512 and the AVX2 kernel proof
+//! types (in [`super::x86_lanes`]) and by the portable set ([`super::portable`]). Every
+//! function of it is `#[inline(always)]`, so it is compiled inside the functions
+//! [`crate::lanes::compiled!`] makes for each instruction set, where the intrinsics inline.
 //!
 //! Each lane computes exactly what [`super::simd::Kernels::boxes`] computes for its ray (the
 //! same planes, the same [`PacketIsa::plane_distance`], the same order of `max` and `min`), against
@@ -43,21 +43,12 @@ use crate::lanes::{Mask, Real, Vec3x, Vector};
 /// arrays, whatever the width.
 pub const MAX_WIDTH: usize = 16;
 
-// The comparisons of [`PacketIsa::cmp`], numbered as x86's `_CMP_*` predicates: `OQ` false
-// where either side is NaN, `UQ` true.
-pub const CMP_EQ_OQ: i32 = 0x00;
-pub const CMP_LT_OQ: i32 = 0x11;
-pub const CMP_LE_OQ: i32 = 0x12;
-pub const CMP_NGT_UQ: i32 = 0x1a;
-pub const CMP_GE_OQ: i32 = 0x1d;
-pub const CMP_GT_OQ: i32 = 0x1e;
-
 /// A ray is six `f32` (origin, direction): lane i gathers floats 6i + c.
-const RAY_FLOATS: i32 = (size_of::<Ray>() / size_of::<f32>()) as i32;
+pub(super) const RAY_FLOATS: i32 = (size_of::<Ray>() / size_of::<f32>()) as i32;
 const _: () = assert!(RAY_FLOATS == 6 && align_of::<Ray>() == align_of::<f32>());
 const _: () = assert!(std::mem::offset_of!(Ray, direction) == 12);
 /// A shadow ray and its `t_max` are seven `f32`, the ray's six first: lane i gathers 7i + c.
-const SEGMENT_FLOATS: i32 = (size_of::<(Ray, f32)>() / size_of::<f32>()) as i32;
+pub(super) const SEGMENT_FLOATS: i32 = (size_of::<(Ray, f32)>() / size_of::<f32>()) as i32;
 const _: () = assert!(
     SEGMENT_FLOATS == 7
         && std::mem::offset_of!((Ray, f32), 0) == 0
@@ -98,18 +89,19 @@ fn directions_agree(mut directions: impl ExactSizeIterator<Item = glam::Vec3>) -
     n > ALONE as usize && directions.all(|d| d.dot(first) >= COHERENT_COS)
 }
 
-/// What the packet traversal needs of a SIMD instruction set: one register of `f32` with a lane
-/// per ray ([`Real`]: the arithmetic and comparisons of [`crate::lanes`]), a register of `u32`
-/// (the best triangle's index), a comparison's result, and the few operations below, each one
-/// instruction or a short fixed sequence. Implemented by the kernel proof types, whose values
+/// What the packet traversal needs of a SIMD instruction set beyond its lanes: one register of
+/// `f32` with a lane per ray ([`Real`]: the arithmetic, comparisons, `max`/`min` and `select`
+/// of [`crate::lanes`], each declared there once), its comparisons' results ([`Mask`], as bits
+/// too), a register of `u32` (the best triangle's index), and the few operations below, each
+/// one instruction or a short fixed sequence. Implemented by the kernel proof types, whose values
 /// exist only on a CPU that runs them: `Avx512` (sixteen rays, masks in mask registers) and
 /// `Avx2` (eight rays, masks as all-ones lanes); and by [`super::portable::Portable`] (eight
 /// rays in two four-lane registers), which every CPU runs. The single-ray kernels are written
 /// over it too ([`super::kernels`]).
 ///
 /// Every method is `#[inline(always)]` and every caller in this module too: the traversal is
-/// compiled inside the `#[target_feature]` entry points of [`super`] (one generic body per
-/// query, instantiated for each set), where the intrinsics inline.
+/// compiled inside the functions [`crate::lanes::compiled!`] makes in [`super`] (one generic
+/// body per query, instantiated for each set), where the intrinsics inline.
 pub(super) trait PacketIsa: KernelSet {
     /// Lanes, so rays in a packet.
     const WIDTH: usize;
@@ -152,27 +144,7 @@ pub(super) trait PacketIsa: KernelSet {
         inv: Self::F,
         origin_inv: Self::F,
     ) -> Self::F;
-    /// The instruction's maximum: `b` where either is NaN (unlike [`Real::simd_max`]).
-    fn max(self, a: Self::F, b: Self::F) -> Self::F;
-    /// The instruction's minimum: `b` where either is NaN (unlike [`Real::simd_min`]).
-    fn min(self, a: Self::F, b: Self::F) -> Self::F;
-    fn and(self, a: Self::F, b: Self::F) -> Self::F;
-    fn or(self, a: Self::F, b: Self::F) -> Self::F;
-    fn xor(self, a: Self::F, b: Self::F) -> Self::F;
-    /// `|a|`: the sign bit cleared.
-    fn abs(self, a: Self::F) -> Self::F;
 
-    /// Lane by lane `a <C> b`, `C` one of the `_CMP_*` predicates.
-    fn cmp<const C: i32>(self, a: Self::F, b: Self::F) -> Self::Mask;
-    /// Lane `i` set: bit `i`.
-    fn bits(self, m: Self::Mask) -> u32;
-    /// Bit `i` (below `WIDTH`) set: lane `i`.
-    fn mask(self, bits: u32) -> Self::Mask;
-    /// `b` in the lanes of `m`, `a` elsewhere.
-    #[inline(always)]
-    fn blend(self, m: Self::Mask, a: Self::F, b: Self::F) -> Self::F {
-        Self::F::select(m, b, a)
-    }
     /// The least of the lanes of `m` (at least one).
     fn min_of(self, m: Self::Mask, v: Self::F) -> f32;
 
@@ -182,443 +154,6 @@ pub(super) trait PacketIsa: KernelSet {
     /// Lane by lane `a < b`, unsigned.
     fn lt_u32(self, a: Self::U, b: Self::U) -> Self::Mask;
     fn blend_u32(self, m: Self::Mask, a: Self::U, b: Self::U) -> Self::U;
-}
-
-/// The SIMD sets' lane operations: AVX-512's and AVX2's registers and intrinsics.
-#[cfg(target_arch = "x86_64")]
-mod x86 {
-    use std::arch::x86_64::*;
-
-    use super::super::simd::{Avx2, Avx512};
-    use super::super::x86_lanes::{Avx2F32, Avx2Mask, Avx512F32, Avx512Mask};
-    use super::{CMP_EQ_OQ, CMP_GE_OQ, CMP_GT_OQ, CMP_LE_OQ, CMP_LT_OQ, CMP_NGT_UQ};
-    use super::{MAX_WIDTH, PacketIsa, RAY_FLOATS, SEGMENT_FLOATS};
-    use crate::geometry::Ray;
-    // The comparisons are numbered as the `_CMP_*` predicates, which these sets take as they are.
-    const _: () = assert!(
-        CMP_EQ_OQ == _CMP_EQ_OQ
-            && CMP_LT_OQ == _CMP_LT_OQ
-            && CMP_LE_OQ == _CMP_LE_OQ
-            && CMP_GT_OQ == _CMP_GT_OQ
-            && CMP_GE_OQ == _CMP_GE_OQ
-            && CMP_NGT_UQ == _CMP_NGT_UQ
-    );
-
-    // Every intrinsic below needs its instruction set enabled, which a value of the proof type
-    // guarantees (it is made only by `detect`, after checking the CPU): hence the `unsafe`.
-
-    /// Floats `stride·i + c` (`c < K`) of `len` records from `base`, record `i` in lane `i`;
-    /// lanes past `len` repeat the last record.
-    ///
-    /// # Safety
-    /// AVX-512 F; `base` points to `len` (1 to 16) records of `stride ≥ K` floats.
-    #[inline(always)]
-    pub(super) unsafe fn gather16<const K: usize>(
-        base: *const f32,
-        stride: i32,
-        len: usize,
-    ) -> [__m512; K] {
-        // SAFETY: every index gathered is stride·i + c for a record i < len and c < K ≤ stride.
-        unsafe {
-            let lane = _mm512_min_epi32(
-                _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
-                _mm512_set1_epi32(len as i32 - 1),
-            );
-            let lane = _mm512_mullo_epi32(lane, _mm512_set1_epi32(stride));
-            let mut out = [_mm512_setzero_ps(); K];
-            for (c, out) in out.iter_mut().enumerate() {
-                let index = _mm512_add_epi32(lane, _mm512_set1_epi32(c as i32));
-                *out = _mm512_i32gather_ps::<4>(index, base);
-            }
-            out
-        }
-    }
-
-    /// [`gather16`] for a full packet (`len` = 16) of records of `S` floats (`K ≤ S ≤ 8`), read
-    /// with `S` plain loads and rearranged in registers: a gather takes one load per lane, which
-    /// would be the packet paths' bottleneck.
-    ///
-    /// Lane `i` of output `c` is float `S·i + c`, which lies in loaded vector `(S·i + c) / 16`;
-    /// `permutex2var` picks lanes from a pair of vectors, so each output is one pick per pair of
-    /// loaded vectors, merged by mask.
-    ///
-    /// # Safety
-    /// AVX-512 F; `base` points to 16 records of `S` floats.
-    #[inline(always)]
-    unsafe fn transpose16<const S: usize, const K: usize>(base: *const f32) -> [__m512; K] {
-        /// `[c][pair]`: the lanes whose float `s·i + c` lies in the pair of vectors `pair`
-        /// (floats 32·pair ..).
-        const fn pair_lanes(s: usize) -> [[u16; 4]; 8] {
-            let mut table = [[0u16; 4]; 8];
-            let mut c = 0;
-            while c < 8 {
-                let mut i = 0;
-                while i < 16 {
-                    let pair = (s * i + c) / 32;
-                    if pair < 4 {
-                        table[c][pair] |= 1 << i;
-                    }
-                    i += 1;
-                }
-                c += 1;
-            }
-            table
-        }
-        let lanes = const { pair_lanes(S) };
-        // SAFETY: the loads read floats 0 .. 16·S of `base`, 16 records of S floats.
-        unsafe {
-            let mut v = [_mm512_setzero_ps(); 8];
-            for (j, v) in v.iter_mut().enumerate().take(S) {
-                *v = _mm512_loadu_ps(base.add(16 * j));
-            }
-            let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-            let float = _mm512_mullo_epi32(iota, _mm512_set1_epi32(S as i32));
-            let mut out = [_mm512_setzero_ps(); K];
-            for (c, out) in out.iter_mut().enumerate() {
-                // Index within a pair of vectors: the float's position modulo 32.
-                let index = _mm512_and_si512(
-                    _mm512_add_epi32(float, _mm512_set1_epi32(c as i32)),
-                    _mm512_set1_epi32(31),
-                );
-                let mut acc = _mm512_setzero_ps();
-                for pair in 0..S.div_ceil(2) {
-                    let (a, b) = (v[2 * pair], v[(2 * pair + 1).min(7)]);
-                    let picked = _mm512_permutex2var_ps(a, index, b);
-                    acc = _mm512_mask_mov_ps(acc, lanes[c][pair], picked);
-                }
-                *out = acc;
-            }
-            out
-        }
-    }
-
-    /// [`gather16`] for eight lanes.
-    ///
-    /// # Safety
-    /// AVX2; `base` points to `len` (1 to 8) records of `stride ≥ K` floats.
-    #[inline(always)]
-    unsafe fn gather8<const K: usize>(base: *const f32, stride: i32, len: usize) -> [__m256; K] {
-        // SAFETY: every index gathered is stride·i + c for a record i < len and c < K ≤ stride.
-        unsafe {
-            let lane = _mm256_min_epi32(
-                _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
-                _mm256_set1_epi32(len as i32 - 1),
-            );
-            let lane = _mm256_mullo_epi32(lane, _mm256_set1_epi32(stride));
-            let mut out = [_mm256_setzero_ps(); K];
-            for (c, out) in out.iter_mut().enumerate() {
-                let index = _mm256_add_epi32(lane, _mm256_set1_epi32(c as i32));
-                *out = _mm256_i32gather_ps::<4>(base, index);
-            }
-            out
-        }
-    }
-
-    impl PacketIsa for Avx512 {
-        const WIDTH: usize = 16;
-        type F = Avx512F32;
-        type U = __m512i;
-        type Mask = Avx512Mask;
-
-        #[inline(always)]
-        fn rays(self, rays: &[Ray]) -> [Avx512F32; 6] {
-            debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
-            // SAFETY: AVX-512 F; `rays` holds rays.len() records of RAY_FLOATS floats.
-            let v = unsafe {
-                if rays.len() == 16 {
-                    transpose16::<{ RAY_FLOATS as usize }, 6>(rays.as_ptr().cast())
-                } else {
-                    gather16(rays.as_ptr().cast(), RAY_FLOATS, rays.len())
-                }
-            };
-            v.map(Avx512F32)
-        }
-
-        #[inline(always)]
-        fn segments(self, segments: &[(Ray, f32)]) -> [Avx512F32; 7] {
-            debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
-            // SAFETY: AVX-512 F; `segments` holds segments.len() records of SEGMENT_FLOATS floats.
-            let v = unsafe {
-                if segments.len() == 16 {
-                    transpose16::<{ SEGMENT_FLOATS as usize }, 7>(segments.as_ptr().cast())
-                } else {
-                    gather16(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len())
-                }
-            };
-            v.map(Avx512F32)
-        }
-
-        #[inline(always)]
-        fn load(self, a: &[f32; MAX_WIDTH]) -> Avx512F32 {
-            Avx512F32::load(a)
-        }
-        #[inline(always)]
-        fn load_lanes<const N: usize>(self, a: &[f32; N]) -> Avx512F32 {
-            Avx512F32::load(a.first_chunk().expect("at least sixteen floats"))
-        }
-        #[inline(always)]
-        fn lane(self, v: Avx512F32, i: usize) -> f32 {
-            // SAFETY: AVX-512 F.
-            unsafe { _mm512_cvtss_f32(_mm512_permutexvar_ps(_mm512_set1_epi32(i as i32), v.0)) }
-        }
-        #[inline(always)]
-        fn lane_u32(self, v: __m512i, i: usize) -> u32 {
-            // SAFETY: AVX-512 F.
-            unsafe {
-                let v = _mm512_permutexvar_epi32(_mm512_set1_epi32(i as i32), v);
-                _mm_cvtsi128_si32(_mm512_castsi512_si128(v)) as u32
-            }
-        }
-        #[inline(always)]
-        fn store(self, a: &mut [f32; MAX_WIDTH], v: Avx512F32) {
-            // SAFETY: AVX-512 F; `a` is sixteen writable f32.
-            unsafe { _mm512_storeu_ps(a.as_mut_ptr(), v.0) }
-        }
-        #[inline(always)]
-        fn plane_distance(
-            self,
-            plane: Avx512F32,
-            _origin: Avx512F32,
-            inv: Avx512F32,
-            origin_inv: Avx512F32,
-        ) -> Avx512F32 {
-            // SAFETY: AVX-512 F.
-            Avx512F32(unsafe { _mm512_fmsub_ps(plane.0, inv.0, origin_inv.0) })
-        }
-        #[inline(always)]
-        fn max(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
-            // SAFETY: AVX-512 F.
-            Avx512F32(unsafe { _mm512_max_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn min(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
-            // SAFETY: AVX-512 F.
-            Avx512F32(unsafe { _mm512_min_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn and(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
-            // SAFETY: AVX-512 DQ.
-            Avx512F32(unsafe { _mm512_and_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn or(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
-            // SAFETY: AVX-512 DQ.
-            Avx512F32(unsafe { _mm512_or_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn xor(self, a: Avx512F32, b: Avx512F32) -> Avx512F32 {
-            // SAFETY: AVX-512 DQ.
-            Avx512F32(unsafe { _mm512_xor_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn abs(self, a: Avx512F32) -> Avx512F32 {
-            // SAFETY: AVX-512 F.
-            Avx512F32(unsafe { _mm512_abs_ps(a.0) })
-        }
-
-        #[inline(always)]
-        fn cmp<const C: i32>(self, a: Avx512F32, b: Avx512F32) -> Avx512Mask {
-            // SAFETY: AVX-512 F.
-            Avx512Mask(unsafe { _mm512_cmp_ps_mask::<C>(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn bits(self, m: Avx512Mask) -> u32 {
-            m.0 as u32
-        }
-        #[inline(always)]
-        fn mask(self, bits: u32) -> Avx512Mask {
-            Avx512Mask(bits as __mmask16)
-        }
-        #[inline(always)]
-        fn min_of(self, m: Avx512Mask, v: Avx512F32) -> f32 {
-            // SAFETY: AVX-512 F.
-            unsafe { _mm512_mask_reduce_min_ps(m.0, v.0) }
-        }
-
-        #[inline(always)]
-        fn splat_u32(self, x: u32) -> __m512i {
-            // SAFETY: AVX-512 F.
-            unsafe { _mm512_set1_epi32(x as i32) }
-        }
-        #[inline(always)]
-        fn load_u32(self, a: &[u32; MAX_WIDTH]) -> __m512i {
-            // SAFETY: AVX-512 F; `a` is sixteen readable u32.
-            unsafe { _mm512_loadu_si512(a.as_ptr().cast()) }
-        }
-        #[inline(always)]
-        fn store_u32(self, a: &mut [u32; MAX_WIDTH], v: __m512i) {
-            // SAFETY: AVX-512 F; `a` is sixteen writable u32.
-            unsafe { _mm512_storeu_si512(a.as_mut_ptr().cast(), v) }
-        }
-        #[inline(always)]
-        fn lt_u32(self, a: __m512i, b: __m512i) -> Avx512Mask {
-            // SAFETY: AVX-512 F.
-            Avx512Mask(unsafe { _mm512_cmplt_epu32_mask(a, b) })
-        }
-        #[inline(always)]
-        fn blend_u32(self, m: Avx512Mask, a: __m512i, b: __m512i) -> __m512i {
-            // SAFETY: AVX-512 F.
-            unsafe { _mm512_mask_blend_epi32(m.0, a, b) }
-        }
-    }
-
-    impl PacketIsa for Avx2 {
-        const WIDTH: usize = 8;
-        type F = Avx2F32;
-        type U = __m256i;
-        type Mask = Avx2Mask;
-
-        #[inline(always)]
-        fn rays(self, rays: &[Ray]) -> [Avx2F32; 6] {
-            debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
-            // SAFETY: `rays` holds rays.len() records of RAY_FLOATS floats.
-            unsafe { gather8(rays.as_ptr().cast(), RAY_FLOATS, rays.len()) }.map(Avx2F32)
-        }
-
-        #[inline(always)]
-        fn segments(self, segments: &[(Ray, f32)]) -> [Avx2F32; 7] {
-            debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
-            // SAFETY: `segments` holds segments.len() records of SEGMENT_FLOATS floats.
-            unsafe { gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }
-                .map(Avx2F32)
-        }
-
-        #[inline(always)]
-        fn load(self, a: &[f32; MAX_WIDTH]) -> Avx2F32 {
-            Avx2F32::load(a.first_chunk().expect("sixteen floats hold eight"))
-        }
-        #[inline(always)]
-        fn load_lanes<const N: usize>(self, a: &[f32; N]) -> Avx2F32 {
-            Avx2F32::load(a.first_chunk().expect("at least eight floats"))
-        }
-        #[inline(always)]
-        fn lane(self, v: Avx2F32, i: usize) -> f32 {
-            // SAFETY: AVX2.
-            unsafe { _mm256_cvtss_f32(_mm256_permutevar8x32_ps(v.0, _mm256_set1_epi32(i as i32))) }
-        }
-        #[inline(always)]
-        fn lane_u32(self, v: __m256i, i: usize) -> u32 {
-            // SAFETY: AVX2.
-            unsafe {
-                let v = _mm256_permutevar8x32_epi32(v, _mm256_set1_epi32(i as i32));
-                _mm_cvtsi128_si32(_mm256_castsi256_si128(v)) as u32
-            }
-        }
-        #[inline(always)]
-        fn store(self, a: &mut [f32; MAX_WIDTH], v: Avx2F32) {
-            // SAFETY: AVX; `a` holds at least eight writable f32.
-            unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v.0) }
-        }
-        #[inline(always)]
-        fn plane_distance(
-            self,
-            plane: Avx2F32,
-            _origin: Avx2F32,
-            inv: Avx2F32,
-            origin_inv: Avx2F32,
-        ) -> Avx2F32 {
-            // SAFETY: FMA.
-            Avx2F32(unsafe { _mm256_fmsub_ps(plane.0, inv.0, origin_inv.0) })
-        }
-        #[inline(always)]
-        fn max(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
-            // SAFETY: AVX.
-            Avx2F32(unsafe { _mm256_max_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn min(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
-            // SAFETY: AVX.
-            Avx2F32(unsafe { _mm256_min_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn and(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
-            // SAFETY: AVX.
-            Avx2F32(unsafe { _mm256_and_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn or(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
-            // SAFETY: AVX.
-            Avx2F32(unsafe { _mm256_or_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn xor(self, a: Avx2F32, b: Avx2F32) -> Avx2F32 {
-            // SAFETY: AVX.
-            Avx2F32(unsafe { _mm256_xor_ps(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn abs(self, a: Avx2F32) -> Avx2F32 {
-            // SAFETY: AVX.
-            Avx2F32(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), a.0) })
-        }
-
-        #[inline(always)]
-        fn cmp<const C: i32>(self, a: Avx2F32, b: Avx2F32) -> Avx2Mask {
-            // SAFETY: AVX.
-            Avx2Mask(unsafe { _mm256_cmp_ps::<C>(a.0, b.0) })
-        }
-        #[inline(always)]
-        fn bits(self, m: Avx2Mask) -> u32 {
-            // SAFETY: AVX.
-            unsafe { _mm256_movemask_ps(m.0) as u32 }
-        }
-        #[inline(always)]
-        fn mask(self, bits: u32) -> Avx2Mask {
-            // SAFETY: AVX2.
-            unsafe {
-                let lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-                let set = _mm256_and_si256(_mm256_set1_epi32(bits as i32), lane_bit);
-                Avx2Mask(_mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane_bit)))
-            }
-        }
-        #[inline(always)]
-        fn min_of(self, m: Avx2Mask, v: Avx2F32) -> f32 {
-            // SAFETY: AVX.
-            unsafe {
-                let v = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), v.0, m.0);
-                let v = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
-                let v = _mm256_min_ps(v, _mm256_permute_ps::<0b01_00_11_10>(v));
-                let v = _mm256_min_ps(v, _mm256_permute_ps::<0b10_11_00_01>(v));
-                _mm256_cvtss_f32(v)
-            }
-        }
-
-        #[inline(always)]
-        fn splat_u32(self, x: u32) -> __m256i {
-            // SAFETY: AVX.
-            unsafe { _mm256_set1_epi32(x as i32) }
-        }
-        #[inline(always)]
-        fn load_u32(self, a: &[u32; MAX_WIDTH]) -> __m256i {
-            // SAFETY: AVX; `a` holds at least eight readable u32.
-            unsafe { _mm256_loadu_si256(a.as_ptr().cast()) }
-        }
-        #[inline(always)]
-        fn store_u32(self, a: &mut [u32; MAX_WIDTH], v: __m256i) {
-            // SAFETY: AVX; `a` holds at least eight writable u32.
-            unsafe { _mm256_storeu_si256(a.as_mut_ptr().cast(), v) }
-        }
-        #[inline(always)]
-        fn lt_u32(self, a: __m256i, b: __m256i) -> Avx2Mask {
-            // AVX2 compares signed only: flipping both sign bits orders u32 as i32.
-            // SAFETY: AVX2.
-            unsafe {
-                let flip = _mm256_set1_epi32(i32::MIN);
-                let lt = _mm256_cmpgt_epi32(_mm256_xor_si256(b, flip), _mm256_xor_si256(a, flip));
-                Avx2Mask(_mm256_castsi256_ps(lt))
-            }
-        }
-        #[inline(always)]
-        fn blend_u32(self, m: Avx2Mask, a: __m256i, b: __m256i) -> __m256i {
-            // SAFETY: AVX.
-            unsafe {
-                _mm256_castps_si256(_mm256_blendv_ps(
-                    _mm256_castsi256_ps(a),
-                    _mm256_castsi256_ps(b),
-                    m.0,
-                ))
-            }
-        }
-    }
 }
 
 /// The packet's rays, one per lane: what the box test needs (as in [`RayK`]).
@@ -660,7 +195,7 @@ impl<P: PacketIsa> Lanes<P> {
     #[inline(always)]
     fn for_triangles(k: P, [ox, oy, oz, dx, dy, dz]: [P::F; 6]) -> Self {
         let zero = k.splat(0.0);
-        let none = k.mask(0);
+        let none = P::Mask::from_bitmask(0);
         Self {
             k,
             origin: [ox, oy, oz],
@@ -684,16 +219,16 @@ impl<P: PacketIsa> Lanes<P> {
         for axis in 0..3 {
             let min = k.splat(node.bounds[axis][slot]);
             let max = k.splat(node.bounds[axis + 3][slot]);
-            let near_plane = k.blend(self.negative[axis], min, max);
-            let far_plane = k.blend(self.negative[axis], max, min);
+            let near_plane = P::F::select(self.negative[axis], max, min);
+            let far_plane = P::F::select(self.negative[axis], min, max);
             let (o, inv, o_inv) = (self.origin[axis], self.inv[axis], self.origin_inv[axis]);
             let near = k.plane_distance(near_plane, o, inv, o_inv);
             let far = k.plane_distance(far_plane, o, inv, o_inv);
-            t0 = k.max(t0, near);
-            t1 = k.min(t1, far);
+            t0 = t0.max_or_other(near);
+            t1 = t1.min_or_other(far);
         }
-        let entered = active & k.cmp::<CMP_LE_OQ>(t0, t1);
-        let bits = k.bits(entered);
+        let entered = active & t0.simd_le(t1);
+        let bits = entered.bitmask();
         if bits == 0 {
             return (0, 0.0);
         }
@@ -765,27 +300,27 @@ impl<P: PacketIsa> Lanes<P> {
     ) {
         let k = self.k;
         let limit = k.splat(t_max);
-        let active = k.mask(active);
+        let active = P::Mask::from_bitmask(active);
         let mut best_t = k.load(&b.t);
         let mut best_i = k.load_u32(&b.index);
         let mut best_u = k.load(&b.u);
         let mut best_v = k.load(&b.v);
         for (p, tri) in triangles {
             let ([t, u, v], hit) = self.triangle(p, tri, active, limit);
-            if k.bits(hit) == 0 {
+            if hit.bitmask() == 0 {
                 continue;
             }
             let index_v = k.splat_u32(p.index[tri]);
             // Nearer, or as near with a lower index (a lane without a hit has best_t = t_max,
             // which no hit reaches, so the index test only ever compares real hits).
-            let nearer = hit & k.cmp::<CMP_LT_OQ>(t, best_t);
-            let tie = hit & k.cmp::<CMP_EQ_OQ>(t, best_t);
+            let nearer = hit & t.simd_lt(best_t);
+            let tie = hit & t.simd_eq(best_t);
             let tie = tie & k.lt_u32(index_v, best_i);
             let better = nearer | tie;
-            best_t = k.blend(better, best_t, t);
+            best_t = P::F::select(better, t, best_t);
             best_i = k.blend_u32(better, best_i, index_v);
-            best_u = k.blend(better, best_u, u);
-            best_v = k.blend(better, best_v, v);
+            best_u = P::F::select(better, u, best_u);
+            best_v = P::F::select(better, v, best_v);
         }
         k.store(&mut b.t, best_t);
         k.store_u32(&mut b.index, best_i);
@@ -813,21 +348,20 @@ impl<P: PacketIsa> Lanes<P> {
         limit: P::F,
         give_up: bool,
     ) -> u32 {
-        let k = self.k;
         // The lanes not yet blocked, as bits and as a mask.
         let mut left = active;
-        let mut left_mask = k.mask(left);
+        let mut left_mask = P::Mask::from_bitmask(left);
         for (p, tri) in triangles {
             if left == 0 {
                 break;
             }
-            let blocked = k.bits(
-                self.triangle_or_give_up(p, tri, left_mask, limit, give_up)
-                    .1,
-            );
+            let blocked = (self
+                .triangle_or_give_up(p, tri, left_mask, limit, give_up)
+                .1)
+                .bitmask();
             if blocked != 0 {
                 left &= !blocked;
-                left_mask = k.mask(left);
+                left_mask = P::Mask::from_bitmask(left);
             }
         }
         active & !left
@@ -839,10 +373,10 @@ impl<P: PacketIsa> Lanes<P> {
 /// and the lanes going towards negative coordinates.
 #[inline(always)]
 fn axis<P: PacketIsa>(k: P, o: P::F, d: P::F) -> (P::F, P::F, P::Mask) {
-    let huge = k.or(k.splat(INV_HUGE), k.and(d, k.splat(-0.0)));
-    let small = k.cmp::<CMP_NGT_UQ>(k.abs(d), k.splat(1.0 / INV_HUGE));
-    let inv = k.blend(small, k.splat(1.0) / d, huge);
-    (inv, o * inv, k.cmp::<CMP_LT_OQ>(inv, k.splat(0.0)))
+    let huge = k.splat(INV_HUGE).copysign(d);
+    let small = d.abs().simd_ngt(k.splat(1.0 / INV_HUGE));
+    let inv = P::F::select(small, huge, k.splat(1.0) / d);
+    (inv, o * inv, inv.simd_lt(k.splat(0.0)))
 }
 
 /// The lanes set in `mask`, lowest first.
@@ -1101,7 +635,7 @@ impl Bvh8 {
             } else {
                 let node = &self.nodes[item as usize];
                 let limit = b.box_limit(k);
-                let active_mask = k.mask(active);
+                let active_mask = P::Mask::from_bitmask(active);
                 // Push the entered children sorted so that the nearest is on top.
                 let base = sp;
                 for slot in 0..node.child.len() {
@@ -1130,7 +664,7 @@ impl Bvh8 {
                 }
                 sp -= 1;
                 let (next, entered, t_near) = stack[sp];
-                let still = entered & k.bits(k.cmp::<CMP_GE_OQ>(b.box_limit(k), k.splat(t_near)));
+                let still = entered & b.box_limit(k).simd_ge(k.splat(t_near)).bitmask();
                 if still != 0 {
                     item = next;
                     active = still;
@@ -1182,7 +716,7 @@ impl Bvh8 {
                 done |= lanes.leaf_any(&self.packets[(item & !LEAF) as usize], active, limit_t);
             } else {
                 let node = &self.nodes[item as usize];
-                let active_mask = k.mask(active);
+                let active_mask = P::Mask::from_bitmask(active);
                 for slot in 0..node.child.len() {
                     let child = node.child[slot];
                     if child == EMPTY {
@@ -1218,9 +752,9 @@ mod tests {
     use super::super::simd::{Avx2, Avx512};
     #[cfg(target_arch = "x86_64")]
     use super::super::x86_lanes::Avx512F32;
-    #[cfg(target_arch = "x86_64")]
-    use super::x86::gather16;
     use super::*;
+    #[cfg(target_arch = "x86_64")]
+    use crate::accel::x86_lanes::gather16;
 
     /// A full packet's rays and shadow rays read by plain loads and rearranged
     /// (`transpose16`) equal the same read lane by lane (`gather16`), every float.
@@ -1274,7 +808,7 @@ mod tests {
     fn eight_lane_masks<P: PacketIsa>(k: P) {
         assert_eq!(P::WIDTH, 8);
         for bits in 0..256u32 {
-            assert_eq!(k.bits(k.mask(bits)), bits);
+            assert_eq!(P::Mask::from_bitmask(bits).bitmask(), bits);
         }
         let mut a = [0.0f32; MAX_WIDTH];
         let mut ua = [0u32; MAX_WIDTH];
@@ -1287,10 +821,10 @@ mod tests {
             ub[lane] = unsigned[7 - lane];
         }
         let v = k.load(&a);
-        let lt = k.bits(k.cmp::<CMP_LT_OQ>(v, k.splat(2.5)));
+        let lt = v.simd_lt(k.splat(2.5)).bitmask();
         let want: u32 = (0..8).filter(|&i| values[i] < 2.5).map(|i| 1 << i).sum();
         assert_eq!(lt, want);
-        let ult = k.bits(k.lt_u32(k.load_u32(&ua), k.load_u32(&ub)));
+        let ult = (k.lt_u32(k.load_u32(&ua), k.load_u32(&ub))).bitmask();
         let want: u32 = (0..8).filter(|&i| ua[i] < ub[i]).map(|i| 1 << i).sum();
         assert_eq!(ult, want);
         for bits in 1..256u32 {
@@ -1298,7 +832,7 @@ mod tests {
                 .filter(|&i| bits & (1 << i) != 0 && !values[i].is_nan())
                 .map(|i| values[i])
                 .fold(f32::INFINITY, f32::min);
-            let got = k.min_of(k.mask(bits), v);
+            let got = k.min_of(P::Mask::from_bitmask(bits), v);
             if bits & (1 << 6) == 0 {
                 assert_eq!(got, want, "{bits:08b}");
             }
@@ -1307,11 +841,19 @@ mod tests {
         let mut out = [0.0f32; MAX_WIDTH];
         k.store(
             &mut out,
-            k.blend(k.mask(0b1010_0101), k.splat(1.0), k.splat(2.0)),
+            P::F::select(
+                P::Mask::from_bitmask(0b1010_0101),
+                k.splat(2.0),
+                k.splat(1.0),
+            ),
         );
         assert_eq!(&out[..8], &[2.0, 1.0, 2.0, 1.0, 1.0, 2.0, 1.0, 2.0]);
         let mut outu = [0u32; MAX_WIDTH];
-        let blended = k.blend_u32(k.mask(0b0000_0011), k.splat_u32(4), k.splat_u32(9));
+        let blended = k.blend_u32(
+            P::Mask::from_bitmask(0b0000_0011),
+            k.splat_u32(4),
+            k.splat_u32(9),
+        );
         k.store_u32(&mut outu, blended);
         assert_eq!(&outu[..8], &[9, 9, 4, 4, 4, 4, 4, 4]);
     }

@@ -15,9 +15,7 @@
 //! triangles are tested, never what a test returns.
 
 use super::Hit;
-use super::packet::{
-    CMP_EQ_OQ, CMP_GE_OQ, CMP_GT_OQ, CMP_LE_OQ, CMP_LT_OQ, CMP_NGT_UQ, MAX_WIDTH, PacketIsa,
-};
+use super::packet::{MAX_WIDTH, PacketIsa};
 use super::simd::{LANES, RayK};
 use super::wide::{Flat, KernelSet};
 use crate::geometry::Ray;
@@ -27,166 +25,9 @@ use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use quad::Q;
 
-/// Four lanes: an SSE register on x86-64, four `f32` elsewhere. Comparisons give masks of the
-/// same type (all ones in a lane that is true), as SSE does.
+// Four lanes: on x86-64 an SSE register (`x86_lanes`), elsewhere four `f32` (below).
 #[cfg(target_arch = "x86_64")]
-mod quad {
-    use std::arch::x86_64::*;
-
-    #[derive(Clone, Copy, Debug)]
-    #[repr(transparent)]
-    pub struct Q(__m128);
-
-    /// `$e`, an SSE or SSE2 intrinsic.
-    macro_rules! sse {
-        ($e:expr) => {
-            // SAFETY: SSE and SSE2 are part of x86-64: every x86-64 CPU runs them.
-            unsafe { $e }
-        };
-    }
-
-    impl Q {
-        // SAFETY: four u32 are the sixteen bytes of a register.
-        pub const ZERO: Q = Q(unsafe { std::mem::transmute::<[u32; 4], __m128>([0; 4]) });
-        // SAFETY: as above.
-        pub const ONES: Q = Q(unsafe { std::mem::transmute::<[u32; 4], __m128>([!0; 4]) });
-
-        #[inline(always)]
-        pub fn splat(x: f32) -> Q {
-            Q(sse!(_mm_set1_ps(x)))
-        }
-        #[inline(always)]
-        pub fn splat_u32(x: u32) -> Q {
-            Q(sse!(_mm_castsi128_ps(_mm_set1_epi32(x as i32))))
-        }
-        #[inline(always)]
-        pub fn load(a: &[f32; 4]) -> Q {
-            // SAFETY: `a` is four readable f32 (SSE, as above).
-            Q(unsafe { _mm_loadu_ps(a.as_ptr()) })
-        }
-        #[inline(always)]
-        pub fn store(self, a: &mut [f32; 4]) {
-            // SAFETY: `a` is four writable f32 (SSE, as above).
-            unsafe { _mm_storeu_ps(a.as_mut_ptr(), self.0) }
-        }
-        #[inline(always)]
-        pub fn to_array(self) -> [f32; 4] {
-            let mut a = [0.0; 4];
-            self.store(&mut a);
-            a
-        }
-        #[inline(always)]
-        pub fn add(self, o: Q) -> Q {
-            Q(sse!(_mm_add_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn sub(self, o: Q) -> Q {
-            Q(sse!(_mm_sub_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn mul(self, o: Q) -> Q {
-            Q(sse!(_mm_mul_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn div(self, o: Q) -> Q {
-            Q(sse!(_mm_div_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn sqrt(self) -> Q {
-            Q(sse!(_mm_sqrt_ps(self.0)))
-        }
-        /// `self > o ? self : o` lane by lane (`o` where either is NaN).
-        #[inline(always)]
-        pub fn max(self, o: Q) -> Q {
-            Q(sse!(_mm_max_ps(self.0, o.0)))
-        }
-        /// `self < o ? self : o` lane by lane (`o` where either is NaN).
-        #[inline(always)]
-        pub fn min(self, o: Q) -> Q {
-            Q(sse!(_mm_min_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn and(self, o: Q) -> Q {
-            Q(sse!(_mm_and_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn or(self, o: Q) -> Q {
-            Q(sse!(_mm_or_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn xor(self, o: Q) -> Q {
-            Q(sse!(_mm_xor_ps(self.0, o.0)))
-        }
-        /// `!self & o`, bit by bit.
-        #[inline(always)]
-        pub fn andnot(self, o: Q) -> Q {
-            Q(sse!(_mm_andnot_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn eq(self, o: Q) -> Q {
-            Q(sse!(_mm_cmpeq_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn ne(self, o: Q) -> Q {
-            Q(sse!(_mm_cmpneq_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn lt(self, o: Q) -> Q {
-            Q(sse!(_mm_cmplt_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn le(self, o: Q) -> Q {
-            Q(sse!(_mm_cmple_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn gt(self, o: Q) -> Q {
-            Q(sse!(_mm_cmpgt_ps(self.0, o.0)))
-        }
-        #[inline(always)]
-        pub fn ge(self, o: Q) -> Q {
-            Q(sse!(_mm_cmpge_ps(self.0, o.0)))
-        }
-        /// `!(self > o)`: true where either is NaN.
-        #[inline(always)]
-        pub fn ngt(self, o: Q) -> Q {
-            Q(sse!(_mm_cmpngt_ps(self.0, o.0)))
-        }
-        /// Lane `i`'s sign bit as bit `i`.
-        #[inline(always)]
-        pub fn bits(self) -> u32 {
-            sse!(_mm_movemask_ps(self.0)) as u32
-        }
-        /// Bit `i` of `bits` as lane `i`, all ones or all zeros.
-        #[inline(always)]
-        pub fn from_bits(bits: u32) -> Q {
-            sse!({
-                let lane_bit = _mm_setr_epi32(1, 2, 4, 8);
-                let set = _mm_and_si128(_mm_set1_epi32(bits as i32), lane_bit);
-                Q(_mm_castsi128_ps(_mm_cmpeq_epi32(set, lane_bit)))
-            })
-        }
-        /// `self < o` as unsigned 32-bit integers.
-        #[inline(always)]
-        pub fn lt_u32(self, o: Q) -> Q {
-            // SSE2 compares signed only: flipping both sign bits orders u32 as i32.
-            sse!({
-                let flip = _mm_set1_epi32(i32::MIN);
-                let a = _mm_xor_si128(_mm_castps_si128(self.0), flip);
-                let b = _mm_xor_si128(_mm_castps_si128(o.0), flip);
-                Q(_mm_castsi128_ps(_mm_cmplt_epi32(a, b)))
-            })
-        }
-        /// The least lane (by [`Q::min`], in a fixed order).
-        #[inline(always)]
-        pub fn least(self) -> f32 {
-            sse!({
-                let m = _mm_min_ps(self.0, _mm_movehl_ps(self.0, self.0));
-                let m = _mm_min_ps(m, _mm_shuffle_ps::<0b01>(m, m));
-                _mm_cvtss_f32(m)
-            })
-        }
-    }
-}
+use super::x86_lanes::quad;
 
 /// Four lanes as four `f32` (their bits for the logic), each operation a loop the compiler
 /// vectorises.
@@ -473,6 +314,16 @@ impl Mask for M8 {
     fn any(self) -> bool {
         self.0[0].or(self.0[1]).bits() != 0
     }
+
+    #[inline(always)]
+    fn bitmask(self) -> u32 {
+        self.bits()
+    }
+
+    #[inline(always)]
+    fn from_bitmask(bits: u32) -> M8 {
+        M8::from_bits(bits)
+    }
 }
 
 impl Real for F8 {
@@ -508,6 +359,31 @@ impl Real for F8 {
     fn copysign(self, sign: Self) -> Self {
         let bit = F8::splat(-0.0);
         bit.zip(self, Q::andnot).zip(bit.zip(sign, Q::and), Q::or)
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        F8::splat(-0.0).zip(self, Q::andnot)
+    }
+
+    #[inline(always)]
+    fn max_or_other(self, o: Self) -> Self {
+        self.zip(o, Q::max)
+    }
+
+    #[inline(always)]
+    fn min_or_other(self, o: Self) -> Self {
+        self.zip(o, Q::min)
+    }
+
+    #[inline(always)]
+    fn simd_eq(self, o: Self) -> M8 {
+        self.test(o, Q::eq)
+    }
+
+    #[inline(always)]
+    fn simd_ngt(self, o: Self) -> M8 {
+        self.test(o, Q::ngt)
     }
 
     #[inline(always)]
@@ -618,51 +494,7 @@ impl PacketIsa for Portable {
     fn plane_distance(self, plane: F8, origin: F8, inv: F8, _origin_inv: F8) -> F8 {
         (plane - origin) * inv
     }
-    #[inline(always)]
-    fn max(self, a: F8, b: F8) -> F8 {
-        a.zip(b, Q::max)
-    }
-    #[inline(always)]
-    fn min(self, a: F8, b: F8) -> F8 {
-        a.zip(b, Q::min)
-    }
-    #[inline(always)]
-    fn and(self, a: F8, b: F8) -> F8 {
-        a.zip(b, Q::and)
-    }
-    #[inline(always)]
-    fn or(self, a: F8, b: F8) -> F8 {
-        a.zip(b, Q::or)
-    }
-    #[inline(always)]
-    fn xor(self, a: F8, b: F8) -> F8 {
-        a.zip(b, Q::xor)
-    }
-    #[inline(always)]
-    fn abs(self, a: F8) -> F8 {
-        F8::splat(-0.0).zip(a, Q::andnot)
-    }
 
-    #[inline(always)]
-    fn cmp<const C: i32>(self, a: F8, b: F8) -> M8 {
-        match C {
-            CMP_EQ_OQ => a.test(b, Q::eq),
-            CMP_LT_OQ => a.test(b, Q::lt),
-            CMP_LE_OQ => a.test(b, Q::le),
-            CMP_GT_OQ => a.test(b, Q::gt),
-            CMP_GE_OQ => a.test(b, Q::ge),
-            CMP_NGT_UQ => a.test(b, Q::ngt),
-            _ => unreachable!("not a comparison the traversals use: {C}"),
-        }
-    }
-    #[inline(always)]
-    fn bits(self, m: M8) -> u32 {
-        m.bits()
-    }
-    #[inline(always)]
-    fn mask(self, bits: u32) -> M8 {
-        M8::from_bits(bits)
-    }
     #[inline(always)]
     fn min_of(self, m: M8, v: F8) -> f32 {
         let v = m.blend(F8::splat(f32::INFINITY).0, v.0);

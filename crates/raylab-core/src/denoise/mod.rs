@@ -69,6 +69,7 @@ pub use outliers::{Noisy, OUTLIER_DEVIATIONS, OUTLIER_MIN_SAMPLES, SPREAD_RADIUS
 
 use crate::film::{Film, Image};
 use crate::integrator::Tracer;
+use crate::lanes::compiled;
 use crate::render::{Cancelled, accumulate_pass, render};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
@@ -526,10 +527,11 @@ impl Isa {
     fn best() -> Isa {
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx512f") {
+            // The kernels' own detection: the features `compiled!` enables for each set.
+            if crate::accel::simd::Avx512::detect().is_some() {
                 return Isa::Avx512;
             }
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if crate::accel::simd::Avx2::detect().is_some() {
                 return Isa::Avx2;
             }
         }
@@ -550,17 +552,15 @@ impl Row<'_> {
         }
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    compiled!(Avx2:
     fn filter_avx2(&self, out: Out) {
         self.filter_portable(out)
-    }
+    });
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
+    compiled!(Avx512:
     fn filter_avx512(&self, out: Out) {
         self.filter_portable(out)
-    }
+    });
 
     /// Sixteen pixels at a time: their own values and running sums stay in registers (fixed
     /// arrays the compiler keeps in vector registers) through all 25 taps, each tap reading

@@ -37,6 +37,7 @@ use glam::Vec3;
 
 use super::{BINOMIAL, Features, Isa, effective, exp_neg};
 use crate::film::{Film, FilmSums, Image, channel_mean, mean_and_variance_of_mean};
+use crate::lanes::compiled;
 
 /// How many standard deviations of a pixel's other samples its brightest may lie above their
 /// mean before it is taken apart (module docs). A well-behaved pixel's largest of 64 samples
@@ -232,17 +233,15 @@ impl Surface {
         })
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    compiled!(Avx2:
     fn row_avx2(&self, y: usize, step: usize, x: &[Vec<f32>; 3], row: &mut [f32]) {
         self.row(y, step, x, row)
-    }
+    });
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
+    compiled!(Avx512:
     fn row_avx512(&self, y: usize, step: usize, x: &[Vec<f32>; 3], row: &mut [f32]) {
         self.row(y, step, x, row)
-    }
+    });
 
     /// Row `y` of [`Surface::gather`], its three channels one after the other in `row`.
     #[inline(always)]

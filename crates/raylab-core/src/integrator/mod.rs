@@ -53,7 +53,7 @@ use crate::camera::ImagePoints;
 use crate::film::Seen;
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
+use crate::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, compiled, select_lazy};
 use crate::light::{
     AnyLight, DirectLight, LightKind, LightSpec, SHADOW_OFFSET, ShadowRays, shadow_rays_to,
 };
@@ -1020,10 +1020,9 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    compiled!(Avx512:
     /// [`Tracer::trace_primary`] compiled with AVX-512 as well: 32 vector registers instead of
     /// 16, which the long body of a path vertex spills less with.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
     fn trace_avx512(
         &self,
         _proof: Avx512,
@@ -1034,13 +1033,12 @@ impl<'a> Tracer<'a> {
         scratch: &mut Scratch,
     ) {
         self.trace_primary(primary, rngs, out, seen, scratch);
-    }
+    });
 
+    compiled!(Avx2:
     /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (A closure passed to such a
     /// function stays out of line, compiled without them; so the camera rays come as data,
     /// [`Primary::Camera`].)
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
     fn trace_avx2(
         &self,
         _proof: Avx2,
@@ -1051,7 +1049,7 @@ impl<'a> Tracer<'a> {
         scratch: &mut Scratch,
     ) {
         self.trace_primary(primary, rngs, out, seen, scratch);
-    }
+    });
 
     /// The rays of `primary`, made in batches of [`Tracer::batch_len`] if they come as image
     /// points, traced by [`Tracer::trace_seen`].
@@ -1332,9 +1330,8 @@ mod tests {
         (lit, asked)
     }
 
+    compiled!(Avx512:
     /// [`lit_lanes`] compiled for AVX-512, as the lab's wave is.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
     fn lit_lanes_avx512(
         light: &LightSpec,
         shading: &Shading,
@@ -1342,11 +1339,10 @@ mod tests {
         sphere: bool,
     ) -> (Lighting<Vec3x16>, M16) {
         lit_lanes(light, shading, surfaces, sphere)
-    }
+    });
 
+    compiled!(Avx2:
     /// [`lit_lanes`] compiled for AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
     fn lit_lanes_avx2(
         light: &LightSpec,
         shading: &Shading,
@@ -1354,7 +1350,7 @@ mod tests {
         sphere: bool,
     ) -> (Lighting<Vec3x16>, M16) {
         lit_lanes(light, shading, surfaces, sphere)
-    }
+    });
 
     /// The lab's terms sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`], as the lab's
     /// wave computes them, compiled portably and for each instruction set the CPU has) equal
