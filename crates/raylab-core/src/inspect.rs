@@ -641,8 +641,9 @@ impl Inspection {
                             photons: None,
                         });
                     }
-                    // Diffuse hits and, in the lab's stages, glossy ones are shaded.
-                    if !material.is_specular() {
+                    // Diffuse hits and, in the lab's stages, glossy ones are shaded; the path
+                    // tracer tells the others' light as a vertex.
+                    if !material.is_specular() && (stage != Stage::Path || material.is_diffuse()) {
                         waiting.push_back((*ray, *hit, *depth));
                     }
                     latest = Some((*ray, *hit));
