@@ -40,7 +40,8 @@
 use glam::Vec3;
 
 use super::path_mis::{
-    LightSample, PathState, PathVertex, gather_photons, light_met, roulette, sample_light, scatter,
+    Carried, LightSample, PathState, PathVertex, gather_photons, light_met, roulette, sample_light,
+    scatter,
 };
 use super::{
     BATCH, HitScratch, PATH_BATCH, PATH_GROUPS, Recorder, Seen, Stage, Tracer, departure_points,
@@ -50,7 +51,7 @@ use crate::bsdf::{Bsdf, ShadingFrame};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
 use crate::lanes::{LANES, M16, Mask, Vec3x16, Vector};
-use crate::material::{Scatter, facing};
+use crate::material::{Material, Scatter, facing};
 use crate::photon_map::Gathered;
 use crate::sampling::{Rng, Rng16, Uniform, cosine_hemisphere_by_rejection, hemisphere_around};
 
@@ -80,6 +81,7 @@ impl PathScratch {
             hits: HitScratch::new(),
             memory: Box::new(PathMemory {
                 paths: [PathState::START; PATH_BATCH],
+                carried: [Carried::START; PATH_BATCH],
                 alive: [0; PATH_BATCH],
                 rays_alive: [Ray {
                     origin: Vec3::ZERO,
@@ -111,6 +113,9 @@ impl PathScratch {
 /// [`super::Scratch`]'s).
 struct PathMemory {
     paths: [PathState; PATH_BATCH],
+    /// What the paths carry for an area light and photons, read only without the point
+    /// light's lanes (`Tracer::lane_light`), and set at a batch's start only then.
+    carried: [Carried; PATH_BATCH],
     alive: [u16; PATH_BATCH],
     rays_alive: [Ray; PATH_BATCH],
     hits: [Option<Intersection>; PATH_BATCH],
@@ -336,6 +341,53 @@ fn give_back(d: &Departures, rng: &Rng16, rngs: &mut [Rng]) {
     }
 }
 
+/// A vertex that is not a diffuse one under the point light, by the single path's steps
+/// ([`super::path_mis`]): its light sample, its photons, its scattering. `hit` is the hit with
+/// its material, the arriving ray's direction and `at_edge`; `path` the path's index, state,
+/// carried values and generator. What it found goes into `pending`'s [`Lit`], its shadow ray
+/// into `pending`'s slot, whose index in the batch's shadow rays is given: whether each was
+/// filled (the [`Lit`] also where `record`, for the pixel inspector). Returns those, and β
+/// before the vertex with the scattering if the path goes on.
+///
+/// Out of line: inlined, it would make the loop over a batch's hits, which the lab's box
+/// runs at every vertex, a larger function than the diffuse lanes alone need.
+#[inline(never)]
+#[allow(clippy::type_complexity)]
+fn other_vertex(
+    tracer: &Tracer,
+    hit: (&Intersection, &Material, Vec3, Option<Vec3>),
+    path: (usize, &mut PathState, &mut Carried, &mut Rng),
+    pending: (&mut Lit, &mut (Ray, f32), usize),
+    record: bool,
+) -> (bool, bool, Option<(Vec3, Scatter)>) {
+    let (hit, material, incoming, at_edge) = hit;
+    let (owner, path, carried, rng) = path;
+    let (lit, shadow, shadow_index) = pending;
+    let v = tracer.scattering_with(hit, material, incoming, at_edge);
+    let scatters = path.bounces < tracer.shading.max_bounces();
+    let light = sample_light(tracer, &v, path.beta, scatters, rng);
+    let photons = gather_photons(tracer, &v, path.beta, carried, scatters);
+    let mut cast = false;
+    let filled = record || light.is_some() || photons.is_some();
+    if filled {
+        if let Some(sample) = light.filter(LightSample::casts) {
+            *shadow = sample.shadow.expect("a cast shadow ray");
+            cast = true;
+        }
+        *lit = Lit {
+            owner: owner as u16,
+            light,
+            shadow: shadow_index as u16,
+            photons,
+            position: hit.position,
+            bsdf: v.bsdf,
+        };
+    }
+    let beta = path.beta;
+    let scattered = scatter(tracer, &v, path, carried, rng).map(|s| (beta, s));
+    (filled, cast, scattered)
+}
+
 #[inline(always)]
 fn batch<R: Recorder>(
     tracer: &Tracer,
@@ -360,6 +412,7 @@ fn batch<R: Recorder>(
     } = scratch;
     let PathMemory {
         paths,
+        carried,
         alive,
         rays_alive,
         hits,
@@ -372,6 +425,9 @@ fn batch<R: Recorder>(
     let HitScratch { diffuse, lit } = lanes;
     let n = rays.len();
     paths[..n].fill(PathState::START);
+    if light_seen {
+        carried[..n].fill(Carried::START);
+    }
     // The paths still going, by index, and the ray each goes on with.
     for (i, ray) in rays.iter().enumerate() {
         alive[i] = i as u16;
@@ -409,7 +465,7 @@ fn batch<R: Recorder>(
             // Step 3: the light, if the ray meets it before any surface.
             if light_seen {
                 let t_surface = hits[k].as_ref().map_or(f32::INFINITY, |h| h.distance);
-                if let Some(added) = light_met(tracer, ray, t_surface, path) {
+                if let Some(added) = light_met(tracer, ray, t_surface, path.beta, &carried[i]) {
                     out[i] += added;
                     continue;
                 }
@@ -433,40 +489,24 @@ fn batch<R: Recorder>(
                 n_diffuse += 1;
                 continue;
             }
-            // Any other vertex, by the single path's steps: its light sample (its shadow ray
-            // asked with the others' below), its photons, its scattering.
-            let v = tracer.scattering_with(&hit, material, incoming, at_edge);
-            let rng = &mut rngs[i];
-            let scatters = path.bounces < max_bounces;
-            let light = sample_light(tracer, &v, path, scatters, rng);
-            let photons = gather_photons(tracer, &v, path, scatters);
-            if R::ENABLED || light.is_some() || photons.is_some() {
-                let mut shadow = 0;
-                if let Some(sample) = light.filter(LightSample::casts) {
-                    shadows[n_shadows] = sample.shadow.expect("a cast shadow ray");
-                    shadow = n_shadows as u16;
-                    n_shadows += 1;
+            // Any other vertex, by the single path's steps.
+            let (lit, cast, scattered) = other_vertex(
+                tracer,
+                (&hit, material, incoming, at_edge),
+                (i, path, &mut carried[i], &mut rngs[i]),
+                (&mut lit_one[n_lit], &mut shadows[n_shadows], n_shadows),
+                R::ENABLED,
+            );
+            n_lit += usize::from(lit);
+            n_shadows += usize::from(cast);
+            if let Some((beta, scattered)) = scattered {
+                let (g, lane) = (n_other / LANES, n_other % LANES);
+                if lane == 0 {
+                    others[g].active = M16::NONE;
                 }
-                lit_one[n_lit] = Lit {
-                    owner: i as u16,
-                    light,
-                    shadow,
-                    photons,
-                    position: hit.position,
-                    bsdf: v.bsdf,
-                };
-                n_lit += 1;
+                others[g].set(lane, i, &hit, geometric, at_edge, beta, scattered);
+                n_other += 1;
             }
-            let beta = path.beta;
-            let Some(scattered) = scatter(tracer, &v, path, rng) else {
-                continue;
-            };
-            let (g, lane) = (n_other / LANES, n_other % LANES);
-            if lane == 0 {
-                others[g].active = M16::NONE;
-            }
-            others[g].set(lane, i, &hit, geometric, at_edge, beta, scattered);
-            n_other += 1;
         }
         let mut still = 0;
         // The direct term at the diffuse hits.

@@ -124,7 +124,8 @@ enum Arrival {
     },
 }
 
-/// What a path carries from one vertex to the next, in both forms of the path tracer.
+/// What a path carries from one vertex to the next, in both forms of the path tracer: its
+/// throughput and counts here, what only area lights and photons read in [`Carried`].
 #[derive(Clone, Copy, Debug)]
 pub(super) struct PathState {
     /// β, the throughput: what light found at the next vertex is multiplied by.
@@ -133,6 +134,21 @@ pub(super) struct PathState {
     pub bounces: u32,
     /// Vertices the path went on from.
     pub depth: u32,
+}
+
+impl PathState {
+    /// A path at the camera: full throughput, no vertex yet.
+    pub const START: Self = Self {
+        beta: Vec3::ONE,
+        bounces: 0,
+        depth: 0,
+    };
+}
+
+/// What a path carries for the light its rays meet ([`light_met`]) and its photons
+/// ([`gather_photons`]): read only under an area light or with a photon map.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Carried {
     arrival: Arrival,
     /// Whether the path has met a non-delta vertex: emission reached through delta BSDFs after
     /// one is the photon map's.
@@ -146,12 +162,9 @@ pub(super) struct PathState {
     eta_scale: f32,
 }
 
-impl PathState {
-    /// A path at the camera: full throughput, no vertex yet.
+impl Carried {
+    /// A path at the camera.
     pub const START: Self = Self {
-        beta: Vec3::ONE,
-        bounces: 0,
-        depth: 0,
         arrival: Arrival::Delta,
         after_diffuse: false,
         eta_scale: 1.0,
@@ -180,6 +193,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
     let scene = tracer.scene;
     let mut value = Vec3::ZERO;
     let mut path = PathState::START;
+    let mut carried = Carried::START;
     loop {
         let hit = scene.closest_intersection(&ray, f32::INFINITY);
         if R::ENABLED {
@@ -187,7 +201,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         }
         // Step 3: the light, if the ray meets it before any surface.
         let t_surface = hit.as_ref().map_or(f32::INFINITY, |h| h.distance);
-        if let Some(added) = light_met(tracer, &ray, t_surface, &path) {
+        if let Some(added) = light_met(tracer, &ray, t_surface, path.beta, &carried) {
             value += added;
             break;
         }
@@ -196,7 +210,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
         // Step 1, then the photons.
         let scatters = path.bounces < tracer.shading.max_bounces();
         let mut light_terms = None;
-        if let Some(sample) = sample_light(tracer, &v, &path, scatters, rng) {
+        if let Some(sample) = sample_light(tracer, &v, path.beta, scatters, rng) {
             let blocked = sample
                 .shadow
                 .is_some_and(|(shadow, t_max)| scene.occluded(&shadow, t_max));
@@ -204,7 +218,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
             value += terms.added;
             light_terms = Some(terms);
         }
-        let gathered = gather_photons(tracer, &v, &mut path, scatters);
+        let gathered = gather_photons(tracer, &v, path.beta, &mut carried, scatters);
         if let Some(g) = gathered {
             value += g.value;
         }
@@ -217,7 +231,7 @@ fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut
             });
         }
         // Step 2: the next direction, from the BSDF; then Russian roulette.
-        let Some(scatter) = scatter(tracer, &v, &mut path, rng) else {
+        let Some(scatter) = scatter(tracer, &v, &mut path, &mut carried, rng) else {
             break;
         };
         let depth = path.depth + 1;
@@ -252,12 +266,13 @@ pub(super) fn light_met(
     tracer: &Tracer,
     ray: &Ray,
     t_surface: f32,
-    path: &PathState,
+    beta: Vec3,
+    carried: &Carried,
 ) -> Option<Vec3> {
     let light = tracer.emitter();
     light.intersect(ray, t_surface)?;
-    let weight = match path.arrival {
-        Arrival::Delta if tracer.photon_map().is_some() && path.after_diffuse => 0.0,
+    let weight = match carried.arrival {
+        Arrival::Delta if tracer.photon_map().is_some() && carried.after_diffuse => 0.0,
         Arrival::Delta => 1.0,
         Arrival::Sampled {
             pdf,
@@ -265,7 +280,7 @@ pub(super) fn light_met(
             relief_visibility,
         } => power_heuristic(pdf, light.pdf_li(from, ray.direction)) * relief_visibility,
     };
-    Some(path.beta * light.le(ray.direction) * weight)
+    Some(beta * light.le(ray.direction) * weight)
 }
 
 /// Step 1 drawn, its shadow ray still to answer ([`sample_light`]).
@@ -312,7 +327,7 @@ impl LightSample {
 pub(super) fn sample_light(
     tracer: &Tracer,
     v: &Scattering,
-    path: &PathState,
+    beta: Vec3,
     scatters: bool,
     rng: &mut Rng,
 ) -> Option<LightSample> {
@@ -350,7 +365,7 @@ pub(super) fn sample_light(
             true => shadow_ray_to(sample.point, position, surface.geometric, surface.at_edge),
             false => None,
         },
-        value: path.beta
+        value: beta
             * f
             * sample.li
             * (cos * terms.mis_weight * surface.relief_visibility / sample.pdf),
@@ -364,16 +379,17 @@ pub(super) fn sample_light(
 pub(super) fn gather_photons(
     tracer: &Tracer,
     v: &Scattering,
-    path: &mut PathState,
+    beta: Vec3,
+    carried: &mut Carried,
     scatters: bool,
 ) -> Option<Gathered> {
     if v.bsdf.is_delta() {
         return None;
     }
-    path.after_diffuse = true;
+    carried.after_diffuse = true;
     let map = tracer.photon_map().filter(|_| scatters)?;
     let mut g = gather(map, &v.frame, &v.bsdf, v.surface.position, v.wo);
-    g.value *= path.beta * path.eta_scale;
+    g.value *= beta * carried.eta_scale;
     Some(g)
 }
 
@@ -391,6 +407,7 @@ pub(super) fn scatter(
     tracer: &Tracer,
     v: &Scattering,
     path: &mut PathState,
+    carried: &mut Carried,
     rng: &mut Rng,
 ) -> Option<Scatter> {
     if !v.bsdf.is_delta() {
@@ -435,13 +452,13 @@ pub(super) fn scatter(
     if let Bsdf::Glass { ior, .. } = v.bsdf
         && !v.frame.reflects(v.wo, wi)
     {
-        path.eta_scale *= if v.frame.front_face() {
+        carried.eta_scale *= if v.frame.front_face() {
             1.0 / (ior * ior)
         } else {
             ior * ior
         };
     }
-    path.arrival = if sample.is_delta {
+    carried.arrival = if sample.is_delta {
         Arrival::Delta
     } else {
         Arrival::Sampled {
