@@ -246,21 +246,21 @@ impl Departures {
         active: M16::NONE,
     };
 
-    /// Puts a vertex already sampled one at a time in lane `i`: the path `owner` at `hit`,
-    /// with the triangle's `normal`, `at_edge` ([`crate::scene::Scene::approach_at_edge`]), β
-    /// before the vertex and the scattering drawn.
+    /// Puts a vertex already sampled one at a time in lane `i`: the path `owner` leaving
+    /// `from` (its hit's position, the triangle's normal and `at_edge`,
+    /// [`crate::scene::Scene::approach_at_edge`]), with β before the vertex and the
+    /// scattering drawn.
     #[inline(always)]
     fn set(
         &mut self,
         i: usize,
         owner: usize,
-        hit: &Intersection,
-        normal: Vec3,
-        at_edge: Option<Vec3>,
+        from: (Vec3, Vec3, Option<Vec3>),
         beta: Vec3,
         scatter: Scatter,
     ) {
-        self.position.set_lane(i, hit.position);
+        let (position, normal, at_edge) = from;
+        self.position.set_lane(i, position);
         self.normal.set_lane(i, normal);
         self.beta.set_lane(i, beta);
         self.owner[i] = owner as u16;
@@ -504,7 +504,8 @@ fn batch<R: Recorder>(
                 if lane == 0 {
                     others[g].active = M16::NONE;
                 }
-                others[g].set(lane, i, &hit, geometric, at_edge, beta, scattered);
+                let from = (hit.position, geometric, at_edge);
+                others[g].set(lane, i, from, beta, scattered);
                 n_other += 1;
             }
         }
