@@ -641,8 +641,9 @@ impl Inspection {
                             photons: None,
                         });
                     }
-                    // Diffuse hits and, in the lab's stages, glossy ones are shaded.
-                    if !material.is_specular() {
+                    // Diffuse hits and, in the lab's stages, glossy ones are shaded; the path
+                    // tracer tells the others' light as a vertex.
+                    if !material.is_specular() && (stage != Stage::Path || material.is_diffuse()) {
                         waiting.push_back((*ray, *hit, *depth));
                     }
                     latest = Some((*ray, *hit));
@@ -1613,7 +1614,7 @@ mod tests {
         assert!(on_block > 20 && highlight > 0, "{on_block} {highlight}");
     }
 
-    /// Under the quad light the general path tracer runs, and the inspector shows each
+    /// Under the quad light every vertex runs the single path's steps, and the inspector shows each
     /// vertex's light sample with the BSDF's value, both densities and the MIS weight; R is
     /// still the rendered pixel bit for bit. The weight is the power heuristic of the two
     /// densities shown, p_L²/(p_L² + p_B²), computed here in f64 (within 1e-6: f32 rounding
@@ -1632,7 +1633,9 @@ mod tests {
         s.light.kind = LightKind::Quad { side: 1.5 };
         s.material_preset = crate::material::MaterialPreset::Rough;
         let (mut seen, mut shared) = (0, 0);
-        for (x, y) in [(10, 16), (16, 20), (22, 26), (5, 5)] {
+        // Every fourth pixel each way: the vertices of a few paths may all be far from or
+        // near the light.
+        for (x, y) in (0..64).map(|k| (1 + 4 * (k % 8), 1 + 4 * (k / 8))) {
             let i = inspect_pixel(&scene, &s, x, y).unwrap();
             let rendered = crate::render::trace_pixel(&scene, &s, x, y, 0);
             assert_eq!(
@@ -1653,7 +1656,9 @@ mod tests {
                 shared += usize::from((0.05..0.95).contains(&power));
             }
             let text: Vec<String> = i.lines().into_iter().map(|l| l.text).collect();
-            if !i.bounces.is_empty() {
+            // A vertex that sampled the light shows its weight (a path may see only the
+            // ceiling, above the light, and end on the light's back).
+            if i.bounces.iter().any(|v| v.light_sample.is_some()) {
                 assert!(text.iter().any(|l| l.contains("MIS weight")), "{text:?}");
             }
         }

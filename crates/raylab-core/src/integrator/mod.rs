@@ -606,9 +606,10 @@ pub struct Tracer<'a> {
     pub light: LightSpec,
     /// The light as an emitter ([`Light`]): what the general path tracer samples and sees.
     emitter: AnyLight,
-    /// Whether the path stage needs the general path tracer ([`path_mis`]): an area or spot
-    /// light, or a material the sixteen-lane one does not have (the rough metal).
-    general: bool,
+    /// Whether the path tracer takes its diffuse vertices sixteen at a time with the lab's
+    /// direct term ([`path`]): under a point light (the lab's, or a sphere or square of size
+    /// 0), without a photon map.
+    lane_light: bool,
     pub shading: Shading,
     /// Whether anything draws random numbers: the path tracer, a spherical light's soft
     /// shadows, a thin lens's aperture.
@@ -639,18 +640,14 @@ impl<'a> Tracer<'a> {
             materials = Cow::Owned(settings.texture_preset.apply(&materials));
         }
         let random = settings.is_stochastic();
-        // The sixteen-lane path tracer knows the lab's point light alone; caustics by photons
-        // are gathered by the general path tracer.
-        let light_needs_general = match settings.light.kind {
-            LightKind::Point => false,
-            LightKind::Sphere { .. } | LightKind::Quad { .. } => settings.light.is_area(),
-            LightKind::Spot(_) => true,
+        // The lab's direct term in lanes is the light sample of a point light; a photon map
+        // is gathered at the diffuse vertices one at a time.
+        let point_light = match settings.light.kind {
+            LightKind::Point => true,
+            LightKind::Sphere { .. } | LightKind::Quad { .. } => !settings.light.is_area(),
+            LightKind::Spot(_) => false,
         };
-        let general = light_needs_general
-            || settings.shading.photon_caustics()
-            || materials
-                .iter()
-                .any(|m| !m.is_diffuse() && !m.is_specular());
+        let lane_light = point_light && !settings.shading.photon_caustics();
         let plain = materials
             .iter()
             .all(|m| m.texture.is_none() && m.relief.is_none())
@@ -665,7 +662,7 @@ impl<'a> Tracer<'a> {
             materials,
             light: settings.light,
             emitter: settings.light.emitter(),
-            general,
+            lane_light,
             shading: settings.shading,
             random,
             plain,
@@ -717,7 +714,24 @@ impl<'a> Tracer<'a> {
         let scene = self.scene;
         let material = self.material_of(hit.triangle_index);
         let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, direction);
-        let surface = self.surface_with(hit, material, direction, at_edge);
+        self.scattering_with(hit, material, direction, at_edge)
+    }
+
+    /// [`Tracer::scattering`] with the hit's `material` and `at_edge` given. A mirror or
+    /// glass scatters about [`Tracer::specular_normal`] (a smooth normal could send its
+    /// reflection below the surface), as the lab's stages follow it.
+    #[inline(always)]
+    pub fn scattering_with(
+        &self,
+        hit: &Intersection,
+        material: &Material,
+        direction: Vec3,
+        at_edge: Option<Vec3>,
+    ) -> Scattering {
+        let mut surface = self.surface_with(hit, material, direction, at_edge);
+        if material.is_specular() && material.relief.is_none() {
+            surface.normal = surface.geometric;
+        }
         let wo = -direction;
         Scattering {
             bsdf: material.bsdf(surface.rho),
@@ -941,15 +955,15 @@ impl<'a> Tracer<'a> {
     }
 
     /// Whether the integrator tells what each camera sample sees ([`Seen`]) as it traces it:
-    /// the sixteen-lane path tracer does, at no extra ray but those of the specular branches
-    /// of a camera ray that meets a mirror or glass first. For the others the denoiser's
-    /// features are traced apart ([`crate::denoise::Features::trace`]).
+    /// the path tracer does, at no extra ray but those of the specular branches of a camera
+    /// ray that meets a mirror or glass first. For the lab's stages the denoiser's features
+    /// are traced apart ([`crate::denoise::Features::trace`]).
     pub fn records_features(&self) -> bool {
-        self.shading.stage.integrator() == Integrator::Path && !self.general
+        self.shading.stage.integrator() == Integrator::Path
     }
 
     /// How many camera rays to hand [`Tracer::trace_camera`] at a time: [`PATH_BATCH`] for
-    /// the sixteen-lane path tracer, [`BATCH`] for the others.
+    /// the path tracer, [`BATCH`] for the lab's stages.
     pub fn batch_len(&self) -> usize {
         if self.records_features() {
             PATH_BATCH
@@ -1155,11 +1169,7 @@ impl<'a> Tracer<'a> {
                     rays.len(),
                     "the path tracer needs a generator per ray"
                 );
-                if self.general {
-                    path_mis::trace(self, rays, rngs, out, recorder);
-                } else {
-                    path::trace(self, rays, rngs, out, seen, path, recorder);
-                }
+                path::trace(self, rays, rngs, out, seen, path, recorder);
             }
         }
     }

@@ -1,44 +1,58 @@
-//! Path tracing: real light where the lab adds the constant N.
+//! Path tracing: real light where the lab adds the constant N. The one path tracer: any
+//! material, any light, multiple importance sampling and caustic photons, a batch of paths at
+//! a time, each vertex computed by [`super::path_mis`]'s steps, the same path one at a time
+//! (its reference, which the tests compare with this one on the same random numbers).
 //!
-//! A path starts with the camera ray. At every diffuse vertex it adds the lab's direct term,
-//! ρ·D with the shadow ray (next-event estimation to the point light, [`super::HitTerms`]), times the
-//! path's throughput β; then it continues in a cosine-weighted direction and β is multiplied by
-//! ρ (the sample's weight in π × radiance units, see [`crate::material`]). Mirror and glass
-//! vertices pick their reflected or refracted direction and add no direct light: a point light
-//! is never seen in a perfect mirror, so, as in any path tracer with a point light, caustics
+//! A path starts with the camera ray. At every vertex ([`super::path_mis`] says each step) it
+//! adds the light it sees directly (a light sample, weighted by MIS against BSDF sampling),
+//! the caustic photons there if the pass has a photon map, and the light its ray meets; then
+//! it continues along a direction drawn from the BSDF, and β, its throughput, is multiplied
+//! by the sample's weight (π × radiance units, see [`crate::material`]).
+//!
+//! Under the lab's point light a diffuse vertex's light sample is the lab's direct term, ρ·D
+//! with the shadow ray ([`super::HitTerms`]), and its bounce a cosine-weighted direction of
+//! weight ρ. So with no bounces the value is ρ·D with shadows, the `shadows` stage exactly;
+//! each bounce adds ρ₁·ρ₂·D₂, then ρ₁·ρ₂·ρ₃·D₃, …, the series that the lab's constant N
+//! approximates. A point light is never seen in a perfect mirror: without photons, caustics
 //! are missing.
-//!
-//! So with no bounces the value is ρ·D with shadows, the `shadows` stage exactly; each bounce
-//! adds ρ₁·ρ₂·D₂, then ρ₁·ρ₂·ρ₃·D₃, …, the series that the lab's constant N approximates.
 //!
 //! Surfaces are two-sided: at every vertex the normal is turned to face the arriving ray.
 //! After [`ROULETTE_DEPTH`] vertices a path continues with probability q = min(max β, 0.95)
 //! and β is divided by q (Russian roulette), which ends paths without bias. A path of
 //! [`MAX_DEPTH`] vertices is ended anyway, a guard against rays trapped between facing mirrors.
 //!
-//! Paths run in batches of [`PATH_BATCH`], phase by phase, as the lab stages do, and each phase
-//! of a vertex runs sixteen paths at a time, a path a lane ([`crate::lanes`]): the direct term
-//! ([`DiffuseHits::light`], the lab's own code), the diffuse bounce's direction
-//! ([`hemisphere_around`]), the throughput, Russian roulette and the next ray
-//! ([`departure_points`]). Only what differs from path to path in control flow stays one path
-//! at a time: the hit's material, the random numbers (drawn by rejection), and mirror and glass
-//! sampling ([`crate::material::Material::sample`]).
+//! Paths run in batches of [`PATH_BATCH`], phase by phase, as the lab stages do: every path's
+//! closest hit in one batch query, every vertex's shadow ray in batch queries, and what is the
+//! same arithmetic for every path sixteen paths at a time, a path a lane ([`crate::lanes`]):
+//! Russian roulette and the next rays ([`departure_points`]) at every vertex, and at the
+//! diffuse vertices under the point light their whole light sample and bounce (the lab's own
+//! code, [`DiffuseHits::light`], and [`hemisphere_around`]: the same values as
+//! [`super::path_mis::sample_light`] and [`super::path_mis::scatter`] up to rounding, and the
+//! same random numbers). Every other vertex (any other BSDF or light, or with photons) runs
+//! [`super::path_mis`]'s steps one path at a time, its shadow ray asked with the others'.
 //!
 //! Each path draws only from its own generator, in the same order whatever the batch: a pixel
 //! computed alone is the same as in an image, and with the bounces capped at B the first B
 //! bounces draw the same numbers as with more, so adding bounces only ever adds light.
+//!
+//! [`DiffuseHits::light`]: super::hits::DiffuseHits::light
 
 use glam::Vec3;
 
+use super::path_mis::{
+    Carried, LightSample, PathState, PathVertex, gather_photons, light_met, roulette, sample_light,
+    scatter,
+};
 use super::{
     BATCH, HitScratch, PATH_BATCH, PATH_GROUPS, Recorder, Seen, Stage, Tracer, departure_points,
     shaded_value,
 };
-use crate::bsdf::ShadingFrame;
+use crate::bsdf::{Bsdf, ShadingFrame};
 use crate::geometry::Ray;
 use crate::intersect::Intersection;
-use crate::lanes::{F32x16, LANES, M16, Mask, Real, Vec3x16, Vector};
-use crate::material::{Scatter, facing};
+use crate::lanes::{LANES, M16, Mask, Vec3x16, Vector};
+use crate::material::{Material, Scatter, facing};
+use crate::photon_map::Gathered;
 use crate::sampling::{Rng, Rng16, Uniform, cosine_hemisphere_by_rejection, hemisphere_around};
 
 /// The vertex from which Russian roulette may end a path: the fifth, as in Mitsuba 3's path
@@ -67,51 +81,76 @@ impl PathScratch {
             hits: HitScratch::new(),
             memory: Box::new(PathMemory {
                 paths: [PathState::START; PATH_BATCH],
+                carried: [Carried::START; PATH_BATCH],
                 alive: [0; PATH_BATCH],
                 rays_alive: [Ray {
                     origin: Vec3::ZERO,
                     direction: Vec3::ZERO,
                 }; PATH_BATCH],
                 hits: [None; PATH_BATCH],
-                specular: [Departures::NONE; PATH_GROUPS],
+                others: [Departures::NONE; PATH_GROUPS],
                 arriving: [Vec3x16::ZERO; PATH_GROUPS],
+                lit: [Lit::NONE; PATH_BATCH],
+                shadows: [(
+                    Ray {
+                        origin: Vec3::ZERO,
+                        direction: Vec3::ZERO,
+                    },
+                    0.0,
+                ); PATH_BATCH],
+                blocked: [false; PATH_BATCH],
             }),
         }
     }
 }
 
-/// A batch's paths: each path's state, the paths still going and their next rays and hits, the
-/// mirror and glass vertices, and β of each diffuse hit's path as it arrives. Kept off the
-/// stack: as the batch's own arrays they would swell the stack frame of the code compiled for
-/// the CPU, which the lab's batches share, and slow the lab pass. A batch takes only what it
-/// wrote: the entries of its paths are set when they start, and lanes left from
-/// earlier vertices or batches are computed with, never taken (as [`super::Scratch`]'s).
+/// A batch's paths: each path's state, the paths still going and their next rays and hits,
+/// the vertices taken one at a time and the light they found, and β of each diffuse hit's
+/// path as it arrives. Kept off the stack: as the batch's own arrays they would swell the
+/// stack frame of the code compiled for the CPU, which the lab's batches share, and slow the
+/// lab pass. A batch takes only what it wrote: the entries of its paths are set when they
+/// start, and lanes left from earlier vertices or batches are computed with, never taken (as
+/// [`super::Scratch`]'s).
 struct PathMemory {
     paths: [PathState; PATH_BATCH],
+    /// What the paths carry for an area light and photons, read only without the point
+    /// light's lanes (`Tracer::lane_light`), and set at a batch's start only then.
+    carried: [Carried; PATH_BATCH],
     alive: [u16; PATH_BATCH],
     rays_alive: [Ray; PATH_BATCH],
     hits: [Option<Intersection>; PATH_BATCH],
-    /// Mirror and glass vertices, sampled one at a time.
-    specular: [Departures; PATH_GROUPS],
+    /// The vertices sampled one at a time ([`super::path_mis`]'s steps), going on.
+    others: [Departures; PATH_GROUPS],
     arriving: [Vec3x16; PATH_GROUPS],
+    /// The light samples and photons of the vertices taken one at a time.
+    lit: [Lit; PATH_BATCH],
+    /// Their shadow rays, and the answers.
+    shadows: [(Ray, f32); PATH_BATCH],
+    blocked: [bool; PATH_BATCH],
 }
 
-#[derive(Clone, Copy, Debug)]
-struct PathState {
-    /// β, the throughput: what light found at the next vertex is multiplied by.
-    beta: Vec3,
-    /// Diffuse bounces made.
-    bounces: u32,
-    /// Vertices visited.
-    depth: u32,
+/// What a vertex taken one at a time found before its shadow ray is answered: its light
+/// sample, its photons, and what the pixel inspector is told of it.
+#[derive(Clone, Copy)]
+struct Lit {
+    /// The path.
+    owner: u16,
+    light: Option<LightSample>,
+    /// Where its shadow ray is in the batch's (if it casts one).
+    shadow: u16,
+    photons: Option<Gathered>,
+    position: Vec3,
+    bsdf: Bsdf,
 }
 
-impl PathState {
-    /// A path at the camera: full throughput, no vertex yet.
-    const START: Self = Self {
-        beta: Vec3::ONE,
-        bounces: 0,
-        depth: 0,
+impl Lit {
+    const NONE: Self = Self {
+        owner: 0,
+        light: None,
+        shadow: 0,
+        photons: None,
+        position: Vec3::ZERO,
+        bsdf: Bsdf::Lambertian { rho: Vec3::ZERO },
     };
 }
 
@@ -207,18 +246,25 @@ impl Departures {
         active: M16::NONE,
     };
 
-    /// Puts a vertex already sampled one at a time (mirror or glass) in lane `i`.
+    /// Puts a vertex already sampled one at a time in lane `i`: the path `owner` leaving
+    /// `from` (its hit's position, the triangle's normal and `at_edge`,
+    /// [`crate::scene::Scene::approach_at_edge`]), with β before the vertex and the
+    /// scattering drawn.
     #[inline(always)]
-    fn set(&mut self, i: usize, owner: usize, hit: &Intersection, normal: Vec3, beta: Vec3) {
-        self.position.set_lane(i, hit.position);
+    fn set(
+        &mut self,
+        i: usize,
+        owner: usize,
+        from: (Vec3, Vec3, Option<Vec3>),
+        beta: Vec3,
+        scatter: Scatter,
+    ) {
+        let (position, normal, at_edge) = from;
+        self.position.set_lane(i, position);
         self.normal.set_lane(i, normal);
         self.beta.set_lane(i, beta);
         self.owner[i] = owner as u16;
         self.active.0[i] = true;
-    }
-
-    #[inline(always)]
-    fn set_scatter(&mut self, i: usize, at_edge: Option<Vec3>, scatter: Scatter) {
         self.near_edge.0[i] = at_edge.is_some();
         self.incoming.set_lane(i, at_edge.unwrap_or(Vec3::ZERO));
         self.direction.set_lane(i, scatter.direction);
@@ -226,9 +272,9 @@ impl Departures {
     }
 }
 
-/// The vertices of `d` go on: β times the weight, Russian roulette from [`ROULETTE_DEPTH`] on,
-/// the next ray; the paths that survive are appended to `alive[..*still]`, their next rays
-/// to `rays[..*still]`.
+/// The vertices of `d` go on: Russian roulette ([`roulette`], sixteen at a time), the next
+/// ray; the paths that survive are appended to `alive[..*still]`, their next rays to
+/// `rays[..*still]`.
 ///
 /// Roulette's number is drawn at every vertex, used or not, and the outcome is computed
 /// without branches: whether a path survives is a coin toss the processor cannot predict. A
@@ -245,23 +291,15 @@ fn go_on<R: Recorder>(
 ) {
     let (alive, rays) = next;
     let mut depth = [0u32; LANES];
-    let mut roulette = M16::NONE;
+    let mut at_depth = M16::NONE;
     for lane in 0..LANES {
         if d.active.0[lane] {
             depth[lane] = paths[d.owner[lane] as usize].depth + 1;
-            roulette.0[lane] = depth[lane] >= ROULETTE_DEPTH;
+            at_depth.0[lane] = depth[lane] >= ROULETTE_DEPTH;
         }
     }
     let u = rng.draw(d.active);
-    let beta = d.beta * d.weight;
-    let survival = F32x16::select(
-        roulette,
-        beta.max_element()
-            .simd_min(F32x16::splat(ROULETTE_MAX_SURVIVAL)),
-        F32x16::splat(1.0),
-    );
-    let beta = beta * (F32x16::splat(1.0) / survival);
-    let lucky = u.simd_lt(survival);
+    let (beta, survival, lucky) = roulette(d.beta, d.weight, at_depth, u);
     let origin = departure_points(d.position, d.normal, d.direction, d.near_edge, d.incoming);
     for lane in (0..LANES).filter(|&lane| d.active.0[lane]) {
         let i = d.owner[lane] as usize;
@@ -303,6 +341,53 @@ fn give_back(d: &Departures, rng: &Rng16, rngs: &mut [Rng]) {
     }
 }
 
+/// A vertex that is not a diffuse one under the point light, by the single path's steps
+/// ([`super::path_mis`]): its light sample, its photons, its scattering. `hit` is the hit with
+/// its material, the arriving ray's direction and `at_edge`; `path` the path's index, state,
+/// carried values and generator. What it found goes into `pending`'s [`Lit`], its shadow ray
+/// into `pending`'s slot, whose index in the batch's shadow rays is given: whether each was
+/// filled (the [`Lit`] also where `record`, for the pixel inspector). Returns those, and β
+/// before the vertex with the scattering if the path goes on.
+///
+/// Out of line: inlined, it would make the loop over a batch's hits, which the lab's box
+/// runs at every vertex, a larger function than the diffuse lanes alone need.
+#[inline(never)]
+#[allow(clippy::type_complexity)]
+fn other_vertex(
+    tracer: &Tracer,
+    hit: (&Intersection, &Material, Vec3, Option<Vec3>),
+    path: (usize, &mut PathState, &mut Carried, &mut Rng),
+    pending: (&mut Lit, &mut (Ray, f32), usize),
+    record: bool,
+) -> (bool, bool, Option<(Vec3, Scatter)>) {
+    let (hit, material, incoming, at_edge) = hit;
+    let (owner, path, carried, rng) = path;
+    let (lit, shadow, shadow_index) = pending;
+    let v = tracer.scattering_with(hit, material, incoming, at_edge);
+    let scatters = path.bounces < tracer.shading.max_bounces();
+    let light = sample_light(tracer, &v, path.beta, scatters, rng);
+    let photons = gather_photons(tracer, &v, path.beta, carried, scatters);
+    let mut cast = false;
+    let filled = record || light.is_some() || photons.is_some();
+    if filled {
+        if let Some(sample) = light.filter(LightSample::casts) {
+            *shadow = sample.shadow.expect("a cast shadow ray");
+            cast = true;
+        }
+        *lit = Lit {
+            owner: owner as u16,
+            light,
+            shadow: shadow_index as u16,
+            photons,
+            position: hit.position,
+            bsdf: v.bsdf,
+        };
+    }
+    let beta = path.beta;
+    let scattered = scatter(tracer, &v, path, carried, rng).map(|s| (beta, s));
+    (filled, cast, scattered)
+}
+
 #[inline(always)]
 fn batch<R: Recorder>(
     tracer: &Tracer,
@@ -315,7 +400,8 @@ fn batch<R: Recorder>(
 ) {
     let scene = tracer.scene;
     let max_bounces = tracer.shading.max_bounces();
-    let sphere_light = tracer.light.is_area();
+    // Whether rays may meet the light (an area light; not a point or a spot).
+    let light_seen = !tracer.lane_light;
     let (triangles, materials) = (scene.triangles.as_slice(), &*tracer.materials);
     out.fill(Vec3::ZERO);
     // What each camera sample sees, if asked: found at the camera rays' hits (`look`).
@@ -326,15 +412,22 @@ fn batch<R: Recorder>(
     } = scratch;
     let PathMemory {
         paths,
+        carried,
         alive,
         rays_alive,
         hits,
-        specular,
+        others,
         arriving,
+        lit: lit_one,
+        shadows,
+        blocked: blocked_one,
     } = &mut **memory;
     let HitScratch { diffuse, lit } = lanes;
     let n = rays.len();
     paths[..n].fill(PathState::START);
+    if light_seen {
+        carried[..n].fill(Carried::START);
+    }
     // The paths still going, by index, and the ray each goes on with.
     for (i, ray) in rays.iter().enumerate() {
         alive[i] = i as u16;
@@ -356,18 +449,26 @@ fn batch<R: Recorder>(
             // The paths still going are the camera rays, in their order.
             look(tracer, &rays_alive[..n_alive], &hits[..n_alive], seen);
         }
-        // Each hit to its phase: the diffuse ones into lanes for their light and bounce, the
-        // specular ones sampled here.
+        // Each hit to its phase: the diffuse ones under the point light into lanes for their
+        // light and bounce, the others through the single path's steps here.
         diffuse.clear();
         // The diffuse hits in lanes one after another (lanes left empty would cost their
         // groups' light and shadow rays as much as full ones).
         let mut n_diffuse = 0;
-        let mut n_specular = 0;
+        let (mut n_other, mut n_lit, mut n_shadows) = (0, 0, 0);
         for k in 0..n_alive {
             let (i, ray) = (alive[k] as usize, &rays_alive[k]);
-            let path = &paths[i];
+            let path = &mut paths[i];
             if R::ENABLED {
                 rec.closest_hit(ray, hits[k].as_ref(), path.beta, path.depth);
+            }
+            // Step 3: the light, if the ray meets it before any surface.
+            if light_seen {
+                let t_surface = hits[k].as_ref().map_or(f32::INFINITY, |h| h.distance);
+                if let Some(added) = light_met(tracer, ray, t_surface, path.beta, &carried[i]) {
+                    out[i] += added;
+                    continue;
+                }
             }
             let Some(hit) = hits[k] else { continue };
             let triangle = &triangles[hit.triangle_index];
@@ -375,7 +476,7 @@ fn batch<R: Recorder>(
             let geometric = triangle.normal;
             let incoming = ray.direction;
             let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, incoming);
-            if material.is_diffuse() {
+            if tracer.lane_light && material.is_diffuse() {
                 // Two-sided: both normals turned to face the arriving ray.
                 let mut surface = tracer.surface_with(&hit, material, incoming, at_edge);
                 let turned = facing(geometric, incoming);
@@ -386,33 +487,31 @@ fn batch<R: Recorder>(
                 arriving[n_diffuse / LANES].set_lane(n_diffuse % LANES, path.beta);
                 diffuse.push(n_diffuse, surface, i);
                 n_diffuse += 1;
-            } else {
-                // Mirror and glass scatter about the triangle's own normal, or a relief's bent
-                // one (the water's waves), held to the geometric surface's rules as the
-                // general path tracer holds it ([`ShadingFrame::new`]). A direction the
-                // BSDF refuses (a reflection below the triangle or a refraction that does not
-                // cross it: only about a bent normal) ends the path.
-                let shading = tracer.specular_normal(&hit, material, incoming);
-                let Some(scatter) = material.sample(incoming, shading, geometric, &mut rngs[i])
-                else {
-                    continue;
-                };
-                let (g, lane) = (n_specular / LANES, n_specular % LANES);
+                continue;
+            }
+            // Any other vertex, by the single path's steps.
+            let (lit, cast, scattered) = other_vertex(
+                tracer,
+                (&hit, material, incoming, at_edge),
+                (i, path, &mut carried[i], &mut rngs[i]),
+                (&mut lit_one[n_lit], &mut shadows[n_shadows], n_shadows),
+                R::ENABLED,
+            );
+            n_lit += usize::from(lit);
+            n_shadows += usize::from(cast);
+            if let Some((beta, scattered)) = scattered {
+                let (g, lane) = (n_other / LANES, n_other % LANES);
                 if lane == 0 {
-                    specular[g].active = M16::NONE;
+                    others[g].active = M16::NONE;
                 }
-                specular[g].set(lane, i, &hit, geometric, path.beta);
-                specular[g].set_scatter(lane, at_edge, scatter);
-                n_specular += 1;
+                let from = (hit.position, geometric, at_edge);
+                others[g].set(lane, i, from, beta, scattered);
+                n_other += 1;
             }
         }
         let mut still = 0;
-        // The direct term at the diffuse hits (drawing a spherical light's points first).
-        if sphere_light {
-            diffuse.light::<true>(tracer, rngs, |i| i as usize, lit);
-        } else {
-            diffuse.light::<false>(tracer, rngs, |i| i as usize, lit);
-        }
+        // The direct term at the diffuse hits.
+        diffuse.light::<false>(tracer, rngs, |i| i as usize, lit);
         // Their bounces: a cosine-weighted direction about the turned normal, weight ρ.
         for (g, (_, surfaces)) in diffuse.groups().enumerate() {
             let mut d = Departures {
@@ -443,7 +542,7 @@ fn batch<R: Recorder>(
                 give_back(&d, &rng, rngs);
             }
         }
-        for d in &specular[..n_specular.div_ceil(LANES)] {
+        for d in &others[..n_other.div_ceil(LANES)] {
             let mut rng = take_rngs(d, rngs);
             let next = (&mut *alive, &mut *rays_alive);
             go_on(d, paths, &mut rng, next, &mut still, rec);
@@ -468,6 +567,30 @@ fn batch<R: Recorder>(
                     rec.shaded(&terms, Vec3::ZERO, value.lane(lane), arriving[g].lane(lane));
                 }
                 out[i as usize] += seen.lane(lane);
+            }
+        }
+        // The other vertices' shadow rays, and their light and photons into their pixels.
+        if n_lit > 0 {
+            scene.occluded_many(&shadows[..n_shadows], &mut blocked_one[..n_shadows]);
+            for one in &lit_one[..n_lit] {
+                let i = one.owner as usize;
+                let light = one
+                    .light
+                    .map(|l| l.answered(l.casts() && blocked_one[one.shadow as usize]));
+                if let Some(terms) = light {
+                    out[i] += terms.added;
+                }
+                if let Some(g) = one.photons {
+                    out[i] += g.value;
+                }
+                if R::ENABLED {
+                    rec.path_vertex(&PathVertex {
+                        position: one.position,
+                        bsdf: one.bsdf,
+                        light,
+                        photons: one.photons,
+                    });
+                }
             }
         }
     }
@@ -629,6 +752,122 @@ mod tests {
             }
         }
         assert!(refracted > 0 && reflected > 0, "{refracted} {reflected}");
+    }
+
+    /// The batched tracer and its reference, [`super::super::path_mis::trace`] (one path at
+    /// a time), on the same random numbers follow the same paths: every configuration whose
+    /// vertices all run the single path's steps (area and spot lights, the glossy presets
+    /// beside the point light's diffuse lanes, photons) gives the same bits, pixel by pixel;
+    /// under the lab's point light, where the diffuse vertices take the lab's direct term in
+    /// lanes (ρ·D, where the reference computes f·Li·cos θ/p), the same values up to rounding.
+    #[test]
+    fn the_batch_equals_the_single_path_on_the_same_numbers() {
+        use crate::light::{LightKind, LightSpec, SpotCone};
+        use crate::settings::Caustics;
+        let scene = cornell_box();
+        let lights = [
+            LightSpec::default(),
+            LightSpec {
+                kind: LightKind::Quad { side: 0.4 },
+                ..LightSpec::default()
+            },
+            LightSpec {
+                kind: LightKind::Sphere { radius: 0.1 },
+                ..LightSpec::default()
+            },
+            LightSpec {
+                kind: LightKind::Spot(SpotCone {
+                    aim: Vec3::new(0.0, 1.0, -0.2),
+                    cutoff: 25f32.to_radians(),
+                    beam: 15f32.to_radians(),
+                }),
+                ..LightSpec::default()
+            },
+        ];
+        let (mut exact, mut close) = (0, 0);
+        for light in lights {
+            for preset in MaterialPreset::ALL {
+                for caustics in [Caustics::Off, Caustics::Photons] {
+                    let mut settings = RenderSettings::default();
+                    settings.shading = Shading::for_stage(Stage::Path);
+                    settings.shading.caustics = caustics;
+                    settings.shading.photons = 2000;
+                    settings.material_preset = preset;
+                    settings.light = light;
+                    settings.camera = settings.camera.with_resolution(24, 24);
+                    let tracer = Tracer::for_pass(&scene, &settings, 1);
+                    let rays = crate::camera::primary_rays(&settings.camera);
+                    let rngs = || -> Vec<Rng> {
+                        (0..rays.len())
+                            .map(|i| Rng::for_pixel_sample(9, i as u32, 2, 1))
+                            .collect()
+                    };
+                    let mut batched = vec![Vec3::NAN; rays.len()];
+                    tracer.trace(&rays, &mut rngs(), &mut batched);
+                    let mut single = vec![Vec3::NAN; rays.len()];
+                    super::super::path_mis::trace(
+                        &tracer,
+                        &rays,
+                        &mut rngs(),
+                        &mut single,
+                        &mut (),
+                    );
+                    let what = format!("{light:?} {preset} {caustics}");
+                    if tracer.lane_light {
+                        for (a, b) in batched.iter().zip(&single) {
+                            let scale = a.max_element().max(b.max_element()).max(1e-3);
+                            assert!(
+                                (*a - *b).abs().max_element() <= 1e-4 * scale,
+                                "{what}: {a} {b}"
+                            );
+                        }
+                        close += 1;
+                    } else {
+                        let bits = |v: &[Vec3]| -> Vec<[u32; 3]> {
+                            v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+                        };
+                        assert_eq!(bits(&batched), bits(&single), "{what}");
+                        exact += 1;
+                    }
+                    let lit = batched.iter().filter(|v| v.max_element() > 0.0).count();
+                    assert!(lit > 40, "{what}: {lit} pixels lit");
+                }
+            }
+        }
+        assert!(exact > 0 && close > 0, "{exact} {close}");
+    }
+
+    /// The path-traced pool shows its waves: rendered with the same random numbers, the image
+    /// with waves of 0.05 differs from the still water's over much of the picture (the water
+    /// covers the floor, seen in most of the lower half), and still water gives the same image
+    /// as still water. A path tracer that scattered about the water's flat triangle normal
+    /// would give the same image for both.
+    #[test]
+    fn the_path_traced_pool_shows_its_waves() {
+        let render = |waves: f32| {
+            let mut spec = crate::scene::SceneChoice::Pool.spec();
+            spec.water.as_mut().unwrap().waves = waves;
+            let scene = crate::scene::SceneChoice::from_spec(spec).load().unwrap();
+            let mut settings = RenderSettings::default();
+            settings.shading = Shading::for_stage(Stage::Path);
+            settings.camera = settings.camera.with_resolution(32, 32);
+            settings.samples_per_pixel = 4;
+            crate::render::render(&scene, &settings)
+        };
+        let still = render(0.0);
+        assert_eq!(still.pixels, render(0.0).pixels, "deterministic");
+        let waves = render(0.05);
+        let moved = still
+            .pixels
+            .iter()
+            .zip(&waves.pixels)
+            .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * a.max_element().max(0.1))
+            .count();
+        assert!(
+            moved > still.pixels.len() / 5,
+            "{moved} of {} pixels changed",
+            still.pixels.len()
+        );
     }
 
     /// Waves tilt the normal mirror and glass scatter about (`Tracer::specular_normal`, the

@@ -49,12 +49,13 @@ use serde::Serialize;
 
 use super::path::{MAX_DEPTH, ROULETTE_DEPTH, ROULETTE_MAX_SURVIVAL};
 use super::{Recorder, Scattering, Tracer, continue_ray};
-use crate::bsdf::{Bsdf, ShadingFrame};
+use crate::bsdf::{Bsdf, BsdfSample, ShadingFrame};
 use crate::geometry::Ray;
+use crate::lanes::{MaskOf, Real, Vector};
 use crate::light::{Light, shadow_ray_to};
-use crate::material::Scatter;
+use crate::material::{Scatter, facing};
 use crate::photon_map::{Gathered, PhotonMap};
-use crate::sampling::Rng;
+use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
 
 /// The power heuristic with exponent 2 (Veach's thesis, §9.2.4): the weight of a sample drawn
 /// with density `pdf_f` when the other strategy would have drawn it with density `pdf_g`.
@@ -123,12 +124,58 @@ enum Arrival {
     },
 }
 
+/// What a path carries from one vertex to the next, in both forms of the path tracer: its
+/// throughput and counts here, what only area lights and photons read in [`Carried`].
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PathState {
+    /// β, the throughput: what light found at the next vertex is multiplied by.
+    pub beta: Vec3,
+    /// Scatterings from non-delta BSDFs made (the bounces [`Shading::max_bounces`] caps).
+    pub bounces: u32,
+    /// Vertices the path went on from.
+    pub depth: u32,
+}
+
+impl PathState {
+    /// A path at the camera: full throughput, no vertex yet.
+    pub const START: Self = Self {
+        beta: Vec3::ONE,
+        bounces: 0,
+        depth: 0,
+    };
+}
+
+/// What a path carries for the light its rays meet ([`light_met`]) and its photons
+/// ([`gather_photons`]): read only under an area light or with a photon map.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Carried {
+    arrival: Arrival,
+    /// Whether the path has met a non-delta vertex: emission reached through delta BSDFs after
+    /// one is the photon map's.
+    after_diffuse: bool,
+    /// The radiance factor (n_t/n_i)² of the refractions the camera path made, in the
+    /// direction light flows (pbrt-v4's `etaScale`): 1/ior² for a path entering glass, ior²
+    /// leaving it. The path tracer leaves these factors out on both sides of a closed glass
+    /// object, where they cancel (see `crate::bsdf`); a photon gather is the radiance at the
+    /// diffuse point in its own medium, so it is scaled by them: the floor seen through the
+    /// glass block gets 1/ior² of the photons' radiance under the block.
+    eta_scale: f32,
+}
+
+impl Carried {
+    /// A path at the camera.
+    pub const START: Self = Self {
+        arrival: Arrival::Delta,
+        after_diffuse: false,
+        eta_scale: 1.0,
+    };
+}
+
 /// The value of every ray (π × radiance), into `out`, each path drawing from its own
-/// generator; each vertex told to `rec`. Kept out of line: inlined into the tracer's
-/// per-CPU entry points it would change how LLVM compiles the sixteen-lane path tracer beside
-/// it (some of that one's helpers left out of line, more instructions).
+/// generator; each vertex told to `rec`: the batched path tracer's reference, one path at a
+/// time (its tests compare the two on the same random numbers).
 #[inline(never)]
-pub(super) fn trace<R: Recorder>(
+pub fn trace<R: Recorder>(
     tracer: &Tracer,
     rays: &[Ray],
     rngs: &mut [Rng],
@@ -140,177 +187,312 @@ pub(super) fn trace<R: Recorder>(
     }
 }
 
-/// One path from `ray`: its value in π × radiance.
+/// One path from `ray`: its value in π × radiance. Each step is one of the functions below,
+/// which the batched path tracer ([`super::path`]) runs for its vertices too.
 fn radiance<R: Recorder>(tracer: &Tracer, mut ray: Ray, rng: &mut Rng, rec: &mut R) -> Vec3 {
     let scene = tracer.scene;
-    let light = tracer.emitter();
-    let max_bounces = tracer.shading.max_bounces();
     let mut value = Vec3::ZERO;
-    let mut beta = Vec3::ONE;
-    let mut arrival = Arrival::Delta;
-    let (mut bounces, mut depth) = (0u32, 0u32);
-    let photons = tracer.photon_map();
-    // Whether the path has met a non-delta vertex: emission reached through delta BSDFs after
-    // one is the photon map's.
-    let mut after_diffuse = false;
-    // The radiance factor (n_t/n_i)² of the refractions the camera path made, in the
-    // direction light flows (pbrt-v4's `etaScale`): 1/ior² for a path entering glass, ior²
-    // leaving it. The path tracer leaves these factors out on both sides of a closed glass
-    // object, where they cancel (see `crate::bsdf`); a photon gather is the radiance at the
-    // diffuse point in its own medium, so it is scaled by them: the floor seen through the
-    // glass block gets 1/ior² of the photons' radiance under the block.
-    let mut eta_scale = 1.0f32;
+    let mut path = PathState::START;
+    let mut carried = Carried::START;
     loop {
         let hit = scene.closest_intersection(&ray, f32::INFINITY);
         if R::ENABLED {
-            rec.closest_hit(&ray, hit.as_ref(), beta, depth);
+            rec.closest_hit(&ray, hit.as_ref(), path.beta, path.depth);
         }
         // Step 3: the light, if the ray meets it before any surface.
         let t_surface = hit.as_ref().map_or(f32::INFINITY, |h| h.distance);
-        if light.intersect(&ray, t_surface).is_some() {
-            // A ray from a delta BSDF after a non-delta vertex carries light that reached that
-            // vertex through mirror or glass: the photon map counted it there.
-            if photons.is_some() && after_diffuse && matches!(arrival, Arrival::Delta) {
-                break;
-            }
-            let weight = match arrival {
-                Arrival::Delta => 1.0,
-                Arrival::Sampled {
-                    pdf,
-                    from,
-                    relief_visibility,
-                } => power_heuristic(pdf, light.pdf_li(from, ray.direction)) * relief_visibility,
-            };
-            value += beta * light.le(ray.direction) * weight;
+        if let Some(added) = light_met(tracer, &ray, t_surface, path.beta, &carried) {
+            value += added;
             break;
         }
         let Some(hit) = hit else { break };
-        depth += 1;
-        let Scattering {
-            surface,
-            bsdf,
-            frame,
-            wo,
-        } = tracer.scattering(&hit, ray.direction);
-        let at_edge = surface.at_edge;
-
-        // Step 1: next-event estimation, where the BSDF is not a delta. Where the path ends
-        // here (its bounces used up), BSDF sampling will not look for the light, so the light
-        // sample counts in full.
+        let v = tracer.scattering(&hit, ray.direction);
+        // Step 1, then the photons.
+        let scatters = path.bounces < tracer.shading.max_bounces();
         let mut light_terms = None;
-        let scatters = bounces < max_bounces;
-        if !bsdf.is_delta() {
-            let u = Vec2::new(rng.next_f32(), rng.next_f32());
-            if let Some(sample) = light.sample_li(hit.position, u) {
-                let (f, pdf_bsdf) = frame.eval_world(&bsdf, wo, sample.wi);
-                let cos = sample.wi.dot(frame.shading_normal()).abs();
-                let mut terms = LightTerms {
-                    wi: sample.wi,
-                    f,
-                    pdf_light: sample.pdf,
-                    pdf_bsdf: if sample.is_delta { 0.0 } else { pdf_bsdf },
-                    mis_weight: if sample.is_delta || !scatters {
-                        1.0
-                    } else {
-                        power_heuristic(sample.pdf, pdf_bsdf)
-                    },
-                    blocked: false,
-                    added: Vec3::ZERO,
-                };
-                if f != Vec3::ZERO && sample.pdf > 0.0 {
-                    terms.blocked =
-                        shadow_ray_to(sample.point, hit.position, surface.geometric, at_edge)
-                            .is_some_and(|(shadow, t_max)| scene.occluded(&shadow, t_max));
-                    if !terms.blocked {
-                        terms.added = beta
-                            * f
-                            * sample.li
-                            * (cos * terms.mis_weight * surface.relief_visibility / sample.pdf);
-                        value += terms.added;
-                    }
-                }
-                light_terms = Some(terms);
-            }
+        if let Some(sample) = sample_light(tracer, &v, path.beta, scatters, rng) {
+            let blocked = sample
+                .shadow
+                .is_some_and(|(shadow, t_max)| scene.occluded(&shadow, t_max));
+            let terms = sample.answered(blocked);
+            value += terms.added;
+            light_terms = Some(terms);
         }
-        // The caustic photons at a non-delta vertex where the path may scatter (a caustic
-        // reaches the eye by a scattering here, a bounce as the cap counts them).
-        let mut gathered = None;
-        if !bsdf.is_delta() {
-            after_diffuse = true;
-            if let Some(map) = photons.filter(|_| scatters) {
-                let mut g = gather(map, &frame, &bsdf, hit.position, wo);
-                g.value *= beta * eta_scale;
-                value += g.value;
-                gathered = Some(g);
-            }
+        let gathered = gather_photons(tracer, &v, path.beta, &mut carried, scatters);
+        if let Some(g) = gathered {
+            value += g.value;
         }
         if R::ENABLED {
             rec.path_vertex(&PathVertex {
                 position: hit.position,
-                bsdf,
+                bsdf: v.bsdf,
                 light: light_terms,
                 photons: gathered,
             });
         }
-
-        // Step 2: the next direction, from the BSDF.
-        if !bsdf.is_delta() {
-            if !scatters {
-                break;
-            }
-            bounces += 1;
-        }
-        let uc = rng.next_f32();
-        let u = Vec2::new(rng.next_f32(), rng.next_f32());
-        let Some(sample) = frame.sample_world(&bsdf, wo, uc, u) else {
+        // Step 2: the next direction, from the BSDF; then Russian roulette.
+        let Some(scatter) = scatter(tracer, &v, &mut path, &mut carried, rng) else {
             break;
         };
-        let wi = sample.wi;
-        if sample.weight == Vec3::ZERO {
-            break;
-        }
-        beta *= sample.weight;
-        if let Bsdf::Glass { ior, .. } = bsdf
-            && !frame.reflects(wo, wi)
-        {
-            eta_scale *= if frame.front_face() {
-                1.0 / (ior * ior)
-            } else {
-                ior * ior
-            };
-        }
-        arrival = if sample.is_delta {
-            Arrival::Delta
-        } else {
-            Arrival::Sampled {
-                pdf: sample.pdf,
-                from: hit.position,
-                relief_visibility: surface.relief_visibility,
-            }
-        };
-        // Russian roulette, as the sixteen-lane path tracer plays it: its number drawn at
-        // every vertex, used or not.
-        let u_roulette = rng.next_f32();
-        let survival = if depth >= ROULETTE_DEPTH {
-            beta.max_element().min(ROULETTE_MAX_SURVIVAL)
-        } else {
-            1.0
-        };
-        beta /= survival;
-        let survives = depth < MAX_DEPTH && u_roulette < survival;
+        let depth = path.depth + 1;
+        let u = rng.next_f32();
+        let (beta, survival, lucky) =
+            roulette(path.beta, scatter.weight, depth >= ROULETTE_DEPTH, u);
+        path.beta = beta;
+        path.depth = depth;
+        let survives = depth < MAX_DEPTH && lucky;
         if R::ENABLED {
-            let scatter = Scatter {
-                direction: wi,
-                weight: sample.weight,
-            };
-            rec.scattered(&scatter, survival, beta, survives);
+            rec.scattered(&scatter, survival, path.beta, survives);
         }
         if !survives {
             break;
         }
-        ray = continue_ray(hit.position, surface.geometric, wi, at_edge);
+        ray = continue_ray(
+            hit.position,
+            v.surface.geometric,
+            scatter.direction,
+            v.surface.at_edge,
+        );
     }
     value
+}
+
+/// Step 3: what `ray` adds if it meets the light before `t_surface` (β and the MIS weight
+/// included), and then the path ends there; `None` if it does not meet it. A ray from a delta
+/// BSDF after a non-delta vertex carries light that reached that vertex through mirror or
+/// glass: with a photon map, the map counted it there, so it adds nothing.
+#[inline]
+pub(super) fn light_met(
+    tracer: &Tracer,
+    ray: &Ray,
+    t_surface: f32,
+    beta: Vec3,
+    carried: &Carried,
+) -> Option<Vec3> {
+    let light = tracer.emitter();
+    light.intersect(ray, t_surface)?;
+    let weight = match carried.arrival {
+        Arrival::Delta if tracer.photon_map().is_some() && carried.after_diffuse => 0.0,
+        Arrival::Delta => 1.0,
+        Arrival::Sampled {
+            pdf,
+            from,
+            relief_visibility,
+        } => power_heuristic(pdf, light.pdf_li(from, ray.direction)) * relief_visibility,
+    };
+    Some(beta * light.le(ray.direction) * weight)
+}
+
+/// Step 1 drawn, its shadow ray still to answer ([`sample_light`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LightSample {
+    /// The terms, `blocked` and `added` still unset.
+    terms: LightTerms,
+    /// Whether the light sample can add anything (f and the light's density not 0): only then
+    /// is its shadow ray asked.
+    lights: bool,
+    /// The shadow ray toward the light's point, and its length (`None`: nothing can block it).
+    pub shadow: Option<(Ray, f32)>,
+    /// What it adds if the shadow ray is not blocked.
+    value: Vec3,
+}
+
+impl LightSample {
+    /// The terms once the shadow ray is answered (`blocked`; ignored where none is cast).
+    #[inline]
+    pub fn answered(&self, blocked: bool) -> LightTerms {
+        let mut terms = self.terms;
+        if self.lights {
+            terms.blocked = blocked && self.shadow.is_some();
+            if !terms.blocked {
+                terms.added = self.value;
+            }
+        }
+        terms
+    }
+
+    /// Whether its shadow ray is to be cast.
+    #[inline]
+    pub fn casts(&self) -> bool {
+        self.lights && self.shadow.is_some()
+    }
+}
+
+/// Step 1, next-event estimation, where the BSDF is not a delta: a point of the light drawn
+/// (two numbers from `rng`, unless the light is a delta light, whose point is fixed), f and
+/// both densities toward it, its MIS weight. Where the path ends here (`scatters` false: its
+/// bounces used up), BSDF sampling will not look for the light, so the light sample counts
+/// in full.
+#[inline]
+pub(super) fn sample_light(
+    tracer: &Tracer,
+    v: &Scattering,
+    beta: Vec3,
+    scatters: bool,
+    rng: &mut Rng,
+) -> Option<LightSample> {
+    if v.bsdf.is_delta() {
+        return None;
+    }
+    let light = tracer.emitter();
+    let position = v.surface.position;
+    let u = match light.is_delta() {
+        true => Vec2::ZERO,
+        false => Vec2::new(rng.next_f32(), rng.next_f32()),
+    };
+    let sample = light.sample_li(position, u)?;
+    let (f, pdf_bsdf) = v.frame.eval_world(&v.bsdf, v.wo, sample.wi);
+    let cos = sample.wi.dot(v.frame.shading_normal()).abs();
+    let terms = LightTerms {
+        wi: sample.wi,
+        f,
+        pdf_light: sample.pdf,
+        pdf_bsdf: if sample.is_delta { 0.0 } else { pdf_bsdf },
+        mis_weight: if sample.is_delta || !scatters {
+            1.0
+        } else {
+            power_heuristic(sample.pdf, pdf_bsdf)
+        },
+        blocked: false,
+        added: Vec3::ZERO,
+    };
+    let lights = f != Vec3::ZERO && sample.pdf > 0.0;
+    let surface = &v.surface;
+    Some(LightSample {
+        terms,
+        lights,
+        shadow: match lights {
+            true => shadow_ray_to(sample.point, position, surface.geometric, surface.at_edge),
+            false => None,
+        },
+        value: beta
+            * f
+            * sample.li
+            * (cos * terms.mis_weight * surface.relief_visibility / sample.pdf),
+    })
+}
+
+/// The caustic photons at a non-delta vertex where the path may scatter (a caustic reaches
+/// the eye by a scattering here, a bounce as the cap counts them), β included; `None` without
+/// a photon map. Marks the path as past a non-delta vertex.
+#[inline]
+pub(super) fn gather_photons(
+    tracer: &Tracer,
+    v: &Scattering,
+    beta: Vec3,
+    carried: &mut Carried,
+    scatters: bool,
+) -> Option<Gathered> {
+    if v.bsdf.is_delta() {
+        return None;
+    }
+    carried.after_diffuse = true;
+    let map = tracer.photon_map().filter(|_| scatters)?;
+    let mut g = gather(map, &v.frame, &v.bsdf, v.surface.position, v.wo);
+    g.value *= beta * carried.eta_scale;
+    Some(g)
+}
+
+/// Step 2: the next direction, from the BSDF, and the weight β is multiplied by; `None` ends
+/// the path (a non-delta BSDF with the bounces used up, nothing to sample, no weight). Counts
+/// the bounce and keeps what the next vertex needs (how the ray was drawn, the refractions).
+///
+/// A diffuse surface scatters as the sixteen-lane vertices do ([`crate::material::Material::sample`]):
+/// a cosine-weighted direction drawn by rejection about its own normal turned to the arriving
+/// ray, weight ρ, its density for MIS the shading frame's. Every other BSDF draws through its
+/// shading frame ([`ShadingFrame::sample_world`]): one number for the lobe, two more where it
+/// has a density.
+#[inline]
+pub(super) fn scatter(
+    tracer: &Tracer,
+    v: &Scattering,
+    path: &mut PathState,
+    carried: &mut Carried,
+    rng: &mut Rng,
+) -> Option<Scatter> {
+    if !v.bsdf.is_delta() {
+        if path.bounces >= tracer.shading.max_bounces() {
+            return None;
+        }
+        path.bounces += 1;
+    }
+    let sample = match v.bsdf {
+        Bsdf::Lambertian { rho } => {
+            let local = cosine_hemisphere_by_rejection::<Vec3>(rng, true);
+            let wi = hemisphere_around(facing(v.surface.geometric, -v.wo), local);
+            // The density only MIS asks for, where BSDF samples may meet the light.
+            let pdf = match tracer.emitter().is_delta() {
+                true => 0.0,
+                false => v.frame.eval_world(&v.bsdf, v.wo, wi).1,
+            };
+            BsdfSample {
+                wi,
+                weight: rho,
+                pdf,
+                is_delta: false,
+            }
+        }
+        Bsdf::Mirror { .. }
+        | Bsdf::Glass { .. }
+        | Bsdf::RoughConductor { .. }
+        | Bsdf::Plastic(_) => {
+            let uc = rng.next_f32();
+            let u = match v.bsdf.is_delta() {
+                true => Vec2::ZERO,
+                false => Vec2::new(rng.next_f32(), rng.next_f32()),
+            };
+            let sample = v.frame.sample_world(&v.bsdf, v.wo, uc, u)?;
+            if sample.weight == Vec3::ZERO {
+                return None;
+            }
+            sample
+        }
+    };
+    let wi = sample.wi;
+    if let Bsdf::Glass { ior, .. } = v.bsdf
+        && !v.frame.reflects(v.wo, wi)
+    {
+        carried.eta_scale *= if v.frame.front_face() {
+            1.0 / (ior * ior)
+        } else {
+            ior * ior
+        };
+    }
+    carried.arrival = if sample.is_delta {
+        Arrival::Delta
+    } else {
+        Arrival::Sampled {
+            pdf: sample.pdf,
+            from: v.surface.position,
+            relief_visibility: v.surface.relief_visibility,
+        }
+    };
+    Some(Scatter {
+        direction: wi,
+        weight: sample.weight,
+    })
+}
+
+/// Russian roulette after a scattering of `weight`, for one path or sixteen: β times the
+/// weight, the chance to go on (min(max β, [`ROULETTE_MAX_SURVIVAL`]) where `at_depth`, the
+/// path's vertex being at least [`ROULETTE_DEPTH`], else 1), β divided by it, and whether the
+/// uniform number `u` lets the path go on.
+#[inline(always)]
+pub(super) fn roulette<V: Vector>(
+    beta: V,
+    weight: V,
+    at_depth: MaskOf<V>,
+    u: V::Real,
+) -> (V, V::Real, MaskOf<V>) {
+    let beta = beta * weight;
+    let survival = V::Real::select(
+        at_depth,
+        beta.max_element()
+            .simd_min(V::Real::splat(ROULETTE_MAX_SURVIVAL)),
+        V::Real::splat(1.0),
+    );
+    let beta = V::scale(V::Real::splat(1.0) / survival, beta);
+    (beta, survival, u.simd_lt(survival))
 }
 
 /// The photon map's density estimate at a hit ([`PhotonMap::gather`]): f(wo, wi) for each
