@@ -17,6 +17,7 @@
 
 pub mod compile;
 pub mod error;
+pub mod explain;
 pub mod judge;
 pub mod lex;
 pub mod parse;
@@ -26,8 +27,9 @@ mod trace;
 #[cfg(test)]
 mod tests;
 
-pub use compile::{Equations, compile};
+pub use compile::{Equations, Part, compile};
 pub use error::{SandboxError, Span};
+pub use explain::Explanation;
 pub use judge::{Verdict, judge};
 pub use tape::{Tape, Ty};
 pub use trace::{MAGENTA, Recording, Rendered, record, render};
