@@ -177,7 +177,9 @@ impl Explanation {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        push("the lab's terms".to_owned(), terms(&self.direction_terms));
+        if self.direction.yours.is_some() {
+            push("the lab's terms".to_owned(), terms(&self.direction_terms));
+        }
         quantity_lines(&self.direction, &mut Vec::new(), &mut push);
         for (i, hit) in self.hits.iter().enumerate() {
             if self.made_of == "specular" {
