@@ -344,6 +344,13 @@ fn shadow_start_inputs(hit: &Hit, u: &Uniforms) -> [f32; INPUT_COMPONENTS] {
 /// Calls `put(component, value)` for every input a hit gives (all but `x`, `y`, `shadowed`
 /// and `D`).
 fn hit_inputs(hit: &Hit, u: &Uniforms, mut put: impl FnMut(usize, f32)) {
+    uniform_inputs(u, &mut put);
+    own_inputs(hit, put);
+}
+
+/// Calls `put(component, value)` for the inputs that are one for the whole image: the
+/// camera's, the light's, N and the image's size.
+fn uniform_inputs(u: &Uniforms, mut put: impl FnMut(usize, f32)) {
     let mut vec = |first: usize, v: Vec3| {
         for (k, c) in v.to_array().into_iter().enumerate() {
             put(first + k, c);
@@ -355,20 +362,29 @@ fn hit_inputs(hit: &Hit, u: &Uniforms, mut put: impl FnMut(usize, f32)) {
     vec(const { offset("forward") }, u.forward);
     vec(const { offset("lightPos") }, u.light);
     vec(const { offset("lightColor") }, u.light_color);
-    vec(const { offset("position") }, hit.position);
-    vec(const { offset("normal") }, hit.normal);
-    vec(const { offset("color") }, hit.color);
     vec(const { offset("indirectLight") }, u.indirect);
-    vec(const { offset("shadowStart") }, hit.shadow_start);
     for (k, v) in [
         (const { offset("W") }, u.width),
         (const { offset("H") }, u.height),
         (const { offset("focalLength") }, u.focal_length),
-        (const { offset("distance") }, hit.distance),
-        (const { offset("shadowDistance") }, hit.shadow_distance),
     ] {
         put(k, v);
     }
+}
+
+/// Calls `put(component, value)` for the inputs that are the hit's own.
+fn own_inputs(hit: &Hit, mut put: impl FnMut(usize, f32)) {
+    let mut vec = |first: usize, v: Vec3| {
+        for (k, c) in v.to_array().into_iter().enumerate() {
+            put(first + k, c);
+        }
+    };
+    vec(const { offset("position") }, hit.position);
+    vec(const { offset("normal") }, hit.normal);
+    vec(const { offset("color") }, hit.color);
+    vec(const { offset("shadowStart") }, hit.shadow_start);
+    put(const { offset("distance") }, hit.distance);
+    put(const { offset("shadowDistance") }, hit.shadow_distance);
 }
 
 impl Recording {
@@ -393,30 +409,31 @@ impl Recording {
     pub fn evaluate_lanes<const N: usize>(&self, equations: &Equations) -> Rendered {
         let values: Vec<Vec3> = self
             .hits
-            .par_chunks(256)
+            .par_chunks(CHUNK)
             .flat_map_iter(|chunk| {
                 let mut slots = Vec::new();
-                let mut out = Vec::with_capacity(chunk.len());
-                for group in chunk.chunks(N) {
-                    self.values::<N>(equations, group, &mut slots, &mut out, None);
+                let mut out = vec![Vec3::ZERO; chunk.len()];
+                for (group, out) in chunk.chunks(N).zip(out.chunks_mut(N)) {
+                    self.values::<N>(equations, group, &mut slots, out, None);
                 }
                 out
             })
             .collect();
-        let mut non_finite = 0;
-        let pixels = self
+        let mut pixels: Vec<Vec3> = self
             .pixels
-            .iter()
-            .map(|p| {
-                let v = self.pixel_value(*p, |i| values[i]);
-                if v.is_finite() {
-                    v
-                } else {
-                    non_finite += 1;
-                    MAGENTA
-                }
-            })
+            .par_iter()
+            .map(|p| self.pixel_value(*p, |i| values[i]))
             .collect();
+        let non_finite = pixels
+            .par_iter_mut()
+            .map(|v| {
+                let bad = !v.is_finite();
+                if bad {
+                    *v = MAGENTA;
+                }
+                usize::from(bad)
+            })
+            .sum();
         Rendered {
             image: Image {
                 width: self.width,
@@ -503,13 +520,15 @@ impl Recording {
                         hit_terms = terms(inputs, true);
                     }
                 };
+            let mut value = [Vec3::ZERO];
             self.values::<1>(
                 equations,
                 std::slice::from_ref(hit),
                 &mut Vec::new(),
-                &mut values,
+                &mut value,
                 Some(&mut watch),
             );
+            values.push(value[0]);
             hits.push(HitValues {
                 weight: hit.weight.to_array(),
                 terms: hit_terms,
@@ -533,72 +552,69 @@ impl Recording {
         })
     }
 
-    /// R at each hit of `group` (at most `N`), appended to `out`. `watch`, if given, is told
-    /// each of `shadowed`, `D` and `R` as it is computed: the inputs it read, the slots the
-    /// student's tape left (empty where they wrote none) and the lab's value at each hit from
-    /// those inputs.
+    /// R at each hit of `group` (at most `N`) into `out` (as long as `group`). `watch`, if
+    /// given, is told each of `shadowed`, `D` and `R` as it is computed: the inputs it read,
+    /// the slots the student's tape left (empty where they wrote none) and the lab's value at
+    /// each hit from those inputs.
     fn values<const N: usize>(
         &self,
         equations: &Equations,
         group: &[Hit],
         slots: &mut Vec<[f32; N]>,
-        out: &mut Vec<Vec3>,
+        out: &mut [Vec3],
         mut watch: Option<&mut Watch<'_, N>>,
     ) {
         let u = &self.uniforms;
-        let mut inputs = vec![[0.0f32; N]; INPUT_COMPONENTS];
+        // Lanes past the group's hits hold the uniforms and zeros: computed, never read.
+        let mut inputs = [[0.0f32; N]; INPUT_COMPONENTS];
+        uniform_inputs(u, |k, v| inputs[k] = [v; N]);
         for (i, hit) in group.iter().enumerate() {
-            hit_inputs(hit, u, |k, v| inputs[k][i] = v);
+            own_inputs(hit, |k, v| inputs[k][i] = v);
         }
         let lanes = group.len();
-        let vec3s = |v: [[f32; N]; 3]| -> Vec<Vec3> {
-            (0..lanes)
-                .map(|i| Vec3::new(v[0][i], v[1][i], v[2][i]))
-                .collect()
-        };
-        let set_vec3s = |inputs: &mut Vec<[f32; N]>, first: usize, vs: &[Vec3]| {
-            for (i, v) in vs.iter().enumerate() {
-                for (k, c) in v.to_array().into_iter().enumerate() {
-                    inputs[first + k][i] = c;
-                }
-            }
+        let vec3s = |v: [[f32; N]; 3]| -> [Vec3; N] {
+            std::array::from_fn(|i| Vec3::new(v[0][i], v[1][i], v[2][i]))
         };
         let d_tape = equations.tape(Quantity::Direct);
         let shadowed_tape = equations.tape(Quantity::Shadowed);
-        // The lab's shadowed: its test where light arrives. Where the lab cast no shadow ray,
-        // light arrives if the student's D, unshadowed, is not 0.
-        let lab_shadowed: Vec<bool> = if shadowed_tape.is_none() || watch.is_some() {
-            let unshadowed: Option<Vec<Vec3>> = d_tape.map(|tape| {
-                for l in inputs[const { offset("shadowed") }].iter_mut() {
-                    *l = 0.0;
+        // The lab's shadowed: its test where light arrives. Where the lab cast no shadow ray
+        // (and the ray it would have cast is blocked), light arrives if the student's D,
+        // unshadowed, is not 0.
+        let mut lab_shadowed = [false; N];
+        if shadowed_tape.is_none() || watch.is_some() {
+            let ask = |h: &Hit| u.shadows && !h.lab_cast && h.blocked;
+            let unshadowed = match d_tape {
+                Some(tape) if group.iter().any(ask) => {
+                    inputs[const { offset("shadowed") }] = [0.0; N];
+                    Some(vec3s(tape.run::<N>(&inputs, slots)))
                 }
-                vec3s(tape.run::<N>(&inputs, slots))
-            });
-            group
-                .iter()
-                .enumerate()
-                .map(|(i, h)| {
-                    let arrives =
-                        h.lab_cast || unshadowed.as_ref().is_some_and(|d| d[i] != Vec3::ZERO);
-                    u.shadows && arrives && h.blocked
-                })
-                .collect()
-        } else {
-            Vec::new()
+                _ => None,
+            };
+            for (i, h) in group.iter().enumerate() {
+                let arrives = h.lab_cast || unshadowed.is_some_and(|d| d[i] != Vec3::ZERO);
+                lab_shadowed[i] = u.shadows && arrives && h.blocked;
+            }
+        }
+        let shadowed = match shadowed_tape {
+            Some(tape) => {
+                let s = tape.run::<N>(&inputs, slots);
+                s[0].map(|v| v != 0.0)
+            }
+            None => lab_shadowed,
         };
-        let students: Option<Vec<bool>> = shadowed_tape.map(|tape| {
-            let s = tape.run::<N>(&inputs, slots);
-            (0..lanes).map(|i| s[0][i] != 0.0).collect()
-        });
-        let shadowed = students.as_deref().unwrap_or(&lab_shadowed);
         if let Some(w) = watch.as_deref_mut() {
-            let lab: Vec<[f32; 3]> = lab_shadowed.iter().map(|&b| [truth(b); 3]).collect();
-            let slots = if students.is_some() { &slots[..] } else { &[] };
+            let lab: Vec<[f32; 3]> = lab_shadowed[..lanes]
+                .iter()
+                .map(|&b| [truth(b); 3])
+                .collect();
+            let slots = if shadowed_tape.is_some() {
+                &slots[..]
+            } else {
+                &[]
+            };
             w(Quantity::Shadowed, &inputs, slots, &lab);
         }
-        for (i, s) in shadowed.iter().enumerate() {
-            inputs[const { offset("shadowed") }][i] = truth(*s);
-        }
+        inputs[const { offset("shadowed") }] = shadowed.map(truth);
         let lab_d = |i: usize| {
             if shadowed[i] {
                 Vec3::ZERO
@@ -606,30 +622,41 @@ impl Recording {
                 group[i].lab_d
             }
         };
-        let d: Vec<Vec3> = match d_tape {
+        let d: [Vec3; N] = match d_tape {
             Some(tape) => vec3s(tape.run::<N>(&inputs, slots)),
-            None => (0..lanes).map(lab_d).collect(),
+            None => std::array::from_fn(|i| if i < lanes { lab_d(i) } else { Vec3::ZERO }),
         };
         if let Some(w) = watch.as_deref_mut() {
             let lab: Vec<[f32; 3]> = (0..lanes).map(|i| lab_d(i).to_array()).collect();
             let slots = if d_tape.is_some() { &slots[..] } else { &[] };
             w(Quantity::Direct, &inputs, slots, &lab);
         }
-        set_vec3s(&mut inputs, const { offset("D") }, &d);
+        for (k, lanes) in inputs[const { offset("D") }..][..3].iter_mut().enumerate() {
+            *lanes = d.map(|d| d[k]);
+        }
         let lab_r = |i: usize| shaded_value(u.stage, group[i].color, d[i], false, u.indirect);
         let r_tape = equations.tape(Quantity::Value);
-        let r = match r_tape {
-            Some(tape) => vec3s(tape.run::<N>(&inputs, slots)),
-            None => (0..lanes).map(lab_r).collect(),
-        };
+        match r_tape {
+            Some(tape) => {
+                let r = vec3s(tape.run::<N>(&inputs, slots));
+                out.copy_from_slice(&r[..lanes]);
+            }
+            None => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = lab_r(i);
+                }
+            }
+        }
         if let Some(w) = watch {
             let lab: Vec<[f32; 3]> = (0..lanes).map(|i| lab_r(i).to_array()).collect();
             let slots = if r_tape.is_some() { &slots[..] } else { &[] };
             w(Quantity::Value, &inputs, slots, &lab);
         }
-        out.extend(r);
     }
 }
+
+/// How many hits a parallel task evaluates.
+const CHUNK: usize = 1024;
 
 /// What [`Recording::values`] tells: a quantity, the inputs it read, the slots the student's
 /// tape left (empty where they wrote none), and the lab's value at each hit.
