@@ -145,3 +145,88 @@ pub fn scene_file(data: &[u8]) {
             .as_bytes(),
     );
 }
+
+/// Text → the equation sandbox's lexer, parser and compiler (`sandbox::compile`, what
+/// `--equations FILE` and the window's editors run). Each error must lie in the text, on
+/// character boundaries, with its line, column and message. What compiles is evaluated over an
+/// 8 × 8 recording of the lab's box (traced again with its `d` and `shadowStart` where it
+/// writes them): sixteen lanes and one give the same bits, the count of NaN and infinite
+/// pixels is the magenta ones', and every pixel's explanation (`Recording::explain`, the
+/// inspector's) has the image's value bit for bit and prints.
+pub fn sandbox(data: &[u8]) {
+    use raylab_core::sandbox::{self, MAGENTA, Recording, Rendered};
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let equations = match sandbox::compile(text) {
+        Ok(equations) => equations,
+        Err(errors) => {
+            assert!(!errors.is_empty());
+            for e in &errors {
+                assert!(
+                    e.span.start <= e.span.end && e.span.end <= text.len(),
+                    "{e:?}"
+                );
+                assert!(text.is_char_boundary(e.span.start), "{e:?}");
+                assert!(
+                    e.line >= 1 && e.column >= 1 && !e.message.is_empty(),
+                    "{e:?}"
+                );
+            }
+            return;
+        }
+    };
+    static SETTINGS: OnceLock<RenderSettings> = OnceLock::new();
+    static LAB: OnceLock<Recording> = OnceLock::new();
+    let settings = SETTINGS.get_or_init(|| {
+        let mut s = RenderSettings::default();
+        s.camera = s.camera.with_resolution(8, 8);
+        s.shading = Shading::for_stage(Stage::Lab);
+        s
+    });
+    let scene = scene_for(&SceneChoice::Cornell);
+    let lab = LAB.get_or_init(|| sandbox::record(&scene, settings, &sandbox::Equations::lab()));
+    let traced;
+    let recording = if lab.fits(&equations) {
+        lab
+    } else {
+        traced = sandbox::record(&scene, settings, &equations);
+        &traced
+    };
+    let bits = |r: &Rendered| -> Vec<u32> {
+        r.image
+            .pixels
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    };
+    let sixteen = recording.evaluate_lanes::<16>(&equations);
+    let one = recording.evaluate_lanes::<1>(&equations);
+    assert_eq!(bits(&sixteen), bits(&one), "{text:?}");
+    let magenta = sixteen
+        .image
+        .pixels
+        .iter()
+        .filter(|p| **p == MAGENTA)
+        .count();
+    assert!(sixteen.non_finite <= magenta, "{text:?}");
+    for y in 0..8 {
+        for x in 0..8 {
+            let e = recording
+                .explain(&equations, x, y)
+                .expect("a pixel of the image");
+            let pixel = sixteen.image.pixels[(y * 8 + x) as usize];
+            if e.finite {
+                assert_eq!(
+                    e.value.map(f32::to_bits),
+                    pixel.to_array().map(f32::to_bits)
+                );
+            } else {
+                assert_eq!(pixel, MAGENTA, "{text:?}");
+            }
+            assert!(!e.to_text().is_empty());
+            serde_json::to_string(&e).expect("an explanation serialises");
+        }
+    }
+    assert!(recording.explain(&equations, 8, 0).is_none());
+}

@@ -152,6 +152,10 @@ pub struct InspectArgs {
     /// `render --denoise on` writes it), printed beside the traced one.
     #[arg(long, default_value = "off", value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
     pub denoise: bool,
+    /// Your own equations (see render's --equations): also the pixel of the image they render,
+    /// each quantity's value beside the lab's and every part of your text with its value there.
+    #[arg(long, value_name = "FILE", conflicts_with = "denoise")]
+    pub equations: Option<PathBuf>,
     #[command(flatten)]
     pub options: RenderOptions,
 }
@@ -1113,8 +1117,12 @@ fn check_scene_destination(path: &std::path::Path) -> anyhow::Result<()> {
 }
 
 fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
+    let written = args.equations.as_deref().map(equations::read).transpose()?;
     let settings = args.options.resolve_settings()?;
     settings.validate()?;
+    if written.is_some() {
+        equations::refuse_unless_lab(&settings, View::Shaded)?;
+    }
     let Pixel(x, y) = args.pixel;
     let (width, height) = (settings.camera.width, settings.camera.height);
     // Refused before the scene is loaded (a large model takes a while).
@@ -1137,6 +1145,10 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
     let scene = pool.install(|| settings.scene.load())?;
     let inspection =
         inspect_pixel(&scene, &settings, x, y).with_context(|| format!("--pixel {x},{y}"))?;
+    // Inside the image (checked above), so explained wherever equations are given.
+    let explained = written
+        .as_ref()
+        .and_then(|w| pool.install(|| equations::explain(&scene, &settings, w, x, y)));
     // The denoised value needs the whole image, rendered and denoised as `render --denoise
     // on` writes it (`None` where nothing is noisy).
     let denoised = if args.denoise || settings.denoise {
@@ -1165,9 +1177,16 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
                 }),
             );
         }
+        if let (Some(explained), Some(object)) = (&explained, json.as_object_mut()) {
+            object.insert("equations".to_owned(), serde_json::to_value(explained)?);
+        }
         writeln!(out, "{json}")?;
     } else {
         write!(out, "{}", printable_lines(&inspection.to_text()))?;
+        if let Some(explained) = &explained {
+            writeln!(out, "\nYour equations at this pixel:")?;
+            write!(out, "{}", printable_lines(&explained.to_text()))?;
+        }
         match denoised {
             Some(Some(d)) => writeln!(
                 out,

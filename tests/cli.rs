@@ -1636,6 +1636,99 @@ fn check_the_students_equations() {
     assert_eq!(json["non_finite_pixels"], 0);
 }
 
+/// `inspect --pixel X,Y --equations FILE`: the inspector's explanation, then the student's
+/// pixel with each quantity beside the lab's and every part of their text with its value at
+/// the line and column where it is written; in JSON under `equations`, its value the pixel of
+/// the image `render --equations` writes.
+#[test]
+fn inspect_with_the_students_equations() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("no4pi.txt");
+    std::fs::write(
+        &path,
+        "vec3 r = lightPos - position;\n\
+         D = shadowed ? vec3(0) : lightColor * max(dot(normalize(r), normal), 0.0) / dot(r, r)\n",
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let size = ["--width", "32", "--height", "32"];
+    let mut args = vec!["inspect", "--pixel", "8,28", "--equations", path];
+    args.extend(size);
+    let out = raylab(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("eq. 27"), "the inspector's own lines: {text}");
+    let (_, yours) = text
+        .split_once("Your equations at this pixel:")
+        .unwrap_or_else(|| panic!("{text}"));
+    let has = |start: &str, text: &str| {
+        yours
+            .lines()
+            .any(|l| l.trim_start().starts_with(start) && l.contains(text))
+    };
+    assert!(has("your pixel", "(8, 28) = ("), "{yours}");
+    assert!(has("the lab's terms", "lightPos = ("), "{yours}");
+    assert!(has("D ", "(they differ)"), "{yours}");
+    assert!(has("line 1:6 ", "r = lightPos - position = ("), "{yours}");
+    assert!(has("line 2:77 ", "dot(r, r) = "), "{yours}");
+
+    args.push("--json");
+    let out = raylab(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["pixel"], serde_json::json!([8, 28]));
+    let e = &json["equations"];
+    assert_eq!(e["made_of"], "diffuse", "{e}");
+    let d = &e["hits"][0]["quantities"][2];
+    assert_eq!(d["name"], "D", "{e}");
+    let ratio = d["yours"][0].as_f64().unwrap() / d["lab"][0].as_f64().unwrap();
+    assert!((ratio - 4.0 * std::f64::consts::PI).abs() < 1e-3, "{ratio}");
+    assert_eq!(d["parts"][0]["text"], "lightPos - position");
+    assert_eq!(d["parts"][0]["line"], 1);
+
+    // Its value is the pixel of the image `render --equations` writes.
+    let png = dir.path().join("no4pi.png");
+    let exr = dir.path().join("no4pi.exr");
+    for out in [&png, &exr] {
+        let mut render = vec![
+            "render",
+            "--equations",
+            path,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        render.extend(size);
+        let out = raylab(&render);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let exr = image::open(&exr).unwrap().to_rgb32f();
+    let pixel = exr.get_pixel(8, 28).0;
+    let value: Vec<f32> = e["value"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect();
+    assert_eq!(value, pixel, "{e}");
+
+    // Equations that do not compile are refused before anything is traced.
+    std::fs::write(dir.path().join("bad.txt"), "R = colr\n").unwrap();
+    let bad = dir.path().join("bad.txt");
+    let out = raylab(&[
+        "inspect",
+        "--pixel",
+        "1,1",
+        "--equations",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("bad.txt:1:5: unknown name `colr`"),
+        "{}",
+        stderr(&out)
+    );
+}
+
 /// Equations that do not compile are refused with each error's file, line and column, the
 /// line and a caret under the offending text; nothing is written. What the sandbox does not
 /// compute (the path stage) is refused by name.

@@ -57,6 +57,9 @@ pub struct Evaluated {
     pub verdicts: Vec<(Quantity, String)>,
     /// Whether the camera and shadow rays were traced again (else only evaluated).
     pub retraced: bool,
+    /// What the image was evaluated from, for the inspector's explanation of a pixel.
+    pub recording: Arc<Recording>,
+    pub equations: Equations,
     pub ms: f64,
 }
 
@@ -194,6 +197,19 @@ impl YourEquations {
             Some((s, e, Ok(evaluated))) if *s == settings && *e == equations => Some(evaluated),
             _ => None,
         }
+    }
+
+    /// The student's pixel (`x`, `y`) explained, each part of their text with its value there
+    /// beside the lab's terms ([`Recording::explain`]), when their image of the settings in
+    /// force is on screen.
+    pub fn explained(
+        &self,
+        live: &RenderSettings,
+        x: u32,
+        y: u32,
+    ) -> Option<Vec<raylab_core::inspect::InspectLine>> {
+        let evaluated = self.fresh(live)?;
+        Some(evaluated.recording.explain(&evaluated.equations, x, y)?.lines())
     }
 
     /// Quantity `q`'s verdict, if the newest image made judged the text in its editor now
@@ -450,7 +466,7 @@ fn work(
     results: &Sender<Result<Evaluated, (u64, String)>>,
     repaint: &egui::Context,
 ) {
-    let mut recording: Option<(Arc<Scene>, RenderSettings, Recording)> = None;
+    let mut recording: Option<(Arc<Scene>, RenderSettings, Arc<Recording>)> = None;
     let mut figure: Option<(Arc<Scene>, RenderSettings, Rgb8)> = None;
     while let Ok(mut job) = jobs.recv() {
         // Older jobs waiting are stale: only the newest is made.
@@ -474,7 +490,7 @@ fn work(
 /// One job's image and comparison.
 fn make(
     job: &Job,
-    recording: &mut Option<(Arc<Scene>, RenderSettings, Recording)>,
+    recording: &mut Option<(Arc<Scene>, RenderSettings, Arc<Recording>)>,
     figure: &mut Option<(Arc<Scene>, RenderSettings, Rgb8)>,
 ) -> Evaluated {
     let start = Instant::now();
@@ -486,7 +502,7 @@ fn make(
         .is_some_and(|(scene, s, r)| same(scene, s) && r.fits(&job.equations));
     if retraced {
         let traced = sandbox::record(&job.scene, &job.settings, &job.equations);
-        *recording = Some((Arc::clone(&job.scene), job.settings.clone(), traced));
+        *recording = Some((Arc::clone(&job.scene), job.settings.clone(), Arc::new(traced)));
     }
     if !figure.as_ref().is_some_and(|(scene, s, _)| same(scene, s)) {
         let image = raylab_core::render::render(&job.scene, &job.settings);
@@ -522,6 +538,8 @@ fn make(
         non_finite: rendered.non_finite,
         verdicts,
         retraced,
+        recording: Arc::clone(recorded),
+        equations: job.equations.clone(),
         ms: start.elapsed().as_secs_f64() * 1e3,
     }
 }

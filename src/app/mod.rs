@@ -1013,6 +1013,11 @@ impl WorkbenchApp {
         };
         let shown = self.state.pinned.and_then(|pixel| self.shown_pixel(pixel));
         let display = self.state.settings.display;
+        // With the student's equations on screen: their pixel, part by part.
+        let explained = self
+            .state
+            .pinned
+            .and_then(|[x, y]| self.equations.explained(&self.state.settings, x, y));
         match self.inspection() {
             None => {
                 ui.label("Click a pixel of the image to see how its value is computed.");
@@ -1022,7 +1027,8 @@ impl WorkbenchApp {
             }
             Some(Ok(inspected)) => {
                 // The display's lines change as samples come in: made each frame (no tracing).
-                let shown_lines = inspected.inspection.display_lines(&display, shown);
+                let mut shown_lines = inspected.inspection.display_lines(&display, shown);
+                shown_lines.extend(explained.into_iter().flatten());
                 ui.horizontal(|ui| {
                     if ui
                         .button("Copy as text")

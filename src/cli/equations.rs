@@ -5,7 +5,10 @@
 use std::path::Path;
 
 use raylab_core::light::LightKind;
-use raylab_core::sandbox::{self, Equations, MAX_SOURCE_BYTES, Quantity, SandboxError};
+use raylab_core::sandbox::{
+    self, Equations, Explanation, MAX_SOURCE_BYTES, Quantity, SandboxError,
+};
+use raylab_core::scene::Scene;
 use raylab_core::settings::EquationTexts;
 use raylab_core::view::View;
 use raylab_core::{RenderSettings, Stage};
@@ -134,4 +137,16 @@ pub fn verdicts(equations: &Equations, stage: Stage) -> Vec<(Quantity, String)> 
         .into_iter()
         .filter_map(|q| Some((q, sandbox::judge(equations, q, stage)?.to_string())))
         .collect()
+}
+
+/// Pixel `(x, y)` of the image `equations` render explained: each quantity's value beside the
+/// lab's, every part of the text with its value (`None` outside the image).
+pub fn explain(
+    scene: &Scene,
+    settings: &RenderSettings,
+    equations: &Equations,
+    x: u32,
+    y: u32,
+) -> Option<Explanation> {
+    sandbox::record(scene, settings, equations).explain(equations, x, y)
 }

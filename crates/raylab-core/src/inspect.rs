@@ -1414,7 +1414,7 @@ impl Lines {
 
 /// A number as printed: three significant digits below 1, three decimals above (trailing
 /// zeros dropped: 14, 0.5, 2.74), scientific notation when very small or large, 0 for zero.
-fn num(x: f32) -> String {
+pub(crate) fn num(x: f32) -> String {
     let a = x.abs();
     let text = if x == 0.0 {
         return "0".to_owned();
@@ -1437,7 +1437,7 @@ fn num(x: f32) -> String {
     }
 }
 
-fn vector(v: Vec3) -> String {
+pub(crate) fn vector(v: Vec3) -> String {
     format!("({}, {}, {})", num(v.x), num(v.y), num(v.z))
 }
 

@@ -78,6 +78,23 @@ fn scene_file_inputs_that_once_failed() {
     }
 }
 
+/// The sandbox's inputs: each valid one (named `valid-…`) compiles, so the check evaluates and
+/// explains it over a recording; any other is refused with errors.
+#[test]
+fn sandbox_inputs_that_once_failed() {
+    assert!(replay("sandbox", checks::sandbox) >= 3);
+    for file in inputs("sandbox") {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let compiled = raylab_core::sandbox::compile(&text);
+        let name = file.file_name().unwrap().to_string_lossy().into_owned();
+        assert_eq!(
+            compiled.is_ok(),
+            name.starts_with("valid-"),
+            "{name}: {compiled:?}"
+        );
+    }
+}
+
 /// The scene-file check on every scene shipped in assets/scenes (the fuzz target's seeds): each
 /// parses, saves and reads back to the same settings.
 #[test]

@@ -17,6 +17,9 @@ use super::{INPUTS, MAX_SOURCE_BYTES, Quantity, input};
 /// The most operations a quantity's tape may have.
 pub const MAX_OPS: usize = 50_000;
 
+/// The longest text a [`Part`] keeps, in bytes: a longer one ends in `…`.
+pub const MAX_PART_TEXT: usize = 120;
+
 /// The functions, as the messages list them.
 const FUNCTIONS: [&str; 14] = [
     "dot",
@@ -43,6 +46,35 @@ pub const CONSTANTS: [&str; 2] = ["pi", "M_PI"];
 pub struct Equations {
     tapes: [Option<Tape>; 5],
     spans: [Option<Span>; 5],
+    parts: [Vec<Part>; 5],
+}
+
+/// A part of the student's text whose value the inspector shows: a value of their own (`let r
+/// = …`, `vec3 r = …;`), the quantity itself, or an operation, call or `.x` inside either.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    /// Where it is in the text (a statement's: from its name to the end of its value).
+    pub span: Span,
+    /// 1-based line and column (in characters) of the span's start.
+    pub line: usize,
+    pub column: usize,
+    /// The name a statement defines (`r`, `D`); `None` for an expression inside one.
+    pub name: Option<String>,
+    /// Its text, each run of white space one space (a statement's: its value's text).
+    pub text: String,
+    pub ty: Ty,
+    /// Its value's slots in the quantity's tape: one, or three for a vec3.
+    pub slots: [u32; 3],
+    /// The index of the statement it is in, among the text's statements.
+    pub statement: usize,
+}
+
+impl Part {
+    /// Its value, read from the slots of its quantity's tape run over one pixel.
+    pub fn value(&self, slots: &[[f32; 1]]) -> [f32; 3] {
+        self.slots
+            .map(|s| slots.get(s as usize).map_or(f32::NAN, |v| v[0]))
+    }
 }
 
 impl Equations {
@@ -61,6 +93,13 @@ impl Equations {
         self.spans[q as usize]
     }
 
+    /// The parts of the text `q`'s tape computes, statement by statement in the order of the
+    /// text (the values of its own that it uses, then itself), each statement's parts in the
+    /// order they are computed; empty where `q` is not written.
+    pub fn parts(&self, q: Quantity) -> &[Part] {
+        &self.parts[q as usize]
+    }
+
     /// The quantities written.
     pub fn written(&self) -> impl Iterator<Item = Quantity> + '_ {
         Quantity::ALL
@@ -73,6 +112,7 @@ impl Equations {
         for q in Quantity::ALL.into_iter().filter(|q| !keep(*q)) {
             self.tapes[q as usize] = None;
             self.spans[q as usize] = None;
+            self.parts[q as usize].clear();
         }
     }
 
@@ -81,6 +121,7 @@ impl Equations {
     pub fn take(&mut self, q: Quantity, other: &Equations) {
         self.tapes[q as usize] = other.tapes[q as usize].clone();
         self.spans[q as usize] = other.spans[q as usize];
+        self.parts[q as usize] = other.parts[q as usize].clone();
     }
 
     /// Whether going from `self` to `other` means tracing again (`d` or `shadowStart`
@@ -131,6 +172,8 @@ struct Builder {
     inputs: HashMap<u16, u32>,
     /// The lets compiled so far, by their statement's index.
     lets: HashMap<usize, Val>,
+    /// The parts computed, in the order they were.
+    parts: Vec<Part>,
 }
 
 impl Builder {
@@ -216,6 +259,8 @@ struct Defined<'a> {
 
 struct Compiler<'a> {
     source: &'a str,
+    /// Where each line of the source starts, in bytes.
+    line_starts: Vec<usize>,
     stmts: &'a [Stmt],
     /// The student's own values, by name.
     lets: HashMap<&'a str, Defined<'a>>,
@@ -235,8 +280,12 @@ type Compiled<T> = Result<T, SandboxError>;
 
 impl<'a> Compiler<'a> {
     fn new(source: &'a str, stmts: &'a [Stmt]) -> Self {
+        let line_starts = std::iter::once(0)
+            .chain(source.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
         Self {
             source,
+            line_starts,
             stmts,
             lets: HashMap::new(),
             errors: Vec::new(),
@@ -277,7 +326,10 @@ impl<'a> Compiler<'a> {
         }
         for &(index, q) in &quantities {
             match self.quantity(index, q) {
-                Ok(tape) => equations.tapes[q as usize] = Some(tape),
+                Ok((tape, parts)) => {
+                    equations.tapes[q as usize] = Some(tape);
+                    equations.parts[q as usize] = parts;
+                }
                 Err(e) => self.push_error(e),
             }
         }
@@ -367,8 +419,8 @@ impl<'a> Compiler<'a> {
         Ok(())
     }
 
-    /// Quantity `q`'s tape, from statement `index`.
-    fn quantity(&self, index: usize, q: Quantity) -> Compiled<Tape> {
+    /// Quantity `q`'s tape, from statement `index`, and the parts it computes.
+    fn quantity(&self, index: usize, q: Quantity) -> Compiled<(Tape, Vec<Part>)> {
         let stmt = &self.stmts[index];
         let mut b = Builder::default();
         let ctx = Ctx {
@@ -376,6 +428,7 @@ impl<'a> Compiler<'a> {
             at: index,
         };
         let v = self.expr(&stmt.expr, ctx, &mut b)?;
+        self.statement_part(stmt, index, v, &mut b);
         self.check_declared(stmt, v.ty)?;
         if v.ty != q.ty() {
             let hint = match (q.ty(), v.ty) {
@@ -404,11 +457,63 @@ impl<'a> Compiler<'a> {
                 ),
             ));
         }
-        Ok(Tape {
+        let mut parts = b.parts;
+        // Statement by statement (a stable sort: each one's parts stay in computing order).
+        parts.sort_by_key(|p| p.statement);
+        let tape = Tape {
             ops: b.ops,
             result: v.s[..v.ty.width()].to_vec(),
             ty: v.ty,
-        })
+        };
+        Ok((tape, parts))
+    }
+
+    /// A part for the expression at `span` in statement `statement`, with value `v`; its text
+    /// is that of `text`.
+    fn part(&self, span: Span, shown: Span, name: Option<&str>, statement: usize, v: Val) -> Part {
+        let source = self.source;
+        let start = span.start.min(source.len());
+        let line = self.line_starts.partition_point(|&s| s <= start);
+        let line_start = self.line_starts[line - 1];
+        let column = source
+            .get(line_start..start)
+            .map_or(1, |s| s.chars().count() + 1);
+        let mut text = String::new();
+        for word in source
+            .get(shown.start..shown.end)
+            .unwrap_or("")
+            .split_whitespace()
+        {
+            if !text.is_empty() {
+                text.push(' ');
+            }
+            if text.len() + word.len() > MAX_PART_TEXT {
+                text.push('…');
+                break;
+            }
+            text.push_str(word);
+        }
+        Part {
+            span,
+            line,
+            column,
+            name: name.map(str::to_owned),
+            text,
+            ty: v.ty,
+            slots: v.s,
+            statement,
+        }
+    }
+
+    /// The part of statement `index` as a whole, in place of its value's outermost expression
+    /// (the same value, shown once).
+    fn statement_part(&self, stmt: &Stmt, index: usize, v: Val, b: &mut Builder) {
+        if b.parts.last().is_some_and(|p| p.span == stmt.expr.span) {
+            b.parts.pop();
+        }
+        let span = stmt.name_span.to(stmt.expr.span);
+        let part = self.part(span, stmt.expr.span, Some(&stmt.name), index, v);
+        b.parts.push(part);
     }
 
     /// A C++ declaration's type against its value's.
@@ -439,7 +544,19 @@ impl<'a> Compiler<'a> {
         ))
     }
 
+    /// `e`'s value; an operation, call or `.x` is recorded as a part.
     fn expr(&self, e: &Expr, ctx: Ctx, b: &mut Builder) -> Compiled<Val> {
+        let v = self.expr_value(e, ctx, b)?;
+        if !matches!(
+            e.kind,
+            ExprKind::Num(_) | ExprKind::Bool(_) | ExprKind::Name(_)
+        ) {
+            b.parts.push(self.part(e.span, e.span, None, ctx.at, v));
+        }
+        Ok(v)
+    }
+
+    fn expr_value(&self, e: &Expr, ctx: Ctx, b: &mut Builder) -> Compiled<Val> {
         match &e.kind {
             ExprKind::Num(v) => Ok(Builder::number(b.constant(*v))),
             ExprKind::Bool(t) => Ok(Builder::boolean(b.constant(if *t { 1.0 } else { 0.0 }))),
@@ -544,6 +661,7 @@ impl<'a> Compiler<'a> {
                 return Ok(*v);
             }
             let v = self.expr(&d.stmt.expr, Ctx { at: d.index, ..ctx }, b)?;
+            self.statement_part(d.stmt, d.index, v, b);
             b.lets.insert(d.index, v);
             return Ok(v);
         }

@@ -19,6 +19,7 @@ pub mod carried;
 pub mod compile;
 pub mod error;
 pub mod examples;
+pub mod explain;
 pub mod judge;
 pub mod lex;
 pub mod parse;
@@ -28,8 +29,9 @@ mod trace;
 #[cfg(test)]
 mod tests;
 
-pub use compile::{Equations, compile};
+pub use compile::{Equations, Part, compile};
 pub use error::{SandboxError, Span};
+pub use explain::Explanation;
 pub use judge::{Verdict, judge};
 pub use tape::{Tape, Ty};
 pub use trace::{MAGENTA, Recording, Rendered, record, render};

@@ -470,9 +470,13 @@ impl Parser<'_> {
             Tok::Punct("(") => {
                 self.parens += 1;
                 let inner = self.expression()?;
-                self.expect(")", "to close `(`")?;
+                let close = self.expect(")", "to close `(`")?;
                 self.parens -= 1;
-                Ok(inner)
+                // The parentheses are part of its text: `(a + b) * c` starts at `(`.
+                Ok(Expr {
+                    span: t.span.to(close.span),
+                    ..inner
+                })
             }
             other => Err(self.error(
                 t.span,

@@ -110,11 +110,18 @@ impl Tape {
             };
             slots.push(v);
         }
+        self.value_in(slots)
+    }
+
+    /// The value's components in `slots`, as [`Tape::run`] left them (one component repeated
+    /// for a number or a bool).
+    pub fn value_in<const N: usize>(&self, slots: &[[f32; N]]) -> [[f32; N]; 3] {
         let get = |k: usize| {
             self.result
                 .get(k)
                 .or(self.result.first())
-                .map_or([f32::NAN; N], |&i| slots[i as usize])
+                .and_then(|&i| slots.get(i as usize).copied())
+                .unwrap_or([f32::NAN; N])
         };
         [get(0), get(1), get(2)]
     }

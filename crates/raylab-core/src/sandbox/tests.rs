@@ -502,6 +502,62 @@ fn sizes_are_capped() {
     assert!(eq.tape(Quantity::Value).unwrap().ops.len() < 400);
 }
 
+/// The parts the inspector shows: each value of the student's own and each operation, call or
+/// `.x` a quantity computes, statement by statement in the text's order (each one's parts in
+/// the order computed, itself last), with line, column and text (its parentheses included);
+/// a value used twice is one part, and its value is the tape's.
+#[test]
+fn parts_are_the_texts_values_in_order() {
+    let source = "let r = lightPos - position\nvec3 n = normal; let unused = 2 * 3\n\
+                  D = lightColor * (dot(r, n) /\n  dot(r,   r)) + vec3(r.x)\n";
+    let eq = compile(source).unwrap();
+    let parts: Vec<(usize, usize, Option<&str>, &str)> = eq
+        .parts(Quantity::Direct)
+        .iter()
+        .map(|p| (p.line, p.column, p.name.as_deref(), p.text.as_str()))
+        .collect();
+    assert_eq!(
+        parts,
+        [
+            (1, 5, Some("r"), "lightPos - position"),
+            (2, 6, Some("n"), "normal"),
+            (3, 19, None, "dot(r, n)"),
+            (4, 3, None, "dot(r, r)"),
+            (3, 18, None, "(dot(r, n) / dot(r, r))"),
+            (3, 5, None, "lightColor * (dot(r, n) / dot(r, r))"),
+            (4, 23, None, "r.x"),
+            (4, 18, None, "vec3(r.x)"),
+            (
+                3,
+                1,
+                Some("D"),
+                "lightColor * (dot(r, n) / dot(r, r)) + vec3(r.x)"
+            ),
+        ]
+    );
+    assert!(eq.parts(Quantity::Value).is_empty());
+    let tape = eq.tape(Quantity::Direct).unwrap();
+    let given = inputs(&[
+        ("lightPos", &[1.0, 2.0, 3.0]),
+        ("position", &[0.5, 0.25, -1.0]),
+        ("normal", &[0.0, 1.0, 0.0]),
+        ("lightColor", &[14.0; 3]),
+    ]);
+    let lanes: Vec<[f32; 1]> = given.iter().map(|&v| [v]).collect();
+    let mut slots = Vec::new();
+    let d = tape.run::<1>(&lanes, &mut slots).map(|[v]| v);
+    let r = Vec3::new(0.5, 1.75, 4.0);
+    let values: Vec<[f32; 3]> = eq
+        .parts(Quantity::Direct)
+        .iter()
+        .map(|p| p.value(&slots))
+        .collect();
+    assert_eq!(values[0], r.to_array());
+    assert_eq!(values[3], [r.dot(r); 3]);
+    assert_eq!(values[6], [r.x; 3]);
+    assert_eq!(values[8], d);
+}
+
 /// Random texts, and the lab's own text mutated (bytes deleted, swapped, inserted, lines
 /// duplicated): compiling never panics, every error's span lies in the text on character
 /// boundaries, and what compiles runs.

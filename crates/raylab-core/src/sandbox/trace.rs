@@ -26,10 +26,12 @@
 //! [`DirectLight::at`]: crate::light::DirectLight::at
 //! [`SHADOW_OFFSET`]: crate::light::SHADOW_OFFSET
 
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
-use super::{INPUT_COMPONENTS, Quantity, compile::Equations, offset};
+use super::explain::{Explanation, HitValues, QuantityValue, Term, Value};
+use super::{INPUT_COMPONENTS, INPUTS, Quantity, compile::Equations, offset};
+use crate::camera::Camera;
 use crate::check::mistakes::{PixelHits, ShadedHit, pixel_hits};
 use crate::film::Image;
 use crate::geometry::Ray;
@@ -50,6 +52,8 @@ struct Hit {
     color: Vec3,
     shadow_start: Vec3,
     shadow_distance: f32,
+    /// The lab's shadow ray's start (the hit's position where it has none).
+    lab_shadow_start: Vec3,
     /// D of equation 27 before shadows, as the lab computed it.
     lab_d: Vec3,
     /// Whether the lab cast a shadow ray here (shadows on, light arriving).
@@ -92,6 +96,9 @@ struct Uniforms {
     indirect: Vec3,
     stage: Stage,
     shadows: bool,
+    /// The camera and its rotation: the lab's ray through a pixel.
+    lens: Camera,
+    rotation: Mat3,
 }
 
 /// Every pixel's diffuse hits and their terms, traced once with the student's `d` and
@@ -140,6 +147,8 @@ pub fn record(scene: &Scene, settings: &RenderSettings, equations: &Equations) -
         indirect: settings.shading.indirect_term(),
         stage: settings.shading.stage,
         shadows: settings.shading.shadows,
+        lens: *camera,
+        rotation,
     };
     let tracer = Tracer::new(scene, settings);
     let (w, h) = (camera.width as usize, camera.height as usize);
@@ -226,20 +235,7 @@ fn camera_rays(
     let Some(tape) = equations.tape(Quantity::Direction) else {
         return (0..w).map(|x| Some(lab(x))).collect();
     };
-    let mut inputs = [[0.0f32; 16]; INPUT_COMPONENTS];
-    let mut put = |name: &str, v: &[f32]| {
-        for (k, c) in v.iter().enumerate() {
-            inputs[offset(name) + k] = [*c; 16];
-        }
-    };
-    put("y", &[y as f32]);
-    put("W", &[u.width]);
-    put("H", &[u.height]);
-    put("focalLength", &[u.focal_length]);
-    put("cameraPos", &u.camera.to_array());
-    put("right", &u.right.to_array());
-    put("down", &u.down.to_array());
-    put("forward", &u.forward.to_array());
+    let mut inputs = direction_inputs::<16>(u, y);
     let mut slots = Vec::new();
     let mut rays = Vec::with_capacity(w);
     for x0 in (0..w).step_by(16) {
@@ -251,6 +247,25 @@ fn camera_rays(
         }
     }
     rays
+}
+
+/// The inputs `d` reads in row `y`, `N` pixels at a time (`x` left 0, for the caller to set).
+fn direction_inputs<const N: usize>(u: &Uniforms, y: usize) -> [[f32; N]; INPUT_COMPONENTS] {
+    let mut inputs = [[0.0f32; N]; INPUT_COMPONENTS];
+    let mut put = |name: &str, v: &[f32]| {
+        for (k, c) in v.iter().enumerate() {
+            inputs[offset(name) + k] = [*c; N];
+        }
+    };
+    put("y", &[y as f32]);
+    put("W", &[u.width]);
+    put("H", &[u.height]);
+    put("focalLength", &[u.focal_length]);
+    put("cameraPos", &u.camera.to_array());
+    put("right", &u.right.to_array());
+    put("down", &u.down.to_array());
+    put("forward", &u.forward.to_array());
+    inputs
 }
 
 /// A shaded hit's terms, its shadow ray cast from the student's `shadowStart` or the lab's.
@@ -270,6 +285,7 @@ fn hit_of(
         color: t.rho,
         shadow_start: t.position,
         shadow_distance: f32::INFINITY,
+        lab_shadow_start: t.position,
         lab_d: t.d,
         lab_cast: t.shadow_ray.is_some(),
         blocked: false,
@@ -280,10 +296,17 @@ fn hit_of(
             .closest_intersection(ray, f32::INFINITY)
             .map_or(f32::INFINITY, |h| h.distance)
     };
+    // The lab's shadow ray: the one it cast, or (where it cast none, as no light arrived) the
+    // one it would have ([`crate::scene::in_shadow`]).
+    let lab_ray = t.shadow_ray.or_else(|| {
+        let at_edge = scene.approach_at_edge(s.hit.triangle_index, s.hit.u, s.hit.v, s.incoming);
+        shadow_ray(&settings.light, t.position, t.normal, at_edge)
+    });
+    if let Some((ray, _)) = lab_ray {
+        hit.lab_shadow_start = ray.origin;
+    }
     if let Some(tape) = equations.tape(Quantity::ShadowStart) {
-        let mut inputs = [0.0f32; INPUT_COMPONENTS];
-        hit_inputs(&hit, u, |k, v| inputs[k] = v);
-        let start = Vec3::from_array(tape.run_one(&inputs, slots));
+        let start = Vec3::from_array(tape.run_one(&shadow_start_inputs(&hit, u), slots));
         hit.shadow_start = start;
         let to_light = u.light - start;
         if start.is_finite() && to_light != Vec3::ZERO {
@@ -294,12 +317,6 @@ fn hit_of(
         }
         return hit;
     }
-    // The lab's shadow ray: the one it cast, or (where it cast none, as no light arrived) the
-    // one it would have ([`crate::scene::in_shadow`]).
-    let lab_ray = t.shadow_ray.or_else(|| {
-        let at_edge = scene.approach_at_edge(s.hit.triangle_index, s.hit.u, s.hit.v, s.incoming);
-        shadow_ray(&settings.light, t.position, t.normal, at_edge)
-    });
     if let Some((ray, t_max)) = lab_ray {
         hit.shadow_start = ray.origin;
         hit.shadow_distance = nearest(&ray);
@@ -312,9 +329,28 @@ fn hit_of(
     hit
 }
 
+/// The inputs `shadowStart` reads at `hit` (its shadow ray not yet cast).
+fn shadow_start_inputs(hit: &Hit, u: &Uniforms) -> [f32; INPUT_COMPONENTS] {
+    let unanswered = Hit {
+        shadow_start: hit.position,
+        shadow_distance: f32::INFINITY,
+        ..*hit
+    };
+    let mut inputs = [0.0f32; INPUT_COMPONENTS];
+    hit_inputs(&unanswered, u, |k, v| inputs[k] = v);
+    inputs
+}
+
 /// Calls `put(component, value)` for every input a hit gives (all but `x`, `y`, `shadowed`
 /// and `D`).
 fn hit_inputs(hit: &Hit, u: &Uniforms, mut put: impl FnMut(usize, f32)) {
+    uniform_inputs(u, &mut put);
+    own_inputs(hit, put);
+}
+
+/// Calls `put(component, value)` for the inputs that are one for the whole image: the
+/// camera's, the light's, N and the image's size.
+fn uniform_inputs(u: &Uniforms, mut put: impl FnMut(usize, f32)) {
     let mut vec = |first: usize, v: Vec3| {
         for (k, c) in v.to_array().into_iter().enumerate() {
             put(first + k, c);
@@ -326,20 +362,29 @@ fn hit_inputs(hit: &Hit, u: &Uniforms, mut put: impl FnMut(usize, f32)) {
     vec(const { offset("forward") }, u.forward);
     vec(const { offset("lightPos") }, u.light);
     vec(const { offset("lightColor") }, u.light_color);
-    vec(const { offset("position") }, hit.position);
-    vec(const { offset("normal") }, hit.normal);
-    vec(const { offset("color") }, hit.color);
     vec(const { offset("indirectLight") }, u.indirect);
-    vec(const { offset("shadowStart") }, hit.shadow_start);
     for (k, v) in [
         (const { offset("W") }, u.width),
         (const { offset("H") }, u.height),
         (const { offset("focalLength") }, u.focal_length),
-        (const { offset("distance") }, hit.distance),
-        (const { offset("shadowDistance") }, hit.shadow_distance),
     ] {
         put(k, v);
     }
+}
+
+/// Calls `put(component, value)` for the inputs that are the hit's own.
+fn own_inputs(hit: &Hit, mut put: impl FnMut(usize, f32)) {
+    let mut vec = |first: usize, v: Vec3| {
+        for (k, c) in v.to_array().into_iter().enumerate() {
+            put(first + k, c);
+        }
+    };
+    vec(const { offset("position") }, hit.position);
+    vec(const { offset("normal") }, hit.normal);
+    vec(const { offset("color") }, hit.color);
+    vec(const { offset("shadowStart") }, hit.shadow_start);
+    put(const { offset("distance") }, hit.distance);
+    put(const { offset("shadowDistance") }, hit.shadow_distance);
 }
 
 impl Recording {
@@ -364,41 +409,31 @@ impl Recording {
     pub fn evaluate_lanes<const N: usize>(&self, equations: &Equations) -> Rendered {
         let values: Vec<Vec3> = self
             .hits
-            .par_chunks(256)
+            .par_chunks(CHUNK)
             .flat_map_iter(|chunk| {
                 let mut slots = Vec::new();
-                let mut out = Vec::with_capacity(chunk.len());
-                for group in chunk.chunks(N) {
-                    self.values::<N>(equations, group, &mut slots, &mut out);
+                let mut out = vec![Vec3::ZERO; chunk.len()];
+                for (group, out) in chunk.chunks(N).zip(out.chunks_mut(N)) {
+                    self.values::<N>(equations, group, &mut slots, out, None);
                 }
                 out
             })
             .collect();
-        let mut non_finite = 0;
-        let pixels = self
+        let mut pixels: Vec<Vec3> = self
             .pixels
-            .iter()
-            .map(|p| {
-                let v = match *p {
-                    Pixel::Miss => Vec3::ZERO,
-                    Pixel::BadRay => Vec3::NAN,
-                    Pixel::Diffuse { first } => values[first as usize],
-                    Pixel::Specular { first, count } => {
-                        let range = first as usize..(first + count) as usize;
-                        self.hits[range.clone()]
-                            .iter()
-                            .zip(&values[range])
-                            .fold(Vec3::ZERO, |sum, (h, v)| sum + h.weight * *v)
-                    }
-                };
-                if v.is_finite() {
-                    v
-                } else {
-                    non_finite += 1;
-                    MAGENTA
-                }
-            })
+            .par_iter()
+            .map(|p| self.pixel_value(*p, |i| values[i]))
             .collect();
+        let non_finite = pixels
+            .par_iter_mut()
+            .map(|v| {
+                let bad = !v.is_finite();
+                if bad {
+                    *v = MAGENTA;
+                }
+                usize::from(bad)
+            })
+            .sum();
         Rendered {
             image: Image {
                 width: self.width,
@@ -409,81 +444,247 @@ impl Recording {
         }
     }
 
-    /// R at each hit of `group` (at most `N`), appended to `out`.
+    /// A pixel's value from its hits' values (`value(i)`: R at hit `i`): black for a miss, NaN
+    /// for a bad ray, the sum of the hits' values times their weights behind mirror or glass.
+    fn pixel_value(&self, p: Pixel, value: impl Fn(usize) -> Vec3) -> Vec3 {
+        match p {
+            Pixel::Miss => Vec3::ZERO,
+            Pixel::BadRay => Vec3::NAN,
+            Pixel::Diffuse { first } => value(first as usize),
+            Pixel::Specular { first, count } => (first as usize..(first + count) as usize)
+                .fold(Vec3::ZERO, |sum, i| sum + self.hits[i].weight * value(i)),
+        }
+    }
+
+    /// Pixel `(x, y)` explained: its value and, at each diffuse hit it is made of, the lab's
+    /// terms and every quantity, the student's value and each part of their text beside the
+    /// lab's value from the same inputs. Evaluated by the image's own code, one hit at a time
+    /// (whose bits are the sixteen-lane form's): the value is the image's pixel, bit for bit.
+    /// `equations` should [`Recording::fits`] the recording. `None` outside the image.
+    pub fn explain(&self, equations: &Equations, x: u32, y: u32) -> Option<Explanation> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        let u = &self.uniforms;
+        let pixel = self.pixels[y as usize * self.width as usize + x as usize];
+        // d: the student's run over this pixel as `camera_rays` runs it, or the lab's ray.
+        let mut inputs = direction_inputs::<1>(u, y as usize);
+        inputs[offset("x")] = [x as f32];
+        let mut slots = Vec::new();
+        if let Some(tape) = equations.tape(Quantity::Direction) {
+            tape.run::<1>(&inputs, &mut slots);
+        }
+        let lab_ray = u
+            .lens
+            .primary_ray_rotated(&u.rotation, x as f32 + 0.5, y as f32 + 0.5);
+        let direction = QuantityValue::new(
+            equations,
+            Quantity::Direction,
+            &slots,
+            Value::Vec3(lab_ray.direction.to_array()),
+        );
+        let direction_terms = terms(&inputs, false);
+        let range = match pixel {
+            Pixel::Miss | Pixel::BadRay => 0..0,
+            Pixel::Diffuse { first } => first as usize..first as usize + 1,
+            Pixel::Specular { first, count } => first as usize..(first + count) as usize,
+        };
+        let mut values = Vec::new();
+        let mut hits = Vec::new();
+        for hit in &self.hits[range.clone()] {
+            let mut quantities = Vec::new();
+            let start = match equations.tape(Quantity::ShadowStart) {
+                Some(tape) => {
+                    let start = shadow_start_inputs(hit, u).map(|v| [v]);
+                    tape.run::<1>(&start, &mut slots);
+                    &slots[..]
+                }
+                None => &[],
+            };
+            quantities.push(QuantityValue::new(
+                equations,
+                Quantity::ShadowStart,
+                start,
+                Value::Vec3(hit.lab_shadow_start.to_array()),
+            ));
+            let mut hit_terms = Vec::new();
+            let mut watch =
+                |q: Quantity, inputs: &[[f32; 1]], slots: &[[f32; 1]], lab: &[[f32; 3]]| {
+                    quantities.push(QuantityValue::new(
+                        equations,
+                        q,
+                        slots,
+                        Value::of(q.ty(), lab[0]),
+                    ));
+                    if q == Quantity::Value {
+                        hit_terms = terms(inputs, true);
+                    }
+                };
+            let mut value = [Vec3::ZERO];
+            self.values::<1>(
+                equations,
+                std::slice::from_ref(hit),
+                &mut Vec::new(),
+                &mut value,
+                Some(&mut watch),
+            );
+            values.push(value[0]);
+            hits.push(HitValues {
+                weight: hit.weight.to_array(),
+                terms: hit_terms,
+                quantities,
+            });
+        }
+        let value = self.pixel_value(pixel, |i| values[i - range.start]);
+        Some(Explanation {
+            pixel: [x, y],
+            made_of: match pixel {
+                Pixel::Miss => "miss",
+                Pixel::BadRay => "bad ray",
+                Pixel::Diffuse { .. } => "diffuse",
+                Pixel::Specular { .. } => "specular",
+            },
+            value: value.to_array(),
+            finite: value.is_finite(),
+            direction,
+            direction_terms,
+            hits,
+        })
+    }
+
+    /// R at each hit of `group` (at most `N`) into `out` (as long as `group`). `watch`, if
+    /// given, is told each of `shadowed`, `D` and `R` as it is computed: the inputs it read,
+    /// the slots the student's tape left (empty where they wrote none) and the lab's value at
+    /// each hit from those inputs.
     fn values<const N: usize>(
         &self,
         equations: &Equations,
         group: &[Hit],
         slots: &mut Vec<[f32; N]>,
-        out: &mut Vec<Vec3>,
+        out: &mut [Vec3],
+        mut watch: Option<&mut Watch<'_, N>>,
     ) {
         let u = &self.uniforms;
-        let mut inputs = vec![[0.0f32; N]; INPUT_COMPONENTS];
+        // Lanes past the group's hits hold the uniforms and zeros: computed, never read.
+        let mut inputs = [[0.0f32; N]; INPUT_COMPONENTS];
+        uniform_inputs(u, |k, v| inputs[k] = [v; N]);
         for (i, hit) in group.iter().enumerate() {
-            hit_inputs(hit, u, |k, v| inputs[k][i] = v);
+            own_inputs(hit, |k, v| inputs[k][i] = v);
         }
         let lanes = group.len();
-        let vec3s = |v: [[f32; N]; 3]| -> Vec<Vec3> {
-            (0..lanes)
-                .map(|i| Vec3::new(v[0][i], v[1][i], v[2][i]))
-                .collect()
-        };
-        let set_vec3s = |inputs: &mut Vec<[f32; N]>, first: usize, vs: &[Vec3]| {
-            for (i, v) in vs.iter().enumerate() {
-                for (k, c) in v.to_array().into_iter().enumerate() {
-                    inputs[first + k][i] = c;
-                }
-            }
+        let vec3s = |v: [[f32; N]; 3]| -> [Vec3; N] {
+            std::array::from_fn(|i| Vec3::new(v[0][i], v[1][i], v[2][i]))
         };
         let d_tape = equations.tape(Quantity::Direct);
-        // shadowed: the student's, or the lab's test where light arrives.
-        let shadowed: Vec<bool> = match equations.tape(Quantity::Shadowed) {
+        let shadowed_tape = equations.tape(Quantity::Shadowed);
+        // The lab's shadowed: its test where light arrives. Where the lab cast no shadow ray
+        // (and the ray it would have cast is blocked), light arrives if the student's D,
+        // unshadowed, is not 0.
+        let mut lab_shadowed = [false; N];
+        if shadowed_tape.is_none() || watch.is_some() {
+            let ask = |h: &Hit| u.shadows && !h.lab_cast && h.blocked;
+            let unshadowed = match d_tape {
+                Some(tape) if group.iter().any(ask) => {
+                    inputs[const { offset("shadowed") }] = [0.0; N];
+                    Some(vec3s(tape.run::<N>(&inputs, slots)))
+                }
+                _ => None,
+            };
+            for (i, h) in group.iter().enumerate() {
+                let arrives = h.lab_cast || unshadowed.is_some_and(|d| d[i] != Vec3::ZERO);
+                lab_shadowed[i] = u.shadows && arrives && h.blocked;
+            }
+        }
+        let shadowed = match shadowed_tape {
             Some(tape) => {
                 let s = tape.run::<N>(&inputs, slots);
-                (0..lanes).map(|i| s[0][i] != 0.0).collect()
+                s[0].map(|v| v != 0.0)
+            }
+            None => lab_shadowed,
+        };
+        if let Some(w) = watch.as_deref_mut() {
+            let lab: Vec<[f32; 3]> = lab_shadowed[..lanes]
+                .iter()
+                .map(|&b| [truth(b); 3])
+                .collect();
+            let slots = if shadowed_tape.is_some() {
+                &slots[..]
+            } else {
+                &[]
+            };
+            w(Quantity::Shadowed, &inputs, slots, &lab);
+        }
+        inputs[const { offset("shadowed") }] = shadowed.map(truth);
+        let lab_d = |i: usize| {
+            if shadowed[i] {
+                Vec3::ZERO
+            } else {
+                group[i].lab_d
+            }
+        };
+        let d: [Vec3; N] = match d_tape {
+            Some(tape) => vec3s(tape.run::<N>(&inputs, slots)),
+            None => std::array::from_fn(|i| if i < lanes { lab_d(i) } else { Vec3::ZERO }),
+        };
+        if let Some(w) = watch.as_deref_mut() {
+            let lab: Vec<[f32; 3]> = (0..lanes).map(|i| lab_d(i).to_array()).collect();
+            let slots = if d_tape.is_some() { &slots[..] } else { &[] };
+            w(Quantity::Direct, &inputs, slots, &lab);
+        }
+        for (k, lanes) in inputs[const { offset("D") }..][..3].iter_mut().enumerate() {
+            *lanes = d.map(|d| d[k]);
+        }
+        let lab_r = |i: usize| shaded_value(u.stage, group[i].color, d[i], false, u.indirect);
+        let r_tape = equations.tape(Quantity::Value);
+        match r_tape {
+            Some(tape) => {
+                let r = vec3s(tape.run::<N>(&inputs, slots));
+                out.copy_from_slice(&r[..lanes]);
             }
             None => {
-                // Where the lab cast no shadow ray, light arrives if the student's D, unshadowed,
-                // is not 0.
-                let unshadowed: Option<Vec<Vec3>> = d_tape.map(|tape| {
-                    for l in inputs[const { offset("shadowed") }].iter_mut() {
-                        *l = 0.0;
-                    }
-                    vec3s(tape.run::<N>(&inputs, slots))
-                });
-                group
-                    .iter()
-                    .enumerate()
-                    .map(|(i, h)| {
-                        let arrives =
-                            h.lab_cast || unshadowed.as_ref().is_some_and(|d| d[i] != Vec3::ZERO);
-                        u.shadows && arrives && h.blocked
-                    })
-                    .collect()
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = lab_r(i);
+                }
             }
-        };
-        for (i, s) in shadowed.iter().enumerate() {
-            inputs[const { offset("shadowed") }][i] = if *s { 1.0 } else { 0.0 };
         }
-        let d: Vec<Vec3> = match d_tape {
-            Some(tape) => vec3s(tape.run::<N>(&inputs, slots)),
-            None => group
-                .iter()
-                .zip(&shadowed)
-                .map(|(h, s)| if *s { Vec3::ZERO } else { h.lab_d })
-                .collect(),
-        };
-        set_vec3s(&mut inputs, const { offset("D") }, &d);
-        match equations.tape(Quantity::Value) {
-            Some(tape) => out.extend(vec3s(tape.run::<N>(&inputs, slots))),
-            None => out.extend(
-                group
-                    .iter()
-                    .zip(&d)
-                    .map(|(h, d)| shaded_value(u.stage, h.color, *d, false, u.indirect)),
-            ),
+        if let Some(w) = watch {
+            let lab: Vec<[f32; 3]> = (0..lanes).map(|i| lab_r(i).to_array()).collect();
+            let slots = if r_tape.is_some() { &slots[..] } else { &[] };
+            w(Quantity::Value, &inputs, slots, &lab);
         }
     }
+}
+
+/// How many hits a parallel task evaluates.
+const CHUNK: usize = 1024;
+
+/// What [`Recording::values`] tells: a quantity, the inputs it read, the slots the student's
+/// tape left (empty where they wrote none), and the lab's value at each hit.
+type Watch<'a, const N: usize> = dyn FnMut(Quantity, &[[f32; N]], &[[f32; N]], &[[f32; 3]]) + 'a;
+
+fn truth(b: bool) -> f32 {
+    if b { 1.0 } else { 0.0 }
+}
+
+/// The inputs `d` reads (`hit: false`: the pixel's and the camera's) or those a hit gives
+/// (`hit: true`, but `shadowed` and `D`), and their values in lane 0 of `inputs`.
+fn terms<const N: usize>(inputs: &[[f32; N]], hit: bool) -> Vec<Term> {
+    INPUTS
+        .iter()
+        .filter(|i| (i.from != Quantity::Direction) == hit && !["shadowed", "D"].contains(&i.name))
+        .map(|i| {
+            let at = usize::from(i.offset);
+            let c = [0, 1, 2].map(|k| {
+                inputs
+                    .get(at + k.min(i.ty.width() - 1))
+                    .map_or(f32::NAN, |l| l[0])
+            });
+            Term {
+                name: i.name,
+                value: Value::of(i.ty, c),
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -494,6 +695,7 @@ mod tests {
     use crate::sandbox::compile;
     use crate::scene::cornell_box;
     use crate::settings::Shading;
+    use std::f32::consts::PI as PI_F32;
 
     fn settings(stage: Stage, side: u32) -> RenderSettings {
         let mut s = RenderSettings::default();
@@ -600,7 +802,8 @@ mod tests {
     }
 
     /// Typing each formula mistake of the catalogue (and the pixel's corner) gives the image
-    /// `check` renders for it.
+    /// `check` renders for it, and `check` names that mistake on the typed image (where it
+    /// shows in the lab's box).
     #[test]
     fn typed_mistakes_give_the_catalogues_figures() {
         let scene = cornell_box();
@@ -622,13 +825,19 @@ mod tests {
             // Where the mistake shows in the catalogue's figure, it shows in the typed one
             // (an unclamped cosine does not show in the lab's box: the faces turned away from
             // the light are in shadow).
-            if want != render_figure(&scene, &s) {
+            let shows = want != render_figure(&scene, &s);
+            if shows {
                 assert!(
                     got.image != render_figure(&scene, &s),
                     "{m} shows no mistake"
                 );
             }
             assert_close(&got.image, &want, 1e-6, &format!("{m}"));
+            let checked =
+                crate::check::check(&scene, &s, &crate::check::Rgb8::from_linear(&got.image))
+                    .unwrap_or_else(|e| panic!("{m}: {e}"));
+            let named = if shows { m.name() } else { "none" };
+            assert_eq!(checked.report.best.mistake, named, "{m}");
             typed += 1;
         }
         assert_eq!(typed, 10);
@@ -680,6 +889,174 @@ mod tests {
             let want = if i % 32 < 16 { MAGENTA } else { *f };
             assert_eq!(*p, want, "pixel {i}");
         }
+    }
+
+    /// Every pixel's explanation has the image's value, bit for bit: misses, the box's
+    /// diffuse hits, the mirror's and the glass's branches, NaN pixels, rays with no
+    /// direction; with the student's `d` and `shadowStart` traced too. At a diffuse hit, the
+    /// student's R is the pixel and each statement's last part is its quantity's value.
+    #[test]
+    fn the_explanation_has_the_images_value_at_every_pixel() {
+        let scene = cornell_box();
+        let mut s = settings(Stage::Lab, 24);
+        s.material_preset = crate::material::MaterialPreset::Both;
+        // Rows 0–3 look back, out of the box (misses); rows 4 and 5 have no direction.
+        let d = "d = y < 4 ? -forward : (y < 6 ? vec3(0) : right * (x + 0.5 - W / 2) + \
+                 down * (y + 0.5 - H / 2) + forward * focalLength)";
+        let texts = [
+            lab_text(Stage::Lab).replace(
+                "d = right * (x + 0.5 - W / 2) + down * (y + 0.5 - H / 2) + forward * focalLength",
+                d,
+            ),
+            format!(
+                "{}\nshadowStart = position + normal * 1e-3",
+                lab_text(Stage::Lab)
+            ),
+            "let k = position.x > 0 ? 1 : 0 / 0\nR = color * (D + indirectLight) * k".to_owned(),
+            String::new(),
+        ];
+        let mut kinds = std::collections::BTreeSet::new();
+        for text in &texts {
+            let equations = compile(text).unwrap_or_else(|e| panic!("{text}: {e:?}"));
+            let recording = record(&scene, &s, &equations);
+            let image = recording.evaluate(&equations);
+            for y in 0..24 {
+                for x in 0..24 {
+                    let e = recording.explain(&equations, x, y).unwrap();
+                    let pixel = image.image.pixels[(y * 24 + x) as usize];
+                    kinds.insert((e.made_of, e.finite));
+                    if e.finite {
+                        assert_eq!(
+                            e.value.map(f32::to_bits),
+                            pixel.to_array().map(f32::to_bits),
+                            "{text}: ({x}, {y})"
+                        );
+                    } else {
+                        assert_eq!(pixel, MAGENTA, "{text}: ({x}, {y})");
+                    }
+                    if e.made_of == "diffuse" {
+                        let r = e.hits[0].quantities.last().unwrap();
+                        assert_eq!(r.name, "R");
+                        let v = r.yours.unwrap_or(r.lab);
+                        let bits = |v: Value| match v {
+                            Value::Vec3(v) => v.map(f32::to_bits),
+                            other => panic!("R is {other:?}"),
+                        };
+                        assert_eq!(bits(v), e.value.map(f32::to_bits), "{text}: ({x}, {y})");
+                        for q in &e.hits[0].quantities {
+                            if let (Some(yours), Some(last)) = (q.yours, q.parts.last()) {
+                                assert_eq!(last.name.as_deref(), Some(q.name));
+                                assert_eq!(format!("{:?}", last.value), format!("{yours:?}"));
+                            }
+                        }
+                    }
+                }
+            }
+            assert!(recording.explain(&equations, 24, 0).is_none());
+        }
+        for kind in [
+            ("miss", true),
+            ("diffuse", true),
+            ("specular", true),
+            ("diffuse", false),
+            ("bad ray", false),
+        ] {
+            assert!(kinds.contains(&kind), "no {kind:?} pixel: {kinds:?}");
+        }
+    }
+
+    /// At a lit pixel of the lab's box, each part of the student's text is the value glam gives
+    /// from the lab's terms shown beside it, the lab's own equations typed equal the lab's
+    /// values, and a mistake's D differs from the lab's; the lines say so.
+    #[test]
+    fn the_explanation_shows_each_part_beside_the_labs_terms() {
+        let scene = cornell_box();
+        let s = settings(Stage::Lab, 32);
+        // A lit pixel of the floor.
+        let (x, y) = (8, 28);
+        let text = lab_text(Stage::Lab);
+        let equations = compile(&text).unwrap();
+        let e = record(&scene, &s, &equations)
+            .explain(&equations, x, y)
+            .unwrap();
+        assert_eq!(e.made_of, "diffuse");
+        let hit = &e.hits[0];
+        let term = |name: &str| -> Vec3 {
+            match hit.terms.iter().find(|t| t.name == name).unwrap().value {
+                Value::Vec3(v) => Vec3::from_array(v),
+                other => panic!("{name} is {other:?}"),
+            }
+        };
+        let (light, position, normal) = (term("lightPos"), term("position"), term("normal"));
+        let quantity = |name: &str| hit.quantities.iter().find(|q| q.name == name).unwrap();
+        let d = quantity("D");
+        assert_eq!(d.parts.first().unwrap().name.as_deref(), Some("r"));
+        let part = |text: &str| {
+            d.parts
+                .iter()
+                .find(|p| p.text == text)
+                .unwrap_or_else(|| panic!("no part {text:?}: {:?}", d.parts))
+        };
+        let r = light - position;
+        assert_eq!(part("lightPos - position").value, Value::Vec3(r.to_array()));
+        assert_eq!(part("lightPos - position").name.as_deref(), Some("r"));
+        assert_eq!(
+            (
+                part("lightPos - position").line,
+                part("lightPos - position").column
+            ),
+            (2, 6)
+        );
+        assert_eq!(part("dot(r, r)").value, Value::Number(r.dot(r)));
+        assert_eq!(part("dot(r, r)").name.as_deref(), Some("r2"));
+        let cos = (r / r.dot(r).sqrt()).dot(normal);
+        assert!(cos > 0.0, "the pixel is lit");
+        assert_eq!(part("dot(r / sqrt(r2), normal)").value, Value::Number(cos));
+        assert_eq!(
+            part("(4 * M_PI * r2)").value,
+            Value::Number(4.0 * PI_F32 * r.dot(r))
+        );
+        assert_eq!(quantity("shadowed").yours, Some(Value::Bool(false)));
+        assert_eq!(quantity("shadowed").lab, Value::Bool(false));
+        let (Some(Value::Vec3(yours)), Value::Vec3(lab)) = (d.yours, d.lab) else {
+            panic!("{d:?}");
+        };
+        for (a, b) in yours.into_iter().zip(lab) {
+            assert!((a - b).abs() <= 1e-6 * b.abs(), "{yours:?} against {lab:?}");
+        }
+        let lines = e.to_text();
+        let has = |equation: &str, text: &str| {
+            lines
+                .lines()
+                .any(|l| l.trim_start().starts_with(equation) && l.contains(text))
+        };
+        assert!(has("line 2:6 ", "  r = lightPos - position = ("), "{lines}");
+        assert!(has("line 3:7 ", "  r2 = dot(r, r) = "), "{lines}");
+        assert!(has("the lab's terms", "position = ("), "{lines}");
+        assert!(has("D ", "yours ("), "{lines}");
+        // r is computed once, shown once, though D uses it twice.
+        assert_eq!(
+            lines.matches("r = lightPos - position").count(),
+            1,
+            "{lines}"
+        );
+
+        let no_4pi = compile(
+            "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * max(dot(normalize(r), normal), 0.0) / dot(r, r)",
+        )
+        .unwrap();
+        let e = record(&scene, &s, &no_4pi).explain(&no_4pi, x, y).unwrap();
+        let d = e.hits[0].quantities.iter().find(|q| q.name == "D").unwrap();
+        let (Some(Value::Vec3(yours)), Value::Vec3(lab)) = (d.yours, d.lab) else {
+            panic!("{d:?}");
+        };
+        assert!(
+            (yours[0] / lab[0] - 4.0 * PI_F32).abs() < 1e-3,
+            "{yours:?} {lab:?}"
+        );
+        let text = e.to_text();
+        assert!(text.contains("(they differ)"), "{text}");
+        assert!(text.contains("(the lab's)"), "{text}");
     }
 
     /// A recording is evaluated again for a new `shadowed`, `D` or `R`; a new `d` or
