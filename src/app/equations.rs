@@ -209,7 +209,12 @@ impl YourEquations {
         y: u32,
     ) -> Option<Vec<raylab_core::inspect::InspectLine>> {
         let evaluated = self.fresh(live)?;
-        Some(evaluated.recording.explain(&evaluated.equations, x, y)?.lines())
+        Some(
+            evaluated
+                .recording
+                .explain(&evaluated.equations, x, y)?
+                .lines(),
+        )
     }
 
     /// Quantity `q`'s verdict, if the newest image made judged the text in its editor now
@@ -502,7 +507,11 @@ fn make(
         .is_some_and(|(scene, s, r)| same(scene, s) && r.fits(&job.equations));
     if retraced {
         let traced = sandbox::record(&job.scene, &job.settings, &job.equations);
-        *recording = Some((Arc::clone(&job.scene), job.settings.clone(), Arc::new(traced)));
+        *recording = Some((
+            Arc::clone(&job.scene),
+            job.settings.clone(),
+            Arc::new(traced),
+        ));
     }
     if !figure.as_ref().is_some_and(|(scene, s, _)| same(scene, s)) {
         let image = raylab_core::render::render(&job.scene, &job.settings);

@@ -179,3 +179,40 @@ fn a_screenshot_carries_the_equations_back_to_the_panel() {
     assert!(settings(&h).equations.is_empty());
     assert_eq!(*fresh(&h).image, *image);
 }
+
+/// With the student's image on screen the inspector explains their pixel too: its value, equal
+/// to their image's, and each part of their text with its value there.
+#[test]
+fn the_inspector_explains_the_students_pixel_part_by_part() {
+    let mut h = with_panel(small_state());
+    type_into(&mut h, "D", NO_4PI);
+    settle(&mut h);
+    // The editor has the keyboard: the inspector is turned on as its key would.
+    h.state_mut().state.inspect_mode = true;
+    h.run_steps(3);
+    h.state_mut().state.pinned = Some([40, 70]);
+    h.run_steps(3);
+    let value = fresh(&h).image.get(40, 70);
+    let explained = h
+        .state()
+        .equations
+        .explained(&settings(&h), 40, 70)
+        .expect("the student's pixel explained");
+    assert!(
+        explained[0].text.starts_with("(40, 70) = "),
+        "{explained:?}"
+    );
+    let shown = raylab_core::sandbox::explain::Value::Vec3(value.to_array()).text();
+    assert!(explained[0].text.contains(&shown), "{shown}: {explained:?}");
+    assert!(
+        h.query_by_label_contains("Inspector: pixel (40, 70)")
+            .is_some(),
+        "inspector"
+    );
+    assert!(h.query_by_label_contains("(40, 70) = ").is_some());
+    assert!(
+        h.query_all_by_label_contains("dot(r, r) = ")
+            .next()
+            .is_some()
+    );
+}
