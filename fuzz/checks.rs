@@ -6,12 +6,12 @@
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
-use raylab_core::check::{self, Rgb8};
-use raylab_core::render::render;
-use raylab_core::scene::obj::{Placement, parse_obj};
-use raylab_core::scene::spec::model_in_box;
-use raylab_core::scene::{Scene, SceneChoice, cornell_box};
-use raylab_core::view::render_view;
+use raylab_core::shapes::scene::obj::{Placement, parse_obj};
+use raylab_core::shapes::scene::spec::model_in_box;
+use raylab_core::shapes::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::teaching::check::{self, Rgb8};
+use raylab_core::transport::render::render;
+use raylab_core::transport::view::render_view;
 use raylab_core::{RenderSettings, Shading, Stage};
 
 /// The largest image side and sample count `settings_json` renders: each run stays quick.
@@ -117,7 +117,7 @@ fn scene_for(choice: &SceneChoice) -> Arc<Scene> {
     }
 }
 
-/// Bytes → `raylab_core::scene_file::parse` (what `--scene-file FILE` and the workbench's Open read)
+/// Bytes → `raylab_core::files::scene_file::parse` (what `--scene-file FILE` and the workbench's Open read)
 /// → settings that are valid, since the parser validates them. They must save and read back to
 /// the same settings (a scene file round-trips exactly), and when small, render on the Cornell
 /// box as [`settings_json`] does. Model paths resolve against a folder that does not exist, so
@@ -127,14 +127,14 @@ pub fn scene_file(data: &[u8]) {
         return;
     };
     let folder = Path::new("/nonexistent-fuzz-folder");
-    let Ok(settings) = raylab_core::scene_file::parse(text, folder) else {
+    let Ok(settings) = raylab_core::files::scene_file::parse(text, folder) else {
         return;
     };
     settings
         .validate()
         .expect("the parser validates what it returns");
-    if let Ok(saved) = raylab_core::scene_file::to_text(&settings, folder) {
-        let again = raylab_core::scene_file::parse(&saved, folder)
+    if let Ok(saved) = raylab_core::files::scene_file::to_text(&settings, folder) {
+        let again = raylab_core::files::scene_file::parse(&saved, folder)
             .unwrap_or_else(|e| panic!("a saved scene file reads back: {e}\n{saved}"));
         assert_eq!(again, settings, "{saved}");
     }
@@ -154,7 +154,7 @@ pub fn scene_file(data: &[u8]) {
 /// pixels is the magenta ones', and every pixel's explanation (`Recording::explain`, the
 /// inspector's) has the image's value bit for bit and prints.
 pub fn sandbox(data: &[u8]) {
-    use raylab_core::sandbox::{self, MAGENTA, Recording, Rendered};
+    use raylab_core::teaching::sandbox::{self, MAGENTA, Recording, Rendered};
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };

@@ -13,21 +13,21 @@ use std::time::Instant;
 use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
-use raylab_core::accel::{AccelKind, Isa};
 use raylab_core::bench::{BenchConfig, bench_scene};
-use raylab_core::display::{Display, DisplayTransform};
-use raylab_core::film::OutputFormat;
-use raylab_core::inspect::{InspectError, inspect_pixel};
-use raylab_core::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
-use raylab_core::light::{LightKind, LightShape, SpotCone};
-use raylab_core::material::{MaterialKind, TexturePreset};
-use raylab_core::render::try_render;
-use raylab_core::scene::SceneChoice;
-use raylab_core::scene::spec::{BoxPart, PartMaterial};
-use raylab_core::settings::{
+use raylab_core::shading::light::{LightKind, LightShape, SpotCone};
+use raylab_core::shading::material::{MaterialKind, TexturePreset};
+use raylab_core::shapes::accel::{AccelKind, Isa};
+use raylab_core::shapes::scene::SceneChoice;
+use raylab_core::shapes::scene::spec::{BoxPart, PartMaterial};
+use raylab_core::teaching::inspect::{InspectError, inspect_pixel};
+use raylab_core::transport::display::{Display, DisplayTransform};
+use raylab_core::transport::film::OutputFormat;
+use raylab_core::transport::integrator::{DEFAULT_SPECULAR_DEPTH, MAX_SPECULAR_DEPTH};
+use raylab_core::transport::render::try_render;
+use raylab_core::transport::settings::{
     Caustics, DEFAULT_PHOTONS, MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_PHOTONS, MAX_SAMPLES,
 };
-use raylab_core::view::View;
+use raylab_core::transport::view::View;
 use raylab_core::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 mod class;
@@ -118,7 +118,7 @@ pub struct RenderArgs {
     /// --display says, so their colours are the legend's. Combines with --settings.
     /// [default: shaded, or the view a screenshot given to --settings was made with]
     #[arg(long, value_name = "VIEW")]
-    pub view: Option<raylab_core::view::View>,
+    pub view: Option<raylab_core::transport::view::View>,
     /// Also write the render's settings as a scene file (.toml), to open in the workbench or
     /// render again with --scene-file.
     #[arg(long, value_name = "FILE.toml")]
@@ -460,7 +460,7 @@ impl RenderOptions {
     /// warning.
     pub fn resolve_settings(&self) -> anyhow::Result<RenderSettings> {
         if let Some(path) = &self.scene_file {
-            return Ok(raylab_core::scene_file::load(path)?);
+            return Ok(raylab_core::files::scene_file::load(path)?);
         }
         if (self.water_waves.is_some() || self.water_time.is_some())
             && self.scene_choice().spec().water.is_none()
@@ -537,8 +537,8 @@ impl RenderOptions {
         if let Some(p) = self.camera {
             camera.position = p;
         }
-        camera.yaw = raylab_core::camera::radians(self.yaw);
-        camera.pitch = raylab_core::camera::radians(self.pitch);
+        camera.yaw = raylab_core::base::camera::radians(self.yaw);
+        camera.pitch = raylab_core::base::camera::radians(self.pitch);
         camera.aperture = self.aperture;
         if let Some(d) = self.focus_distance {
             camera.focus_distance = d;
@@ -604,10 +604,10 @@ impl RenderOptions {
                 aim: self.light_aim.unwrap_or(default.aim),
                 cutoff: self
                     .spot_cutoff
-                    .map_or(default.cutoff, raylab_core::camera::radians),
+                    .map_or(default.cutoff, raylab_core::base::camera::radians),
                 beam: self
                     .spot_beam
-                    .map_or(default.beam, raylab_core::camera::radians),
+                    .map_or(default.beam, raylab_core::base::camera::radians),
             };
         }
         if let Some(shadows) = self.shadows {
@@ -625,11 +625,11 @@ impl RenderOptions {
     }
 }
 
-/// Reads render settings from a file ([`raylab_core::settings_file::read_file`]): a scene file,
+/// Reads render settings from a file ([`raylab_core::files::settings_file::read_file`]): a scene file,
 /// a screenshot PNG or its JSON, or a bare settings object. Unknown fields are warned of on
 /// stderr.
 pub fn read_settings_file(path: &std::path::Path) -> anyhow::Result<RenderSettings> {
-    let loaded = raylab_core::settings_file::read_file(path)?;
+    let loaded = raylab_core::files::settings_file::read_file(path)?;
     for warning in &loaded.warnings {
         print_error_line(&format!("warning: {}: {warning}", path.display()));
     }
@@ -688,9 +688,9 @@ pub fn main() -> ExitCode {
     // on rayon's global pool: its thread count is given too, so `RAYON_NUM_THREADS` cannot
     // ask for more than the cap.
     let _ = rayon::ThreadPoolBuilder::new()
-        .num_threads(raylab_core::progressive::default_threads())
+        .num_threads(raylab_core::transport::progressive::default_threads())
         .thread_name(|i| format!("raylab-{i}"))
-        .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
+        .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
         .build_global();
     if cli.isa == "best"
         && let Some(note) = Isa::environment_note()
@@ -730,21 +730,21 @@ pub fn main() -> ExitCode {
 
 /// Writes one line to stderr: `text`, with what came from files (a scene's name, a model's
 /// file name, a line of a scene file) made safe for a terminal
-/// ([`raylab_core::inputs::escape_control`]: control characters escaped, a line break
+/// ([`raylab_core::base::inputs::escape_control`]: control characters escaped, a line break
 /// included, so the message stays one line). A stderr that cannot be written (`2> /dev/full`)
 /// is no panic: the exit code still says what happened.
 fn print_error_line(text: &str) {
     let _ = writeln!(
         std::io::stderr(),
         "{}",
-        raylab_core::inputs::escape_control(text)
+        raylab_core::base::inputs::escape_control(text)
     );
 }
 
 /// `text` of several lines made safe for a terminal line by line (see [`print_error_line`]).
 fn printable_lines(text: &str) -> String {
     text.lines()
-        .map(|line| format!("{}\n", raylab_core::inputs::escape_control(line)))
+        .map(|line| format!("{}\n", raylab_core::base::inputs::escape_control(line)))
         .collect()
 }
 
@@ -777,7 +777,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    raylab_core::film::check_writable(&args.out)?;
+    raylab_core::transport::film::check_writable(&args.out)?;
     let mut settings = args.options.resolve_settings()?;
     settings.validate()?;
     refuse_output_onto(
@@ -798,7 +798,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let equations = if settings.equations.is_empty() {
         None
     } else {
-        let written = raylab_core::sandbox::carried::compile_texts(&settings.equations)?;
+        let written = raylab_core::teaching::sandbox::carried::compile_texts(&settings.equations)?;
         equations::refuse_unless_lab(&settings, view)?;
         Some(written)
     };
@@ -812,13 +812,13 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     } else {
         0
     };
-    raylab_core::memory::check(
+    raylab_core::base::memory::check(
         format!("a {}×{} render", c.width, c.height),
         settings
             .memory_estimate(view)
             .saturating_add(denoise_memory),
     )?;
-    if view == raylab_core::view::View::Variance && settings.samples_per_pixel < 2 {
+    if view == raylab_core::transport::view::View::Variance && settings.samples_per_pixel < 2 {
         anyhow::bail!(
             "the variance view needs 2 or more samples per pixel (--samples 2 or more): it \
              measures the spread between a pixel's samples"
@@ -829,11 +829,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let out_folder = args.out.parent().unwrap_or(std::path::Path::new(""));
     let mut carried = settings.relative_to(out_folder);
     carried.view = view;
-    let text = raylab_core::settings_file::settings_text(&carried).map_err(anyhow::Error::msg)?;
+    let text =
+        raylab_core::files::settings_file::settings_text(&carried).map_err(anyhow::Error::msg)?;
     let scene_text = match &args.save_scene {
         Some(path) => {
             let folder = path.parent().unwrap_or(std::path::Path::new(""));
-            let text = raylab_core::scene_file::to_text(&settings, folder)
+            let text = raylab_core::files::scene_file::to_text(&settings, folder)
                 .map_err(|reason| anyhow::anyhow!("--save-scene '{}': {reason}", path.display()))?;
             Some((path, text))
         }
@@ -852,19 +853,21 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     // within 2/255 of the exact figure.
     let mut sandbox_figures = None;
     let (image, display, legend) = if let Some(written) = &equations {
-        let yours = pool.install(|| raylab_core::sandbox::render(&scene, &settings, written));
+        let yours =
+            pool.install(|| raylab_core::teaching::sandbox::render(&scene, &settings, written));
         let figure = pool.install(|| try_render(&scene, &settings))?;
-        let share = raylab_core::check::compare::share_within(
-            &raylab_core::check::Rgb8::from_linear(&yours.image),
-            &raylab_core::check::Rgb8::from_linear(&figure),
+        let share = raylab_core::teaching::check::compare::share_within(
+            &raylab_core::teaching::check::Rgb8::from_linear(&yours.image),
+            &raylab_core::teaching::check::Rgb8::from_linear(&figure),
         );
         sandbox_figures = Some((yours.non_finite, share));
         (yours.image, settings.display, None)
     } else {
         match view {
-            raylab_core::view::View::Shaded if settings.denoise => {
-                let (raw, denoised) =
-                    pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
+            raylab_core::transport::view::View::Shaded if settings.denoise => {
+                let (raw, denoised) = pool.install(|| {
+                    raylab_core::transport::denoise::render_denoised(&scene, &settings)
+                });
                 denoised_note = Some(if denoised.is_some() {
                     "denoised (the accumulated image filtered by the denoiser; --denoise off writes \
                  the unbiased estimate)"
@@ -874,7 +877,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
                 });
                 (denoised.unwrap_or(raw), settings.display, None)
             }
-            raylab_core::view::View::Shaded => (
+            raylab_core::transport::view::View::Shaded => (
                 pool.install(|| try_render(&scene, &settings))?,
                 settings.display,
                 None,
@@ -888,7 +891,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             | View::Variance
             | View::Photons) => {
                 let v = pool.install(|| {
-                    raylab_core::view::render_view(&scene, &settings, view, &|| false)
+                    raylab_core::transport::view::render_view(&scene, &settings, view, &|| false)
                 })?;
                 (v.image, Display::default(), Some(v.legend))
             }
@@ -896,13 +899,13 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let elapsed = start.elapsed();
     // A PNG carries its settings, so the image alone reopens to the same render.
-    let keyword = raylab_core::settings_file::PNG_KEYWORD;
+    let keyword = raylab_core::files::settings_file::PNG_KEYWORD;
     image.save_with_text(&args.out, &display, Some((keyword, &text)))?;
     let saved_scene = match scene_text {
         Some((path, text)) => Some(save_scene_file(path, &text)?),
         None => None,
     };
-    if let Some(note) = raylab_core::render::camera_sees_nothing(&scene, &settings) {
+    if let Some(note) = raylab_core::transport::render::camera_sees_nothing(&scene, &settings) {
         // A black image the camera is to blame for: say so (the image is written all the same).
         print_error_line(&format!("note: {note}"));
     }
@@ -964,7 +967,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
 /// What `--equations` found, a line each: the match with the exact figure, the pixels that
 /// came out NaN or infinite (magenta), and each written quantity's verdict.
 fn equations_text(
-    written: &raylab_core::sandbox::Equations,
+    written: &raylab_core::teaching::sandbox::Equations,
     stage: Stage,
     non_finite: usize,
     share: f64,
@@ -989,20 +992,20 @@ fn equations_text(
 /// `check --equations FILE`: the image the student's equations render, checked as their
 /// image would be, and each quantity judged.
 fn check_equations(args: &CheckArgs, path: &std::path::Path) -> anyhow::Result<()> {
-    use raylab_core::check;
+    use raylab_core::teaching::check;
     let written = equations::read(path)?;
     let settings = args.options.resolve_settings()?;
     equations::refuse_unless_lab(&settings, View::Shaded)?;
     check::check_settings(&settings)?;
     let c = &settings.camera;
-    raylab_core::memory::check(
+    raylab_core::base::memory::check(
         format!("checking a {}×{} image", c.width, c.height),
         check::memory_estimate(c.width, c.height) + settings.scene.memory_estimate(),
     )?;
     let pool = thread_pool("check", args.options.threads)?;
     let (checked, rendered) = pool.install(|| -> anyhow::Result<_> {
         let scene = settings.scene.load()?;
-        let rendered = raylab_core::sandbox::render(&scene, &settings, &written);
+        let rendered = raylab_core::teaching::sandbox::render(&scene, &settings, &written);
         let image = check::Rgb8::from_linear(&rendered.image);
         Ok((check::check(&scene, &settings, &image)?, rendered))
     })?;
@@ -1040,7 +1043,7 @@ fn check_equations(args: &CheckArgs, path: &std::path::Path) -> anyhow::Result<(
 fn files_read(
     options: &RenderOptions,
     settings: &RenderSettings,
-) -> Vec<raylab_core::inputs::Input> {
+) -> Vec<raylab_core::base::inputs::Input> {
     let given = [
         (&options.settings, "the --settings file"),
         (&options.scene_file, "the --scene-file file"),
@@ -1049,7 +1052,7 @@ fn files_read(
         .into_iter()
         .filter_map(|(path, what)| {
             let path = path.as_deref()?;
-            Some(raylab_core::inputs::Input::new(path, what))
+            Some(raylab_core::base::inputs::Input::new(path, what))
         })
         .collect();
     files.extend(settings.scene.files_read());
@@ -1057,15 +1060,15 @@ fn files_read(
 }
 
 /// Refuses an output (`option`'s `path`) that would replace one of the `files` `reader` reads
-/// ([`raylab_core::inputs::refuse_output_onto`]), before any work. `--save-scene` needs no
+/// ([`raylab_core::base::inputs::refuse_output_onto`]), before any work. `--save-scene` needs no
 /// such check: it never replaces a file ([`save_scene_file`]).
 fn refuse_output_onto(
     option: &str,
     path: &std::path::Path,
     reader: &str,
-    files: Vec<raylab_core::inputs::Input>,
+    files: Vec<raylab_core::base::inputs::Input>,
 ) -> anyhow::Result<()> {
-    raylab_core::inputs::refuse_output_onto(option, path, reader, &files)
+    raylab_core::base::inputs::refuse_output_onto(option, path, reader, &files)
         .map_err(anyhow::Error::msg)
 }
 
@@ -1077,13 +1080,14 @@ fn save_scene_file(
     path: &std::path::Path,
     text: &str,
 ) -> anyhow::Result<(std::path::PathBuf, std::path::PathBuf)> {
-    let written =
-        raylab_core::film::write_to_free_name(path, text.as_bytes()).map_err(|e| match e {
-            raylab_core::film::SaveError::Write { path, reason } => {
+    let written = raylab_core::transport::film::write_to_free_name(path, text.as_bytes()).map_err(
+        |e| match e {
+            raylab_core::transport::film::SaveError::Write { path, reason } => {
                 anyhow::anyhow!("could not write scene file '{}': {reason}", path.display())
             }
             other => anyhow::Error::new(other),
-        })?;
+        },
+    )?;
     Ok((written, path.to_path_buf()))
 }
 
@@ -1092,7 +1096,7 @@ fn save_scene_file(
 fn check_scene_destination(path: &std::path::Path) -> anyhow::Result<()> {
     let toml = path
         .extension()
-        .is_some_and(|e| e == raylab_core::scene_file::EXTENSION);
+        .is_some_and(|e| e == raylab_core::files::scene_file::EXTENSION);
     if !toml {
         anyhow::bail!(
             "--save-scene '{}': a scene file's name ends in .toml",
@@ -1108,8 +1112,8 @@ fn check_scene_destination(path: &std::path::Path) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    raylab_core::film::check_file_destination(path).map_err(|e| match e {
-        raylab_core::film::SaveError::Write { reason, .. } => {
+    raylab_core::transport::film::check_file_destination(path).map_err(|e| match e {
+        raylab_core::transport::film::SaveError::Write { reason, .. } => {
             anyhow::anyhow!("could not write scene file '{}': {reason}", path.display())
         }
         other => anyhow::Error::new(other),
@@ -1137,9 +1141,9 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
     }
     // Refused before the scene is loaded if it cannot fit: inspecting holds the scene (its
     // models and textures), not the image.
-    raylab_core::memory::check(
+    raylab_core::base::memory::check(
         format!("inspecting a pixel of {}", settings.scene.name()),
-        settings.scene.memory_estimate() + raylab_core::settings::BASE_MEMORY,
+        settings.scene.memory_estimate() + raylab_core::transport::settings::BASE_MEMORY,
     )?;
     let pool = thread_pool("inspect", args.options.threads)?;
     let scene = pool.install(|| settings.scene.load())?;
@@ -1153,14 +1157,14 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
     // on` writes it (`None` where nothing is noisy).
     let denoised = if args.denoise || settings.denoise {
         let c = &settings.camera;
-        raylab_core::memory::check(
+        raylab_core::base::memory::check(
             format!("denoising a {}×{} render", c.width, c.height),
             settings
-                .memory_estimate(raylab_core::view::View::Shaded)
+                .memory_estimate(raylab_core::transport::view::View::Shaded)
                 .saturating_add(208 * u64::from(c.width) * u64::from(c.height)),
         )?;
         let (_, denoised) =
-            pool.install(|| raylab_core::denoise::render_denoised(&scene, &settings));
+            pool.install(|| raylab_core::transport::denoise::render_denoised(&scene, &settings));
         Some(denoised.map(|d| d.get(x, y)))
     } else {
         None
@@ -1206,7 +1210,7 @@ fn run_inspect(args: &InspectArgs) -> anyhow::Result<()> {
 }
 
 fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
-    use raylab_core::check;
+    use raylab_core::teaching::check;
     if let Some(path) = &args.equations {
         return check_equations(args, path);
     }
@@ -1221,7 +1225,7 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
                 path.display()
             );
         }
-        raylab_core::film::check_file_destination(path)?;
+        raylab_core::transport::film::check_file_destination(path)?;
     }
     let (image, encoding) = check::read_image_encoded(path)?;
     // The figure at the image's size: settings from a file keep their own camera (a size
@@ -1233,14 +1237,14 @@ fn run_check(args: &CheckArgs) -> anyhow::Result<()> {
     };
     if let Some(path) = &args.diff_out {
         let mut files = files_read(&args.options, &settings);
-        files.push(raylab_core::inputs::Input::new(
+        files.push(raylab_core::base::inputs::Input::new(
             &args.images[0],
             "the image to check",
         ));
         refuse_output_onto("--diff-out", path, "the check", files)?;
     }
     check::check_settings(&settings)?;
-    raylab_core::memory::check(
+    raylab_core::base::memory::check(
         format!("checking a {}×{} image", image.width, image.height),
         check::memory_estimate(image.width, image.height) + settings.scene.memory_estimate(),
     )?;
@@ -1323,7 +1327,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             .filter(|c| *c != SceneChoice::TexturedTeapot)
             .collect(),
     };
-    let isa = raylab_core::scene::best_isa();
+    let isa = raylab_core::shapes::scene::best_isa();
     let config = BenchConfig {
         width: args.width,
         height: args.height,
@@ -1332,7 +1336,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
     };
     // Refused before any work if it cannot fit: the scenes are measured one after the other.
     let largest_scene = scenes.iter().map(SceneChoice::memory_estimate).max();
-    raylab_core::memory::check(
+    raylab_core::base::memory::check(
         format!("a {}×{} bench", args.width, args.height),
         raylab_core::bench::memory_estimate(&config) + largest_scene.unwrap_or(0),
     )?;
@@ -1372,7 +1376,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             write!(
                 out,
                 "{:<10} {:>9} {:>6} {:>6} {:>10.2} {:>12.1} {:>12.1} {:>10.2}",
-                raylab_core::inputs::escape_control(&r.scene),
+                raylab_core::base::inputs::escape_control(&r.scene),
                 r.triangles,
                 kind.name(),
                 isa.name(),
@@ -1395,7 +1399,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
             args.height,
             pool.current_num_threads(),
             args.passes,
-            raylab_core::scene::calibration().map_or_else(
+            raylab_core::shapes::scene::calibration().map_or_else(
                 || format!("{} (forced)", isa.name()),
                 |c| format!("{}, the fastest measured here", c.summary())
             )
@@ -1407,18 +1411,18 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
 /// `raylab bench --stage denoise`: the denoiser's time (features and filter, medians of
 /// `--passes`) on a 16-sample path-traced Cornell box at W×H (its materials
 /// `--material-preset`'s), then its quality at 256²: relative MSE raw and denoised at 4 to
-/// 1,024 samples against `--reference-samples` ([`raylab_core::denoise::quality`]).
+/// 1,024 samples against `--reference-samples` ([`raylab_core::transport::denoise::quality`]).
 fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     use raylab_core::bench::path_settings;
-    use raylab_core::denoise::{Denoiser, Noisy, denoising_film, features_of, quality};
-    use raylab_core::film::Film;
-    raylab_core::memory::check(
+    use raylab_core::transport::denoise::{Denoiser, Noisy, denoising_film, features_of, quality};
+    use raylab_core::transport::film::Film;
+    raylab_core::base::memory::check(
         format!("a {}×{} denoise bench", args.width, args.height),
         // A film (sum, squares, brightest samples, the features' sums), the features, the
         // colour without outliers and the filter's planes: under 52 floats a pixel.
         208 * u64::from(args.width) * u64::from(args.height),
     )?;
-    let scene = raylab_core::scene::cornell_box();
+    let scene = raylab_core::shapes::scene::cornell_box();
     let preset = args.material_preset.unwrap_or_default();
     let with_preset = |width: u32, height: u32| RenderSettings {
         material_preset: preset,
@@ -1441,7 +1445,9 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
                 (&mut plain, &mut not_recording),
             ] {
                 let start = std::time::Instant::now();
-                raylab_core::render::accumulate_pass(&scene, &settings, sample, film, &never)?;
+                raylab_core::transport::render::accumulate_pass(
+                    &scene, &settings, sample, film, &never,
+                )?;
                 times.push(start.elapsed());
             }
         }
@@ -1543,23 +1549,23 @@ fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Resu
 }
 
 /// A pool of `threads` threads named `raylab-{what}-N`, or by default
-/// [`raylab_core::progressive::default_threads`] (`RAYON_NUM_THREADS` up to four threads a
+/// [`raylab_core::transport::progressive::default_threads`] (`RAYON_NUM_THREADS` up to four threads a
 /// core, else one per core; a value beyond it is warned of). The count is always given
 /// explicitly, so rayon never reads `RAYON_NUM_THREADS` itself.
 fn thread_pool(what: &'static str, threads: Option<u16>) -> anyhow::Result<rayon::ThreadPool> {
     let threads = match threads {
         Some(n) => usize::from(n),
         None => {
-            if let Some(note) = raylab_core::progressive::default_threads_note() {
+            if let Some(note) = raylab_core::transport::progressive::default_threads_note() {
                 print_error_line(&format!("warning: {note}"));
             }
-            raylab_core::progressive::default_threads()
+            raylab_core::transport::progressive::default_threads()
         }
     };
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(move |i| format!("raylab-{what}-{i}"))
-        .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
+        .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
         .build()
         .with_context(|| format!("could not start the {what} threads"))
 }
@@ -1775,8 +1781,8 @@ mod tests {
         assert_eq!(s.camera.pitch, 0.0);
         // Degrees, as the window's Pitch and a scene file's `pitch` take them.
         let s = args(&["--pitch", "-12.5", "--yaw", "30"]).settings();
-        assert_eq!(s.camera.pitch, raylab_core::camera::radians(-12.5));
-        assert_eq!(s.camera.yaw, raylab_core::camera::radians(30.0));
+        assert_eq!(s.camera.pitch, raylab_core::base::camera::radians(-12.5));
+        assert_eq!(s.camera.yaw, raylab_core::base::camera::radians(30.0));
         assert!((s.camera.pitch + 12.5f32.to_radians()).abs() < 1e-7);
     }
 

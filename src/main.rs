@@ -4,7 +4,7 @@ mod app;
 mod cli;
 mod signals;
 
-/// Runs the program on a thread whose stack raylab sets ([`raylab_core::memory::MAIN_STACK_BYTES`])
+/// Runs the program on a thread whose stack raylab sets ([`raylab_core::base::memory::MAIN_STACK_BYTES`])
 /// and waits for it: the first thread's stack is whatever `ulimit -s` says, and under
 /// `ulimit -s 64` parsing the arguments alone overflowed it. (On Linux only: elsewhere the
 /// window must run on the first thread, and does, as the rest of the program.)
@@ -16,7 +16,7 @@ fn main() -> std::process::ExitCode {
     signals::block();
     let started = std::thread::Builder::new()
         .name("raylab-main".to_owned())
-        .stack_size(raylab_core::memory::MAIN_STACK_BYTES)
+        .stack_size(raylab_core::base::memory::MAIN_STACK_BYTES)
         .spawn(cli::main);
     match started {
         // Its panic was reported where it happened; it ends the program as it would have.

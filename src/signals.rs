@@ -1,11 +1,11 @@
 //! Signals that stop a render: whatever stops it, no temporary file is left behind.
 //!
 //! Images and scene files are written to a temporary file and renamed into place
-//! ([`raylab_core::film::write_atomically`]); a signal between the two would leave the
+//! ([`raylab_core::transport::film::write_atomically`]); a signal between the two would leave the
 //! temporary file. So:
 //!
 //! * SIGINT (Ctrl+C), SIGTERM (`kill`) and SIGHUP (the terminal closed) are handled by the
-//!   `ctrlc` crate: the files on [`raylab_core::temp_files`]' list are removed and the program
+//!   `ctrlc` crate: the files on [`raylab_core::base::temp_files`]' list are removed and the program
 //!   exits with code 130;
 //! * on Unix, the other signals whose default is to end the program and that another process
 //!   or a limit sends — SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGVTALRM, SIGPROF and SIGXCPU
@@ -43,7 +43,7 @@ pub fn remove_temporary_files_when_stopped() {
     #[cfg(unix)]
     unix::install();
     let installed = ctrlc::set_handler(|| {
-        raylab_core::temp_files::remove_all();
+        raylab_core::base::temp_files::remove_all();
         let _ = writeln!(
             std::io::stderr(),
             "raylab: interrupted; its temporary files are removed"
@@ -99,12 +99,12 @@ mod unix {
         }
         let spawned = std::thread::Builder::new()
             .name("raylab-signals".to_owned())
-            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
+            .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 loop {
                     // Only fails on EINTR, a signal outside the set: wait again.
                     if let Ok(received) = set.wait() {
-                        raylab_core::temp_files::remove_all();
+                        raylab_core::base::temp_files::remove_all();
                         let _ = writeln!(
                             std::io::stderr(),
                             "raylab: stopped by {}; its temporary files are removed",

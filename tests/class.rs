@@ -197,8 +197,8 @@ fn a_class_folder_gives_a_row_for_each_submission() {
     let rows = json["submissions"].as_array().unwrap();
     assert_eq!(rows.len(), expected.len(), "a row a submission");
     let csv_text = std::fs::read_to_string(out.join("report.csv")).unwrap();
-    let csv = raylab_core::check::csv::parse(&csv_text).unwrap();
-    assert_eq!(csv[0], raylab_core::check::report::CSV_COLUMNS);
+    let csv = raylab_core::teaching::check::csv::parse(&csv_text).unwrap();
+    assert_eq!(csv[0], raylab_core::teaching::check::report::CSV_COLUMNS);
     assert_eq!(csv.len(), rows.len() + 1);
     let column = |name: &str| csv[0].iter().position(|c| c == name).unwrap();
     for e in &expected {
@@ -254,7 +254,7 @@ fn a_class_folder_gives_a_row_for_each_submission() {
     }
     // Every mistake of the catalogue was named.
     let counts = json["verdicts"].as_object().unwrap();
-    for m in raylab_core::check::Mistake::catalogue() {
+    for m in raylab_core::teaching::check::Mistake::catalogue() {
         assert!(counts.contains_key(m.name()), "{m}: {counts:?}");
     }
 

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use common::{files_in, raylab, settings, stderr};
 use raylab_core::Stage;
-use raylab_core::scene::cornell_box;
+use raylab_core::shapes::scene::cornell_box;
 
 #[test]
 fn renders_a_png_and_an_exr_of_the_requested_size() {
@@ -80,7 +80,7 @@ fn the_png_is_the_labs_display_of_the_exr() {
 /// floats, rows top to bottom.
 fn library_exr(settings: &raylab_core::RenderSettings) -> Vec<f32> {
     let scene = settings.scene.load().unwrap();
-    raylab_core::render::render(&scene, settings)
+    raylab_core::transport::render::render(&scene, settings)
         .pixels
         .iter()
         .flat_map(|p| p.to_array())
@@ -358,7 +358,7 @@ fn the_extensions_on_the_command_line() {
             "radius.exr",
             vec!["--light-radius", "0.2", "--samples", "4"],
             with(&|s| {
-                s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.2 };
+                s.light.kind = raylab_core::shading::light::LightKind::Sphere { radius: 0.2 };
                 s.samples_per_pixel = 4;
             }),
         ),
@@ -381,19 +381,21 @@ fn the_extensions_on_the_command_line() {
         (
             "texture.exr",
             vec!["--texture-preset", "checker-floor"],
-            with(&|s| s.texture_preset = raylab_core::material::TexturePreset::CheckerFloor),
+            with(&|s| {
+                s.texture_preset = raylab_core::shading::material::TexturePreset::CheckerFloor
+            }),
         ),
         (
             "bunny.exr",
             vec!["--scene", "bunny"],
-            with(&|s| s.scene = raylab_core::scene::SceneChoice::Bunny),
+            with(&|s| s.scene = raylab_core::shapes::scene::SceneChoice::Bunny),
         ),
         // Smooth shading changes a model, never the box.
         (
             "flat.exr",
             vec!["--scene", "bunny", "--smooth", "off"],
             with(&|s| {
-                s.scene = raylab_core::scene::SceneChoice::Bunny;
+                s.scene = raylab_core::shapes::scene::SceneChoice::Bunny;
                 s.shading.smooth = false;
             }),
         ),
@@ -537,7 +539,7 @@ fn every_kernel_set_forced_with_isa_gives_the_same_image() {
     // structure traces packets with AVX-512 and single rays otherwise, the same hits either
     // way, so the same pixels. A set this CPU lacks is refused with one line.
     let dir = tempfile::tempdir().unwrap();
-    let available = raylab_core::accel::Isa::available();
+    let available = raylab_core::shapes::accel::Isa::available();
     let mut images = Vec::new();
     for isa in ["best", "scalar", "avx2", "avx512"] {
         let path = dir.path().join(format!("{isa}.png"));
@@ -730,7 +732,7 @@ fn the_inspect_command() {
 /// |image − figure| amplified; what cannot be checked is one line naming why.
 #[test]
 fn the_check_command() {
-    use raylab_core::check::{self, Mistake, Rgb8};
+    use raylab_core::teaching::check::{self, Mistake, Rgb8};
     let dir = tempfile::tempdir().unwrap();
     let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
     // A non-square image and a turned camera: the figure follows the image's size and the
@@ -754,7 +756,7 @@ fn the_check_command() {
     // The figure upside down, as a BMP.
     let mut s = settings(Stage::Direct, 48);
     s.camera = s.camera.with_resolution(48, 36);
-    s.camera.yaw = raylab_core::camera::radians(10.0);
+    s.camera.yaw = raylab_core::base::camera::radians(10.0);
     let flipped = &check::mistakes::looks(&cornell_box(), &s, Mistake::UpsideDown)[0];
     let bmp = path("flipped.bmp");
     image::RgbImage::from_raw(48, 36, flipped.data.clone())
@@ -832,8 +834,8 @@ fn the_check_command() {
 /// difference picture is scaled so that it is not white all over.
 #[test]
 fn check_names_another_stage_and_a_factor() {
-    use raylab_core::check::Rgb8;
-    use raylab_core::film::Image;
+    use raylab_core::teaching::check::Rgb8;
+    use raylab_core::transport::film::Image;
     let dir = tempfile::tempdir().unwrap();
     let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
     let six = path("six.png");
@@ -928,20 +930,20 @@ fn check_follows_water_and_glass() {
     }
     let mut s = settings(Stage::Shadows, 24);
     s.camera = s.camera.with_resolution(24, 20);
-    let mut spec = raylab_core::scene::SceneChoice::Pool.spec();
-    spec.models = vec![raylab_core::scene::spec::ModelSpec {
-        kind: raylab_core::material::MaterialKind::Glass {
+    let mut spec = raylab_core::shapes::scene::SceneChoice::Pool.spec();
+    spec.models = vec![raylab_core::shapes::scene::spec::ModelSpec {
+        kind: raylab_core::shading::material::MaterialKind::Glass {
             ior: 1.5,
             tint: glam::Vec3::ONE,
         },
-        ..raylab_core::scene::spec::ModelSpec::new(
+        ..raylab_core::shapes::scene::spec::ModelSpec::new(
             "teapot",
-            &raylab_core::scene::obj::Placement::TEAPOT,
+            &raylab_core::shapes::scene::obj::Placement::TEAPOT,
         )
     }];
-    s.scene = raylab_core::scene::SceneChoice::from_spec(spec);
+    s.scene = raylab_core::shapes::scene::SceneChoice::from_spec(spec);
     let toml = path("glass-pool.toml");
-    let text = raylab_core::scene_file::to_text(&s, dir.path()).unwrap();
+    let text = raylab_core::files::scene_file::to_text(&s, dir.path()).unwrap();
     assert!(
         text.contains("[scene.water]") && text.contains("glass"),
         "{text}"
@@ -995,11 +997,11 @@ fn the_pool_on_the_command_line() {
     assert!(run.status.success(), "{}", stderr(&run));
     let mut s = settings(Stage::Lab, 40);
     s.camera = s.camera.with_resolution(40, 30);
-    let mut spec = raylab_core::scene::SceneChoice::Pool.spec();
+    let mut spec = raylab_core::shapes::scene::SceneChoice::Pool.spec();
     let water = spec.water.as_mut().unwrap();
     water.waves = 0.02;
     water.time = 1.5;
-    s.scene = raylab_core::scene::SceneChoice::from_spec(spec);
+    s.scene = raylab_core::shapes::scene::SceneChoice::from_spec(spec);
     let written = image::open(&out).unwrap().to_rgb32f().into_raw();
     assert_eq!(written, library_exr(&s));
 
@@ -1057,7 +1059,7 @@ fn denoise_on_the_command_line() {
     let (denoised, text) = render("denoised.exr", "on");
     assert_eq!(raw, library_exr(&s));
     assert!(!raw_text.contains("denoised"), "{raw_text}");
-    let (_, want) = raylab_core::denoise::render_denoised(&cornell_box(), &s);
+    let (_, want) = raylab_core::transport::denoise::render_denoised(&cornell_box(), &s);
     let want = want.unwrap();
     let want: Vec<f32> = want.pixels.iter().flat_map(|p| p.to_array()).collect();
     assert_eq!(denoised, want);
@@ -1267,7 +1269,9 @@ fn a_spot_light_on_the_command_line() {
     assert!(out.status.success(), "{}", stderr(&out));
     let exr = image::open(&path).unwrap().to_rgb32f().into_raw();
     let mut s = settings(Stage::Shadows, side);
-    s.light.kind = raylab_core::light::LightKind::Spot(raylab_core::light::SpotCone::default());
+    s.light.kind = raylab_core::shading::light::LightKind::Spot(
+        raylab_core::shading::light::SpotCone::default(),
+    );
     assert_eq!(exr, library_exr(&s));
     let spot = s.light.spot().unwrap();
     let scene = cornell_box();
@@ -1408,8 +1412,8 @@ fn the_plastic_preset_shows_a_highlight_on_the_tall_block() {
 /// it, and a wrong kind, field or value is refused on one line naming it, with no file.
 #[test]
 fn a_part_material_on_the_command_line() {
-    use raylab_core::material::MaterialKind;
-    use raylab_core::scene::spec::{BoxPart, PartMaterial};
+    use raylab_core::shading::material::MaterialKind;
+    use raylab_core::shapes::scene::spec::{BoxPart, PartMaterial};
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("m.exr");
     let scene = dir.path().join("m.toml");
@@ -1451,7 +1455,7 @@ fn a_part_material_on_the_command_line() {
     ];
     let image = image::open(&out).unwrap().to_rgb32f();
     assert_eq!(image.as_raw(), &library_exr(&s));
-    let saved = raylab_core::scene_file::load(&scene).unwrap();
+    let saved = raylab_core::files::scene_file::load(&scene).unwrap();
     assert_eq!(saved.part_materials, s.part_materials);
     std::fs::remove_file(&out).unwrap();
     for (material, names) in [
@@ -1581,7 +1585,7 @@ fn a_render_carries_the_equations_and_its_settings_render_it_again() {
     ]);
     assert_ne!(pixels(&figure), pixels(&first));
 
-    let settings = raylab_core::settings_file::read_file(std::path::Path::new(&first))
+    let settings = raylab_core::files::settings_file::read_file(std::path::Path::new(&first))
         .unwrap()
         .settings;
     let mut json = serde_json::to_value(&settings).unwrap();

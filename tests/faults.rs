@@ -17,11 +17,11 @@
 mod common;
 
 use glam::Vec3;
-use raylab_core::accel::AccelKind;
-use raylab_core::geometry::{Ray, Triangle};
-use raylab_core::intersect::{closest_intersection_brute_force, occluded_brute_force};
-use raylab_core::sampling::Rng;
-use raylab_core::scene::{Material, Scene};
+use raylab_core::base::geometry::{Ray, Triangle};
+use raylab_core::base::sampling::Rng;
+use raylab_core::shapes::accel::AccelKind;
+use raylab_core::shapes::intersect::{closest_intersection_brute_force, occluded_brute_force};
+use raylab_core::shapes::scene::{Material, Scene};
 
 use common::rays::random_dir;
 use common::{raylab, stderr};
@@ -93,7 +93,7 @@ fn build_and_compare(triangles: &[Triangle], rays: &[Ray]) -> usize {
             triangles.to_vec(),
             materials.clone(),
             kind,
-            raylab_core::scene::best_isa(),
+            raylab_core::shapes::scene::best_isa(),
         );
         for (ray, (closest, occluded)) in rays.iter().zip(&expected) {
             assert_eq!(
@@ -117,7 +117,7 @@ fn a_million_copies_of_one_triangle_build_quickly_and_answer_as_brute_force() {
     let rays = rays_at(&triangles, 40, 31);
     let hits = build_and_compare(&triangles, &rays);
     assert!(hits >= 15, "{hits} of 40 rays hit");
-    let bvh = raylab_core::accel::bvh::Bvh::build(&triangles);
+    let bvh = raylab_core::shapes::accel::bvh::Bvh::build(&triangles);
     assert_eq!(bvh.nodes.len(), 1, "one leaf");
     assert_eq!(bvh.indices, [0], "the first copy is the one kept");
     let hit = Scene::new(triangles, vec![Material::diffuse("m", Vec3::ONE)])
@@ -146,10 +146,10 @@ fn triangles_with_one_centroid_build_a_shallow_tree_and_answer_as_brute_force() 
         })
         .collect();
     for t in &triangles {
-        let b = raylab_core::accel::bvh::Aabb::of_triangle(t).unwrap();
+        let b = raylab_core::shapes::accel::bvh::Aabb::of_triangle(t).unwrap();
         assert_eq!(b.centre(), Vec3::ZERO);
     }
-    let bvh = raylab_core::accel::bvh::Bvh::build(&triangles);
+    let bvh = raylab_core::shapes::accel::bvh::Bvh::build(&triangles);
     let log2 = (n as f64).log2().ceil() as usize;
     assert!(bvh.depth() <= log2 + 42, "depth {} for {n}", bvh.depth());
     let rays = rays_at(&triangles, 200, 33);
@@ -163,7 +163,7 @@ fn triangles_with_one_centroid_build_a_shallow_tree_and_answer_as_brute_force() 
 fn a_million_triangles_in_one_point_build_an_empty_tree() {
     let p = Vec3::new(0.25, 0.5, 2.0);
     let triangles = vec![Triangle::new(p, p, p, 0); COPIES];
-    let bvh = raylab_core::accel::bvh::Bvh::build(&triangles);
+    let bvh = raylab_core::shapes::accel::bvh::Bvh::build(&triangles);
     assert!(bvh.nodes.is_empty() && bvh.indices.is_empty());
     let mut rays = rays_at(&triangles, 20, 34);
     rays.push(Ray::new(Vec3::ZERO, p));
@@ -184,11 +184,12 @@ fn an_obj_of_many_copies_of_one_face_loads_quickly_and_says_what_it_left_out() {
     text.push_str("f 1 2 4\nf 3 1 2\n");
     std::fs::write(&obj, &text).unwrap();
 
-    let (scene, warnings) = raylab_core::scene::spec::obj_scene_with_warnings(&obj).unwrap();
+    let (scene, warnings) =
+        raylab_core::shapes::scene::spec::obj_scene_with_warnings(&obj).unwrap();
     // The box's 30 triangles and the one face.
     assert_eq!(
         scene.triangles.len(),
-        raylab_core::scene::CORNELL_TRIANGLES + 1
+        raylab_core::shapes::scene::CORNELL_TRIANGLES + 1
     );
     let want = format!(
         "{}: left out {} faces that can never be seen: 1 degenerate (zero area), {} exact \
@@ -296,7 +297,7 @@ fn the_largest_allowed_light_writes_a_finite_exr() {
 fn shadows_stage(light: Vec3, side: u32) -> raylab_core::Image {
     let mut s = common::settings(raylab_core::Stage::Shadows, side);
     s.light.position = light;
-    raylab_core::render::render(&raylab_core::scene::cornell_box(), &s)
+    raylab_core::transport::render::render(&raylab_core::shapes::scene::cornell_box(), &s)
 }
 
 /// A light outside the box (which spans −1..1) lights nothing inside it: the walls stand in the
@@ -353,11 +354,11 @@ fn a_light_outside_the_box_lights_nothing_inside() {
 /// (Cramer's rule, one triangle at a time), not by the renderer's shadow rays.
 #[test]
 fn the_floor_edge_is_lit_from_inside_and_dark_from_outside() {
-    use raylab_core::intersect::{closest_intersection_brute_force, intersect_triangle};
+    use raylab_core::shapes::intersect::{closest_intersection_brute_force, intersect_triangle};
     let light = raylab_core::LightSpec::default().position;
     let inside = shadows_stage(light, 128);
     let outside = shadows_stage(Vec3::new(1.5, 0.0, 0.0), 128);
-    let scene = raylab_core::scene::cornell_box();
+    let scene = raylab_core::shapes::scene::cornell_box();
     let camera = common::settings(raylab_core::Stage::Shadows, 128).camera;
     let mut shadowed = Vec::new();
     for i in 96..128 {
@@ -400,7 +401,8 @@ fn the_floor_edge_is_lit_from_inside_and_dark_from_outside() {
 fn a_camera_in_a_corner_sees_the_room_in_front_of_it() {
     let mut s = common::settings(raylab_core::Stage::Flat, 16);
     s.camera.position = Vec3::new(-1.0, -1.0, -1.0);
-    let image = raylab_core::render::render(&raylab_core::scene::cornell_box(), &s);
+    let image =
+        raylab_core::transport::render::render(&raylab_core::shapes::scene::cornell_box(), &s);
     for y in 0..16 {
         for x in 0..16 {
             let want = if x >= 8 && y >= 8 {
@@ -418,7 +420,7 @@ fn a_camera_in_a_corner_sees_the_room_in_front_of_it() {
 /// the stage.
 #[test]
 fn a_camera_on_a_wall_sees_what_is_in_front_of_it() {
-    let scene = raylab_core::scene::cornell_box();
+    let scene = raylab_core::shapes::scene::cornell_box();
     for stage in [raylab_core::Stage::Flat, raylab_core::Stage::Lab] {
         let mut on = common::settings(stage, 48);
         on.camera.position = Vec3::new(0.0, 0.0, 1.0);
@@ -426,8 +428,8 @@ fn a_camera_on_a_wall_sees_what_is_in_front_of_it() {
         let mut before = on.clone();
         before.camera.position.z = 1.0 - 1e-3;
         let (a, b) = (
-            raylab_core::render::render(&scene, &on),
-            raylab_core::render::render(&scene, &before),
+            raylab_core::transport::render::render(&scene, &on),
+            raylab_core::transport::render::render(&scene, &before),
         );
         // The blue and red blocks and the open front (black) at least, not one colour.
         let colours: std::collections::HashSet<[u32; 3]> = common::bits(&a).into_iter().collect();
@@ -587,14 +589,14 @@ fn a_model_path_that_is_not_utf8_is_refused_before_the_render() {
     let folder = dir.path().join(std::ffi::OsStr::from_bytes(b"scenes-\xfe"));
     std::fs::create_dir(&folder).unwrap();
     std::fs::write(folder.join("m.obj"), TETRAHEDRON).unwrap();
-    let mut spec = raylab_core::scene::SceneChoice::Bunny.spec();
+    let mut spec = raylab_core::shapes::scene::SceneChoice::Bunny.spec();
     spec.models[0].file = folder.join("m.obj");
     let settings = raylab_core::RenderSettings {
-        scene: raylab_core::scene::SceneChoice::Custom(Box::new(spec)),
+        scene: raylab_core::shapes::scene::SceneChoice::Custom(Box::new(spec)),
         ..common::settings(raylab_core::Stage::Lab, 8)
     };
     // The file names the model beside it, `m.obj`, which is UTF-8; the folder is not.
-    let text = raylab_core::scene_file::to_text(&settings, &folder).unwrap();
+    let text = raylab_core::files::scene_file::to_text(&settings, &folder).unwrap();
     assert!(text.contains("file = \"m.obj\""), "{text}");
     std::fs::write(folder.join("s.toml"), text).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_raylab"))
@@ -615,7 +617,7 @@ fn a_model_path_that_is_not_utf8_is_refused_before_the_render() {
 fn fifos_and_devices_are_refused_at_once() {
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("pipe");
-    raylab_core::inputs::make_fifo(&fifo);
+    raylab_core::base::inputs::make_fifo(&fifo);
     let fifo = fifo.to_str().unwrap();
     for (flag, input) in [
         ("--obj", fifo),
@@ -634,7 +636,7 @@ fn fifos_and_devices_are_refused_at_once() {
         assert!(!dir.path().join("x.png").exists());
     }
     // A material library that is a FIFO: a warning, and the model renders.
-    raylab_core::inputs::make_fifo(&dir.path().join("lib.mtl"));
+    raylab_core::base::inputs::make_fifo(&dir.path().join("lib.mtl"));
     std::fs::write(
         dir.path().join("m.obj"),
         format!("mtllib lib.mtl\n{TETRAHEDRON}"),
@@ -667,7 +669,7 @@ fn a_screenshot_whose_settings_inflate_without_end_is_refused() {
         encoder.set_color(png::ColorType::Rgb);
         let mut writer = encoder.write_header().unwrap();
         let mut chunk = png::text_metadata::ITXtChunk::new(
-            raylab_core::settings_file::PNG_KEYWORD,
+            raylab_core::files::settings_file::PNG_KEYWORD,
             " ".repeat(8 << 20),
         );
         chunk.compressed = true;
@@ -699,11 +701,11 @@ fn a_screenshot_whose_settings_inflate_without_end_is_refused() {
 fn control_characters_from_files_are_escaped_in_what_is_printed() {
     let dir = tempfile::tempdir().unwrap();
     let mut settings = common::settings(raylab_core::Stage::Lab, 8);
-    let mut spec = raylab_core::scene::SceneChoice::Cornell.spec();
+    let mut spec = raylab_core::shapes::scene::SceneChoice::Cornell.spec();
     spec.name = "\u{1b}[31mred\u{1b}[0m\ttab".into();
     spec.blocks = false;
-    settings.scene = raylab_core::scene::SceneChoice::Custom(Box::new(spec));
-    let text = raylab_core::scene_file::to_text(&settings, dir.path()).unwrap();
+    settings.scene = raylab_core::shapes::scene::SceneChoice::Custom(Box::new(spec));
+    let text = raylab_core::files::scene_file::to_text(&settings, dir.path()).unwrap();
     std::fs::write(dir.path().join("s.toml"), text).unwrap();
     let out = raylab_in(
         dir.path(),
@@ -977,7 +979,7 @@ fn save_scene_never_replaces_a_file_and_is_checked_first() {
     let settings = common::settings(raylab_core::Stage::Lab, 8);
     let hand = format!(
         "# my notes\n{}",
-        raylab_core::scene_file::to_text(&settings, dir.path()).unwrap()
+        raylab_core::files::scene_file::to_text(&settings, dir.path()).unwrap()
     );
     std::fs::write(dir.path().join("s.toml"), &hand).unwrap();
     let args = [
@@ -1000,10 +1002,10 @@ fn save_scene_never_replaces_a_file_and_is_checked_first() {
             "{stdout}"
         );
         let saved = dir.path().join(format!("s-{n}.toml"));
-        let again = raylab_core::scene_file::load(&saved).unwrap();
+        let again = raylab_core::files::scene_file::load(&saved).unwrap();
         assert_eq!(
             again,
-            raylab_core::scene_file::load(&dir.path().join("s.toml")).unwrap()
+            raylab_core::files::scene_file::load(&dir.path().join("s.toml")).unwrap()
         );
     }
     assert_eq!(
@@ -1115,17 +1117,18 @@ fn render_never_writes_over_a_file_its_scene_reads() {
         bytes.into_inner()
     };
     std::fs::write(d.join("nm.png"), &map).unwrap();
-    let mut spec = raylab_core::scene::SceneSpec::cornell("tilted wall");
-    spec.surfaces.push(raylab_core::scene::spec::PartRelief {
-        part: raylab_core::scene::spec::BoxPart::BackWall,
-        relief: raylab_core::scene::spec::ReliefSpec {
-            normal_map: Some(d.join("nm.png")),
-            ..Default::default()
-        },
-    });
+    let mut spec = raylab_core::shapes::scene::SceneSpec::cornell("tilted wall");
+    spec.surfaces
+        .push(raylab_core::shapes::scene::spec::PartRelief {
+            part: raylab_core::shapes::scene::spec::BoxPart::BackWall,
+            relief: raylab_core::shapes::scene::spec::ReliefSpec {
+                normal_map: Some(d.join("nm.png")),
+                ..Default::default()
+            },
+        });
     let mut settings = common::settings(raylab_core::Stage::Lab, 16);
-    settings.scene = raylab_core::scene::SceneChoice::Custom(Box::new(spec));
-    raylab_core::scene_file::save(&settings, &d.join("s.toml")).unwrap();
+    settings.scene = raylab_core::shapes::scene::SceneChoice::Custom(Box::new(spec));
+    raylab_core::files::scene_file::save(&settings, &d.join("s.toml")).unwrap();
     for out_name in ["nm.png", "./nm.png"] {
         let out = raylab_in(d, &["render", "--scene-file", "s.toml", "--out", out_name]);
         assert_input_kept(
@@ -1308,7 +1311,7 @@ fn a_small_stack_limit_is_no_overflow() {
 fn a_scene_file_array_of_four_numbers_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let settings = common::settings(raylab_core::Stage::Lab, 8);
-    let text = raylab_core::scene_file::to_text(&settings, dir.path())
+    let text = raylab_core::files::scene_file::to_text(&settings, dir.path())
         .unwrap()
         .replace(
             "position = [0.0, 0.0, -3.001]",
@@ -1527,7 +1530,7 @@ fn thread_counts_and_kernel_names_from_the_environment() {
     // 2000 on a machine of a few cores would start far more threads than it has cores, each
     // a cost to the render: at most four a core.
     let cores = std::thread::available_parallelism().unwrap().get();
-    let cap = raylab_core::progressive::THREADS_PER_CORE * cores;
+    let cap = raylab_core::transport::progressive::THREADS_PER_CORE * cores;
     let out = run("RAYON_NUM_THREADS", "2000");
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(

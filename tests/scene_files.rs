@@ -8,7 +8,7 @@ use std::path::Path;
 
 use common::{files_in, raylab, stderr};
 use raylab_core::RenderSettings;
-use raylab_core::scene::SceneChoice;
+use raylab_core::shapes::scene::SceneChoice;
 
 fn render(args: &[&str]) -> std::process::Output {
     let out = raylab(&[&["render"], args].concat());
@@ -78,7 +78,7 @@ fn a_screenshot_png_reopens_to_its_render() {
         "--light",
         "-0.3,-0.5,-0.6",
     ]);
-    let loaded = raylab_core::settings_file::read_file(&a).unwrap();
+    let loaded = raylab_core::files::settings_file::read_file(&a).unwrap();
     assert_eq!(loaded.settings.camera.width, 40);
     assert_eq!(loaded.settings.shading.stage, raylab_core::Stage::Shadows);
     assert!(loaded.warnings.is_empty());
@@ -134,12 +134,12 @@ fn every_shipped_scene_file_loads_and_is_valid() {
         ]
     );
     for name in &names {
-        let settings = raylab_core::scene_file::load(&folder.join(name))
+        let settings = raylab_core::files::scene_file::load(&folder.join(name))
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         settings.validate().unwrap();
     }
     // Figure 7 is exactly the lab's defaults; the presets are the built-ins.
-    let load = |n: &str| raylab_core::scene_file::load(&folder.join(n)).unwrap();
+    let load = |n: &str| raylab_core::files::scene_file::load(&folder.join(n)).unwrap();
     assert_eq!(load("figure7.toml"), RenderSettings::default());
     assert_eq!(load("bunny.toml").scene, SceneChoice::Bunny);
     assert_eq!(load("terrain.toml").scene, SceneChoice::Terrain);

@@ -3,7 +3,7 @@
 mod common;
 
 use common::{raylab, stderr};
-use raylab_core::scene::SceneChoice;
+use raylab_core::shapes::scene::SceneChoice;
 
 /// Each scene the command line is given is the one rendered: the PNG is the library's render
 /// of that scene (the lab's display of it), byte for byte, and no two scenes give the same
@@ -44,7 +44,7 @@ fn renders_the_built_in_models_and_an_obj_file() {
         let mut settings = common::settings(raylab_core::Stage::Lab, 48);
         settings.scene = choice;
         let scene = settings.scene.load().unwrap();
-        let want = raylab_core::render::render(&scene, &settings).to_rgb8();
+        let want = raylab_core::transport::render::render(&scene, &settings).to_rgb8();
         assert_eq!(written, want, "{args:?}");
         assert!(
             !seen.contains(&written),

@@ -62,7 +62,7 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     };
-    let _ = raylab_core::accel::Isa::by_name(&cli.isa);
+    let _ = raylab_core::shapes::accel::Isa::by_name(&cli.isa);
     match cli.command {
         Some(Command::Render(args)) => resolve(&args.options),
         Some(Command::Inspect(args)) => resolve(&args.options),

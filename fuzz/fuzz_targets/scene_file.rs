@@ -1,4 +1,4 @@
-//! Scene-file bytes → `raylab_core::scene_file::parse` → a saved copy that reads back the same → a
+//! Scene-file bytes → `raylab_core::files::scene_file::parse` → a saved copy that reads back the same → a
 //! small render ([`checks::scene_file`]).
 #![no_main]
 

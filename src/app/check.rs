@@ -1,6 +1,6 @@
 //! "Check my image": a student's own render of the lab, dropped on the window or opened with
 //! "Check an image…", held against the exact figure for the current settings
-//! ([`raylab_core::check`], the same check as `raylab check`).
+//! ([`raylab_core::teaching::check`], the same check as `raylab check`).
 //!
 //! Reading the image and each check run on a short-lived thread (a check renders a dozen
 //! figures at the image's size, too long for the UI thread), at most
@@ -16,10 +16,10 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use eframe::egui;
 use raylab_core::RenderSettings;
-use raylab_core::check::{self, Checked, Encoding, Rgb8};
-use raylab_core::display::Display;
-use raylab_core::progressive::catch_panic;
-use raylab_core::scene::Scene;
+use raylab_core::shapes::scene::Scene;
+use raylab_core::teaching::check::{self, Checked, Encoding, Rgb8};
+use raylab_core::transport::display::Display;
+use raylab_core::transport::progressive::catch_panic;
 
 use super::Command;
 use super::compare::{Divider, Texture, paint_wipe, tag};

@@ -22,9 +22,11 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use eframe::egui;
-use raylab_core::light::{LightKind, LightSpec, SpotCone};
-use raylab_core::progressive::{Controller, ControllerError, Frame, WorkerError, catch_panic};
-use raylab_core::scene::Scene;
+use raylab_core::shading::light::{LightKind, LightSpec, SpotCone};
+use raylab_core::shapes::scene::Scene;
+use raylab_core::transport::progressive::{
+    Controller, ControllerError, Frame, WorkerError, catch_panic,
+};
 use raylab_core::{Camera, Image, RenderSettings, Shading};
 
 use super::stats::Stats;
@@ -274,7 +276,7 @@ impl Compare {
         let repaint = ctx.clone();
         let spawned = std::thread::Builder::new()
             .name("raylab-difference".to_owned())
-            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
+            .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 // A panic is sent as its message: the difference view says what went wrong
                 // rather than that the thread stopped.
@@ -955,7 +957,7 @@ mod tests {
         let mut b = a.clone();
         b.shading.shadows = false;
         b.samples_per_pixel = 16;
-        b.display.transform = raylab_core::display::DisplayTransform::Srgb;
+        b.display.transform = raylab_core::transport::display::DisplayTransform::Srgb;
         assert_eq!(differences(&a, &b), ["shadows", "samples", "display"]);
         // The same view at another size is only a resolution change.
         let mut c = a.clone();

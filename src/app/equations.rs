@@ -1,7 +1,7 @@
 //! "Your equations": the student types the lab's quantities (`d`, `shadowStart`, `shadowed`,
 //! `D`, `R`) in an editor each, and sees the image they make beside the exact figure, the
 //! share of pixels within 2/255, and how each quantity differs from the lab's
-//! ([`raylab_core::sandbox`], the same as `raylab render --equations`).
+//! ([`raylab_core::teaching::sandbox`], the same as `raylab render --equations`).
 //!
 //! Each keystroke compiles the texts on the UI thread (microseconds); the image is made on a
 //! worker thread of its own, which takes only the newest job when it is free, so stale work is
@@ -16,16 +16,16 @@ use std::time::Instant;
 
 use eframe::egui;
 use egui::text::{LayoutJob, TextFormat};
-use raylab_core::check::mistakes::Mistake;
-use raylab_core::check::{self, Rgb8};
-use raylab_core::film::Image;
-use raylab_core::light::LightKind;
-use raylab_core::progressive::catch_panic;
-use raylab_core::sandbox::{
+use raylab_core::shading::light::LightKind;
+use raylab_core::shapes::scene::Scene;
+use raylab_core::teaching::check::mistakes::Mistake;
+use raylab_core::teaching::check::{self, Rgb8};
+use raylab_core::teaching::sandbox::{
     self, Equations, Quantity, Recording, SandboxError, carried, examples, lex,
 };
-use raylab_core::scene::Scene;
-use raylab_core::settings::EquationTexts;
+use raylab_core::transport::film::Image;
+use raylab_core::transport::progressive::catch_panic;
+use raylab_core::transport::settings::EquationTexts;
 use raylab_core::{RenderSettings, Stage};
 
 use super::check::figure_settings;
@@ -126,7 +126,7 @@ pub fn unsupported(live: &RenderSettings) -> Option<&'static str> {
     if !matches!(live.light.kind, LightKind::Point) {
         return Some("Your equations use the lab's point light: choose the point light.");
     }
-    if live.view != raylab_core::view::View::Shaded {
+    if live.view != raylab_core::transport::view::View::Shaded {
         return Some("Your equations make the shaded image: choose the shaded view.");
     }
     None
@@ -207,7 +207,7 @@ impl YourEquations {
         live: &RenderSettings,
         x: u32,
         y: u32,
-    ) -> Option<Vec<raylab_core::inspect::InspectLine>> {
+    ) -> Option<Vec<raylab_core::teaching::inspect::InspectLine>> {
         let evaluated = self.fresh(live)?;
         Some(
             evaluated
@@ -312,7 +312,7 @@ impl YourEquations {
                 // The thread ends when the panel (its sender) goes.
                 let _ = std::thread::Builder::new()
                     .name("raylab-equations".to_owned())
-                    .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
+                    .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
                     .spawn(move || work(&job_rx, &result_tx, &repaint));
                 self.results = Some(results);
                 jobs
@@ -514,7 +514,7 @@ fn make(
         ));
     }
     if !figure.as_ref().is_some_and(|(scene, s, _)| same(scene, s)) {
-        let image = raylab_core::render::render(&job.scene, &job.settings);
+        let image = raylab_core::transport::render::render(&job.scene, &job.settings);
         *figure = Some((
             Arc::clone(&job.scene),
             job.settings.clone(),

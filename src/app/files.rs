@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use eframe::egui;
 use raylab_core::RenderSettings;
-use raylab_core::settings_file::{self, Loaded};
+use raylab_core::files::settings_file::{self, Loaded};
 
 /// What a file holds, once read.
 #[derive(Debug)]
@@ -45,7 +45,7 @@ pub fn open(path: &Path) -> Result<Opened, String> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     if extension.as_deref() == Some("obj") {
         // Only a regular file: a FIFO would keep the scene loader waiting for ever.
-        raylab_core::inputs::open_regular(path)
+        raylab_core::base::inputs::open_regular(path)
             .map_err(|reason| format!("could not open '{}': {reason}", path.display()))?;
         return Ok(Opened::Model(path.to_path_buf()));
     }
@@ -74,8 +74,8 @@ pub fn open(path: &Path) -> Result<Opened, String> {
 /// another extension is refused.
 pub fn scene_path(path: &Path) -> Result<PathBuf, String> {
     match path.extension() {
-        None => Ok(path.with_extension(raylab_core::scene_file::EXTENSION)),
-        Some(e) if e == raylab_core::scene_file::EXTENSION => Ok(path.to_path_buf()),
+        None => Ok(path.with_extension(raylab_core::files::scene_file::EXTENSION)),
+        Some(e) if e == raylab_core::files::scene_file::EXTENSION => Ok(path.to_path_buf()),
         Some(_) => Err(format!(
             "not saved: a scene file's name ends in .toml ('{}')",
             path.display()
@@ -97,14 +97,15 @@ pub fn save_scene(
     let path = scene_path(path)?;
     if replace {
         let files = settings.scene.files_read();
-        raylab_core::inputs::refuse_output_onto("not saved:", &path, "the scene", &files)?;
-        raylab_core::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
+        raylab_core::base::inputs::refuse_output_onto("not saved:", &path, "the scene", &files)?;
+        raylab_core::files::scene_file::save(settings, &path).map_err(|e| e.to_string())?;
         return Ok(path);
     }
     let folder = path.parent().unwrap_or(Path::new(""));
-    let text = raylab_core::scene_file::to_text(settings, folder)
+    let text = raylab_core::files::scene_file::to_text(settings, folder)
         .map_err(|reason| format!("could not write '{}': {reason}", path.display()))?;
-    raylab_core::film::write_to_free_name(&path, text.as_bytes()).map_err(|e| e.to_string())
+    raylab_core::transport::film::write_to_free_name(&path, text.as_bytes())
+        .map_err(|e| e.to_string())
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -383,7 +384,7 @@ mod tests {
         let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
         std::fs::write(&model, obj).unwrap();
         let mut settings = RenderSettings::default();
-        settings.scene = raylab_core::scene::SceneChoice::Obj(model.clone());
+        settings.scene = raylab_core::shapes::scene::SceneChoice::Obj(model.clone());
         let e = save_scene(&settings, &model, true).unwrap_err();
         assert!(e.starts_with("not saved: "), "{e}");
         assert!(e.contains("(a model: "), "{e}");

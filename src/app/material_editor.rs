@@ -4,10 +4,10 @@
 //! here names a kind, so a new kind shows up with its parameters as it is added.
 
 use eframe::egui;
-use raylab_core::material::{FieldValue, MaterialKind};
-use raylab_core::scene::SceneChoice;
-use raylab_core::scene::cornell_box;
-use raylab_core::scene::spec::{BoxPart, PartMaterial};
+use raylab_core::shading::material::{FieldValue, MaterialKind};
+use raylab_core::shapes::scene::SceneChoice;
+use raylab_core::shapes::scene::cornell_box;
+use raylab_core::shapes::scene::spec::{BoxPart, PartMaterial};
 use raylab_core::{MaterialPreset, RenderSettings};
 
 /// What the editor changes: a part of the box, or the `i`th model of a scene file's scene.

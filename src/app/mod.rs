@@ -27,9 +27,9 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Instant;
 
 use eframe::egui;
-use raylab_core::light::LightKind;
-use raylab_core::progressive::{Controller, Frame, WorkerError, catch_panic};
-use raylab_core::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::shading::light::LightKind;
+use raylab_core::shapes::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::transport::progressive::{Controller, Frame, WorkerError, catch_panic};
 use raylab_core::{Camera, Image, RenderSettings, Shading, Stage};
 
 use persistence::WorkbenchState;
@@ -56,7 +56,7 @@ pub enum Command {
     /// Switch stage, with the shadows and indirect switches its figure uses.
     SetStage(Stage),
     /// Switch to a stage with these switches: the one Check found the image to be.
-    SetStageSwitches(raylab_core::check::StageSwitches),
+    SetStageSwitches(raylab_core::teaching::check::StageSwitches),
     ResetToLabDefaults,
     SaveScreenshot,
     ToggleHelp,
@@ -147,7 +147,7 @@ pub struct Shown {
         not(test),
         expect(dead_code, reason = "tests wait for the display in force")
     )]
-    pub display: raylab_core::display::Display,
+    pub display: raylab_core::transport::display::Display,
     /// Whether the denoiser was on when its pixels were converted.
     #[cfg_attr(
         not(test),
@@ -285,7 +285,7 @@ const CENTRAL_MARGINS: f32 = 20.0;
 /// `request_repaint` runs two UI frames for each request (to let layout settle); the second
 /// one redraws the same picture, and under a software renderer each UI frame takes CPU from
 /// the render threads. A request with a delay runs one; a millisecond is not seen.
-fn repaint_for_frames(ctx: &egui::Context) -> raylab_core::progressive::Notify {
+fn repaint_for_frames(ctx: &egui::Context) -> raylab_core::transport::progressive::Notify {
     let ctx = ctx.clone();
     Box::new(move || ctx.request_repaint_after(std::time::Duration::from_millis(1)))
 }
@@ -312,8 +312,8 @@ struct SceneLoad {
 
 /// An inspection as the inspector panel shows it: its lines, and the same as text to copy.
 struct Inspected {
-    inspection: raylab_core::inspect::Inspection,
-    lines: Vec<raylab_core::inspect::InspectLine>,
+    inspection: raylab_core::teaching::inspect::Inspection,
+    lines: Vec<raylab_core::teaching::inspect::InspectLine>,
 }
 
 /// Where the light appears in the image, as a fraction of its width and height, or `None` when
@@ -345,7 +345,7 @@ pub fn spot_marker(settings: &RenderSettings) -> Option<viewport::SpotMarker> {
     let to_aim = cone.aim - settings.light.position;
     let axis = to_aim.normalize_or_zero();
     let radius = to_aim.length() * cone.cutoff.tan();
-    let (t1, t2) = raylab_core::sampling::orthonormal_basis(axis);
+    let (t1, t2) = raylab_core::base::sampling::orthonormal_basis(axis);
     let rim = (0..24)
         .filter_map(|k| {
             let a = k as f32 * std::f32::consts::TAU / 24.0;
@@ -573,7 +573,7 @@ impl WorkbenchApp {
         let inject_panic = std::mem::take(&mut self.inject_loader_panic);
         let spawned = std::thread::Builder::new()
             .name("raylab-scene-loader".to_owned())
-            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
+            .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 let cancelled = || job_cancel.load(std::sync::atomic::Ordering::SeqCst);
                 let report = |what: &str| {
@@ -932,7 +932,7 @@ impl WorkbenchApp {
             .as_ref()
             .is_some_and(|(s, p, _)| *p == pixel && *s == self.state.settings);
         if !fresh {
-            let result = raylab_core::inspect::inspect_pixel(
+            let result = raylab_core::teaching::inspect::inspect_pixel(
                 &self.scene,
                 &self.state.settings,
                 pixel[0],
@@ -987,7 +987,7 @@ impl WorkbenchApp {
 
     /// What the screen shows at the pinned pixel, when an image of the settings in force is
     /// there: the denoised image's value, or the film's mean.
-    fn shown_pixel(&self, [x, y]: [u32; 2]) -> Option<raylab_core::inspect::ShownPixel> {
+    fn shown_pixel(&self, [x, y]: [u32; 2]) -> Option<raylab_core::teaching::inspect::ShownPixel> {
         let shown = self
             .shown
             .as_ref()
@@ -996,7 +996,7 @@ impl WorkbenchApp {
             Some((image, samples)) => (image, *samples, true),
             None => (&shown.image, shown.samples, false),
         };
-        (x < image.width && y < image.height).then(|| raylab_core::inspect::ShownPixel {
+        (x < image.width && y < image.height).then(|| raylab_core::teaching::inspect::ShownPixel {
             value: image.get(x, y),
             samples,
             denoised,
@@ -1037,7 +1037,8 @@ impl WorkbenchApp {
                     {
                         let mut lines = inspected.lines.clone();
                         lines.extend(shown_lines.iter().cloned());
-                        ui.ctx().copy_text(raylab_core::inspect::lines_text(&lines));
+                        ui.ctx()
+                            .copy_text(raylab_core::teaching::inspect::lines_text(&lines));
                         copied = true;
                     }
                     unpin = ui.button("Unpin").clicked();
@@ -1078,7 +1079,7 @@ impl WorkbenchApp {
         let settings = &mut self.state.settings;
         let camera = &settings.camera;
         let (px, py) = (at.x * camera.width as f32, at.y * camera.height as f32);
-        match raylab_core::render::focus_depth(&self.scene, settings, px, py) {
+        match raylab_core::transport::render::focus_depth(&self.scene, settings, px, py) {
             Some(depth) => {
                 settings.camera.focus_distance = depth;
                 let hint = if settings.camera.aperture > 0.0 {
@@ -1281,7 +1282,7 @@ impl WorkbenchApp {
                 }
             }
             Command::WalkTo(step) => {
-                let step = step.filter(|&n| n < raylab_core::walkthrough::STEPS.len());
+                let step = step.filter(|&n| n < raylab_core::teaching::walkthrough::STEPS.len());
                 if self.state.walk_step.is_none() && step.is_some() {
                     // Starting: what the steps will change, to put back on leaving.
                     self.state.walk_restore = Some(self.state.settings.clone());
@@ -1289,7 +1290,7 @@ impl WorkbenchApp {
                 self.state.walk_step = step;
                 match step {
                     Some(n) => {
-                        let s = &raylab_core::walkthrough::STEPS[n];
+                        let s = &raylab_core::teaching::walkthrough::STEPS[n];
                         s.apply(&mut self.state.settings);
                         // The status line follows the step: a message from before the walk (a
                         // reset, a save) no longer describes what is shown. An error stays.
@@ -1298,7 +1299,7 @@ impl WorkbenchApp {
                             .as_ref()
                             .is_none_or(|s| s.kind != StatusKind::Error)
                         {
-                            let of = raylab_core::walkthrough::STEPS.len();
+                            let of = raylab_core::teaching::walkthrough::STEPS.len();
                             self.set_status(
                                 StatusKind::Info,
                                 format!("Walk-through, step {} of {of}: {}", n + 1, s.title),
@@ -1307,7 +1308,10 @@ impl WorkbenchApp {
                     }
                     None => {
                         if let Some(before) = self.state.walk_restore.take() {
-                            raylab_core::walkthrough::restore(&before, &mut self.state.settings);
+                            raylab_core::teaching::walkthrough::restore(
+                                &before,
+                                &mut self.state.settings,
+                            );
                             self.set_status(
                                 StatusKind::Info,
                                 "Left the walk-through: your stage, materials and samples are \
@@ -1508,7 +1512,7 @@ impl WorkbenchApp {
         let repaint = ctx.clone();
         let spawned = std::thread::Builder::new()
             .name("raylab-screenshot".to_owned())
-            .stack_size(raylab_core::memory::WORKER_STACK_BYTES)
+            .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
             .spawn(move || {
                 let result = screenshot::save(&request).map_err(|e| format!("{e:#}"));
                 let _ = sender.send(result);

@@ -5,16 +5,16 @@
 //! find them by.
 
 use eframe::egui;
-use raylab_core::camera;
-use raylab_core::display::Display;
-use raylab_core::integrator::MAX_SPECULAR_DEPTH;
-use raylab_core::light::{LightKind, LightShape, SpotCone};
-use raylab_core::material::MIN_ROUGHNESS;
-use raylab_core::material::TexturePreset;
-use raylab_core::named::NamedEnum;
-use raylab_core::scene::SceneChoice;
-use raylab_core::settings::{Caustics, MAX_PHOTONS};
-use raylab_core::view::{Legend, View};
+use raylab_core::base::camera;
+use raylab_core::base::named::NamedEnum;
+use raylab_core::shading::light::{LightKind, LightShape, SpotCone};
+use raylab_core::shading::material::MIN_ROUGHNESS;
+use raylab_core::shading::material::TexturePreset;
+use raylab_core::shapes::scene::SceneChoice;
+use raylab_core::transport::display::Display;
+use raylab_core::transport::integrator::MAX_SPECULAR_DEPTH;
+use raylab_core::transport::settings::{Caustics, MAX_PHOTONS};
+use raylab_core::transport::view::{Legend, View};
 use raylab_core::{Camera, LightSpec, MaterialPreset, RenderSettings, Stage};
 
 use super::Command;
@@ -341,10 +341,13 @@ fn water_ui(ui: &mut egui::Ui, scene: &mut SceneChoice) {
     };
     let before = *water;
     ui.add(
-        egui::Slider::new(&mut water.waves, 0.0..=raylab_core::scene::water::MAX_WAVES)
-            .text("Wave amplitude")
-            .logarithmic(true)
-            .smallest_positive(1e-4),
+        egui::Slider::new(
+            &mut water.waves,
+            0.0..=raylab_core::shapes::scene::water::MAX_WAVES,
+        )
+        .text("Wave amplitude")
+        .logarithmic(true)
+        .smallest_positive(1e-4),
     )
     .on_hover_text(
         "How high the fractal waves are, in scene units: they tilt the water's normal (a normal \
@@ -638,7 +641,7 @@ fn degrees_slider(
 ) {
     // In f64 and through `camera::radians`: a typed angle becomes the radians the same number
     // gives on the command line and in a scene file.
-    let before = raylab_core::camera::degrees(*radians);
+    let before = raylab_core::base::camera::degrees(*radians);
     let mut degrees = before;
     let response = ui.add(
         egui::Slider::new(
@@ -656,7 +659,7 @@ fn degrees_slider(
         degrees = (before + points * DEGREES_PER_POINT).clamp(lo, hi);
     }
     if degrees != before {
-        *radians = raylab_core::camera::radians(degrees);
+        *radians = raylab_core::base::camera::radians(degrees);
     }
 }
 
@@ -815,7 +818,7 @@ fn spot_ui(ui: &mut egui::Ui, cone: &mut SpotCone) {
 
 /// The lab walk-through: the current step's explanation and equation, Previous / Next.
 pub fn walkthrough_ui(ui: &mut egui::Ui, step: Option<usize>, commands: &mut Vec<Command>) {
-    use raylab_core::walkthrough::STEPS;
+    use raylab_core::teaching::walkthrough::STEPS;
     let Some(n) = step.filter(|&n| n < STEPS.len()) else {
         ui.label(
             "Step through the lab's figures 2, 3, 5, 6 and 7, then the extensions, each with \

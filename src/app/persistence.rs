@@ -44,7 +44,7 @@ pub struct WorkbenchState {
     /// The lab walk-through's current step, if it is open.
     pub walk_step: Option<usize>,
     /// The settings when the walk-through started: what its steps change is put back from
-    /// them on leaving ([`raylab_core::walkthrough::restore`]).
+    /// them on leaving ([`raylab_core::teaching::walkthrough::restore`]).
     pub walk_restore: Option<RenderSettings>,
     /// Inspect pixels: a click on the image pins a pixel, the inspector explains it.
     pub inspect_mode: bool,
@@ -60,7 +60,7 @@ impl Default for WorkbenchState {
         Self {
             version: STATE_VERSION,
             settings: lab_defaults(),
-            render_threads: raylab_core::progressive::default_threads(),
+            render_threads: raylab_core::transport::progressive::default_threads(),
             screenshot_folder: PathBuf::from("."),
             obj_path: String::new(),
             limited_bounces: DEFAULT_LIMITED_BOUNCES,
@@ -90,7 +90,7 @@ impl WorkbenchState {
             let fallback = Self {
                 screenshot_folder: PathBuf::from("."),
                 settings: RenderSettings {
-                    scene: raylab_core::scene::SceneChoice::Cornell,
+                    scene: raylab_core::shapes::scene::SceneChoice::Cornell,
                     ..self.settings.clone()
                 },
                 ..self.clone()
@@ -128,11 +128,11 @@ impl WorkbenchState {
         if state.render_threads == 0 {
             return Err("it asks for 0 render threads".to_owned());
         }
-        if state.render_threads > raylab_core::progressive::MAX_THREADS {
+        if state.render_threads > raylab_core::transport::progressive::MAX_THREADS {
             return Err(format!(
                 "it asks for {} render threads (at most {})",
                 state.render_threads,
-                raylab_core::progressive::MAX_THREADS
+                raylab_core::transport::progressive::MAX_THREADS
             ));
         }
         Ok(state)
@@ -173,8 +173,8 @@ pub fn state_file(folder: Option<&std::path::Path>) -> (Option<PathBuf>, Option<
         Ok(m) if !m.is_file() => Err("it is not a regular file".to_owned()),
         Ok(m) if m.len() > MAX_STATE_BYTES => Err(format!(
             "it is {}, more than the {} saved settings may be",
-            raylab_core::inputs::exact_size(m.len()),
-            raylab_core::inputs::exact_size(MAX_STATE_BYTES)
+            raylab_core::base::inputs::exact_size(m.len()),
+            raylab_core::base::inputs::exact_size(MAX_STATE_BYTES)
         )),
         Ok(_) => Ok(()),
     };
@@ -283,7 +283,7 @@ mod tests {
         std::fs::write(&file, "()").unwrap();
         assert_eq!(state_file(Some(dir.path())), (None, None));
         std::fs::remove_file(&file).unwrap();
-        raylab_core::inputs::make_fifo(&file);
+        raylab_core::base::inputs::make_fifo(&file);
         let (path, notice) = state_file(Some(dir.path()));
         assert_eq!(path, Some(dir.path().join("app.ron.fallback")));
         let notice = notice.unwrap();
@@ -292,7 +292,7 @@ mod tests {
             "{notice}"
         );
         // A fallback that is no better either: a file of this run's own.
-        raylab_core::inputs::make_fifo(&dir.path().join("app.ron.fallback"));
+        raylab_core::base::inputs::make_fifo(&dir.path().join("app.ron.fallback"));
         let (path, _) = state_file(Some(dir.path()));
         assert!(path.unwrap().starts_with(std::env::temp_dir()));
         assert_eq!(
@@ -340,7 +340,7 @@ mod tests {
         assert_eq!(shading.bounces, None);
         assert_eq!(
             shading.specular_depth,
-            raylab_core::integrator::DEFAULT_SPECULAR_DEPTH
+            raylab_core::transport::integrator::DEFAULT_SPECULAR_DEPTH
         );
         assert_eq!(
             state.settings.material_preset,

@@ -13,7 +13,7 @@ use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use raylab_core::film::OutputFormat;
+use raylab_core::transport::film::OutputFormat;
 use raylab_core::{Image, RenderSettings};
 use serde::{Deserialize, Serialize};
 
@@ -70,14 +70,14 @@ pub fn save(request: &Request) -> anyhow::Result<Saved> {
     // Model paths relative to the folder, so the pair names the same models from wherever
     // it is opened.
     let settings = request.settings.relative_to(folder);
-    let text = raylab_core::settings_file::settings_text(&settings)
+    let text = raylab_core::files::settings_file::settings_text(&settings)
         .map_err(|e| anyhow::anyhow!("could not save the screenshot: {e}"))?;
     let png_bytes = request
         .image
         .encode_with_text(
             OutputFormat::Png,
             &request.settings.display,
-            Some((raylab_core::settings_file::PNG_KEYWORD, &text)),
+            Some((raylab_core::files::settings_file::PNG_KEYWORD, &text)),
         )
         .context("could not encode the screenshot as PNG")?;
     let base = base_name(&request.time);
@@ -167,7 +167,10 @@ mod tests {
     fn request(folder: &Path) -> Request {
         let mut settings = RenderSettings::default();
         settings.camera = settings.camera.with_resolution(24, 16);
-        let image = raylab_core::render::render(&raylab_core::scene::cornell_box(), &settings);
+        let image = raylab_core::transport::render::render(
+            &raylab_core::shapes::scene::cornell_box(),
+            &settings,
+        );
         Request {
             folder: folder.to_owned(),
             image: Arc::new(image),
@@ -210,8 +213,10 @@ mod tests {
             serde_json::from_str(&fs::read_to_string(&first.json).unwrap()).unwrap();
         assert_eq!(sidecar.image, "raylab-20250304-050607.png");
         assert_eq!(sidecar.sample_target, 16);
-        let again =
-            raylab_core::render::render(&raylab_core::scene::cornell_box(), &sidecar.settings);
+        let again = raylab_core::transport::render::render(
+            &raylab_core::shapes::scene::cornell_box(),
+            &sidecar.settings,
+        );
         assert_eq!(again.to_rgb8(), png.into_raw());
     }
 

@@ -2,7 +2,7 @@
 //! estimated remaining noise and the time from a change to its first image on screen.
 
 use eframe::egui;
-use raylab_core::film::{CLEAN_RELATIVE_ERROR, NoiseEstimate};
+use raylab_core::transport::film::{CLEAN_RELATIVE_ERROR, NoiseEstimate};
 
 /// What the noise figures mean, for their hover text.
 const NOISE_HOVER: &str = "How far the image may still be from the converged one: each pixel's \
@@ -33,7 +33,7 @@ pub struct Stats {
     /// From the change to the shown frame's pass, in ms: what its samples took.
     pub elapsed_ms: f64,
     /// What the shown debug view's colours mean (none for the shaded image).
-    pub legend: Option<raylab_core::view::Legend>,
+    pub legend: Option<raylab_core::transport::view::Legend>,
     /// When the shown image is denoised: the samples it was denoised from and the time it
     /// took, in ms.
     pub denoised: Option<(u32, f64)>,

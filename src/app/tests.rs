@@ -12,10 +12,10 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use glam::Vec3;
-use raylab_core::light::{approach_at_edge, direct_light, shadow_ray};
-use raylab_core::render::render;
-use raylab_core::scene::in_shadow;
-use raylab_core::scene::{SceneChoice, cornell_box};
+use raylab_core::shading::light::{approach_at_edge, direct_light, shadow_ray};
+use raylab_core::shapes::scene::in_shadow;
+use raylab_core::shapes::scene::{SceneChoice, cornell_box};
+use raylab_core::transport::render::render;
 use raylab_core::{Image, MaterialPreset, RenderSettings, Shading, Stage};
 
 use super::persistence::{WorkbenchState, lab_defaults};
@@ -164,7 +164,7 @@ fn shadows_switch_changes_only_pixels_a_shadow_can_reach() {
         for x in 0..w {
             let ray = s.camera.pixel_ray(x, y);
             let hit = scene.closest_intersection(&ray, f32::INFINITY);
-            let at_edge = |hit: &raylab_core::intersect::Intersection| {
+            let at_edge = |hit: &raylab_core::shapes::intersect::Intersection| {
                 let t = &scene.triangles[hit.triangle_index];
                 approach_at_edge(t, hit.u, hit.v, ray.direction)
             };
@@ -764,14 +764,18 @@ fn the_stats_show_the_noise_of_a_path_traced_image() {
     assert!(frame.samples >= 2);
     let noise = h.state().stats.noise.expect("a noise estimate");
     // The estimate of the film the library accumulates from the same passes, exactly.
-    let mut film = raylab_core::film::Film::with_noise(
+    let mut film = raylab_core::transport::film::Film::with_noise(
         frame.settings.camera.width,
         frame.settings.camera.height,
     );
     for sample in 0..frame.samples {
-        let pass =
-            raylab_core::render::render_pass(&cornell_box(), &frame.settings, sample, &|| false)
-                .unwrap();
+        let pass = raylab_core::transport::render::render_pass(
+            &cornell_box(),
+            &frame.settings,
+            sample,
+            &|| false,
+        )
+        .unwrap();
         film.add_pass(&pass);
     }
     assert_eq!(Some(noise), film.noise());
@@ -786,7 +790,10 @@ fn the_stats_show_the_noise_of_a_path_traced_image() {
         stats::percent(noise.relative_rms_error)
     );
     assert!(h.query_by_label(&error).is_some(), "{error}");
-    let needed = noise.samples_to_reach(frame.samples, raylab_core::film::CLEAN_RELATIVE_ERROR);
+    let needed = noise.samples_to_reach(
+        frame.samples,
+        raylab_core::transport::film::CLEAN_RELATIVE_ERROR,
+    );
     assert!(needed > 4.0, "{needed}");
     let advice =
         format!("1 % (clean) needs about {needed:.0} samples: raise the sample target (now 4)");
@@ -827,7 +834,7 @@ fn the_extensions_controls_are_found_by_label_and_render_what_the_library_render
     let s = settings(&h);
     assert_eq!(
         s.light.kind,
-        raylab_core::light::LightKind::Sphere { radius: 0.2 }
+        raylab_core::shading::light::LightKind::Sphere { radius: 0.2 }
     );
     assert_eq!(s.camera.aperture, 0.05);
     assert!(!s.shading.smooth);
@@ -906,7 +913,7 @@ fn click_to_focus_sets_the_focus_distance() {
     h.step();
     let s = settings(&h);
     let (px, py) = (at.x * 128.0, at.y * 96.0);
-    let expected = raylab_core::render::focus_depth(&cornell_box(), &s, px, py).unwrap();
+    let expected = raylab_core::transport::render::focus_depth(&cornell_box(), &s, px, py).unwrap();
     assert!(
         (s.camera.focus_distance - expected).abs() < 0.02,
         "{} vs {expected}",
@@ -969,7 +976,7 @@ fn the_walkthrough_steps_through_the_figures() {
     h.get_by_role_and_label(Role::Button, "Start the walk-through")
         .click();
     settle(&mut h);
-    let of = raylab_core::walkthrough::STEPS.len();
+    let of = raylab_core::teaching::walkthrough::STEPS.len();
     assert!(
         h.query_by_label_contains(&format!("Step 1 of {of}"))
             .is_some()
@@ -1344,7 +1351,8 @@ fn the_inspector_explains_a_clicked_pixel() {
     );
     assert!(h.query_by_label_contains("R = ρ·(D + N)").is_some());
     let s = settings(&h);
-    let inspection = raylab_core::inspect::inspect_pixel(&cornell_box(), &s, 40, 70).unwrap();
+    let inspection =
+        raylab_core::teaching::inspect::inspect_pixel(&cornell_box(), &s, 40, 70).unwrap();
     assert_eq!(inspection.r, shown(&h).image.get(40, 70));
     assert_eq!(
         h.state().viewport.pinned.map(|r| r.min),
@@ -1370,15 +1378,16 @@ fn the_view_selector_shows_a_debug_view_with_its_legend() {
     choose(&mut h, "View", "Depth t");
     settle(&mut h);
     let s = settings(&h);
-    assert_eq!(s.view, raylab_core::view::View::Depth);
-    let expected = raylab_core::view::render_view(&cornell_box(), &s, s.view, &|| false).unwrap();
+    assert_eq!(s.view, raylab_core::transport::view::View::Depth);
+    let expected =
+        raylab_core::transport::view::render_view(&cornell_box(), &s, s.view, &|| false).unwrap();
     assert_eq!(*shown(&h).image, expected.image);
     assert_eq!(h.state().stats.legend.as_ref(), Some(&expected.legend));
     assert!(h.query_by_label_contains(&expected.legend.title).is_some());
     // The texture shows the view through the lab's display, whatever the display in force.
     assert_eq!(
         h.state().viewport.rgba().unwrap(),
-        raylab_core::display::Display::default().to_rgba8(&expected.image.pixels)
+        raylab_core::transport::display::Display::default().to_rgba8(&expected.image.pixels)
     );
     choose(&mut h, "View", "Shaded (the stage)");
     settle(&mut h);
@@ -1439,7 +1448,7 @@ fn a_render_that_panics_is_reported_and_the_next_change_renders() {
         text,
         format!(
             "The render panicked: {} (settings: {})",
-            raylab_core::progressive::INJECTED_PANIC,
+            raylab_core::transport::progressive::INJECTED_PANIC,
             failed.summary()
         )
     );
@@ -1512,7 +1521,7 @@ fn a_panic_rendering_a_is_reported_and_b_goes_on() {
         text,
         format!(
             "A: The render panicked: {} (settings: {})",
-            raylab_core::progressive::INJECTED_PANIC,
+            raylab_core::transport::progressive::INJECTED_PANIC,
             a.summary()
         )
     );
@@ -1539,8 +1548,8 @@ fn the_light_shape_and_the_rough_metal_are_chosen_in_the_panels() {
     let s = settings(&h);
     assert_eq!(
         s.light.kind,
-        raylab_core::light::LightKind::Quad {
-            side: raylab_core::light::DEFAULT_QUAD_SIDE
+        raylab_core::shading::light::LightKind::Quad {
+            side: raylab_core::shading::light::DEFAULT_QUAD_SIDE
         }
     );
     // The size slider names what it sets.
@@ -1562,7 +1571,7 @@ fn the_light_shape_and_the_rough_metal_are_chosen_in_the_panels() {
 /// below it.
 #[test]
 fn choosing_the_spot_light_re_renders_with_its_cone() {
-    use raylab_core::light::{LightKind, SpotCone};
+    use raylab_core::shading::light::{LightKind, SpotCone};
     let mut h = harness(tiny_state());
     settle(&mut h);
     let point = shown(&h).image.clone();
@@ -1585,7 +1594,7 @@ fn choosing_the_spot_light_re_renders_with_its_cone() {
     let LightKind::Spot(cone) = settings(&h).light.kind else {
         panic!("not a spot: {:?}", settings(&h).light.kind);
     };
-    assert_eq!(cone.cutoff, raylab_core::camera::radians(10.0));
+    assert_eq!(cone.cutoff, raylab_core::base::camera::radians(10.0));
     assert_eq!(cone.beam, cone.cutoff);
     let frame = shown(&h);
     assert_eq!(*frame.image, render(&cornell_box(), &frame.settings));
@@ -1621,7 +1630,7 @@ fn the_plastic_is_chosen_in_the_panels() {
 fn a_saved_scene_that_cannot_be_loaded_falls_back_to_the_labs_box() {
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("model.obj");
-    raylab_core::inputs::make_fifo(&fifo);
+    raylab_core::base::inputs::make_fifo(&fifo);
     let mut state = small_state();
     state.settings.scene = SceneChoice::Obj(fifo);
     let h = harness(state);

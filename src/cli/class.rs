@@ -1,6 +1,6 @@
 //! `raylab check FOLDER` (or several files): a class checked at once
-//! ([`raylab_core::check::class`]), a line a submission on stdout, and with `--report OUT` the
-//! report folder a teacher opens in the browser ([`raylab_core::check::report`]).
+//! ([`raylab_core::teaching::check::class`]), a line a submission on stdout, and with `--report OUT` the
+//! report folder a teacher opens in the browser ([`raylab_core::teaching::check::report`]).
 //!
 //! What each submission is checked against, in turn: its line of `--csv FILE` (whose columns
 //! are the check's own options), the settings its PNG carries (`--screenshot-settings`, for a
@@ -13,8 +13,8 @@ use std::sync::Mutex;
 
 use clap::{CommandFactory as _, Parser};
 use raylab_core::RenderSettings;
-use raylab_core::check::class::{self, Class, Submission};
-use raylab_core::check::report::ReportFolder;
+use raylab_core::teaching::check::class::{self, Class, Submission};
+use raylab_core::teaching::check::report::ReportFolder;
 
 use super::{CheckArgs, RenderOptions, one_line, printable_lines, thread_pool};
 
@@ -40,15 +40,15 @@ impl List {
     /// without `--`), then a line a submission. An unknown column, a file listed twice or no
     /// `file` column is an error naming it.
     fn read(path: &Path) -> anyhow::Result<List> {
-        let bytes = raylab_core::inputs::read_capped(
+        let bytes = raylab_core::base::inputs::read_capped(
             path,
-            raylab_core::inputs::MAX_SCENE_FILE_BYTES,
+            raylab_core::base::inputs::MAX_SCENE_FILE_BYTES,
             "a list of submissions",
         )
         .map_err(|reason| anyhow::anyhow!("could not read '{}': {reason}", path.display()))?;
         let text = String::from_utf8(bytes)
             .map_err(|_| anyhow::anyhow!("'{}' is not UTF-8 text", path.display()))?;
-        let records = raylab_core::check::csv::parse(&text)
+        let records = raylab_core::teaching::check::csv::parse(&text)
             .map_err(|e| anyhow::anyhow!("'{}': {e}", path.display()))?;
         let Some((header, rows)) = records.split_first() else {
             anyhow::bail!("'{}' is empty: it needs a header line", path.display());
@@ -231,7 +231,7 @@ pub(super) fn run(args: &CheckArgs) -> anyhow::Result<()> {
             return settings_of(&options, &s.path, width, height).map_err(failed);
         }
         if args.screenshot_settings {
-            use raylab_core::settings_file::{ReadError, read_file};
+            use raylab_core::files::settings_file::{ReadError, read_file};
             match read_file(&s.path) {
                 Ok(loaded) => return Ok(loaded.settings),
                 Err(ReadError::NoSettings { .. }) => {}
@@ -267,7 +267,7 @@ pub(super) fn run(args: &CheckArgs) -> anyhow::Result<()> {
     }
     let mut out = std::io::stdout().lock();
     if args.json {
-        let json = raylab_core::check::report::json_value(&class, &title);
+        let json = raylab_core::teaching::check::report::json_value(&class, &title);
         writeln!(out, "{json}")?;
     } else {
         write!(out, "{}", printable_lines(&summary(&class)))?;
@@ -288,7 +288,7 @@ fn is_png(path: &Path) -> bool {
     let mut start = [0u8; 8];
     std::fs::File::open(path)
         .and_then(|mut f| f.read_exact(&mut start))
-        .is_ok_and(|()| start == *raylab_core::settings_file::PNG_SIGNATURE)
+        .is_ok_and(|()| start == *raylab_core::files::settings_file::PNG_SIGNATURE)
 }
 
 /// A line a submission (its name, verdict, match and SSIM, or why it was not checked), then
@@ -320,7 +320,7 @@ fn summary(class: &Class) -> String {
         }
         t.push('\n');
     }
-    let counts: Vec<String> = raylab_core::check::report::verdict_counts(class)
+    let counts: Vec<String> = raylab_core::teaching::check::report::verdict_counts(class)
         .into_iter()
         .map(|(v, n)| format!("{n} {v}"))
         .collect();

@@ -4,13 +4,13 @@
 
 use std::path::Path;
 
-use raylab_core::light::LightKind;
-use raylab_core::sandbox::{
+use raylab_core::shading::light::LightKind;
+use raylab_core::shapes::scene::Scene;
+use raylab_core::teaching::sandbox::{
     self, Equations, Explanation, MAX_SOURCE_BYTES, Quantity, SandboxError,
 };
-use raylab_core::scene::Scene;
-use raylab_core::settings::EquationTexts;
-use raylab_core::view::View;
+use raylab_core::transport::settings::EquationTexts;
+use raylab_core::transport::view::View;
 use raylab_core::{RenderSettings, Stage};
 
 /// Reads and compiles the equations in `path`; a text that does not compile is refused with

@@ -48,14 +48,14 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray as PeerRay, RayHit};
 use obvhs::triangle::Triangle as PeerTriangle;
-use raylab_core::accel::{Accel, AccelKind};
+use raylab_core::base::geometry::Ray;
 use raylab_core::bench::{
     bounce_rays, lab_settings, median_ms, primary_rays, random_rays_in_room, scene_bounds,
     shadow_rays,
 };
-use raylab_core::geometry::Ray;
-use raylab_core::integrator::BATCH;
-use raylab_core::scene::{Scene, SceneChoice};
+use raylab_core::shapes::accel::{Accel, AccelKind};
+use raylab_core::shapes::scene::{Scene, SceneChoice};
+use raylab_core::transport::integrator::BATCH;
 use rayon::prelude::*;
 
 const SCENES: [SceneChoice; 4] = [
@@ -193,7 +193,7 @@ fn trace(tracer: Tracer, scene: &Scene, peer: &Peer, rays: &Rays, out: &mut [Ans
 }
 
 fn closest(tracer: Tracer, scene: &Scene, peer: &Peer, rays: &[Ray], out: &mut [Answer]) {
-    let answer = |hit: Option<raylab_core::intersect::Intersection>| {
+    let answer = |hit: Option<raylab_core::shapes::intersect::Intersection>| {
         hit.map_or(Answer::MISS, |h| Answer {
             index: h.triangle_index as u32,
             t: h.distance,
@@ -521,7 +521,7 @@ fn build_all(scene: &Scene, triangles: &[PeerTriangle]) -> ([f64; 3], Peer) {
             Accel::build(
                 &scene.triangles,
                 AccelKind::Auto,
-                raylab_core::scene::best_isa(),
+                raylab_core::shapes::scene::best_isa(),
             )
             .build_time()
         })

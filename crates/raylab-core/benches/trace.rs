@@ -13,10 +13,10 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use raylab_core::accel::{Accel, AccelKind};
 use raylab_core::bench::{lab_settings, primary_rays, shadow_rays, trace_primary, trace_shadow};
-use raylab_core::render::render_pass;
-use raylab_core::scene::SceneChoice;
+use raylab_core::shapes::accel::{Accel, AccelKind};
+use raylab_core::shapes::scene::SceneChoice;
+use raylab_core::transport::render::render_pass;
 use raylab_core::{Shading, Stage};
 
 fn scenes(c: &mut Criterion) {
@@ -43,7 +43,7 @@ fn scenes(c: &mut Criterion) {
                 Accel::build(
                     black_box(&scene.triangles),
                     AccelKind::Auto,
-                    raylab_core::scene::best_isa(),
+                    raylab_core::shapes::scene::best_isa(),
                 )
             })
         });
@@ -77,8 +77,8 @@ fn scenes(c: &mut Criterion) {
 
 fn degenerate(c: &mut Criterion) {
     use glam::Vec3;
-    use raylab_core::geometry::Triangle;
-    use raylab_core::scene::obj;
+    use raylab_core::base::geometry::Triangle;
+    use raylab_core::shapes::scene::obj;
     const COPIES: usize = 1_000_000;
     let mut group = c.benchmark_group("degenerate");
     group
@@ -97,7 +97,7 @@ fn degenerate(c: &mut Criterion) {
             Accel::build(
                 black_box(&copies),
                 AccelKind::Bvh8,
-                raylab_core::scene::best_isa(),
+                raylab_core::shapes::scene::best_isa(),
             )
         })
     });
@@ -106,7 +106,7 @@ fn degenerate(c: &mut Criterion) {
     group.bench_function("load_an_obj_of_a_million_copies", |b| {
         b.iter(|| {
             let mesh = obj::parse_obj(black_box(text.as_bytes()), std::path::Path::new("c.obj"));
-            raylab_core::scene::spec::model_in_box(
+            raylab_core::shapes::scene::spec::model_in_box(
                 &mesh.unwrap(),
                 &obj::Placement::FRONT_LEFT,
                 "copies",

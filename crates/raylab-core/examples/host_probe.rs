@@ -21,8 +21,8 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use raylab_core::render::render_pass;
-use raylab_core::settings::RenderSettings;
+use raylab_core::transport::render::render_pass;
+use raylab_core::transport::settings::RenderSettings;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -63,7 +63,7 @@ fn main() {
 /// One pass of the Cornell box, 512², on the pool's one thread, in nanoseconds.
 fn pass_ns(
     pool: &rayon::ThreadPool,
-    scene: &raylab_core::scene::Scene,
+    scene: &raylab_core::shapes::scene::Scene,
     settings: &RenderSettings,
     pass: &mut u32,
 ) -> f64 {
@@ -416,11 +416,12 @@ mod x86 {
             .num_threads(1)
             .build()
             .expect("a one-thread pool");
-        let scene = raylab_core::scene::cornell_box();
+        let scene = raylab_core::shapes::scene::cornell_box();
         let lab = RenderSettings::default();
         let mut path = RenderSettings::default();
-        path.shading =
-            raylab_core::integrator::Shading::for_stage(raylab_core::integrator::Stage::Path);
+        path.shading = raylab_core::transport::integrator::Shading::for_stage(
+            raylab_core::transport::integrator::Stage::Path,
+        );
         let l1 = vec![1u64; 2048];
         let l2 = chase_ring(64 << 10, 1); // 256 KB of u32
         let l3 = chase_ring(2 << 20, 2); // 8 MB

@@ -12,9 +12,9 @@
 //! thread. A first pass, unmarked, warms everything up; the marked one is pass `sample`
 //! (default 0: the pixel centres, as `raylab bench` traces them).
 
-use raylab_core::integrator::{Shading, Stage};
-use raylab_core::render::render_pass;
-use raylab_core::settings::RenderSettings;
+use raylab_core::transport::integrator::{Shading, Stage};
+use raylab_core::transport::render::render_pass;
+use raylab_core::transport::settings::RenderSettings;
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -25,7 +25,7 @@ fn main() {
         .num_threads(1)
         .build()
         .expect("a one-thread pool");
-    let scene = raylab_core::scene::cornell_box();
+    let scene = raylab_core::shapes::scene::cornell_box();
     let mut settings = RenderSettings::default();
     if stage == "path" {
         settings.shading = Shading::for_stage(Stage::Path);

@@ -8,8 +8,8 @@
 //! NAME is a mistake of `raylab check`'s catalogue (`inverse-r`, `shadow-acne`, `gamma`, …),
 //! STAGE one of the lab's (default `lab`), W × H the size (default 512 × 512).
 
-use raylab_core::check::{Mistake, mistakes::looks};
-use raylab_core::scene::cornell_box;
+use raylab_core::shapes::scene::cornell_box;
+use raylab_core::teaching::check::{Mistake, mistakes::looks};
 use raylab_core::{RenderSettings, Shading, Stage};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -6,7 +6,7 @@
 //! * `primary_mrays_per_s`: closest hits of the default camera's rays through every pixel
 //!   centre (rays made beforehand; only the tracing is timed);
 //! * `shadow_mrays_per_s`: any-hit queries of the shadow rays the `lab` stage casts from those
-//!   hits towards the light (the same rays as [`crate::scene::in_shadow`] casts);
+//!   hits towards the light (the same rays as [`crate::shapes::scene::in_shadow`] casts);
 //! * `lab_pass_ms`: one full [`render_pass`] of the `lab` stage (figure 7: primary rays,
 //!   shadow rays and shading);
 //! * with [`BenchConfig::path`]: `path_pass_ms` and `path_samples_per_s`, one full pass of the
@@ -20,15 +20,15 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::accel::{Accel, AccelKind, Isa};
-pub use crate::camera::{primary_rays, try_primary_rays};
-use crate::geometry::Ray;
-use crate::integrator::{BATCH, HitTerms, Surface};
-use crate::light::LightSpec;
-use crate::memory::{AllocError, try_with_capacity};
-use crate::render::render_pass;
-use crate::scene::Scene;
-use crate::settings::{BASE_MEMORY, RenderSettings};
+pub use crate::base::camera::{primary_rays, try_primary_rays};
+use crate::base::geometry::Ray;
+use crate::base::memory::{AllocError, try_with_capacity};
+use crate::shading::light::LightSpec;
+use crate::shapes::accel::{Accel, AccelKind, Isa};
+use crate::shapes::scene::Scene;
+use crate::transport::integrator::{BATCH, HitTerms, Surface};
+use crate::transport::render::render_pass;
+use crate::transport::settings::{BASE_MEMORY, RenderSettings};
 use crate::{Camera, Shading, Stage};
 
 /// What to measure.
@@ -125,7 +125,7 @@ pub fn memory_estimate(config: &BenchConfig) -> u64 {
 }
 
 /// The shadow rays the lab stage casts for these primary rays: from every hit that receives
-/// light, [`crate::light::shadow_ray`] towards the light, with its `t_max`.
+/// light, [`crate::shading::light::shadow_ray`] towards the light, with its `t_max`.
 pub fn shadow_rays(scene: &Scene, light: &LightSpec, primary: &[Ray]) -> Vec<(Ray, f32)> {
     primary
         .par_iter()
@@ -274,14 +274,14 @@ pub fn bench_scene(
 
 /// Diffuse bounce rays from the hits of `primary`: from every ray that hits, one direction
 /// drawn with density cos θ / π about the hit triangle's normal turned to face the ray (as the
-/// path tracer's diffuse bounces, [`crate::sampling::cosine_hemisphere_by_rejection`]), started
-/// where the path tracer would start it ([`crate::integrator::continue_ray`]). Rays that miss
+/// path tracer's diffuse bounces, [`crate::base::sampling::cosine_hemisphere_by_rejection`]), started
+/// where the path tracer would start it ([`crate::transport::integrator::continue_ray`]). Rays that miss
 /// cast nothing, so there may be fewer bounce rays than primary rays.
 ///
 /// Deterministic: ray `i`'s direction comes from its own generator, started from `seed` and `i`
 /// alone, so the set is the same on any number of threads.
 pub fn bounce_rays(scene: &Scene, primary: &[Ray], seed: u64) -> Vec<Ray> {
-    use crate::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
+    use crate::base::sampling::{Rng, cosine_hemisphere_by_rejection, hemisphere_around};
     primary
         .par_iter()
         .enumerate()
@@ -298,7 +298,7 @@ pub fn bounce_rays(scene: &Scene, primary: &[Ray], seed: u64) -> Vec<Ray> {
             let local = cosine_hemisphere_by_rejection(&mut rng, true);
             let direction = hemisphere_around(normal, local);
             let at_edge = scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction);
-            Some(crate::integrator::continue_ray(
+            Some(crate::transport::integrator::continue_ray(
                 hit.position,
                 normal,
                 direction,
@@ -323,7 +323,7 @@ pub fn scene_bounds(scene: &Scene) -> (glam::Vec3, glam::Vec3) {
 /// directions uniform over the sphere. The most incoherent rays a scene can be asked about:
 /// neighbours share neither origin nor direction. Deterministic in `seed`, whatever the threads.
 pub fn random_rays_in_room(lo: glam::Vec3, hi: glam::Vec3, n: usize, seed: u64) -> Vec<Ray> {
-    use crate::sampling::Rng;
+    use crate::base::sampling::Rng;
     let margin = 0.01 * (hi - lo);
     let (lo, size) = (lo + margin, (hi - lo) - 2.0 * margin);
     (0..n)
@@ -344,7 +344,7 @@ pub fn random_rays_in_room(lo: glam::Vec3, hi: glam::Vec3, n: usize, seed: u64) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::cornell_box;
+    use crate::shapes::scene::cornell_box;
 
     #[test]
     fn medians() {
@@ -367,7 +367,7 @@ mod tests {
             "cornell",
             &scene,
             AccelKind::Auto,
-            crate::scene::best_isa(),
+            crate::shapes::scene::best_isa(),
             &config,
         )
         .unwrap();

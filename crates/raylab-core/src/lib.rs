@@ -7,7 +7,7 @@
 //! glass) → [`film`]. [`render`] runs that for every pixel, in parallel and cancellably.
 //!
 //! ```
-//! use raylab_core::{RenderSettings, render, scene::cornell_box};
+//! use raylab_core::{RenderSettings, transport::render, shapes::scene::cornell_box};
 //!
 //! // Figure 7 of the lab, small: ρ ∗ (D + N) with shadows.
 //! let mut settings = RenderSettings::default();
@@ -18,44 +18,23 @@
 //! assert!(centre.x > 0.4 && (centre.x - centre.z).abs() < 1e-6);
 //! ```
 
-pub mod accel;
-pub mod bench;
-pub mod bsdf;
-pub mod camera;
-pub mod check;
-pub mod denoise;
-pub mod display;
-pub mod film;
-pub mod geometry;
-pub mod inputs;
-pub mod inspect;
-pub mod integrator;
-pub mod intersect;
-pub mod invalid;
-pub mod lanes;
-pub mod light;
-pub mod material;
-pub mod memory;
-pub mod named;
-pub mod noise;
-pub mod photon_map;
-pub mod progressive;
-pub mod relief;
-pub mod render;
-pub mod sampling;
-pub mod sandbox;
-pub mod scene;
-pub mod scene_file;
-pub mod settings;
-pub mod settings_file;
-pub mod temp_files;
-pub mod texture;
-pub mod view;
-pub mod walkthrough;
+pub mod base;
 
-pub use camera::Camera;
-pub use film::Image;
-pub use integrator::{Shading, Stage};
-pub use light::LightSpec;
-pub use material::{Material, MaterialKind, MaterialPreset};
-pub use settings::RenderSettings;
+pub mod shading;
+
+pub mod shapes;
+
+pub mod transport;
+
+pub mod teaching;
+
+pub mod files;
+
+pub mod bench;
+
+pub use base::camera::Camera;
+pub use shading::light::LightSpec;
+pub use shading::material::{Material, MaterialKind, MaterialPreset};
+pub use transport::film::Image;
+pub use transport::integrator::{Shading, Stage};
+pub use transport::settings::RenderSettings;

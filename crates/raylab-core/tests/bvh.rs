@@ -7,11 +7,11 @@ mod common;
 
 use common::rays::{random_dir, rays};
 use glam::Vec3;
-use raylab_core::accel::{Accel, AccelKind, Isa};
-use raylab_core::geometry::{Ray, Triangle};
-use raylab_core::intersect::{closest_intersection_brute_force, occluded_brute_force};
-use raylab_core::sampling::Rng;
-use raylab_core::scene::{Scene, SceneChoice, cornell_box, terrain};
+use raylab_core::base::geometry::{Ray, Triangle};
+use raylab_core::base::sampling::Rng;
+use raylab_core::shapes::accel::{Accel, AccelKind, Isa};
+use raylab_core::shapes::intersect::{closest_intersection_brute_force, occluded_brute_force};
+use raylab_core::shapes::scene::{Scene, SceneChoice, cornell_box, terrain};
 
 /// Every structure that is not the brute-force loop, with every kernel set this CPU runs.
 fn configurations() -> Vec<(AccelKind, Isa)> {
@@ -35,7 +35,10 @@ fn check_against_brute_force(triangles: &[Triangle], count: usize, seed: u64) ->
             )
         })
         .collect();
-    let materials = vec![raylab_core::scene::Material::diffuse("m", Vec3::ONE)];
+    let materials = vec![raylab_core::shapes::scene::Material::diffuse(
+        "m",
+        Vec3::ONE,
+    )];
     let tris: Vec<Triangle> = triangles
         .iter()
         .map(|t| Triangle { material: 0, ..*t })
@@ -86,7 +89,7 @@ fn teapot_equals_brute_force_on_100k_rays() {
 #[test]
 fn small_terrain_equals_brute_force() {
     // The same generator as the full terrain, ~20,000 triangles.
-    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
+    let scene = raylab_core::shapes::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 100,
         ..terrain::TerrainSpec::default()
     });
@@ -184,13 +187,13 @@ fn huge_coordinates() {
 
 #[test]
 fn wide_tree_over_many_small_triangles_is_shallow_and_fits_the_inline_stack() {
-    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
+    let scene = raylab_core::shapes::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 100,
         ..terrain::TerrainSpec::default()
     });
-    let bvh = raylab_core::accel::bvh::Bvh::build(&scene.triangles);
+    let bvh = raylab_core::shapes::accel::bvh::Bvh::build(&scene.triangles);
     assert!(bvh.depth() < 40, "{}", bvh.depth());
-    let wide = raylab_core::accel::wide::Bvh8::from_binary(&bvh, &scene.triangles);
+    let wide = raylab_core::shapes::accel::wide::Bvh8::from_binary(&bvh, &scene.triangles);
     assert!(wide.max_stack <= 64, "{}", wide.max_stack);
     // Every triangle is in exactly one packet.
     let mut seen = vec![0u8; scene.triangles.len()];
@@ -208,9 +211,9 @@ fn wide_tree_over_many_small_triangles_is_shallow_and_fits_the_inline_stack() {
 /// 80,000 triangles: the root and its children are split on several threads.
 #[test]
 fn trees_are_the_same_on_any_number_of_threads() {
-    use raylab_core::accel::bvh::Bvh;
-    use raylab_core::accel::wide::Bvh8Big;
-    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
+    use raylab_core::shapes::accel::bvh::Bvh;
+    use raylab_core::shapes::accel::wide::Bvh8Big;
+    let scene = raylab_core::shapes::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 200,
         ..terrain::TerrainSpec::default()
     });

@@ -7,11 +7,11 @@ mod common;
 
 use common::{assert_same_image, on_threads};
 use glam::Vec3;
-use raylab_core::film::Image;
-use raylab_core::light::LightKind;
-use raylab_core::render::{render, render_pass};
-use raylab_core::scene::cornell_box;
-use raylab_core::settings::Caustics;
+use raylab_core::shading::light::LightKind;
+use raylab_core::shapes::scene::cornell_box;
+use raylab_core::transport::film::Image;
+use raylab_core::transport::render::{render, render_pass};
+use raylab_core::transport::settings::Caustics;
 use raylab_core::{MaterialPreset, RenderSettings, Shading, Stage};
 
 const SIDE: u32 = 48;

@@ -11,10 +11,10 @@ use std::path::Path;
 use common::{assert_same_image, settings};
 use glam::Vec3;
 use image::ImageFormat;
-use raylab_core::check::mistakes::{Recombined, formula_figures, looks};
-use raylab_core::check::{self, Mistake, Report, Rgb8, read_image};
-use raylab_core::render::render;
-use raylab_core::scene::{Scene, cornell_box};
+use raylab_core::shapes::scene::{Scene, cornell_box};
+use raylab_core::teaching::check::mistakes::{Recombined, formula_figures, looks};
+use raylab_core::teaching::check::{self, Mistake, Report, Rgb8, read_image};
+use raylab_core::transport::render::render;
 use raylab_core::{RenderSettings, Stage};
 
 /// Writes `image` to `dir/name` in `format` (JPEG at quality 95), as a student's program
@@ -298,7 +298,7 @@ fn what_check_refuses() {
     let mut path = s.clone();
     path.shading.stage = Stage::Path;
     let mut area = s.clone();
-    area.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.1 };
+    area.light.kind = raylab_core::shading::light::LightKind::Sphere { radius: 0.1 };
     let mut nan = s.clone();
     nan.camera.yaw = f32::NAN;
     for bad in [path, area, nan] {
@@ -316,10 +316,10 @@ fn what_check_refuses() {
 /// blocks and a mirror teapot, and one with a glass teapot standing in the pool.
 fn specular_scenes(side: u32) -> Vec<(String, RenderSettings)> {
     use raylab_core::MaterialPreset;
-    use raylab_core::material::MaterialKind;
-    use raylab_core::scene::obj::Placement;
-    use raylab_core::scene::spec::{ModelSpec, SceneSpec};
-    use raylab_core::scene::{SceneChoice, water::WaterSpec};
+    use raylab_core::shading::material::MaterialKind;
+    use raylab_core::shapes::scene::obj::Placement;
+    use raylab_core::shapes::scene::spec::{ModelSpec, SceneSpec};
+    use raylab_core::shapes::scene::{SceneChoice, water::WaterSpec};
     let mut scenes = Vec::new();
     for stage in Stage::LAB {
         let mut s = settings(stage, side);

@@ -4,11 +4,11 @@
 
 mod common;
 
-use raylab_core::denoise::quality::{mean, measure, relative_mse};
-use raylab_core::denoise::{Denoiser, Features, render_denoised};
-use raylab_core::material::TexturePreset;
-use raylab_core::render::render;
-use raylab_core::scene::cornell_box;
+use raylab_core::shading::material::TexturePreset;
+use raylab_core::shapes::scene::cornell_box;
+use raylab_core::transport::denoise::quality::{mean, measure, relative_mse};
+use raylab_core::transport::denoise::{Denoiser, Features, render_denoised};
+use raylab_core::transport::render::render;
 use raylab_core::{RenderSettings, Stage};
 
 use common::{assert_same_image, on_threads, settings};
@@ -82,7 +82,7 @@ fn texture_detail_is_kept_under_soft_shadows() {
     let scene_settings = |samples: u32, seed: u64| {
         let mut s = settings(Stage::Lab, 96);
         s.texture_preset = TexturePreset::Both;
-        s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.1 };
+        s.light.kind = raylab_core::shading::light::LightKind::Sphere { radius: 0.1 };
         s.samples_per_pixel = samples;
         s.seed = seed;
         s
@@ -165,9 +165,9 @@ fn edge_pixels_mix_their_surfaces() {
 /// are the same at every sample along one camera ray.
 #[test]
 fn the_path_tracer_records_the_features_tracing_finds() {
-    use raylab_core::denoise::denoising_film;
-    use raylab_core::material::MaterialPreset;
-    use raylab_core::render::accumulate_pass;
+    use raylab_core::shading::material::MaterialPreset;
+    use raylab_core::transport::denoise::denoising_film;
+    use raylab_core::transport::render::accumulate_pass;
     let scene = cornell_box();
     let never = || false;
     let record = |s: &RenderSettings, samples: u32| {
@@ -207,8 +207,8 @@ fn the_path_tracer_records_the_features_tracing_finds() {
 
 /// The box with a mirror and a glass block (`--material-preset both`) at 96²: `measure`'s
 /// figures at `counts` samples, against a 512-sample reference.
-fn mirror_and_glass(counts: &[u32]) -> Vec<raylab_core::denoise::quality::QualityRow> {
-    use raylab_core::material::MaterialPreset;
+fn mirror_and_glass(counts: &[u32]) -> Vec<raylab_core::transport::denoise::quality::QualityRow> {
+    use raylab_core::shading::material::MaterialPreset;
     let scene = cornell_box();
     let mut s = settings(Stage::Path, 96);
     s.material_preset = MaterialPreset::Both;
@@ -245,12 +245,12 @@ fn mirror_and_glass_denoised_beat_384_raw_samples() {
 /// within 2 × the reference's + 0.25, as every other pixel is.
 #[test]
 fn no_firefly_survives_denoising() {
-    use raylab_core::material::MaterialPreset;
+    use raylab_core::shading::material::MaterialPreset;
     let scene = cornell_box();
     let side = 64u32;
     let mut s = settings(Stage::Path, side);
     s.material_preset = MaterialPreset::Both;
-    s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.1 };
+    s.light.kind = raylab_core::shading::light::LightKind::Sphere { radius: 0.1 };
     s.samples_per_pixel = 64;
     let (raw, denoised) = on_threads(2, || render_denoised(&scene, &s));
     let denoised = denoised.unwrap();

@@ -8,13 +8,13 @@ mod common;
 
 use common::{assert_renders, assert_same_image, bits, settings};
 use glam::Vec3;
-use raylab_core::geometry::Triangle;
-use raylab_core::material::{
+use raylab_core::base::geometry::Triangle;
+use raylab_core::shading::material::{
     DEFAULT_ROUGHNESS, MaterialPreset, PRESET_TEXTURE_SCALE, ROUGH_FRONT_BRIGHT_FROM, TALL_BLOCK,
     TexturePreset,
 };
-use raylab_core::render::render;
-use raylab_core::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::shapes::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::transport::render::render;
 use raylab_core::{Camera, Image, Material, RenderSettings, Stage};
 
 /// The checkerboard floor: every pixel that sees the floor shows the colour of the square its
@@ -117,7 +117,7 @@ fn a_soft_shadow_lies_between_umbra_and_full_light() {
     let full = render(&scene, &settings(Stage::Direct, side));
     let hard = render(&scene, &settings(Stage::Shadows, side));
     let mut s = settings(Stage::Shadows, side);
-    s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.15 };
+    s.light.kind = raylab_core::shading::light::LightKind::Sphere { radius: 0.15 };
     s.samples_per_pixel = 64;
     let soft = render(&scene, &s);
     // The same jitter without the sphere: the hard shadow anti-aliased alike.
@@ -178,7 +178,7 @@ fn radius_zero_and_aperture_zero_are_the_labs_images() {
         let mut s = settings(stage, 40);
         s.samples_per_pixel = 3;
         let lab = render(&scene, &s);
-        s.light.kind = raylab_core::light::LightKind::Sphere { radius: 0.0 };
+        s.light.kind = raylab_core::shading::light::LightKind::Sphere { radius: 0.0 };
         s.camera.aperture = 0.0;
         s.camera.focus_distance = 1.234;
         s.texture_preset = TexturePreset::None;

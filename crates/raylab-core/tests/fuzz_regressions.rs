@@ -68,7 +68,8 @@ fn scene_file_inputs_that_once_failed() {
     assert!(replay("scene_file", checks::scene_file) >= 3);
     for file in inputs("scene_file") {
         let text = std::fs::read_to_string(&file).unwrap();
-        let parsed = raylab_core::scene_file::parse(&text, Path::new("/nonexistent-fuzz-folder"));
+        let parsed =
+            raylab_core::files::scene_file::parse(&text, Path::new("/nonexistent-fuzz-folder"));
         let name = file.file_name().unwrap().to_string_lossy().into_owned();
         assert_eq!(
             parsed.is_ok(),
@@ -85,7 +86,7 @@ fn sandbox_inputs_that_once_failed() {
     assert!(replay("sandbox", checks::sandbox) >= 3);
     for file in inputs("sandbox") {
         let text = std::fs::read_to_string(&file).unwrap();
-        let compiled = raylab_core::sandbox::compile(&text);
+        let compiled = raylab_core::teaching::sandbox::compile(&text);
         let name = file.file_name().unwrap().to_string_lossy().into_owned();
         assert_eq!(
             compiled.is_ok(),
@@ -106,7 +107,7 @@ fn the_shipped_scene_files_pass_the_scene_file_check() {
         let text = std::fs::read(&path).unwrap();
         // The check parses against a folder that does not exist: the shipped scenes name only
         // built-in models, so each must parse.
-        let parsed = raylab_core::scene_file::parse(
+        let parsed = raylab_core::files::scene_file::parse(
             std::str::from_utf8(&text).unwrap(),
             Path::new("/nonexistent-fuzz-folder"),
         );
@@ -126,7 +127,7 @@ fn a_relative_index_before_the_first_is_an_error_naming_it() {
         .find(|p| p.ends_with("relative-texcoord-index-before-the-first.obj"))
         .expect("the input is saved");
     let text = std::fs::read(&path).unwrap();
-    let e = raylab_core::scene::obj::parse_obj(&text, Path::new("crash.obj")).unwrap_err();
+    let e = raylab_core::shapes::scene::obj::parse_obj(&text, Path::new("crash.obj")).unwrap_err();
     assert_eq!(
         e.to_string(),
         "could not load OBJ file 'crash.obj': line 29: texture coordinate index -13 is out of \

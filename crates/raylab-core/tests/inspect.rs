@@ -8,11 +8,11 @@ use std::f32::consts::PI;
 
 use common::{assert_pixels_trace_alone, every_pixel, settings, vec3_bits};
 use glam::Vec3;
-use raylab_core::inspect::{InspectError, Inspection, ShadedHit, inspect_pixel};
-use raylab_core::light::direct_light;
-use raylab_core::material::TexturePreset;
-use raylab_core::render::render;
-use raylab_core::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::shading::light::direct_light;
+use raylab_core::shading::material::TexturePreset;
+use raylab_core::shapes::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::teaching::inspect::{InspectError, Inspection, ShadedHit, inspect_pixel};
+use raylab_core::transport::render::render;
 use raylab_core::{MaterialPreset, RenderSettings, Stage};
 
 fn inspect(scene: &Scene, s: &RenderSettings, x: u32, y: u32) -> Inspection {
@@ -91,7 +91,7 @@ fn r_is_the_rendered_pixel_in_every_configuration() {
                     let mut s = settings(stage, 12);
                     s.material_preset = preset;
                     s.texture_preset = texture;
-                    s.light.kind = raylab_core::light::LightKind::Sphere { radius };
+                    s.light.kind = raylab_core::shading::light::LightKind::Sphere { radius };
                     s.camera.aperture = aperture;
                     s.seed = 7;
                     let what = format!("{stage} {preset} {texture} r={radius} a={aperture}");

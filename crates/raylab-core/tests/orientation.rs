@@ -1,8 +1,8 @@
 //! The default render is the lab's view: purple left, yellow right, green floor, cyan ceiling,
 //! the red short block right of centre and the blue tall block left of it.
 
-use raylab_core::render::render;
-use raylab_core::scene::cornell_box;
+use raylab_core::shapes::scene::cornell_box;
+use raylab_core::transport::render::render;
 use raylab_core::{RenderSettings, Shading, Stage};
 
 /// The flat stage (figure 2) at 512 × 512, as names of the reflectance at each pixel.

@@ -7,12 +7,12 @@
 mod common;
 
 use common::assert_same_image;
-use raylab_core::accel::{AccelKind, Isa};
+use raylab_core::base::geometry::Ray;
 use raylab_core::bench::{lab_settings, primary_rays, shadow_rays};
-use raylab_core::geometry::Ray;
-use raylab_core::intersect::{closest_intersection_brute_force, occluded_brute_force};
-use raylab_core::render::render_pass;
-use raylab_core::scene::{Scene, SceneChoice, terrain};
+use raylab_core::shapes::accel::{AccelKind, Isa};
+use raylab_core::shapes::intersect::{closest_intersection_brute_force, occluded_brute_force};
+use raylab_core::shapes::scene::{Scene, SceneChoice, terrain};
+use raylab_core::transport::render::render_pass;
 use rayon::prelude::*;
 
 /// [`check_view`] on the default view at `size`², which looks into the closed box.
@@ -28,7 +28,7 @@ fn check_every_configuration(scene: &Scene, size: u32) {
 type View = (
     Vec<Ray>,
     Vec<(Ray, f32)>,
-    Vec<Option<raylab_core::intersect::Intersection>>,
+    Vec<Option<raylab_core::shapes::intersect::Intersection>>,
     Vec<bool>,
 );
 
@@ -149,7 +149,7 @@ fn cornell_default_view_equals_brute_force() {
 fn small_terrain_default_view_equals_brute_force() {
     // The full terrain's generator at 20,000 triangles (the brute-force loop over a million
     // triangles for every pixel would take hours).
-    let scene = raylab_core::scene::spec::terrain_scene(&terrain::TerrainSpec {
+    let scene = raylab_core::shapes::scene::spec::terrain_scene(&terrain::TerrainSpec {
         grid: 100,
         ..terrain::TerrainSpec::default()
     });
@@ -168,7 +168,7 @@ fn packets_of_every_size_and_mixed_directions_equal_single_rays() {
 fn batches_equal_single_rays(scene: &Scene) {
     let settings = lab_settings(64, 64);
     let primary = primary_rays(&settings.camera);
-    let mut rng = raylab_core::sampling::Rng::new(7);
+    let mut rng = raylab_core::base::sampling::Rng::new(7);
     for len in 1..=64 {
         let start = (rng.next_u32() as usize) % (primary.len() - len);
         let mut rays: Vec<Ray> = primary[start..start + len].to_vec();
@@ -234,12 +234,12 @@ fn shadow_rays_given_as_lanes_equal_brute_force() {
     // structures copy them out. Every cast lane's answer is the brute-force loop's; lanes not
     // cast are never reported blocked. Groups of four as the lab's wave makes them, some lanes
     // left out.
-    use raylab_core::accel::SegmentLanes;
+    use raylab_core::shapes::accel::SegmentLanes;
     for choice in [SceneChoice::Cornell, SceneChoice::Bunny] {
         let scene = choice.load().unwrap();
         let settings = lab_settings(96, 96);
         let shadow = shadow_rays(&scene, &settings.light, &primary_rays(&settings.camera));
-        let mut rng = raylab_core::sampling::Rng::new(17);
+        let mut rng = raylab_core::base::sampling::Rng::new(17);
         for isa in Isa::available_for_tests("packets: shadow_rays_given_as_lanes") {
             let scene = scene.clone().rebuilt(AccelKind::Auto, isa);
             let mut checked = 0;

@@ -9,11 +9,11 @@ mod common;
 
 use common::{assert_pixels_trace_alone, assert_renders, assert_same_image, on_threads, settings};
 use glam::Vec3;
-use raylab_core::geometry::{Ray, Triangle};
-use raylab_core::integrator::Tracer;
-use raylab_core::render::{render, render_pass};
-use raylab_core::sampling::{Rng, cosine_hemisphere, orthonormal_basis, uniform_hemisphere};
-use raylab_core::scene::{Scene, cornell_box};
+use raylab_core::base::geometry::{Ray, Triangle};
+use raylab_core::base::sampling::{Rng, cosine_hemisphere, orthonormal_basis, uniform_hemisphere};
+use raylab_core::shapes::scene::{Scene, cornell_box};
+use raylab_core::transport::integrator::Tracer;
+use raylab_core::transport::render::{render, render_pass};
 use raylab_core::{LightSpec, Material, MaterialPreset, Stage};
 
 /// With 0 bounces a path is the camera ray and the lab's direct term: the `shadows` stage

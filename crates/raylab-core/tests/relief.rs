@@ -9,12 +9,12 @@ use std::sync::Arc;
 
 use common::{assert_same_image, settings};
 use glam::Vec3;
-use raylab_core::material::TexturePreset;
-use raylab_core::relief::{Decoding, HeightMap, NormalMap, Relief};
-use raylab_core::render::render;
-use raylab_core::scene::spec::{BoxPart, PartRelief, ReliefSpec};
-use raylab_core::scene::{Scene, SceneChoice, SceneSpec, cornell_box};
-use raylab_core::texture::TextureImage;
+use raylab_core::shading::material::TexturePreset;
+use raylab_core::shading::relief::{Decoding, HeightMap, NormalMap, Relief};
+use raylab_core::shading::texture::TextureImage;
+use raylab_core::shapes::scene::spec::{BoxPart, PartRelief, ReliefSpec};
+use raylab_core::shapes::scene::{Scene, SceneChoice, SceneSpec, cornell_box};
+use raylab_core::transport::render::render;
 use raylab_core::{Image, RenderSettings, Stage};
 
 /// A PNG of `width × height` pixels, all `rgb`.
@@ -210,7 +210,7 @@ fn the_inspector_shows_the_perturbed_normal() {
     // Column 8 sees the left wall (geometric normal (1, 0, 0)); the brick faces are flat, the
     // bevels by the mortar tilted.
     let tilted = (10..54).find_map(|y| {
-        let i = raylab_core::inspect::inspect_pixel(&scene, &s, 8, y).unwrap();
+        let i = raylab_core::teaching::inspect::inspect_pixel(&scene, &s, 8, y).unwrap();
         assert_eq!(i.surface.as_deref(), Some("purple"), "pixel (8, {y})");
         assert!(i.normal_mapped);
         i.shading_normal.is_some().then_some(i)
@@ -232,9 +232,14 @@ fn the_normals_view_shows_the_normal_map() {
     let never = || false;
     let mut s = settings(Stage::Lab, 64);
     let view = |s: &RenderSettings| {
-        raylab_core::view::render_view(&scene, s, raylab_core::view::View::Normals, &never)
-            .unwrap()
-            .image
+        raylab_core::transport::view::render_view(
+            &scene,
+            s,
+            raylab_core::transport::view::View::Normals,
+            &never,
+        )
+        .unwrap()
+        .image
     };
     let plain = view(&s);
     s.texture_preset = TexturePreset::BumpyWalls;
@@ -275,7 +280,7 @@ fn an_extreme_normal_map_keeps_the_normal_toward_the_viewer() {
         };
         let scene = box_with(extreme, &EVERY_SURFACE);
         let s = settings(Stage::Lab, 48);
-        let tracer = raylab_core::integrator::Tracer::new(&scene, &s);
+        let tracer = raylab_core::transport::integrator::Tracer::new(&scene, &s);
         let mut tilted = 0;
         for y in 0..48 {
             for x in 0..48 {
@@ -335,7 +340,7 @@ fn a_scene_file_names_its_normal_map() {
     let mut s = settings(Stage::Direct, 32);
     s.scene = SceneChoice::Custom(Box::new(spec));
     let file = dir.path().join("wall.toml");
-    raylab_core::scene_file::save(&s, &file).unwrap();
+    raylab_core::files::scene_file::save(&s, &file).unwrap();
     let text = std::fs::read_to_string(&file).unwrap();
     assert!(text.contains("[[scene.surfaces]]"), "{text}");
     assert!(text.contains("part = \"back-wall\""), "{text}");
@@ -344,7 +349,7 @@ fn a_scene_file_names_its_normal_map() {
         !text.contains("normal_strength"),
         "the default is left out: {text}"
     );
-    let read: RenderSettings = raylab_core::scene_file::load(&file).unwrap();
+    let read: RenderSettings = raylab_core::files::scene_file::load(&file).unwrap();
     assert_eq!(read, s);
     // The memory estimate counts the map as a texture is counted: its decoding and its file.
     let file_bytes = std::fs::metadata(dir.path().join("maps/tilt.png"))
@@ -360,7 +365,7 @@ fn a_scene_file_names_its_normal_map() {
 
     // The map gone: an error naming it.
     std::fs::remove_file(dir.path().join("maps/tilt.png")).unwrap();
-    let e = raylab_core::scene_file::load(&file)
+    let e = raylab_core::files::scene_file::load(&file)
         .unwrap()
         .scene
         .load()
@@ -377,14 +382,14 @@ fn a_scene_file_names_its_normal_map() {
         "part = \"back-wall\"\nnormal_strength = -1.0",
     );
     std::fs::write(&file, bad).unwrap();
-    let e = raylab_core::scene_file::load(&file)
+    let e = raylab_core::files::scene_file::load(&file)
         .unwrap_err()
         .to_string();
     assert!(e.contains("scene.surfaces[0].normal_strength"), "{e}");
     // An unknown field too.
     let bad = text.replace("part = \"back-wall\"", "part = \"back-wall\"\nbump = 1");
     std::fs::write(&file, bad).unwrap();
-    let e = raylab_core::scene_file::load(&file)
+    let e = raylab_core::files::scene_file::load(&file)
         .unwrap_err()
         .to_string();
     assert!(e.contains("bump"), "{e}");
@@ -420,8 +425,8 @@ fn a_grey_normal_map_in_a_scene_file_is_refused_as_in_a_material_library() {
         s.scene = SceneChoice::Custom(Box::new(spec));
         let file = dir.path().join("grey.toml");
         std::fs::remove_file(&file).ok();
-        raylab_core::scene_file::save(&s, &file).unwrap();
-        let e = raylab_core::scene_file::load(&file)
+        raylab_core::files::scene_file::save(&s, &file).unwrap();
+        let e = raylab_core::files::scene_file::load(&file)
             .unwrap()
             .scene
             .load()

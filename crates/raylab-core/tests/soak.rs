@@ -13,11 +13,11 @@ mod common;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use raylab_core::display::{Display, DisplayTransform};
-use raylab_core::progressive::{Controller, Frame};
-use raylab_core::render::render;
-use raylab_core::sampling::Rng;
-use raylab_core::scene::{Scene, cornell_box};
+use raylab_core::base::sampling::Rng;
+use raylab_core::shapes::scene::{Scene, cornell_box};
+use raylab_core::transport::display::{Display, DisplayTransform};
+use raylab_core::transport::progressive::{Controller, Frame};
+use raylab_core::transport::render::render;
 use raylab_core::{MaterialPreset, RenderSettings, Shading, Stage};
 
 /// How long the worker may take to finish the last job (a 128² path-traced image of a few

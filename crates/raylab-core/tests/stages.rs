@@ -4,10 +4,10 @@
 use std::f32::consts::PI;
 
 use glam::Vec3;
-use raylab_core::geometry::Ray;
-use raylab_core::intersect::intersect_triangle_matrix_inverse;
-use raylab_core::render::render;
-use raylab_core::scene::{Scene, cornell_box};
+use raylab_core::base::geometry::Ray;
+use raylab_core::shapes::intersect::intersect_triangle_matrix_inverse;
+use raylab_core::shapes::scene::{Scene, cornell_box};
+use raylab_core::transport::render::render;
 use raylab_core::{RenderSettings, Shading, Stage};
 
 const W: u32 = 96;

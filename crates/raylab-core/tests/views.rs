@@ -8,13 +8,13 @@ mod common;
 use std::collections::HashMap;
 
 use glam::Vec3;
-use raylab_core::accel::{Accel, AccelKind, Hit, Isa, TraversalCost};
-use raylab_core::geometry::Ray;
-use raylab_core::light::approach_at_edge;
-use raylab_core::render::{Cancelled, render};
-use raylab_core::scene::in_shadow;
-use raylab_core::scene::{Scene, SceneChoice, cornell_box};
-use raylab_core::view::{
+use raylab_core::base::geometry::Ray;
+use raylab_core::shading::light::approach_at_edge;
+use raylab_core::shapes::accel::{Accel, AccelKind, Hit, Isa, TraversalCost};
+use raylab_core::shapes::scene::in_shadow;
+use raylab_core::shapes::scene::{Scene, SceneChoice, cornell_box};
+use raylab_core::transport::render::{Cancelled, render};
+use raylab_core::transport::view::{
     DEPTH_NO_HIT, SHADOW_BLOCKED, SHADOW_FACES_AWAY, SHADOW_LIT, ShadowState, View, ViewImage,
     ViewValues, render_view, triangle_colour,
 };

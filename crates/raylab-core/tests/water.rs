@@ -6,9 +6,9 @@ mod common;
 use common::settings;
 use glam::Vec3;
 use raylab_core::MaterialKind;
-use raylab_core::render::render;
-use raylab_core::scene::SceneChoice;
-use raylab_core::scene::water::{WaterSpec, water_triangles};
+use raylab_core::shapes::scene::SceneChoice;
+use raylab_core::shapes::scene::water::{WaterSpec, water_triangles};
+use raylab_core::transport::render::render;
 use raylab_core::{RenderSettings, Stage};
 
 fn pool(stage: Stage, waves: f32, time: f32) -> RenderSettings {
@@ -164,11 +164,11 @@ fn the_water_refracts_what_lies_under_it() {
 fn scene_files_carry_the_water() {
     let s = pool(Stage::Path, 0.02, 1.5);
     let dir = tempfile::tempdir().unwrap();
-    let text = raylab_core::scene_file::to_text(&s, dir.path()).unwrap();
+    let text = raylab_core::files::scene_file::to_text(&s, dir.path()).unwrap();
     assert!(text.contains("[scene.water]"), "{text}");
-    let back = raylab_core::scene_file::parse(&text, dir.path()).unwrap();
+    let back = raylab_core::files::scene_file::parse(&text, dir.path()).unwrap();
     assert_eq!(back, s);
     let bad = text.replace("waves = 0.02", "waves = 5.0");
-    let e = raylab_core::scene_file::parse(&bad, dir.path()).unwrap_err();
+    let e = raylab_core::files::scene_file::parse(&bad, dir.path()).unwrap_err();
     assert!(e.contains("scene.water.waves"), "{e}");
 }

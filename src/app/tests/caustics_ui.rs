@@ -1,8 +1,8 @@
 //! Caustics by photon mapping in the window: the switch is the path stage's, and turning it
 //! on lights the shadow behind the glass block with the light the glass focuses into it.
 
-use raylab_core::settings::Caustics;
-use raylab_core::view::{ShadowState, View, ViewValues, render_view};
+use raylab_core::transport::settings::Caustics;
+use raylab_core::transport::view::{ShadowState, View, ViewValues, render_view};
 
 use super::*;
 

@@ -3,7 +3,7 @@
 //! takes the image's size for; the diagnosis follows the settings; the wipe, the difference
 //! picture and the inspector show the two images; what cannot be checked says why.
 
-use raylab_core::check::{self as core_check, Mistake, Rgb8};
+use raylab_core::teaching::check::{self as core_check, Mistake, Rgb8};
 
 use crate::app::check::{StudentCheck, figure_settings};
 
@@ -199,7 +199,7 @@ fn what_cannot_be_checked_says_why() {
 fn a_render_of_the_pool_is_the_exact_figure() {
     let dir = tempfile::tempdir().unwrap();
     let mut state = small_state();
-    state.settings.scene = raylab_core::scene::SceneChoice::Pool;
+    state.settings.scene = raylab_core::shapes::scene::SceneChoice::Pool;
     let mut s = figure_settings(&state.settings);
     s.camera = s.camera.with_resolution(64, 48);
     let scene = s.scene.load().unwrap();

@@ -2,7 +2,7 @@
 //! (`render_denoised`'s, bit for bit) while the accumulated image stays the render; off, the
 //! raw image is shown again at once, nothing traced.
 
-use raylab_core::denoise::render_denoised;
+use raylab_core::transport::denoise::render_denoised;
 
 use super::files_ui::drop_file;
 

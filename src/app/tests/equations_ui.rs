@@ -3,8 +3,8 @@
 //! marked stale; Reset gives the lab's image back; a screenshot carries the equations and
 //! opening it gives them back to the panel.
 
-use raylab_core::sandbox::{self, Quantity, carried};
-use raylab_core::settings_file;
+use raylab_core::files::settings_file;
+use raylab_core::teaching::sandbox::{self, Quantity, carried};
 
 use super::files_ui::{click, drop_file};
 use super::*;
@@ -202,7 +202,7 @@ fn the_inspector_explains_the_students_pixel_part_by_part() {
         explained[0].text.starts_with("(40, 70) = "),
         "{explained:?}"
     );
-    let shown = raylab_core::sandbox::explain::Value::Vec3(value.to_array()).text();
+    let shown = raylab_core::teaching::sandbox::explain::Value::Vec3(value.to_array()).text();
     assert!(explained[0].text.contains(&shown), "{shown}: {explained:?}");
     assert!(
         h.query_by_label_contains("Inspector: pixel (40, 70)")

@@ -153,7 +153,7 @@ fn a_bad_file_says_why_and_changes_nothing() {
     let mut h = harness(small_state());
     let before = shown(&h);
     let bad = dir.path().join("bad.toml");
-    let good = raylab_core::scene_file::to_text(&before.settings, dir.path()).unwrap();
+    let good = raylab_core::files::scene_file::to_text(&before.settings, dir.path()).unwrap();
     std::fs::write(&bad, good.replace("power = 14.0", "power = -2.0")).unwrap();
     type_path(&mut h, bad.to_str().unwrap());
     click(&mut h, "Open");
@@ -191,7 +191,7 @@ fn a_scene_file_whose_model_is_missing_keeps_the_last_good_scene_and_settings() 
     let file = dir.path().join("lost.toml");
     std::fs::write(
         &file,
-        raylab_core::scene_file::to_text(&other, dir.path()).unwrap(),
+        raylab_core::files::scene_file::to_text(&other, dir.path()).unwrap(),
     )
     .unwrap();
     drop_file(&mut h, &file);

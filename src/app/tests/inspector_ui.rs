@@ -3,7 +3,7 @@
 //! shows of the pixel: R in 8 bits, and with anti-aliasing that R is sample 0's, beside the
 //! mean of the samples on screen.
 
-use raylab_core::inspect::{ShownPixel, inspect_pixel};
+use raylab_core::teaching::inspect::{ShownPixel, inspect_pixel};
 
 use super::*;
 
@@ -105,7 +105,7 @@ fn with_one_sample_the_inspector_gives_rs_8_bits_through_the_display() {
     assert_eq!(r, shown(&h).image.get(40, 70));
     let [r8, g8, b8] = s.display.encode(r);
     // Twice the floor's value: not the lab's ×255 of R.
-    assert_ne!(r8, raylab_core::display::to_display_u8(r.x));
+    assert_ne!(r8, raylab_core::transport::display::to_display_u8(r.x));
     let eight_bit = if r8 == g8 && g8 == b8 {
         format!("{r8}")
     } else {

@@ -1,8 +1,8 @@
 //! The material editor: a part of the box given any kind from the kind's table, its
 //! parameters edited by rows made from that table, and the image rendered again with them.
 
-use raylab_core::material::{FieldValue, MaterialKind};
-use raylab_core::scene::spec::{BoxPart, PartMaterial};
+use raylab_core::shading::material::{FieldValue, MaterialKind};
+use raylab_core::shapes::scene::spec::{BoxPart, PartMaterial};
 
 use super::*;
 

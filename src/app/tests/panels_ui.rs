@@ -94,11 +94,11 @@ fn leaving_the_walkthrough_puts_back_the_settings_it_found() {
     h.get_by_role_and_label(Role::Button, "Start the walk-through")
         .click();
     h.run_steps(2);
-    for _ in 1..raylab_core::walkthrough::STEPS.len() {
+    for _ in 1..raylab_core::teaching::walkthrough::STEPS.len() {
         h.get_by_role_and_label(Role::Button, "Next").click();
         h.run_steps(2);
     }
-    let of = raylab_core::walkthrough::STEPS.len();
+    let of = raylab_core::teaching::walkthrough::STEPS.len();
     assert!(
         h.query_by_label_contains(&format!("Step {of} of {of}"))
             .is_some()
@@ -108,7 +108,7 @@ fn leaving_the_walkthrough_puts_back_the_settings_it_found() {
     assert_eq!(walked.material_preset, MaterialPreset::Glass);
     assert_eq!(
         walked.shading.caustics,
-        raylab_core::settings::Caustics::Photons
+        raylab_core::transport::settings::Caustics::Photons
     );
     h.get_by_role_and_label(Role::Slider, "Camera x")
         .set_value_accesskit(0.25);

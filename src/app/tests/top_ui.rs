@@ -73,7 +73,7 @@ fn the_figure_and_the_stage_are_at_the_top_and_in_the_title() {
 /// area light.
 #[test]
 fn a_spot_light_is_not_the_figure() {
-    use raylab_core::light::{LightKind, SpotCone};
+    use raylab_core::shading::light::{LightKind, SpotCone};
     let mut settings = small_state().settings;
     let heading = crate::app::panels::figure_heading;
     assert_eq!(
@@ -210,7 +210,7 @@ fn the_walkthrough_buttons_stay_in_place_and_the_status_follows_the_step() {
     h.get_by_label("Lab walk-through").click();
     h.step();
     click(&mut h, "Start the walk-through");
-    let steps = raylab_core::walkthrough::STEPS;
+    let steps = raylab_core::teaching::walkthrough::STEPS;
     let mut places = Vec::new();
     for (n, step) in steps.iter().enumerate() {
         // The sample targets of the later steps are for a real image: one pass is enough here.

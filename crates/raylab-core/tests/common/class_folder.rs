@@ -10,9 +10,9 @@ use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use image::ImageFormat;
-use raylab_core::check::{Mistake, Rgb8, mistakes::looks};
-use raylab_core::render::render;
-use raylab_core::scene::cornell_box;
+use raylab_core::shapes::scene::cornell_box;
+use raylab_core::teaching::check::{Mistake, Rgb8, mistakes::looks};
+use raylab_core::transport::render::render;
 use raylab_core::{Camera, RenderSettings, Shading, Stage};
 
 /// What a submission's row should say.

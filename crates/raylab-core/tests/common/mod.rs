@@ -8,8 +8,8 @@ pub mod rays;
 use std::fmt::Display;
 
 use glam::Vec3;
-use raylab_core::render::{render, trace_pixel};
-use raylab_core::scene::Scene;
+use raylab_core::shapes::scene::Scene;
+use raylab_core::transport::render::{render, trace_pixel};
 use raylab_core::{Image, RenderSettings};
 
 /// The default settings (figure 7's scene, light and camera) at `side × side` with `stage` and
@@ -26,7 +26,7 @@ pub fn settings(stage: raylab_core::Stage, side: u32) -> RenderSettings {
 /// front and above, they fall behind the tiles, out of the camera's sight).
 pub fn parallax_floor_under_a_low_light() -> RenderSettings {
     let mut s = settings(raylab_core::Stage::Lab, 128);
-    s.texture_preset = raylab_core::material::TexturePreset::ParallaxFloor;
+    s.texture_preset = raylab_core::shading::material::TexturePreset::ParallaxFloor;
     s.light.position = Vec3::new(0.9, 0.7, 0.9);
     s
 }

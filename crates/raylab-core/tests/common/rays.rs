@@ -1,8 +1,8 @@
 //! The random rays the structure tests share (tests/bvh.rs, tests/views.rs).
 
 use glam::Vec3;
-use raylab_core::geometry::{Ray, Triangle};
-use raylab_core::sampling::Rng;
+use raylab_core::base::geometry::{Ray, Triangle};
+use raylab_core::base::sampling::Rng;
 
 pub fn random_dir(rng: &mut Rng) -> Vec3 {
     loop {
