@@ -1413,7 +1413,7 @@ fn run_bench(args: &BenchArgs) -> anyhow::Result<()> {
 /// `--material-preset`'s), then its quality at 256²: relative MSE raw and denoised at 4 to
 /// 1,024 samples against `--reference-samples` ([`raylab_core::transport::denoise::quality`]).
 fn run_denoise_bench(args: &BenchArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
-    use raylab_core::bench::path_settings;
+    use raylab_core::test_support::path_settings;
     use raylab_core::transport::denoise::{Denoiser, Noisy, denoising_film, features_of, quality};
     use raylab_core::transport::film::Film;
     raylab_core::base::memory::check(

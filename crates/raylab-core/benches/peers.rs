@@ -49,12 +49,10 @@ use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray as PeerRay, RayHit};
 use obvhs::triangle::Triangle as PeerTriangle;
 use raylab_core::base::geometry::Ray;
-use raylab_core::bench::{
-    bounce_rays, lab_settings, median_ms, primary_rays, random_rays_in_room, scene_bounds,
-    shadow_rays,
-};
+use raylab_core::bench::{bounce_rays, median_ms, random_rays_in_room, scene_bounds};
 use raylab_core::shapes::accel::{Accel, AccelKind};
 use raylab_core::shapes::scene::{Scene, SceneChoice};
+use raylab_core::test_support::{lab_settings, primary_rays, shadow_rays};
 use raylab_core::transport::integrator::BATCH;
 use rayon::prelude::*;
 

@@ -13,9 +13,10 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use raylab_core::bench::{lab_settings, primary_rays, shadow_rays, trace_primary, trace_shadow};
+use raylab_core::bench::{trace_primary, trace_shadow};
 use raylab_core::shapes::accel::{Accel, AccelKind};
 use raylab_core::shapes::scene::SceneChoice;
+use raylab_core::test_support::{lab_settings, primary_rays, shadow_rays};
 use raylab_core::transport::render::render_pass;
 use raylab_core::{Shading, Stage};
 

@@ -20,16 +20,14 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use crate::base::camera::{primary_rays, try_primary_rays};
 use crate::base::geometry::Ray;
-use crate::base::memory::{AllocError, try_with_capacity};
-use crate::shading::light::LightSpec;
+use crate::base::memory::AllocError;
 use crate::shapes::accel::{Accel, AccelKind, Isa};
 use crate::shapes::scene::Scene;
-use crate::transport::integrator::{BATCH, HitTerms, Surface};
+use crate::test_support::{lab_settings, path_settings, try_primary_rays, try_shadow_rays};
+use crate::transport::integrator::BATCH;
 use crate::transport::render::render_pass;
-use crate::transport::settings::{BASE_MEMORY, RenderSettings};
-use crate::{Camera, Shading, Stage};
+use crate::transport::settings::BASE_MEMORY;
 
 /// What to measure.
 #[derive(Clone, Copy, Debug)]
@@ -96,24 +94,6 @@ fn time<T>(f: impl FnOnce() -> T) -> (Duration, T) {
     (start.elapsed(), out)
 }
 
-/// The lab stage at `width × height` from the default camera.
-pub fn lab_settings(width: u32, height: u32) -> RenderSettings {
-    RenderSettings {
-        camera: Camera::default_for(width, height),
-        shading: Shading::for_stage(Stage::Lab),
-        ..RenderSettings::default()
-    }
-}
-
-/// The path stage at `width × height` from the default camera: what `--stage path` and
-/// `--stage denoise` measure.
-pub fn path_settings(width: u32, height: u32) -> RenderSettings {
-    RenderSettings {
-        shading: Shading::for_stage(Stage::Path),
-        ..lab_settings(width, height)
-    }
-}
-
 /// The memory [`bench_scene`] needs at its peak, in bytes, besides the scene: the camera's rays
 /// (24 bytes a pixel) and the shadow rays cast from their hits (28 bytes each, at most one a
 /// pixel), which are made once and kept through every timed pass, and one pass's image (12
@@ -122,50 +102,6 @@ pub fn memory_estimate(config: &BenchConfig) -> u64 {
     let pixels = u64::from(config.width) * u64::from(config.height);
     let per_pixel = (size_of::<Ray>() + size_of::<(Ray, f32)>() + size_of::<glam::Vec3>()) as u64;
     pixels * per_pixel + BASE_MEMORY
-}
-
-/// The shadow rays the lab stage casts for these primary rays: from every hit that receives
-/// light, [`crate::shading::light::shadow_ray`] towards the light, with its `t_max`.
-pub fn shadow_rays(scene: &Scene, light: &LightSpec, primary: &[Ray]) -> Vec<(Ray, f32)> {
-    primary
-        .par_iter()
-        .filter_map(|ray| shadow_ray_of(scene, light, ray))
-        .collect()
-}
-
-/// [`shadow_rays`], reserved fallibly (room for one a primary ray), made a slice of rays at a
-/// time so that no second full-size buffer is needed.
-pub fn try_shadow_rays(
-    scene: &Scene,
-    light: &LightSpec,
-    primary: &[Ray],
-) -> Result<Vec<(Ray, f32)>, AllocError> {
-    let mut rays = try_with_capacity(primary.len(), || {
-        format!("the shadow rays of {} pixels", primary.len())
-    })?;
-    for slice in primary.chunks(1 << 16) {
-        let part: Vec<(Ray, f32)> = slice
-            .par_iter()
-            .filter_map(|ray| shadow_ray_of(scene, light, ray))
-            .collect();
-        rays.extend(part);
-    }
-    Ok(rays)
-}
-
-/// The lab stage's shadow ray from where `ray` hits, if it hits a point the light reaches.
-fn shadow_ray_of(scene: &Scene, light: &LightSpec, ray: &Ray) -> Option<(Ray, f32)> {
-    let hit = scene.closest_intersection(ray, f32::INFINITY)?;
-    let triangle = &scene.triangles[hit.triangle_index];
-    let surface = Surface {
-        position: hit.position,
-        normal: triangle.normal,
-        geometric: triangle.normal,
-        rho: scene.material_of(hit.triangle_index).reflectance,
-        at_edge: scene.approach_at_edge(hit.triangle_index, hit.u, hit.v, ray.direction),
-        relief_visibility: 1.0,
-    };
-    HitTerms::at(light, Stage::Lab, true, surface, |_| light.position).shadow_ray
 }
 
 /// Closest hits of all `rays`, in parallel, in batches of [`BATCH`] as the integrators ask
@@ -345,6 +281,7 @@ pub fn random_rays_in_room(lo: glam::Vec3, hi: glam::Vec3, n: usize, seed: u64) 
 mod tests {
     use super::*;
     use crate::shapes::scene::cornell_box;
+    use crate::test_support::{primary_rays, shadow_rays};
 
     #[test]
     fn medians() {

@@ -1,10 +1,19 @@
 //! raylab: the tracer behind a raytracing workbench for learning, built around a university
 //! raytracing lab (COMS30115 coursework 1) and its Cornell box.
 //!
-//! The library reads like the lab: [`scene`] → [`camera`] → [`geometry::Ray`] →
-//! [`intersect`] (`closest_intersection`) → [`integrator`] (the lab's stages with
-//! [`light::direct_light`], its equation 27, and the path tracer; [`material`] for mirror and
-//! glass) → [`film`]. [`render`] runs that for every pixel, in parallel and cancellably.
+//! The library reads like the lab: [`shapes::scene`] → [`base::camera`] →
+//! [`base::geometry::Ray`] → [`shapes::intersect`] (`closest_intersection`) →
+//! [`transport::integrator`] (the lab's stages with [`shading::light::direct_light`], its
+//! equation 27, and the path tracer; [`shading::material`] for mirror and glass) →
+//! [`transport::film`]. [`transport::render`] runs that for every pixel, in parallel and
+//! cancellably.
+//!
+//! Its folders are the rungs of a ladder, each using only those before it: [`base`] (rays,
+//! lanes, sampling, the camera), [`shading`] (BSDFs, materials, textures, lights), [`shapes`]
+//! (triangles, the BVH, the scenes), [`transport`] (settings, integrators, film, denoiser,
+//! rendering), [`teaching`] (check my lab, the inspector, the sandbox) and [`files`] (scene
+//! files and settings). [`bench`] measures, and [`test_support`] holds the fixtures tests
+//! share.
 //!
 //! ```
 //! use raylab_core::{RenderSettings, transport::render, shapes::scene::cornell_box};
@@ -31,6 +40,8 @@ pub mod teaching;
 pub mod files;
 
 pub mod bench;
+
+pub mod test_support;
 
 pub use base::camera::Camera;
 pub use shading::light::LightSpec;

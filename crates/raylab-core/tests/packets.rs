@@ -8,10 +8,10 @@ mod common;
 
 use common::assert_same_image;
 use raylab_core::base::geometry::Ray;
-use raylab_core::bench::{lab_settings, primary_rays, shadow_rays};
 use raylab_core::shapes::accel::{AccelKind, Isa};
 use raylab_core::shapes::intersect::{closest_intersection_brute_force, occluded_brute_force};
 use raylab_core::shapes::scene::{Scene, SceneChoice, terrain};
+use raylab_core::test_support::{lab_settings, primary_rays, shadow_rays};
 use raylab_core::transport::render::render_pass;
 use rayon::prelude::*;
 

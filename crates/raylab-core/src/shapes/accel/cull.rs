@@ -529,10 +529,10 @@ mod tests {
     use super::*;
     use crate::base::geometry::Triangle;
     use crate::base::sampling::Rng;
-    use crate::bench::{lab_settings, primary_rays, shadow_rays};
     use crate::shapes::accel::wide::{Corners, triangle_size};
     use crate::shapes::intersect::intersect_triangle;
     use crate::shapes::scene::cornell_box;
+    use crate::test_support::{lab_settings, primary_rays, shadow_rays};
 
     fn v(rng: &mut Rng, s: f32) -> Vec3 {
         Vec3::new(rng.uniform(-s, s), rng.uniform(-s, s), rng.uniform(-s, s))

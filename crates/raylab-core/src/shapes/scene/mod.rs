@@ -575,8 +575,8 @@ mod tests {
     #[test]
     fn closest_hit_lanes_are_the_closest_hits() {
         let scene = cornell::cornell_box();
-        let settings = crate::bench::lab_settings(37, 29);
-        let rays = crate::bench::primary_rays(&settings.camera);
+        let settings = crate::test_support::lab_settings(37, 29);
+        let rays = crate::test_support::primary_rays(&settings.camera);
         let grown = grown(&scene);
         for scene in [&scene, &grown] {
             let mut hits = vec![None; rays.len()];
@@ -601,8 +601,8 @@ mod tests {
     #[test]
     fn closest_hits_make_the_intersections_closest_intersection_finds() {
         let scene = cornell::cornell_box();
-        let settings = crate::bench::lab_settings(64, 64);
-        let rays = crate::bench::primary_rays(&settings.camera);
+        let settings = crate::test_support::lab_settings(64, 64);
+        let rays = crate::test_support::primary_rays(&settings.camera);
         let grown = grown(&scene);
         assert!(!grown.accel.built_for(grown.triangles.len()));
         for scene in [&scene, &grown] {

@@ -258,7 +258,7 @@ fn every_instruction_set_gives_the_same_bits() {
 fn features_serve_a_moved_light_but_not_a_moved_camera() {
     let scene = crate::shapes::scene::cornell_box();
     let never = || false;
-    let mut settings = crate::bench::path_settings(24, 18);
+    let mut settings = crate::test_support::path_settings(24, 18);
     settings.texture_preset = crate::shading::material::TexturePreset::CheckerFloor;
     let features = Features::trace(&scene, &settings, &never).unwrap();
 

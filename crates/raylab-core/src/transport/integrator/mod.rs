@@ -1183,8 +1183,8 @@ mod tests {
     use super::*;
     use crate::Camera;
     use crate::base::lanes::LANES;
-    use crate::bench::primary_rays;
     use crate::shapes::scene::cornell_box;
+    use crate::test_support::primary_rays;
 
     #[test]
     fn stages_parse_and_name_their_figures() {
