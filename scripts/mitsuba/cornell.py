@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The lab's Cornell box in Mitsuba 3: an independent reference for raylab's renders.
 
-The scene is built exactly as raylab's crates/raylab-core/src/scene/cornell.rs builds it (30 triangles, the same
+The scene is built exactly as raylab's crates/raylab-core/src/shapes/scene/cornell.rs builds it (30 triangles, the same
 transform, so y points DOWN) with the lab's point light and pinhole camera. The EXR it writes
 holds pi x radiance, which is raylab's image unit (raylab's rho * D = pi x radiance).
 

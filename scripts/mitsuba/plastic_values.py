@@ -1,5 +1,5 @@
 """Mitsuba 3's roughplastic (ggx, sample_visible, nonlinear = false) evaluated at a few direction
-pairs: the reference values of raylab's plastic tests (crates/raylab-core/src/bsdf/plastic.rs,
+pairs: the reference values of raylab's plastic tests (crates/raylab-core/src/shading/bsdf/plastic.rs,
 `agrees_with_mitsuba`). Prints, for each pair (wo toward the viewer, wi toward the light, both
 in the local frame as raylab names them), the specular and diffuse parts of f (Mitsuba's eval
 divided by cos θ_i) and the pdf.
