@@ -313,7 +313,7 @@ impl Overlay for StudentCheck {
 }
 
 /// An 8-bit RGB image as egui's texture pixels.
-fn color_image(image: &Rgb8) -> egui::ColorImage {
+pub(super) fn color_image(image: &Rgb8) -> egui::ColorImage {
     egui::ColorImage::from_rgb([image.width as usize, image.height as usize], &image.data)
 }
 

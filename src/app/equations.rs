@@ -28,7 +28,7 @@ use raylab_core::transport::progressive::catch_panic;
 use raylab_core::transport::settings::EquationTexts;
 use raylab_core::{RenderSettings, Stage};
 
-use super::check::figure_settings;
+use super::check::{color_image, figure_settings};
 use super::compare::{Divider, Texture, paint_wipe, tag};
 use super::viewport::Overlay;
 
@@ -570,11 +570,6 @@ impl Overlay for YourEquations {
         self.divider
             .input(ui, response, rect, on_marker, !self.difference)
     }
-}
-
-/// An 8-bit RGB image as egui's texture pixels.
-fn color_image(image: &Rgb8) -> egui::ColorImage {
-    egui::ColorImage::from_rgb([image.width as usize, image.height as usize], &image.data)
 }
 
 /// How a piece of the text is coloured.

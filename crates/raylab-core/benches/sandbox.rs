@@ -16,9 +16,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use raylab_core::bench::lab_settings;
 use raylab_core::shapes::scene::cornell_box;
 use raylab_core::teaching::sandbox::{self, Equations, compile};
+use raylab_core::test_support::lab_settings;
 use raylab_core::transport::display::Display;
 
 /// The lab's `DirectLight` and pixel value as a student types them.
