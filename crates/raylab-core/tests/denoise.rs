@@ -266,8 +266,9 @@ fn no_firefly_survives_denoising() {
         .filter(|&i| too_bright(&raw, i, 4.0, 0.5))
         .collect();
     eprintln!("{} fireflies: {fireflies:?}", fireflies.len());
+    // How many there are is chance (a rare path per pixel); one is enough to show removed.
     assert!(
-        fireflies.len() >= 2,
+        !fireflies.is_empty(),
         "the raw image has fireflies to remove"
     );
     for i in 0..denoised.pixels.len() {

@@ -33,7 +33,9 @@ pub fn lab_text(q: Quantity, shading: &Shading) -> &'static str {
         Quantity::Value => match shading.stage {
             Stage::Flat => "// Figure 2: the colour alone\nR = color",
             Stage::Incoming => "// Figure 3: the light arriving\nR = D + indirectLight",
-            _ => "// Equations 28 and 30\nR = color * (D + indirectLight)",
+            Stage::Direct | Stage::Shadows | Stage::Lab | Stage::Path => {
+                "// Equations 28 and 30\nR = color * (D + indirectLight)"
+            }
         },
     }
 }

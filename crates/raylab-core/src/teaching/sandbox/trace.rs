@@ -747,7 +747,9 @@ mod tests {
         text.push_str(match stage {
             Stage::Flat => "R = color",
             Stage::Incoming => "R = D + indirectLight",
-            _ => "R = color * (D + indirectLight)",
+            Stage::Direct | Stage::Shadows | Stage::Lab | Stage::Path => {
+                "R = color * (D + indirectLight)"
+            }
         });
         text
     }

@@ -47,7 +47,7 @@ use crate::base::geometry::Ray;
 use crate::base::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, compiled, select_lazy};
 use crate::base::memory::with_thread_memory;
 use crate::base::sampling::Rng;
-use crate::shading::bsdf::ShadingFrame;
+use crate::shading::bsdf::{Bsdf, ShadingFrame};
 use crate::shading::light::{
     AnyLight, DirectLight, LightKind, LightSpec, SHADOW_OFFSET, ShadowRays, shadow_rays_to,
 };
@@ -912,8 +912,11 @@ impl<'a> Tracer<'a> {
             if !material.is_specular() || bounces == FEATURE_SPECULAR_BOUNCES {
                 let scattering = self.scattering(&hit, ray.direction);
                 let rho = match scattering.bsdf {
-                    crate::shading::bsdf::Bsdf::RoughConductor { tint, .. } => tint,
-                    _ => scattering.surface.rho,
+                    Bsdf::RoughConductor { tint, .. } => tint,
+                    Bsdf::Lambertian { .. }
+                    | Bsdf::Mirror { .. }
+                    | Bsdf::Glass { .. }
+                    | Bsdf::Plastic(_) => scattering.surface.rho,
                 };
                 let normal_there = scattering.frame.shading_normal();
                 let seen = Seen::at(weight, rho, normal_there, scattering.wo, travelled);

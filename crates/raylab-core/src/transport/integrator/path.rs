@@ -57,18 +57,7 @@ use crate::shading::material::{Material, Scatter, facing};
 use crate::shapes::intersect::Intersection;
 use crate::transport::photon_map::Gathered;
 
-/// The vertex from which Russian roulette may end a path: the fifth, as in Mitsuba 3's path
-/// tracer (`rr_depth` = 5), so that at equal samples the two are equally noisy. Starting
-/// earlier makes a sample cheaper and the image noisier by about as much: the same variance ×
-/// time, but a noisier image a sample (PERFORMANCE.md, "Design choices and what each buys").
-pub const ROULETTE_DEPTH: u32 = 5;
-
-/// The largest survival probability of Russian roulette: even a path that keeps all its
-/// throughput (clear glass) ends after about 20 more vertices on average.
-pub const ROULETTE_MAX_SURVIVAL: f32 = 0.95;
-
-/// Vertices after which a path is ended whatever its throughput.
-pub const MAX_DEPTH: u32 = 256;
+pub use super::path_mis::{MAX_DEPTH, ROULETTE_DEPTH, ROULETTE_MAX_SURVIVAL};
 
 /// The path tracer's working memory ([`super::Scratch`]'s part for it): its hits in lanes
 /// and the light at them, and its paths.

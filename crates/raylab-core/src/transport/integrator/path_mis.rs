@@ -47,7 +47,6 @@
 use glam::{Vec2, Vec3};
 use serde::Serialize;
 
-use super::path::{MAX_DEPTH, ROULETTE_DEPTH, ROULETTE_MAX_SURVIVAL};
 use super::{Recorder, Scattering, Tracer, continue_ray};
 use crate::base::geometry::Ray;
 use crate::base::lanes::{MaskOf, Real, Vector};
@@ -56,6 +55,19 @@ use crate::shading::bsdf::{Bsdf, BsdfSample, ShadingFrame};
 use crate::shading::light::{Light, shadow_ray_to};
 use crate::shading::material::{Scatter, facing};
 use crate::transport::photon_map::{Gathered, PhotonMap};
+
+/// The vertex from which Russian roulette may end a path: the fifth, as in Mitsuba 3's path
+/// tracer (`rr_depth` = 5), so that at equal samples the two are equally noisy. Starting
+/// earlier makes a sample cheaper and the image noisier by about as much: the same variance ×
+/// time, but a noisier image a sample (PERFORMANCE.md, "Design choices and what each buys").
+pub const ROULETTE_DEPTH: u32 = 5;
+
+/// The largest survival probability of Russian roulette: even a path that keeps all its
+/// throughput (clear glass) ends after about 20 more vertices on average.
+pub const ROULETTE_MAX_SURVIVAL: f32 = 0.95;
+
+/// Vertices after which a path is ended whatever its throughput.
+pub const MAX_DEPTH: u32 = 256;
 
 /// The power heuristic with exponent 2 (Veach's thesis, §9.2.4): the weight of a sample drawn
 /// with density `pdf_f` when the other strategy would have drawn it with density `pdf_g`.
