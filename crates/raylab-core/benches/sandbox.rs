@@ -1,5 +1,5 @@
-//! `cargo bench --bench sandbox`: the equation sandbox at the lab's 512 × 512, the figures of
-//! issue 40's "Live" targets (benchmarks, not timed tests).
+//! `cargo bench --bench sandbox`: the equation sandbox at the lab's 512 × 512, what a student
+//! waits for while typing (re-evaluation, a keystroke to pixels, a re-trace, compiling).
 //!
 //! * `evaluate/D_R/{1,2}_threads`: a student's `D` and `R` evaluated again over a recording of
 //!   the whole image (the lab stage, figure 7), sixteen hits at a time: what changing `D` or
