@@ -17,7 +17,8 @@
 # samples per second from the frame log over a steady span (THROUGHPUT_SPAN seconds, default 8),
 # with each thread's CPU use over that span. The benchmark runs at the same size and threads
 # just before and just after the window (their mean is taken: the machine's load drifts); both
-# are printed in camera paths per second, and their ratio (window / bench).
+# are printed in camera paths per second, and their ratio (window / bench). The window's
+# denoiser is on, as a student starts it; THROUGHPUT_DENOISE=off measures it off.
 #
 # scripts/measure-window.sh --clean [SIDE] [THREADS] [RUNS]: how long the path-traced box takes
 # to look clean after a change. Starts the window on the path stage at SIDE² (default 512) with
@@ -112,7 +113,9 @@ if [ "$mode" = throughput ]; then
   : >"$summary"
   for run in $(seq "$runs"); do
     bench_before=$(bench_paths)
-    start_app "$(path_stage "$side" "$threads")" "$out/throughput-$run.log" \
+    denoise=true
+    [ "${THROUGHPUT_DENOISE:-on}" = off ] && denoise=false
+    start_app "$(path_stage "$side" "$threads" ", \"denoise\": $denoise")" "$out/throughput-$run.log" \
       "samples=[1-9][0-9]* target=[0-9]+ preview=false"
     grep -Eq "samples=[1-9]" "$log" || { echo "measure-window: no samples logged" >&2; exit 1; }
     # Past the start (the preview, the first passes, the window's first frames).
