@@ -50,6 +50,7 @@
 //!
 //! Rule 3 is the conservative choice: a direction above the geometric surface but below the
 //! shading one gets nothing, so a strongly bent normal darkens slightly near its terminator
+//! rather than leaking light.
 //!
 //! # Files
 //!
