@@ -5,8 +5,8 @@ mod cli;
 mod signals;
 
 /// Runs the program on a thread whose stack raylab sets ([`raylab_core::base::memory::MAIN_STACK_BYTES`])
-/// and waits for it: the first thread's stack is whatever `ulimit -s` says, and under
-/// `ulimit -s 64` parsing the arguments alone overflowed it. (On Linux only: elsewhere the
+/// and waits for it: the first thread's stack is whatever `ulimit -s` says, which may be too
+/// small even for parsing the arguments. (On Linux only: elsewhere the
 /// window must run on the first thread, and does, as the rest of the program.)
 fn main() -> std::process::ExitCode {
     if !cfg!(target_os = "linux") {

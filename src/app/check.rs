@@ -22,7 +22,9 @@ use raylab_core::transport::display::Display;
 use raylab_core::transport::progressive::catch_panic;
 
 use super::Command;
+use super::WorkbenchApp;
 use super::compare::{Divider, Texture, paint_wipe, tag};
+use super::status::{Cause, StatusKind};
 use super::viewport::Overlay;
 
 /// What [`StudentCheck::update`] tells the app.
@@ -461,5 +463,54 @@ fn report_ui(ui: &mut egui::Ui, report: &check::Report, commands: &mut Vec<Comma
                         }
                     });
             });
+    }
+}
+
+impl WorkbenchApp {
+    /// Check my image: reads `path` and holds it against the exact figure for the current
+    /// settings, in place of an A/B comparison.
+    pub(super) fn start_check(&mut self, ctx: &egui::Context, path: std::path::PathBuf) {
+        self.compare = None;
+        let check = StudentCheck::start(ctx, path);
+        self.set_status_while(
+            StatusKind::Info,
+            Cause::Checking,
+            format!("Reading {}…", check.name()),
+        );
+        self.check = Some(check);
+    }
+
+    /// Once a frame: the check's image once read (the camera then renders at its size, with
+    /// the same field of view) and its diagnosis.
+    pub(super) fn receive_check(&mut self, ctx: &egui::Context) {
+        let scene_ready = self.state.settings.scene == self.scene_choice;
+        let Some(check) = &mut self.check else {
+            return;
+        };
+        match check.update(ctx, &self.state.settings, &self.scene, scene_ready) {
+            None => {}
+            Some(Event::Read { width, height }) => {
+                let name = check.name();
+                let camera = &mut self.state.settings.camera;
+                if (camera.width, camera.height) != (width, height) {
+                    let scale = width as f32 / camera.width as f32;
+                    camera.focal_length *= scale;
+                    camera.width = width;
+                    camera.height = height;
+                }
+                self.set_status_while(
+                    StatusKind::Info,
+                    Cause::Checking,
+                    format!(
+                        "Checking {name} ({width} × {height}) against the exact figure: set the \
+                         stage, camera and light it was made with"
+                    ),
+                );
+            }
+            Some(Event::Unreadable(e)) => {
+                self.check = None;
+                self.set_status(StatusKind::Error, e);
+            }
+        }
     }
 }

@@ -12,6 +12,11 @@ use std::path::{Path, PathBuf};
 use eframe::egui;
 use raylab_core::RenderSettings;
 use raylab_core::files::settings_file::{self, Loaded};
+use raylab_core::shapes::scene::SceneChoice;
+
+use super::WorkbenchApp;
+use super::sampled::Sampled;
+use super::status::StatusKind;
 
 /// What a file holds, once read.
 #[derive(Debug)]
@@ -309,6 +314,114 @@ impl FileDialog {
             outcome = DialogOutcome::Cancelled;
         }
         outcome
+    }
+}
+
+impl WorkbenchApp {
+    /// Opens a scene file, a screenshot (PNG or JSON) or an OBJ model: from the File field,
+    /// the dialog or a drop on the window. A file that cannot be used changes nothing.
+    pub(super) fn open_path(&mut self, path: &std::path::Path, ctx: &egui::Context) {
+        self.state.obj_path = path.display().to_string();
+        match open(path) {
+            Ok(Opened::StudentImage(image)) => self.start_check(ctx, image),
+            Ok(Opened::Model(model)) => {
+                self.state.settings.scene = SceneChoice::Obj(model);
+            }
+            Ok(Opened::Settings(mut loaded)) => {
+                // A denoised image's settings turn the Denoise switch on (the switch is the
+                // window's own, not among the settings it traces with).
+                if std::mem::take(&mut loaded.settings.denoise) {
+                    self.state.denoise = true;
+                }
+                // The equations go to the Your equations panel (the live render is the lab's).
+                self.equations
+                    .load(&std::mem::take(&mut loaded.settings.equations));
+                let old = std::mem::replace(&mut self.state.settings, loaded.settings);
+                if self.state.settings.scene != self.scene_choice {
+                    self.restore_on_failure = Some(old);
+                }
+                self.state.walk_step = None;
+                self.state.walk_restore = None;
+                // The file's sample target is its own: not raised.
+                self.sampled = Sampled::of(&self.state.settings);
+                let name = path.file_name().map_or_else(
+                    || path.display().to_string(),
+                    |n| n.to_string_lossy().into_owned(),
+                );
+                if loaded.warnings.is_empty() {
+                    self.set_status(StatusKind::Info, format!("Opened {name}"));
+                } else {
+                    self.set_status(
+                        StatusKind::Notice,
+                        format!("Opened {name}: {}", loaded.warnings.join("; ")),
+                    );
+                }
+            }
+            Err(e) => self.set_status(StatusKind::Error, e),
+        }
+    }
+
+    /// Saves the scene file at `path`; a file there is replaced only when `replace` (the Save
+    /// dialog asked), otherwise the scene goes to the next free name, as the status says.
+    pub(super) fn save_scene_to(&mut self, path: &std::path::Path, replace: bool) {
+        // The scene file carries the student's equations.
+        let mut settings = self.state.settings.clone();
+        settings.equations = self.equations.carried();
+        match save_scene(&settings, path, replace) {
+            Ok(written) => {
+                self.state.obj_path = written.display().to_string();
+                self.set_status(
+                    StatusKind::Info,
+                    format!("Saved the scene file {}", written.display()),
+                );
+            }
+            Err(e) => self.set_status(StatusKind::Error, e),
+        }
+    }
+
+    /// The dialog's folder: the typed path's, else the screenshot folder. Its name field starts
+    /// empty (the Save dialog's suggests a name): the typed file's name there would be chosen
+    /// by a press of Enter, though the user came to the dialog to pick another.
+    pub(super) fn dialog_folder(&self) -> std::path::PathBuf {
+        let typed = std::path::Path::new(self.state.obj_path.trim());
+        match typed.parent() {
+            Some(dir) if typed.file_name().is_some() && dir.is_dir() => dir.to_path_buf(),
+            _ => self.state.screenshot_folder.clone(),
+        }
+    }
+
+    pub(super) fn file_dialog_ui(&mut self, ctx: &egui::Context) {
+        let Some(dialog) = &mut self.file_dialog else {
+            return;
+        };
+        let mode = dialog.mode;
+        match dialog.ui(ctx) {
+            DialogOutcome::Open => {}
+            DialogOutcome::Cancelled => self.file_dialog = None,
+            DialogOutcome::Chosen(path) => {
+                self.file_dialog = None;
+                if mode == DialogMode::SaveScene {
+                    self.save_scene_to(&path, false);
+                } else if mode == DialogMode::CheckImage {
+                    self.start_check(ctx, path);
+                } else {
+                    self.open_path(&path, ctx);
+                }
+            }
+            DialogOutcome::Replace(path) => {
+                self.file_dialog = None;
+                self.save_scene_to(&path, true);
+            }
+        }
+    }
+
+    /// Files dropped on the window are opened (the last, if several).
+    pub(super) fn receive_dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        if let Some(file) = dropped.last() {
+            let path = file.path().to_path_buf();
+            self.open_path(&path, ctx);
+        }
     }
 }
 

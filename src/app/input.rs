@@ -17,8 +17,8 @@ use eframe::egui::{self, Key, KeyboardShortcut, Modifiers};
 use glam::{Mat3, Vec3};
 use raylab_core::{Camera, RenderSettings};
 
-use super::Command;
 use super::viewport::ViewportInput;
+use super::{Command, WorkbenchApp};
 
 /// Camera movement per Up/Down press, in scene units (the box is 2 units wide).
 pub const CAMERA_STEP: f32 = 0.1;
@@ -187,6 +187,37 @@ pub fn wrap_angle(radians: f32) -> f32 {
     use std::f32::consts::{PI, TAU};
     let a = radians.rem_euclid(TAU);
     if a > PI { a - TAU } else { a }
+}
+
+impl WorkbenchApp {
+    pub(super) fn help_ui(&mut self, ctx: &egui::Context) {
+        // Over the image, not the top of the side panel, whose buttons (Help among them)
+        // stay within reach.
+        egui::Window::new("Help")
+            .open(&mut self.show_help)
+            .resizable(false)
+            .collapsible(false)
+            .pivot(egui::Align2::CENTER_CENTER)
+            .default_pos(ctx.content_rect().center())
+            .show(ctx, |ui| {
+                egui::Grid::new("help-keys")
+                    .striped(true)
+                    .num_columns(2)
+                    .show(ui, |ui| {
+                        for (keys, action) in HELP {
+                            ui.strong(*keys);
+                            ui.label(*action);
+                            ui.end_row();
+                        }
+                    });
+                ui.separator();
+                ui.label(
+                    "Keys act when no text field has focus. Every change re-traces at once: \
+                     a coarse preview first, then full resolution, then more samples up to the \
+                     sample target.",
+                );
+            });
+    }
 }
 
 #[cfg(test)]

@@ -11,11 +11,17 @@
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{self, TryRecvError};
 
 use anyhow::Context as _;
+use eframe::egui;
 use raylab_core::transport::film::OutputFormat;
 use raylab_core::{Image, RenderSettings};
 use serde::{Deserialize, Serialize};
+
+use super::WorkbenchApp;
+use super::status::{Cause, StatusKind};
 
 /// The paths a screenshot was written to.
 #[derive(Clone, Debug, PartialEq)]
@@ -154,6 +160,112 @@ fn write_all(mut file: File, bytes: &[u8], path: &Path) -> anyhow::Result<()> {
 
 fn write_error(path: &Path, e: io::Error) -> anyhow::Error {
     anyhow::anyhow!("could not write '{}': {e}", path.display())
+}
+
+impl WorkbenchApp {
+    /// Saves the current full-resolution image on a short-lived thread (PNG encoding of a large
+    /// image takes longer than a UI frame).
+    pub(super) fn start_screenshot(&mut self, ctx: &egui::Context) {
+        let Some(full) = self.current_full_frame() else {
+            return;
+        };
+        let mut settings = full.settings.clone();
+        // What is on screen: the denoised image when there is one, and settings that say so
+        // (with the samples it was made from), so that they reproduce it.
+        let image = match &full.denoised {
+            Some((denoised, samples)) => {
+                settings.samples_per_pixel = *samples;
+                settings.denoise = true;
+                Arc::clone(denoised)
+            }
+            None => {
+                settings.samples_per_pixel = full.samples;
+                Arc::clone(&full.image)
+            }
+        };
+        // The display in force now, which the screenshot's PNG is shown through.
+        settings.display = self.state.settings.display;
+        // While the student's equations are shown: their image, with the settings (and
+        // equations) that make it again.
+        let (image, settings) = self
+            .equations
+            .screenshot(&self.state.settings)
+            .unwrap_or((image, settings));
+        let request = Request {
+            folder: self.state.screenshot_folder.clone(),
+            image,
+            settings,
+            sample_target: full.target,
+            time: chrono::Local::now(),
+        };
+        let (sender, receiver) = mpsc::channel();
+        let repaint = ctx.clone();
+        let spawned = std::thread::Builder::new()
+            .name("raylab-screenshot".to_owned())
+            .stack_size(raylab_core::base::memory::WORKER_STACK_BYTES)
+            .spawn(move || {
+                let result = save(&request).map_err(|e| format!("{e:#}"));
+                let _ = sender.send(result);
+                repaint.request_repaint();
+            });
+        match spawned {
+            Ok(_) => {
+                self.screenshots_saving.push(receiver);
+                self.set_status(StatusKind::Info, "Saving the screenshot...");
+            }
+            Err(e) => self.set_status(
+                StatusKind::Error,
+                format!("could not start saving the screenshot: {e}"),
+            ),
+        }
+    }
+
+    pub(super) fn receive_screenshots(&mut self) {
+        let mut results = Vec::new();
+        self.screenshots_saving
+            .retain(|receiver| match receiver.try_recv() {
+                Ok(result) => {
+                    results.push(result);
+                    false
+                }
+                Err(TryRecvError::Empty) => true,
+                Err(TryRecvError::Disconnected) => {
+                    results.push(Err("the screenshot thread stopped".to_owned()));
+                    false
+                }
+            });
+        for result in results {
+            match result {
+                Ok(saved) => {
+                    let shown = std::fs::canonicalize(&saved.png).unwrap_or(saved.png);
+                    let (kind, early) = if saved.samples < saved.target {
+                        (
+                            StatusKind::Notice,
+                            format!(
+                                " at {}/{} samples, before the target: save again when the \
+                                 progress bar is full for the converged image",
+                                saved.samples, saved.target
+                            ),
+                        )
+                    } else {
+                        (StatusKind::Info, String::new())
+                    };
+                    self.set_status(
+                        kind,
+                        format!(
+                            "Saved {}{early} (its settings inside it, and beside it as .json)",
+                            shown.display()
+                        ),
+                    );
+                }
+                Err(e) if !self.state.screenshot_folder.is_dir() => {
+                    let folder = self.state.screenshot_folder.clone();
+                    self.set_error(Cause::MissingFolder(folder), e);
+                }
+                Err(e) => self.set_status(StatusKind::Error, e),
+            }
+        }
+    }
 }
 
 #[cfg(test)]

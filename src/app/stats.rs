@@ -281,6 +281,29 @@ impl Stats {
     }
 }
 
+impl Stats {
+    /// One line a UI frame for scripts (`RAYLAB_LOG_FRAMES`), its fields in a fixed order;
+    /// `since_start_ms` is the time since the window opened.
+    pub fn frame_log_line(&self, since_start_ms: f64) -> String {
+        let (change_ms, change_frames) = self.change_to_image.unwrap_or((f64::NAN, 0));
+        format!(
+            "raylab-frame ui_ms={:.2} frame_cpu_ms={:.2} samples={} target={} preview={} \
+             t_ms={:.1} change_to_image_ms={:.1} change_frames={} full_pass_ms={:.1} \
+             denoised={}",
+            self.ui_frame_ms,
+            self.frame_cpu_ms.unwrap_or(f64::NAN),
+            self.samples,
+            self.target,
+            self.is_preview,
+            since_start_ms,
+            change_ms,
+            change_frames,
+            self.full_pass.map_or(f64::NAN, |(ms, _, _)| ms),
+            self.denoised.map_or(0, |(samples, _)| samples),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,6 +7,8 @@
 use std::sync::Arc;
 
 use eframe::egui;
+use raylab_core::RenderSettings;
+use raylab_core::shading::light::LightKind;
 
 /// Magnification from which pixels are shown as blocks (nearest filtering).
 const NEAREST_FROM_SCALE: f32 = 2.0;
@@ -317,6 +319,48 @@ pub fn fit_rect(available: egui::Rect, image: egui::Vec2) -> egui::Rect {
     }
     let scale = (available.width() / image.x).min(available.height() / image.y);
     egui::Rect::from_center_size(available.center(), image * scale)
+}
+
+/// Where the light appears in the image, as a fraction of its width and height, or `None` when
+/// it is behind the camera (the viewport also hides it off the image).
+pub fn light_marker(settings: &RenderSettings) -> Option<egui::Vec2> {
+    let camera = &settings.camera;
+    let (px, py, _) = camera.project(settings.light.position)?;
+    Some(egui::vec2(
+        px / camera.width as f32,
+        py / camera.height as f32,
+    ))
+}
+
+/// A spot light's cone where the camera sees it ([`SpotMarker`]): its aim, and 24
+/// points of the circle of the cutoff's radius about the aim, square to the spot's axis (each
+/// left out when behind the camera); `None` for the other lights.
+pub fn spot_marker(settings: &RenderSettings) -> Option<SpotMarker> {
+    let LightKind::Spot(cone) = settings.light.kind else {
+        return None;
+    };
+    let camera = &settings.camera;
+    let fraction = |p| {
+        let (px, py, _) = camera.project(p)?;
+        Some(egui::vec2(
+            px / camera.width as f32,
+            py / camera.height as f32,
+        ))
+    };
+    let to_aim = cone.aim - settings.light.position;
+    let axis = to_aim.normalize_or_zero();
+    let radius = to_aim.length() * cone.cutoff.tan();
+    let (t1, t2) = raylab_core::base::sampling::orthonormal_basis(axis);
+    let rim = (0..24)
+        .filter_map(|k| {
+            let a = k as f32 * std::f32::consts::TAU / 24.0;
+            fraction(cone.aim + radius * (a.cos() * t1 + a.sin() * t2))
+        })
+        .collect();
+    Some(SpotMarker {
+        aim: fraction(cone.aim),
+        rim,
+    })
 }
 
 #[cfg(test)]

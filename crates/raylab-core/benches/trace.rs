@@ -5,9 +5,9 @@
 //! (all cores); set RAYON_NUM_THREADS=2 to match PERFORMANCE.md ("How to measure").
 //!
 //! `cargo bench -- cornell` runs one scene's group. The `degenerate` group times the inputs
-//! that once took minutes (a million copies of one triangle, built and loaded from an OBJ
-//! file; 100,000 faces around one vertex, smoothed): each should take well under a second in
-//! release, linear in its size. The tests check what these inputs give, not how fast.
+//! whose cost must stay linear in their size (a million copies of one triangle, built and
+//! loaded from an OBJ file; 100,000 faces around one vertex, smoothed). The tests check what
+//! these inputs give, not how fast.
 
 use std::hint::black_box;
 use std::time::Duration;

@@ -168,7 +168,8 @@ fn x86_branches(bits: &[u8]) -> u64 {
 mod x86 {
     use super::*;
 
-    /// Iterations of each arithmetic kernel: about 2 ms each at 4 GHz.
+    /// Iterations of each arithmetic kernel: enough that each run is far longer than the
+    /// clock's resolution.
     const ITERATIONS: u64 = 1_000_000;
 
     /// Eight dependent adds an iteration: one a cycle on any x86 core, so the time is the clock.
@@ -338,8 +339,7 @@ mod x86 {
     }
 
     /// Four integer adds, two 512-bit integer adds and two loads, all independent, over and
-    /// over: as many instructions a cycle as the core dispatches to one thread (eight at most on
-    /// Zen 5 running one thread).
+    /// over: as many instructions a cycle as the core dispatches to one thread.
     #[target_feature(enable = "avx512f")]
     fn ipc_ns(buffer: &[u64]) -> f64 {
         let start = Instant::now();

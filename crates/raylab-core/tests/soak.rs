@@ -20,8 +20,8 @@ use raylab_core::transport::progressive::{Controller, Frame};
 use raylab_core::transport::render::render;
 use raylab_core::{MaterialPreset, RenderSettings, Shading, Stage};
 
-/// How long the worker may take to finish the last job (a 128² path-traced image of a few
-/// samples takes well under a second, even in the debug build).
+/// How long the worker may take to finish the last job: far more than a 128² path-traced image
+/// of a few samples needs, even in the debug build.
 const TIMEOUT: Duration = Duration::from_secs(120);
 
 /// The most the resident set may grow from the first third of the run to the last: a leak of

@@ -9,7 +9,7 @@ use super::*;
 
 /// At the window's default size the lab's 512² image is shown 720 points tall; opening the
 /// inspector and pinning a pixel leaves it so, and the camera ray's equation wraps over at most
-/// three rows (it took six in a 230-point column).
+/// three rows (in a narrow column it would take twice as many).
 #[test]
 fn the_inspector_opens_beside_the_image_keeping_its_size_and_its_lines_readable() {
     let mut state = WorkbenchState::default();
@@ -121,8 +121,8 @@ fn with_one_sample_the_inspector_gives_rs_8_bits_through_the_display() {
     settle(&mut h);
 }
 
-/// A smaller resolution keeps the inspected pixel on the same spot (it used to stay at its old
-/// coordinates, outside the image, until another click).
+/// A smaller resolution keeps the inspected pixel on the same spot, not at its old coordinates
+/// (outside the smaller image).
 #[test]
 fn a_new_resolution_keeps_the_inspected_pixel_on_its_spot() {
     let mut state = WorkbenchState::default();

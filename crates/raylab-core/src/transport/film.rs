@@ -508,9 +508,8 @@ pub struct FilmSums<'a> {
 
 /// The samples whose features a film records ([`Film::with_features`]), the first of its
 /// passes. Recording costs a path pass a second look at each camera ray's first surface
-/// (PERFORMANCE.md, "Design choices and what each buys"); the features of 64 samples are enough for the
-/// denoiser to match 1,024 raw samples at 64 (PERFORMANCE.md, "The denoiser"), and later
-/// samples would add little.
+/// (PERFORMANCE.md); the features of the first 64 samples are what the denoiser needs (its
+/// tests and PERFORMANCE.md, "The denoiser"), and later samples would add little.
 pub const FEATURE_SAMPLES_RECORDED: u32 = 64;
 
 /// How far the accumulated image may still be from the converged one, estimated from the

@@ -474,8 +474,8 @@ impl<'a> Rows<'a> {
 /// The jittered image points of samples `samples.1[i]` of pixels `samples.0[i]` of row `y`,
 /// one per slot of `px` and `py`: [`image_plane_point`] at [`pixel_offset`], sample by sample;
 /// and, if `rngs` is not empty, each sample's generator as [`pixel_sample`] leaves it (the
-/// path tracer's bounces draw from it). The offsets are integer hashing (64-bit multiplies)
-/// and took a fifth of a jittered lab pass's instructions one pixel at a time; compiled for
+/// path tracer's bounces draw from it). The offsets are integer hashing (64-bit multiplies),
+/// a large part of a jittered lab pass's work one pixel at a time; compiled for
 /// AVX-512 the same loop is done sixteen samples at once (the same bits: the hashing is
 /// integer arithmetic and each float is made by the same conversion;
 /// `jittered_points_are_the_same_on_every_isa`).

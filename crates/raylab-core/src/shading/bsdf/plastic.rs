@@ -328,7 +328,7 @@ impl RoughPlastic {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{
+    use super::super::checks::{
         assert_sampling_matches_pdf, close, close3, dir, integrate, rough_albedo, u2,
     };
     use super::*;

@@ -692,7 +692,7 @@ mod tests {
     use super::*;
     use crate::shapes::scene::cornell_box;
     use crate::teaching::check::mistakes::{self, Mistake, Recombined};
-    use crate::teaching::sandbox::compile;
+    use crate::teaching::sandbox::{compile, examples};
     use crate::transport::render::render as render_figure;
     use crate::transport::settings::Shading;
     use std::f32::consts::PI as PI_F32;
@@ -728,30 +728,21 @@ mod tests {
         );
     }
 
-    /// The lab's quantities, typed as a student would write them, for `stage`'s figure.
-    fn lab_text(stage: Stage) -> String {
-        let (shadows, _) = stage.preset_switches();
-        let mut text = String::from(
-            "d = right * (x + 0.5 - W / 2) + down * (y + 0.5 - H / 2) + forward * focalLength\n\
-             vec3 r = lightPos - position; // from the surface to the light\n\
-             float r2 = dot(r, r);\n",
-        );
-        if shadows {
-            text.push_str("shadowed = shadowDistance < length(lightPos - shadowStart)\n");
-        } else {
-            text.push_str("shadowed = false\n");
+    /// The lab's quantities as [`examples::lab_text`] types them, for `stage`'s figure: `d`,
+    /// `D` and `R`, and `shadowed` when the figure has shadows (a `shadowed` written is used
+    /// whatever the switch; unwritten, it is the lab's, off without shadows).
+    fn lab_file(stage: Stage) -> String {
+        let shading = Shading::for_stage(stage);
+        let mut quantities = vec![Quantity::Direction];
+        if shading.shadows {
+            quantities.push(Quantity::Shadowed);
         }
-        text.push_str(
-            "D = shadowed ? vec3(0) : lightColor * max(dot(r / sqrt(r2), normal), 0.0f) / (4 * M_PI * r2)\n",
-        );
-        text.push_str(match stage {
-            Stage::Flat => "R = color",
-            Stage::Incoming => "R = D + indirectLight",
-            Stage::Direct | Stage::Shadows | Stage::Lab | Stage::Path => {
-                "R = color * (D + indirectLight)"
-            }
-        });
-        text
+        quantities.extend([Quantity::Direct, Quantity::Value]);
+        quantities
+            .into_iter()
+            .map(|q| examples::lab_text(q, &shading))
+            .collect::<Vec<_>>()
+            .join("\n")
     }
 
     /// The lab's own equations typed in the language give figures 2 to 7 within 10⁻⁶
@@ -761,9 +752,10 @@ mod tests {
         let scene = cornell_box();
         for stage in Stage::LAB {
             let s = settings(stage, 64);
-            let text = lab_text(stage);
+            let text = lab_file(stage);
             let equations = compile(&text).unwrap_or_else(|e| panic!("{text}: {e:?}"));
-            assert_eq!(equations.written().count(), 4);
+            let shadowed = usize::from(Shading::for_stage(stage).shadows);
+            assert_eq!(equations.written().count(), 3 + shadowed);
             let got = render(&scene, &s, &equations);
             assert_eq!(got.non_finite, 0);
             let figure = render_figure(&scene, &s);
@@ -771,35 +763,6 @@ mod tests {
             // With nothing written, the lab's own quantities: the figure bit for bit.
             let lab = render(&scene, &s, &Equations::lab());
             assert_eq!(lab.image, figure, "{stage}");
-        }
-    }
-
-    /// Each formula mistake of the catalogue, typed, as `check` renders it.
-    fn mistake_text(m: Mistake) -> Option<&'static str> {
-        match m {
-            Mistake::No4Pi => Some(
-                "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * max(dot(normalize(r), normal), 0.0) / dot(r, r)",
-            ),
-            Mistake::InverseR => Some(
-                "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * max(dot(r / length(r), normal), 0.0) / (4 * pi * length(r))",
-            ),
-            Mistake::UnclampedCos => Some(
-                "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * dot(r / length(r), normal) / (4 * pi * dot(r, r))",
-            ),
-            Mistake::FlippedNormal => Some(
-                "vec3 r = lightPos - position;\nvec3 n = -normal;\nD = shadowed ? vec3(0) : lightColor * max(dot(r / length(r), n), 0.0) / (4 * pi * dot(r, r))",
-            ),
-            Mistake::NoRho => Some("R = D + indirectLight"),
-            Mistake::IndirectOutsideRho => Some("R = color * D + indirectLight"),
-            Mistake::ShadowAcne => Some("shadowStart = position"),
-            Mistake::ShadowBeyondLight => Some("shadowed = shadowDistance < 1e30"),
-            Mistake::ShadowDropsIndirect => {
-                Some("R = shadowed ? vec3(0) : color * (D + indirectLight)")
-            }
-            Mistake::PixelCorner => {
-                Some("d = right * (x - W / 2) + down * (y - H / 2) + forward * focalLength")
-            }
-            _ => None,
         }
     }
 
@@ -812,7 +775,7 @@ mod tests {
         let s = settings(Stage::Lab, 64);
         let mut typed = 0;
         for m in Mistake::catalogue() {
-            let Some(text) = mistake_text(m) else {
+            let Some((_, text)) = examples::mistake_text(m) else {
                 assert_ne!(m.kind(), mistakes::Kind::Formula, "{m} has no text");
                 continue;
             };
@@ -855,7 +818,7 @@ mod tests {
         let s = settings(Stage::Lab, 48);
         let text = format!(
             "{}\nlet k = pow(abs(dot(normal, normalize(position))), 0.7)\nR = mix(color * (D + indirectLight), vec3(k), 0.3)",
-            lab_text(Stage::Lab)
+            lab_file(Stage::Lab)
                 .lines()
                 .filter(|l| !l.starts_with('R'))
                 .collect::<Vec<_>>()
@@ -909,13 +872,13 @@ mod tests {
         let d = "d = y < 4 ? -forward : (y < 6 ? vec3(0) : right * (x + 0.5 - W / 2) + \
                  down * (y + 0.5 - H / 2) + forward * focalLength)";
         let texts = [
-            lab_text(Stage::Lab).replace(
+            lab_file(Stage::Lab).replace(
                 "d = right * (x + 0.5 - W / 2) + down * (y + 0.5 - H / 2) + forward * focalLength",
                 d,
             ),
             format!(
                 "{}\nshadowStart = position + normal * 1e-3",
-                lab_text(Stage::Lab)
+                lab_file(Stage::Lab)
             ),
             "let k = position.x > 0 ? 1 : 0 / 0\nR = color * (D + indirectLight) * k".to_owned(),
             String::new(),
@@ -979,8 +942,15 @@ mod tests {
         let s = settings(Stage::Lab, 32);
         // A lit pixel of the floor.
         let (x, y) = (8, 28);
-        let text = lab_text(Stage::Lab);
-        let equations = compile(&text).unwrap();
+        // The lab's d, shadowed, D and R as a student may type them in C++: D over a named
+        // r2, with `M_PI` and `0.0f`, so that named parts show.
+        let text = "d = right * (x + 0.5 - W / 2) + down * (y + 0.5 - H / 2) + forward * focalLength\n\
+                    vec3 r = lightPos - position; // from the surface to the light\n\
+                    float r2 = dot(r, r);\n\
+                    shadowed = shadowDistance < length(lightPos - shadowStart)\n\
+                    D = shadowed ? vec3(0) : lightColor * max(dot(r / sqrt(r2), normal), 0.0f) / (4 * M_PI * r2)\n\
+                    R = color * (D + indirectLight)";
+        let equations = compile(text).unwrap();
         let e = record(&scene, &s, &equations)
             .explain(&equations, x, y)
             .unwrap();
@@ -1046,10 +1016,8 @@ mod tests {
             "{lines}"
         );
 
-        let no_4pi = compile(
-            "vec3 r = lightPos - position;\nD = shadowed ? vec3(0) : lightColor * max(dot(normalize(r), normal), 0.0) / dot(r, r)",
-        )
-        .unwrap();
+        let (_, typed) = examples::mistake_text(Mistake::No4Pi).unwrap();
+        let no_4pi = compile(typed).unwrap();
         let e = record(&scene, &s, &no_4pi).explain(&no_4pi, x, y).unwrap();
         let d = e.hits[0].quantities.iter().find(|q| q.name == "D").unwrap();
         let (Some(Value::Vec3(yours)), Value::Vec3(lab)) = (d.yours, d.lab) else {

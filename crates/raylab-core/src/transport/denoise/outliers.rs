@@ -47,8 +47,8 @@ use crate::transport::film::{Film, FilmSums, Image, channel_mean, mean_and_varia
 pub const OUTLIER_DEVIATIONS: f64 = 3.0;
 
 /// The samples a pixel needs before its brightest can be judged against the others: with
-/// fewer, their spread is too uncertain, and at 16 samples the split (from 8) moved the 64²
-/// box's denoised mean by more than 0.5 %.
+/// fewer, their spread is too uncertain: split at 16 samples, the box's denoised mean moves
+/// by more than the denoiser's tests allow (0.5 %).
 pub const OUTLIER_MIN_SAMPLES: u32 = 32;
 
 /// The spread's à-trous steps: three passes of the 3 × 3 binomial kernel, taps 1, 2 and 4

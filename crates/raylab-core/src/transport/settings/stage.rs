@@ -142,7 +142,7 @@ named_enum!(Caustics as "caustics" {
 /// Photons shot from the light each pass, by default.
 pub const DEFAULT_PHOTONS: u32 = 100_000;
 
-/// The most photons a pass may shoot: ten million take about a second a pass on two cores.
+/// The most photons a pass may shoot: a bound on a pass's time and its photon map's memory.
 pub const MAX_PHOTONS: u32 = 10_000_000;
 
 /// What to compute at a hit: the stage and its switches.

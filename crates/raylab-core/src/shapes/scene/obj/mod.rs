@@ -249,8 +249,8 @@ impl DroppedFaces {
 ///   different face (its other side) and is kept too.
 ///
 /// Besides costing memory, copies of a face meet at the same positions, and every copy is a
-/// candidate for every ray that reaches one: a file of a million copies of one triangle took
-/// minutes to load and would take as long to trace.
+/// candidate for every ray that reaches one: a file of many copies of one triangle would be
+/// slow to load and as slow to trace.
 pub fn drop_unseen_faces(mesh: &mut Mesh) -> DroppedFaces {
     use std::collections::HashSet;
     let key = |i: u32| {

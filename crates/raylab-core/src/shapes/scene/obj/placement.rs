@@ -275,9 +275,9 @@ pub fn smooth_normals(
 
 /// Above this many faces around one position, [`smooth_normals`] groups them by normal; above
 /// this many distinct normals, it averages them all, without the crease test. Averaging each
-/// corner over every face around its position costs the square of their number: a file of a
-/// million copies of one triangle (a million faces around each of three positions) took
-/// minutes. No real surface has more than a few dozen differently facing faces meeting at a
+/// corner over every face around its position costs the square of their number, out of reach
+/// for a file of a million copies of one triangle (a million faces around each of three
+/// positions). No real surface has more than a few dozen differently facing faces meeting at a
 /// point (a 64-sided cone's apex is one), so real models are smoothed exactly as described.
 pub const MAX_FAN: usize = 64;
 

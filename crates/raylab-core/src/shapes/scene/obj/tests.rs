@@ -331,8 +331,8 @@ fn degenerate_and_duplicate_faces_are_left_out_and_counted() {
 /// Around a position with more than `MAX_FAN` faces: copies of two faces give each corner
 /// the normal the two faces alone give it (equal normals grouped, their angles summed), and
 /// a fan of many different faces is averaged whole. Each corner there costs the number of
-/// distinct normals, not of faces, which keeps the whole linear (a million faces around one
-/// position took minutes): the copies make two groups, the fan one sum. How fast it runs is
+/// distinct normals, not of faces, which keeps the whole linear: the copies make two groups,
+/// the fan one sum. How fast it runs is
 /// the `degenerate` benchmark's to measure (benches/trace.rs), not a time limit here.
 #[test]
 fn many_faces_around_one_position_are_smoothed_in_linear_time() {
