@@ -4,8 +4,8 @@ use std::io::Write as _;
 use std::path::PathBuf;
 
 use super::equations;
-use super::options::{Pixel, RenderOptions};
-use super::parse::{parse_on_off, parse_pixel};
+use super::options::RenderOptions;
+use super::parse::{Pixel, parse_on_off, parse_pixel};
 use super::pool::thread_pool;
 use super::terminal::printable_lines;
 use anyhow::Context as _;

@@ -4,9 +4,9 @@
 use std::path::PathBuf;
 
 use super::parse::{
-    parse_bounces, parse_colour, parse_degrees, parse_exposure, parse_finite, parse_indirect,
-    parse_non_negative, parse_on_off, parse_part_material, parse_positive, parse_samples,
-    parse_side, parse_vec3, part_material_help,
+    Bounces, Indirect, parse_bounces, parse_colour, parse_degrees, parse_exposure, parse_finite,
+    parse_indirect, parse_non_negative, parse_on_off, parse_part_material, parse_positive,
+    parse_samples, parse_side, parse_vec3, part_material_help,
 };
 use super::terminal::print_error_line;
 use clap::Args;
@@ -22,10 +22,6 @@ use raylab_core::{Camera, MaterialPreset, RenderSettings, Shading, Stage};
 
 /// The image's width and height when not given: the lab's 512 × 512 figures.
 pub(super) const DEFAULT_SIDE: u32 = 512;
-
-/// The `--pixel` value.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Pixel(pub u32, pub u32);
 
 /// The options that set what a file given with `--settings` or `--scene-file` holds: either
 /// file takes them all, so none combines with it.
@@ -255,17 +251,6 @@ pub struct RenderOptions {
     /// core].
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024), value_name = "N")]
     pub threads: Option<u16>,
-}
-
-/// The `--bounces` value: a cap, or unlimited.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Bounces(pub Option<u32>);
-
-/// The `--indirect` value: a constant N, or off.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Indirect {
-    Off,
-    Constant(f32),
 }
 
 impl RenderOptions {

@@ -1,11 +1,25 @@
 //! The options' values as clap reads them: numbers, points, colours, angles, pixels,
 //! `--material`.
 
-use super::options::{Bounces, Indirect, Pixel};
 use glam::Vec3;
 use raylab_core::shading::material::MaterialKind;
 use raylab_core::shapes::scene::spec::{BoxPart, PartMaterial};
 use raylab_core::transport::settings::{MAX_EXPOSURE, MAX_IMAGE_SIDE, MAX_SAMPLES};
+
+/// The `--pixel` value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pixel(pub u32, pub u32);
+
+/// The `--bounces` value: a cap, or unlimited.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounces(pub Option<u32>);
+
+/// The `--indirect` value: a constant N, or off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Indirect {
+    Off,
+    Constant(f32),
+}
 
 pub(super) fn parse_finite(s: &str) -> Result<f32, String> {
     finite(s)

@@ -10,6 +10,7 @@ use raylab_core::transport::settings::{Caustics, DEFAULT_PHOTONS};
 use raylab_core::{MaterialPreset, RenderSettings, Stage};
 
 use super::options::*;
+use super::parse::*;
 use super::terminal::*;
 use super::*;
 
