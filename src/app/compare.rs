@@ -22,7 +22,7 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use eframe::egui;
-use raylab_core::shading::light::{LightKind, LightSpec, SpotCone};
+use raylab_core::shading::light::LightSpec;
 use raylab_core::shapes::scene::Scene;
 use raylab_core::transport::progressive::{
     Controller, ControllerError, Frame, WorkerError, catch_panic,
@@ -701,30 +701,12 @@ pub fn differences(a: &RenderSettings, b: &RenderSettings) -> Vec<&'static str> 
     differ("light power", *power != b.light.power);
     differ("light colour", *colour != b.light.colour);
     differ("light shape", kind.shape() != b.light.kind.shape());
-    match (*kind, b.light.kind) {
-        (LightKind::Sphere { radius }, LightKind::Sphere { radius: other }) => {
-            differ("light radius", radius != other)
+    // The same kind: each parameter by the name errors give it (`light_kinds!`); another
+    // kind is named above.
+    if kind.shape() == b.light.kind.shape() {
+        for ((p, value), other) in kind.params_and_values().zip(b.light.kind.values()) {
+            differ(p.noun, value != other);
         }
-        (LightKind::Quad { side }, LightKind::Quad { side: other }) => {
-            differ("light side", side != other)
-        }
-        (LightKind::Spot(cone), LightKind::Spot(other)) => {
-            let SpotCone { aim, cutoff, beam } = cone;
-            differ("spot aim", aim != other.aim);
-            differ("spot cutoff", cutoff != other.cutoff);
-            differ("spot beam", beam != other.beam);
-        }
-        // Different shapes, named above; the point light has no parameters.
-        (
-            LightKind::Point
-            | LightKind::Sphere { .. }
-            | LightKind::Quad { .. }
-            | LightKind::Spot(_),
-            LightKind::Point
-            | LightKind::Sphere { .. }
-            | LightKind::Quad { .. }
-            | LightKind::Spot(_),
-        ) => {}
     }
     let Shading {
         stage,
@@ -965,6 +947,29 @@ mod tests {
         assert_eq!(differences(&a, &c), ["resolution"]);
         c.camera.yaw = 0.1;
         assert_eq!(differences(&a, &c), ["resolution", "camera"]);
+    }
+
+    /// Each parameter of each light kind (`light_kinds!`) is noticed, by the name errors give
+    /// it; another kind is "light shape".
+    #[test]
+    fn every_light_parameter_is_noticed() {
+        use raylab_core::shading::light::{LightKind, LightShape, ParamValue};
+        for shape in LightShape::ALL {
+            let mut a = RenderSettings::default();
+            a.light.kind = LightKind::of_shape(shape);
+            if shape != LightShape::default() {
+                assert_eq!(differences(&RenderSettings::default(), &a), ["light shape"]);
+            }
+            for (p, value) in a.light.kind.params_and_values() {
+                let mut b = a.clone();
+                let other = match value {
+                    ParamValue::Number(x) => ParamValue::Number(x * 0.5),
+                    ParamValue::Point(v) => ParamValue::Point(v + glam::Vec3::X * 0.1),
+                };
+                b.light.kind.set(p.name, other).unwrap();
+                assert_eq!(differences(&a, &b), [p.noun], "{shape} {}", p.name);
+            }
+        }
     }
 
     #[test]

@@ -7,7 +7,7 @@
 use eframe::egui;
 use raylab_core::base::camera;
 use raylab_core::base::named::NamedEnum;
-use raylab_core::shading::light::{LightKind, LightShape, SpotCone};
+use raylab_core::shading::light::{LightKind, LightShape, ParamType, ParamValue};
 use raylab_core::shading::material::MIN_ROUGHNESS;
 use raylab_core::shading::material::TexturePreset;
 use raylab_core::shapes::scene::SceneChoice;
@@ -33,9 +33,9 @@ pub const MAX_BOUNCES_UI: u32 = 64;
 pub const MAX_APERTURE_UI: f32 = 0.3;
 /// The largest light radius the slider offers, in scene units.
 pub const MAX_LIGHT_RADIUS_UI: f32 = 0.5;
-/// The spot's cutoff slider's range, in degrees (the settings allow up to, not including, 90°).
+/// The largest angle a light's angle slider offers (the spot's cutoff), in degrees: the
+/// settings allow up to, not including, 90°.
 pub const MAX_SPOT_CUTOFF_UI: f64 = 89.0;
-const MIN_SPOT_CUTOFF_UI: f64 = 0.5;
 /// The exposure slider's range either way, in stops.
 pub const MAX_EXPOSURE_UI: f32 = 10.0;
 /// The most render threads the panel offers.
@@ -279,14 +279,13 @@ fn figure_differences(settings: &RenderSettings) -> Vec<String> {
         if s.indirect && figure_n && s.indirect_light != raylab_core::Shading::LAB_INDIRECT_LIGHT {
             differs.push("another N".to_owned());
         }
-        match settings.light.kind {
-            LightKind::Point => {}
-            LightKind::Sphere { .. } | LightKind::Quad { .. } => {
-                if settings.light.is_area() {
-                    differs.push("an area light".to_owned());
-                }
-            }
-            LightKind::Spot(_) => differs.push("a spot light".to_owned()),
+        // Any light but the lab's point: an area light, or another kind by its name.
+        if settings.light.is_area() {
+            differs.push("an area light".to_owned());
+        } else if settings.light.kind.size_param().is_none()
+            && !settings.light.kind.params().is_empty()
+        {
+            differs.push(format!("a {} light", settings.light.kind.name()));
         }
     }
     if settings.scene != SceneChoice::Cornell {
@@ -731,89 +730,71 @@ pub fn light_ui(ui: &mut egui::Ui, light: &mut LightSpec) {
     if shape != light.kind.shape() {
         // An area light keeps its size from one shape to the other.
         let size = light.kind.size();
-        light.kind = match shape {
-            LightShape::Sphere | LightShape::Quad if size > 0.0 => LightKind::sized(shape, size),
-            LightShape::Point | LightShape::Sphere | LightShape::Quad | LightShape::Spot => {
-                LightKind::of_shape(shape)
-            }
+        light.kind = match LightKind::of_shape(shape).size_param() {
+            Some(_) if size > 0.0 => LightKind::sized(shape, size),
+            Some(_) | None => LightKind::of_shape(shape),
         };
     }
-    match &mut light.kind {
-        LightKind::Spot(cone) => spot_ui(ui, cone),
-        kind @ (LightKind::Point | LightKind::Sphere { .. } | LightKind::Quad { .. }) => {
-            size_ui(ui, kind)
-        }
-    }
+    light_params_ui(ui, &mut light.kind);
 }
 
-/// The area light's size: the sphere's radius or the square's side (a size given to the point
-/// light makes it the sphere it always meant).
-fn size_ui(ui: &mut egui::Ui, kind: &mut LightKind) {
-    let quad = matches!(kind, LightKind::Quad { .. });
-    let size_label = if quad { "Light side" } else { "Light radius" };
-    let mut size = kind.size();
-    ui.add(
-        egui::Slider::new(&mut size, 0.0..=MAX_LIGHT_RADIUS_UI)
-            .custom_parser(typed_number(size_label, 0.0, MAX_LIGHT_RADIUS_UI))
-            .clamping(egui::SliderClamping::Edits)
-            .max_decimals(3)
-            .text(size_label),
-    )
-    .on_hover_text(
-        "0 is the lab's point light (hard shadows); above 0 an area light of the same power (a \
-         sphere of this radius, or a square of this side), whose shadows are soft: each sample \
-         sees a point of it, and the samples average to the fraction of the light a point sees",
-    );
-    if size != kind.size() {
-        *kind = match kind {
-            LightKind::Quad { .. } => LightKind::Quad { side: size },
-            LightKind::Point | LightKind::Sphere { .. } | LightKind::Spot(_) => {
-                LightKind::Sphere { radius: size }
-            }
-        };
-    }
-}
-
-/// A spot light's aim and its cone's angles, in degrees (the beam never wider than the cutoff).
-fn spot_ui(ui: &mut egui::Ui, cone: &mut SpotCone) {
-    position_slider(ui, &mut cone.aim.x, -1.0..=1.0, "Aim x");
-    position_slider(ui, &mut cone.aim.y, -1.0..=1.0, "Aim y");
-    position_slider(ui, &mut cone.aim.z, -1.0..=1.0, "Aim z");
-    let angle = |ui: &mut egui::Ui, value: &mut f32, max: f64, label: &str, hover: &str| {
-        let mut degrees = camera::degrees(*value);
-        ui.add(
-            egui::Slider::new(&mut degrees, 0.0..=max)
-                .custom_parser(typed_number(label, 0.0, max as f32))
-                .clamping(egui::SliderClamping::Always)
-                .max_decimals(1)
-                .suffix("°")
-                .text(label),
-        )
-        .on_hover_text(hover);
-        if degrees != camera::degrees(*value) {
-            *value = camera::radians(degrees);
-        }
+/// The light kind's parameters (`light_kinds!`), each by its type: a size as a slider in scene
+/// units, a point as three coordinate sliders, an angle as a slider in degrees; then the
+/// kind's own rules ([`LightKind::tidy`]: the spot's beam never wider than its cutoff). The
+/// point light, of no parameters, shows the first sized kind's size at 0 (the sphere's radius):
+/// a size above 0 makes it that light, the one it always meant.
+fn light_params_ui(ui: &mut egui::Ui, kind: &mut LightKind) {
+    let first_sized = LightShape::ALL
+        .iter()
+        .map(|&s| LightKind::sized(s, 0.0))
+        .find(|k| k.size_param().is_some());
+    let mut edited = match (kind.params().is_empty(), first_sized) {
+        (true, Some(sized)) => sized,
+        (true, None) | (false, _) => *kind,
     };
-    angle(
-        ui,
-        &mut cone.cutoff,
-        MAX_SPOT_CUTOFF_UI,
-        "Spot cutoff",
-        "No light beyond this angle from the spot's axis",
-    );
-    if cone.cutoff <= 0.0 {
-        cone.cutoff = camera::radians(MIN_SPOT_CUTOFF_UI);
+    for (p, value) in edited.params_and_values() {
+        let value = match value {
+            ParamValue::Number(mut x) => {
+                let (degrees, shown) = match p.ty {
+                    ParamType::Angle => (true, camera::degrees(x)),
+                    ParamType::Size | ParamType::Point => (false, f64::from(x)),
+                };
+                let mut edit = shown;
+                let max = match degrees {
+                    true => p.bounds.hi.min(MAX_SPOT_CUTOFF_UI),
+                    false => f64::from(MAX_LIGHT_RADIUS_UI),
+                };
+                let slider = egui::Slider::new(&mut edit, 0.0..=max)
+                    .custom_parser(typed_number(p.label, 0.0, max as f32))
+                    .text(p.label);
+                let slider = match degrees {
+                    true => slider
+                        .clamping(egui::SliderClamping::Always)
+                        .max_decimals(1)
+                        .suffix("°"),
+                    false => slider.clamping(egui::SliderClamping::Edits).max_decimals(3),
+                };
+                ui.add(slider).on_hover_text(p.what);
+                if edit != shown {
+                    x = p.stored(edit);
+                }
+                ParamValue::Number(x)
+            }
+            ParamValue::Point(v) => {
+                let mut xyz = v.to_array();
+                for (axis, c) in ["x", "y", "z"].into_iter().zip(&mut xyz) {
+                    position_slider(ui, c, -1.0..=1.0, &format!("{} {axis}", p.label));
+                }
+                ParamValue::Point(glam::Vec3::from_array(xyz))
+            }
+        };
+        // The parameter is the kind's own, of the value's type: this cannot fail.
+        let _ = edited.set(p.name, value);
     }
-    let cutoff = camera::degrees(cone.cutoff);
-    angle(
-        ui,
-        &mut cone.beam,
-        cutoff,
-        "Spot beam",
-        "Full intensity within this angle of the axis, falling linearly in the angle to 0 at \
-         the cutoff",
-    );
-    cone.beam = cone.beam.min(cone.cutoff);
+    edited.tidy();
+    if edited != *kind && !(kind.params().is_empty() && edited.size() == 0.0) {
+        *kind = edited;
+    }
 }
 
 /// The lab walk-through: the current step's explanation and equation, Previous / Next.

@@ -120,15 +120,14 @@ pub fn refuse_unless_lab(settings: &RenderSettings, view: View) -> anyhow::Resul
              leave out --samples"
         );
     }
-    match settings.light.kind {
-        LightKind::Point => Ok(()),
-        LightKind::Sphere { .. } | LightKind::Quad { .. } | LightKind::Spot(_) => {
-            anyhow::bail!(
-                "--equations uses the lab's point light (lightPos, lightColor): leave out \
-                 --light-shape"
-            )
-        }
+    // The lab's point light, and no other kind.
+    if !matches!(settings.light.kind, LightKind::Point) {
+        anyhow::bail!(
+            "--equations uses the lab's point light (lightPos, lightColor): leave out \
+             --light-shape"
+        );
     }
+    Ok(())
 }
 
 /// Each written quantity and how it compares with the lab's at random inputs, a line each.

@@ -27,7 +27,7 @@ fn the_computes_line_names_the_extensions_in_force() {
     h.run_steps(3);
     // Soft shadows and depth of field raised the target to 256 samples: anti-aliased too.
     let expected = format!(
-        "{lab} · textured ρ · soft shadows from a light of radius 0.15 · coloured light · \
+        "{lab} · textured ρ · soft shadows from a sphere light with radius 0.15 · coloured light · \
          depth of field (aperture 0.1) · anti-aliased over {SOFT_SAMPLE_TARGET} samples"
     );
     assert!(
@@ -298,4 +298,43 @@ fn a_mirror_preset_explains_its_black_front_face() {
     choose(&mut h, "Materials", "Mirror and glass");
     assert!(h.query_by_label_contains(hint).is_some());
     settle(&mut h);
+}
+
+/// The light panel offers every kind of `light_kinds!` by its label, and for each its every
+/// parameter by the table's label (a point as its x, y and z); a parameter set there reaches
+/// the settings.
+#[test]
+fn the_light_panel_offers_every_kind_and_its_parameters() {
+    use raylab_core::shading::light::{LightKind, LightShape, ParamType};
+    let mut h = harness(tiny_state());
+    // The first kind, the lab's point, is shown already: each other one is chosen.
+    for (i, &shape) in LightShape::ALL.iter().enumerate() {
+        if i > 0 {
+            choose(&mut h, "Light shape", shape.label());
+        }
+        assert_eq!(settings(&h).light.kind.shape(), shape);
+        for p in LightKind::of_shape(shape).params() {
+            match p.ty {
+                ParamType::Point => {
+                    for axis in ["x", "y", "z"] {
+                        h.get_by_role_and_label(Role::Slider, &format!("{} {axis}", p.label));
+                    }
+                }
+                ParamType::Size | ParamType::Angle => {
+                    h.get_by_role_and_label(Role::Slider, p.label);
+                }
+            }
+        }
+    }
+    // The spot's aim's x set from the panel.
+    if settings(&h).light.kind.shape() != LightShape::Spot {
+        choose(&mut h, "Light shape", LightShape::Spot.label());
+    }
+    h.get_by_role_and_label(Role::Slider, "Aim x")
+        .set_value_accesskit(0.25);
+    h.run_steps(2);
+    let LightKind::Spot(cone) = settings(&h).light.kind else {
+        panic!("not a spot: {:?}", settings(&h).light.kind);
+    };
+    assert_eq!(cone.aim.x, 0.25);
 }

@@ -76,7 +76,9 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::base::camera::{self, Camera};
-use crate::shading::light::{LightKind, LightShape, LightSpec, SpotCone};
+use crate::shading::light::{
+    LightKind, LightShape, LightSpec, ParamType, ParamValue, RawParam, ReadError,
+};
 use crate::shading::material::{MaterialKind, MaterialPreset, TexturePreset};
 use crate::shapes::scene::SceneChoice;
 use crate::shapes::scene::spec::{
@@ -167,12 +169,13 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
     }
     let file: FileV2 = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
     let kind = file.light.kind(Angles::of_version(file.version), text)?;
-    // A square's size is its `side`, or in older files its `radius`.
-    let size_key = if file.light.side.is_some() {
-        "side"
-    } else {
-        "radius"
-    };
+    // Where an error about the light's parameters points: a sphere's `radius`, a square's
+    // `side` (or in older files its `radius`), the spot's `aim`, …
+    let light_keys: Vec<(&str, Vec<String>)> = kind
+        .params()
+        .iter()
+        .filter_map(|p| Some((p.noun, file.light.key_of(&kind, p.noun)?)))
+        .collect();
     let settings = file.into_settings(folder, kind);
     PartMaterial::validate(&settings.part_materials, |i, f| match f {
         "part" => format!("scene.materials[{i}].part"),
@@ -181,9 +184,9 @@ pub fn parse(text: &str, folder: &Path) -> Result<RenderSettings, String> {
     .map_err(|e| at_key(text, &key_path(&e.name), &e.to_string()))?;
     // The scene's parts are checked too (`SceneSpec::validate`).
     settings.validate().map_err(|e| {
-        let path = match &*e.name {
-            "light size" => vec!["light".to_owned(), size_key.to_owned()],
-            name => key_path(name),
+        let path = match light_keys.iter().find(|(noun, _)| *noun == e.name) {
+            Some((_, path)) => path.clone(),
+            None => key_path(&e.name),
         };
         at_key(text, &path, &e.to_string())
     })?;
@@ -261,9 +264,6 @@ fn key_path(name: &str) -> Vec<String> {
         "light position" => &["light", "position"],
         "light power" => &["light", "power"],
         "light colour" => &["light", "colour"],
-        "light aim" => &["light", "aim"],
-        "spot cutoff" => &["light", "cutoff"],
-        "spot beam" => &["light", "beam"],
         "roughness" => &["scene", "roughness"],
         "exposure" => &["display", "exposure"],
         "indirect light" => &["shading", "indirect_light"],
@@ -560,76 +560,160 @@ struct CameraV2 {
     focus_distance: f32,
 }
 
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The `[light]` table: `position`, `power`, `colour`, the kind's name as `shape` and the
+/// kind's parameters, named as `light_kinds!` names them (angles in degrees; radians in
+/// version 1). A file without `shape` means a sphere by any `radius` above 0, else the point
+/// light; a square's side may be its `radius` (files written before `side`).
 struct LightV2 {
     position: Floats<3>,
     power: f32,
     colour: Floats<3>,
-    /// `point`, `sphere`, `quad` or `spot`; a file without it means a sphere by any radius
-    /// above 0, else the point light.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     shape: Option<LightShape>,
-    /// The sphere's radius (0 or absent for the point light; required without a shape, and
-    /// read as a square's side in files written before `side`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    radius: Option<f32>,
-    /// The square's side.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    side: Option<f32>,
-    /// The spot's aim, cutoff and beam width (degrees; radians in version 1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    aim: Option<Floats<3>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    cutoff: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    beam: Option<f64>,
+    /// The parameters as read, by name.
+    params: Vec<(String, RawParam)>,
+    /// The kind written (its parameters in the table's order).
+    written: Option<LightKind>,
+}
+
+impl Serialize for LightV2 {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let mut map = s.serialize_map(None)?;
+        map.serialize_entry("position", &self.position)?;
+        map.serialize_entry("power", &self.power)?;
+        map.serialize_entry("colour", &self.colour)?;
+        if let Some(shape) = self.shape {
+            map.serialize_entry("shape", &shape)?;
+        }
+        for (p, value) in self.written.iter().flat_map(LightKind::params_and_values) {
+            match (p.ty, value) {
+                (ParamType::Angle, ParamValue::Number(x)) => {
+                    map.serialize_entry(p.name, &p.shown(x))?
+                }
+                (ParamType::Size | ParamType::Point, ParamValue::Number(x)) => {
+                    map.serialize_entry(p.name, &x)?
+                }
+                (_, ParamValue::Point(v)) => map.serialize_entry(p.name, &Floats::from(v))?,
+            }
+        }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for LightV2 {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = LightV2;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(
+                    f,
+                    "the light: its position, power, colour, shape and parameters"
+                )
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<LightV2, A::Error> {
+                use serde::de::Error as _;
+                let (mut position, mut power, mut colour, mut shape) = (None, None, None, None);
+                let mut params: Vec<(String, RawParam)> = Vec::new();
+                while let Some(key) = map.next_key_seed(LightKey)? {
+                    let duplicate = || A::Error::custom(format_args!("duplicate key `{key}`"));
+                    match key.as_str() {
+                        "position" if position.is_none() => position = Some(map.next_value()?),
+                        "power" if power.is_none() => power = Some(map.next_value()?),
+                        "colour" if colour.is_none() => colour = Some(map.next_value()?),
+                        "shape" if shape.is_none() => shape = Some(map.next_value()?),
+                        "position" | "power" | "colour" | "shape" => return Err(duplicate()),
+                        _ if params.iter().any(|(k, _)| *k == key) => return Err(duplicate()),
+                        _ => {
+                            let value = map.next_value()?;
+                            params.push((key, value));
+                        }
+                    }
+                }
+                Ok(LightV2 {
+                    position: position.ok_or_else(|| A::Error::missing_field("position"))?,
+                    power: power.ok_or_else(|| A::Error::missing_field("power"))?,
+                    colour: colour.ok_or_else(|| A::Error::missing_field("colour"))?,
+                    shape,
+                    params,
+                    written: None,
+                })
+            }
+        }
+        d.deserialize_map(Visitor)
+    }
+}
+
+/// A key of the `[light]` table: one of [`light_keys`], or an error at its line naming the
+/// unknown field.
+struct LightKey;
+
+impl<'de> serde::de::DeserializeSeed<'de> for LightKey {
+    type Value = String;
+
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<String, D::Error> {
+        let key = String::deserialize(d)?;
+        match light_keys().contains(&key.as_str()) {
+            true => Ok(key),
+            false => Err(serde::de::Error::unknown_field(&key, light_keys())),
+        }
+    }
+}
+
+/// The keys a `[light]` table may hold: its position, power, colour and shape, and every
+/// light kind's parameters (`light_kinds!`).
+fn light_keys() -> &'static [&'static str] {
+    static KEYS: std::sync::OnceLock<Vec<&'static str>> = std::sync::OnceLock::new();
+    KEYS.get_or_init(|| {
+        let mut keys = vec!["position", "power", "colour", "shape"];
+        for shape in LightShape::ALL {
+            for p in LightKind::of_shape(shape).params() {
+                if !keys.contains(&p.name) {
+                    keys.push(p.name);
+                }
+            }
+        }
+        keys
+    })
 }
 
 impl LightV2 {
     /// The file's light as written: its kind's own fields and none of another's (a field of
     /// another kind is refused at its line, a missing one at the `[light]` table's).
     fn of(l: &LightSpec) -> Self {
-        let k = l.kind.fields();
         LightV2 {
             position: l.position.into(),
             power: l.power,
             colour: l.colour.into(),
             shape: Some(l.kind.shape()),
-            radius: k.radius,
-            side: k.side,
-            aim: k.aim.map(Into::into),
-            cutoff: k.cutoff.map(camera::degrees),
-            beam: k.beam.map(camera::degrees),
+            params: Vec::new(),
+            written: Some(l.kind),
         }
+    }
+
+    fn given(&self, field: &str) -> Option<&RawParam> {
+        self.params.iter().find(|(k, _)| k == field).map(|(_, v)| v)
+    }
+
+    /// Whether a square's side is given as its `radius` (files written before `side`).
+    fn side_as_radius(&self) -> bool {
+        self.shape == Some(LightShape::Quad) && self.given("side").is_none()
     }
 
     /// The light's kind, its fields checked against its shape; errors name the line and field.
     fn kind(&self, angle: Angles, text: &str) -> Result<LightKind, String> {
         let shape = self.shape;
-        let given = [
-            ("radius", self.radius.is_some()),
-            ("side", self.side.is_some()),
-            ("aim", self.aim.is_some()),
-            ("cutoff", self.cutoff.is_some()),
-            ("beam", self.beam.is_some()),
-        ];
-        let own: &[&str] = match shape {
-            None | Some(LightShape::Point) | Some(LightShape::Sphere) => &["radius"],
-            Some(LightShape::Quad) => &["side", "radius"],
-            Some(LightShape::Spot) => &["aim", "cutoff", "beam"],
-        };
         let name = shape.map_or("point".to_owned(), |s| s.name().to_owned());
-        if let Some((field, _)) = given.iter().find(|(f, is)| *is && !own.contains(f)) {
-            return Err(at_key(
+        let refused = |field: &str, own: &str| {
+            at_key(
                 text,
                 &["light", field],
-                &format!(
-                    "light.{field}: a {name} light has no `{field}` (its fields: {})",
-                    own.join(", ")
-                ),
-            ));
-        }
+                &format!("light.{field}: a {name} light has no `{field}` (its fields: {own})"),
+            )
+        };
         let missing = |field: &str| {
             at_key(
                 text,
@@ -637,42 +721,83 @@ impl LightV2 {
                 &format!("missing field `{field}` in [light]: a {name} light needs it"),
             )
         };
-        Ok(match shape {
-            None => match self.radius.ok_or_else(|| missing("radius"))? {
-                radius if radius > 0.0 => LightKind::Sphere { radius },
-                _ => LightKind::Point,
-            },
-            Some(LightShape::Point) => match self.radius.unwrap_or(0.0) {
-                0.0 => LightKind::Point,
-                r => {
-                    return Err(at_key(
-                        text,
-                        &["light", "radius"],
-                        &format!(
-                            "invalid light size {r}: a point light has no size: for an area \
-                             light of this size choose the shape sphere or quad \
-                             (--light-shape), or give the size 0"
-                        ),
-                    ));
-                }
-            },
-            Some(LightShape::Sphere) => LightKind::Sphere {
-                radius: self.radius.ok_or_else(|| missing("radius"))?,
-            },
-            Some(LightShape::Quad) => match (self.side, self.radius) {
+        let radius = || match self.given("radius") {
+            Some(RawParam::Number(r)) => Ok(Some(*r as f32)),
+            Some(RawParam::Array(_)) => Err(at_key(
+                text,
+                &["light", "radius"],
+                "light.radius: must be a number",
+            )),
+            None => Ok(None),
+        };
+        // The forms written before every kind had its own fields: no shape (a sphere by any
+        // radius above 0, else the point), a point's `radius` of 0.
+        if matches!(shape, None | Some(LightShape::Point)) {
+            if let Some((field, _)) = self.params.iter().find(|(k, _)| k != "radius") {
+                return Err(refused(field, "radius"));
+            }
+            return match (shape, radius()?) {
+                (None, None) => Err(missing("radius")),
+                (None, Some(r)) if r > 0.0 => Ok(LightKind::Sphere { radius: r }),
+                (_, None | Some(0.0)) | (None, Some(_)) => Ok(LightKind::Point),
+                (_, Some(r)) => Err(at_key(
+                    text,
+                    &["light", "radius"],
+                    &format!(
+                        "invalid light size {r}: a point light has no size: for an area light \
+                         of this size choose the shape sphere or quad (--light-shape), or give \
+                         the size 0"
+                    ),
+                )),
+            };
+        }
+        let shape = shape.unwrap_or_default();
+        let mut params = self.params.clone();
+        if shape == LightShape::Quad {
+            match (self.given("side"), self.given("radius")) {
                 (Some(_), Some(_)) => {
                     let why = "light.radius: a quad light's size is its `side`, given already";
                     return Err(at_key(text, &["light", "radius"], why));
                 }
-                (Some(side), None) | (None, Some(side)) => LightKind::Quad { side },
-                (None, None) => return Err(missing("side")),
-            },
-            Some(LightShape::Spot) => LightKind::Spot(SpotCone {
-                aim: self.aim.ok_or_else(|| missing("aim"))?.into(),
-                cutoff: angle.radians(self.cutoff.ok_or_else(|| missing("cutoff"))?),
-                beam: angle.radians(self.beam.ok_or_else(|| missing("beam"))?),
-            }),
+                // Before a square had its side, `radius` held it.
+                (None, Some(_)) => {
+                    for (key, _) in &mut params {
+                        if key == "radius" {
+                            *key = "side".to_owned();
+                        }
+                    }
+                }
+                (Some(_), None) | (None, None) => {}
+            }
+        }
+        let degrees = matches!(angle, Angles::Degrees);
+        LightKind::read(shape, &params, degrees).map_err(|e| match e {
+            ReadError::Unknown(field) => {
+                let own: Vec<&str> = LightKind::of_shape(shape)
+                    .params()
+                    .iter()
+                    .map(|p| p.name)
+                    .collect();
+                refused(&field, &own.join(", "))
+            }
+            ReadError::Missing(field) => missing(field),
+            ReadError::WrongType(field, what) => at_key(
+                text,
+                &["light", &field],
+                &format!("light.{field}: must be {what}"),
+            ),
         })
+    }
+
+    /// The key in the file of the light's parameter that errors call `noun` (`light aim`),
+    /// if it is one.
+    fn key_of(&self, kind: &LightKind, noun: &str) -> Option<Vec<String>> {
+        let p = kind.params().iter().find(|p| p.noun == noun)?;
+        let key = match (p.name, self.side_as_radius()) {
+            ("side", true) => "radius",
+            (name, _) => name,
+        };
+        Some(vec!["light".to_owned(), key.to_owned()])
     }
 }
 
@@ -1007,6 +1132,7 @@ impl Angles {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shading::light::SpotCone;
 
     fn round_trip(settings: &RenderSettings) -> RenderSettings {
         let text = to_text(settings, Path::new("/scenes")).unwrap();

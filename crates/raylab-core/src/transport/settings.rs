@@ -23,7 +23,7 @@ pub use crate::base::invalid::SettingsError;
 use crate::base::invalid::check_path;
 
 use crate::base::camera::Camera;
-use crate::shading::light::{LightKind, LightSpec};
+use crate::shading::light::{LightSpec, ParamType, ParamValue};
 use crate::shading::material::{DEFAULT_ROUGHNESS, MIN_ROUGHNESS, MaterialPreset, TexturePreset};
 use crate::shapes::scene::SceneChoice;
 use crate::shapes::scene::spec::PartMaterial;
@@ -306,27 +306,40 @@ impl RenderSettings {
             }
             _ => {}
         }
-        let area = match self.light.kind {
-            LightKind::Sphere { radius } => Some(format!("a light of radius {}", short(radius))),
-            LightKind::Quad { side } => Some(format!("a square light of side {}", short(side))),
-            LightKind::Point | LightKind::Spot(_) => None,
-        };
-        if let (true, true, Some(light)) = (lit, self.light.is_area(), area) {
+        // The light's kind and parameters, as `light_kinds!` names them.
+        let light = format!(
+            "a {} light with {}",
+            self.light.kind.name(),
+            self.light
+                .kind
+                .params_and_values()
+                .map(|(p, value)| {
+                    let shown = match (p.ty, value) {
+                        (ParamType::Angle, ParamValue::Number(a)) => {
+                            format!("{}°", short(crate::base::camera::degrees(a) as f32))
+                        }
+                        (_, ParamValue::Number(x)) => short(x),
+                        (_, ParamValue::Point(v)) => {
+                            format!("({}, {}, {})", short(v.x), short(v.y), short(v.z))
+                        }
+                    };
+                    format!("{} {shown}", p.name)
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        if lit && self.light.is_area() {
             if s.stage == Stage::Path {
                 add(format!("{light}, seen and sampled"));
             } else if s.shadows {
                 add(format!("soft shadows from {light}"));
             }
-        }
-        if let (true, LightKind::Spot(cone)) = (lit, self.light.kind) {
-            add(format!(
-                "a spot light aimed at ({}, {}, {}), cutoff {}°, beam {}°",
-                short(cone.aim.x),
-                short(cone.aim.y),
-                short(cone.aim.z),
-                short(crate::base::camera::degrees(cone.cutoff) as f32),
-                short(crate::base::camera::degrees(cone.beam) as f32)
-            ));
+        } else if lit
+            && self.light.kind.size_param().is_none()
+            && !self.light.kind.params().is_empty()
+        {
+            // A kind with parameters but no size (the spot) changes the light wherever it is.
+            add(light);
         }
         if lit && self.light.colour != Vec3::ONE {
             add("coloured light".to_owned());
@@ -573,64 +586,42 @@ fn check_vec(name: &'static str, v: Vec3) -> Result<(), SettingsError> {
     }
 }
 
-/// The light's parameters. A sphere's radius or a square's side: 0 (the lab's point light) or
-/// from [`MIN_LIGHT_SIZE`] to [`MAX_LIGHT_SIZE`]. A spot's aim: a finite point within
-/// [`MAX_COORDINATE`], at least [`MIN_LIGHT_DISTANCE`](crate::shading::light::MIN_LIGHT_DISTANCE) from
-/// the light (aimed at itself it has no direction); its cutoff above 0 and below 90°, its beam
-/// width from 0 to the cutoff.
+/// The light's parameters (`light_kinds!`), each by its type and bounds, then the rules
+/// between them ([`crate::shading::light::LightKind::check_rules`]). A size (a sphere's radius, a square's side): 0
+/// (the lab's point light) or from [`MIN_LIGHT_SIZE`] to [`MAX_LIGHT_SIZE`]. A point (a spot's
+/// aim): finite and within [`MAX_COORDINATE`]. An angle: finite and within its bounds (a
+/// spot's cutoff above 0 and below 90°).
 fn check_light_size(light: &LightSpec) -> Result<(), SettingsError> {
-    let size = match light.kind {
-        LightKind::Point => return Ok(()),
-        LightKind::Sphere { radius } => radius,
-        LightKind::Quad { side } => side,
-        LightKind::Spot(cone) => return check_spot(light.position, cone),
-    };
-    check_finite("light size", size)?;
+    for (p, value) in light.kind.params_and_values() {
+        match (p.ty, value) {
+            (ParamType::Size, ParamValue::Number(size)) => check_size(p.noun, size)?,
+            (ParamType::Angle, ParamValue::Number(a)) if !a.is_finite() => {
+                return Err(err(p.noun, a, "must be a finite number"));
+            }
+            (_, ParamValue::Point(v)) => check_position(p.noun, v)?,
+            (ParamType::Angle | ParamType::Point, ParamValue::Number(_)) => {}
+        }
+        p.check_bounds(value)?;
+    }
+    light.kind.check_rules(light.position)
+}
+
+/// An area light's size, called `name` in errors (see [`check_light_size`]).
+fn check_size(name: &'static str, size: f32) -> Result<(), SettingsError> {
+    check_finite(name, size)?;
     if size < 0.0 {
-        return Err(err("light size", number(size), "must be ≥ 0"));
+        return Err(err(name, number(size), "must be ≥ 0"));
     }
     if size == 0.0 {
         return Ok(());
     }
     if !(MIN_LIGHT_SIZE..=MAX_LIGHT_SIZE).contains(&size) {
         return Err(err(
-            "light size",
+            name,
             number(size),
             "must be 0 (the point light) or between 0.001 and 1e6 (scene units): a smaller \
              sphere or square is brighter than the light's bounds allow; for a light that \
              small use the point light (--light-shape point)",
-        ));
-    }
-    Ok(())
-}
-
-/// A spot light's cone (see [`check_light_size`]); angles are shown in degrees.
-fn check_spot(position: Vec3, cone: crate::shading::light::SpotCone) -> Result<(), SettingsError> {
-    check_position("light aim", cone.aim)?;
-    if !((cone.aim - position).length() >= crate::shading::light::MIN_LIGHT_DISTANCE) {
-        return Err(err(
-            "light aim",
-            vector(cone.aim),
-            "must be at least 0.001 from the light's position: a spot aimed at itself has no \
-             direction (--light-aim)",
-        ));
-    }
-    let (cutoff, beam) = (cone.cutoff, cone.beam);
-    check_finite("spot cutoff", cutoff)?;
-    check_finite("spot beam", beam)?;
-    let deg = |a: f32| format!("{}°", crate::base::camera::degrees(a));
-    if !(cutoff > 0.0 && cutoff < std::f32::consts::FRAC_PI_2) {
-        return Err(err(
-            "spot cutoff",
-            deg(cutoff),
-            "must be above 0° and below 90° (--spot-cutoff)",
-        ));
-    }
-    if !(beam >= 0.0 && beam <= cutoff) {
-        return Err(err(
-            "spot beam",
-            format!("{} (cutoff {})", deg(beam), deg(cutoff)),
-            "must be from 0° to the cutoff (--spot-beam, --spot-cutoff)",
         ));
     }
     Ok(())
@@ -770,6 +761,7 @@ impl<'de> serde::de::Visitor<'de> for UniqueKeys {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shading::light::LightKind;
 
     /// The description names each extension in force, once, and none that does nothing in
     /// the stage.
@@ -777,7 +769,7 @@ mod tests {
     /// digit of the f32 the drag left.
     #[test]
     fn the_spot_in_the_description_is_rounded() {
-        use crate::shading::light::{LightKind, SpotCone};
+        use crate::shading::light::SpotCone;
         let mut s = RenderSettings::default();
         s.light.kind = LightKind::Spot(SpotCone {
             aim: Vec3::new(0.370_090_34, 0.995_348_4, -0.200_000_05),
@@ -786,7 +778,7 @@ mod tests {
         });
         let text = s.description();
         assert!(
-            text.contains("a spot light aimed at (0.37, 0.995, -0.2), cutoff 25.347°, beam 15°"),
+            text.contains("a spot light with aim (0.37, 0.995, -0.2), cutoff 25.347°, beam 15°"),
             "{text}"
         );
     }
@@ -802,8 +794,8 @@ mod tests {
         s.samples_per_pixel = 16;
         assert_eq!(
             s.description(),
-            "ρ·(D + N) (eq. 30) with shadows (§5.1) · textured ρ · soft shadows from a light of \
-             radius 0.15 · coloured light · depth of field (aperture 0.1) · anti-aliased over 16 \
+            "ρ·(D + N) (eq. 30) with shadows (§5.1) · textured ρ · soft shadows from a sphere \
+             light with radius 0.15 · coloured light · depth of field (aperture 0.1) · anti-aliased over 16 \
              samples"
         );
         // Without shadows the lab stages take the light from its centre: its size does nothing.
@@ -823,7 +815,7 @@ mod tests {
         s.light.kind = LightKind::Quad { side: 0.15 };
         let path = s.description();
         assert!(
-            path.contains("· a square light of side 0.15, seen and sampled"),
+            path.contains("· a quad light with side 0.15, seen and sampled"),
             "{path}"
         );
         assert!(!path.contains("anti-aliased"), "{path}");

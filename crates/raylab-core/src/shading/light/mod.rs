@@ -5,15 +5,15 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::base::camera::radians;
 use crate::base::geometry::{Ray, Triangle};
 use crate::base::lanes::{Mask, MaskOf, Real, Vector, select_lazy};
-use crate::base::named::named_enum;
 use crate::base::sampling::{orthonormal_basis, uniform_cone};
 
 #[cfg(test)]
 mod checks;
 mod interface;
+mod kinds;
+mod params;
 mod point;
 mod quad;
 mod shape;
@@ -21,34 +21,13 @@ mod sphere;
 mod spot;
 
 pub use interface::{Light, LightSample};
+pub use kinds::{AnyLight, LightKind, LightShape, RawParam, ReadError};
+pub use params::{Bounds, KindRules, Param, ParamType, ParamValue};
 pub use point::PointLight;
 pub use quad::QuadLight;
-pub use shape::{AnyLight, emitter};
+pub use shape::emitter;
 pub use sphere::SphereLight;
-pub use spot::{SpotLight, acos};
-
-/// The kind of light, by name: what the command line's `--light-shape` and the workbench's
-/// selector choose ([`LightKind::of_shape`] makes the kind with its default parameters).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LightShape {
-    /// The lab's point light (hard shadows). The default.
-    #[default]
-    Point,
-    /// A sphere emitting from its surface ([`SphereLight`]): soft shadows from every side.
-    Sphere,
-    /// A square panel facing the floor ([`QuadLight`]): a Cornell box's ceiling light.
-    Quad,
-    /// The point light given a direction ([`SpotLight`]): a cone of light.
-    Spot,
-}
-
-named_enum!(LightShape as "light shape" {
-    Point => "point", "Point (the lab)";
-    Sphere => "sphere", "Sphere";
-    Quad => "quad", "Square (quad)";
-    Spot => "spot", "Spot";
-});
+pub use spot::{SpotCone, SpotLight, acos};
 
 /// The sphere light's radius when only its shape is chosen.
 pub const DEFAULT_SPHERE_RADIUS: f32 = 0.1;
@@ -63,137 +42,14 @@ pub const MIN_LIGHT_DISTANCE: f32 = 1e-3;
 /// hit point can't make the surface shadow itself ("shadow acne"), far below a pixel's size.
 pub const SHADOW_OFFSET: f32 = 1e-4;
 
-/// What the light is, with the parameters of its kind. Every kind sits at the light's
-/// `position` and emits the total power of the lab's omni light, `power · colour`, or for the
-/// spot the omni light's intensity `power · colour / (4π)` inside its cone.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightKind {
-    /// The lab's point light (section 5).
-    Point,
-    /// A sphere of this radius (scene units) about the position, emitting from its surface; a
-    /// radius of 0 is the point light.
-    Sphere { radius: f32 },
-    /// A square of this side (scene units) centred on the position, facing the floor (+y); a
-    /// side of 0 is the point light.
-    Quad { side: f32 },
-    /// A spot light ([`SpotLight`]): the point light aimed at a point, with a cone.
-    Spot(SpotCone),
-}
-
-/// A spot light's cone: the point it is aimed at, the cutoff angle beyond which it sends
-/// nothing and the beam width within which it sends its full intensity (radians, measured
-/// from the axis; 0 ≤ beam ≤ cutoff < 90°). Between the two its intensity falls linearly in
-/// the angle (Mitsuba 3's `spot`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpotCone {
-    /// The point the spot is aimed at (its axis runs from the light's position to it).
-    pub aim: Vec3,
-    /// The cutoff angle, in radians.
-    pub cutoff: f32,
-    /// The beam width, in radians.
-    pub beam: f32,
-}
-
-impl Default for SpotCone {
-    /// Aimed from the lab's light at (0, 1, −0.2) on the floor, cutoff 25°, beam width 15°.
-    fn default() -> Self {
-        Self {
-            aim: Vec3::new(0.0, 1.0, -0.2),
-            cutoff: radians(25.0),
-            beam: radians(15.0),
-        }
-    }
-}
-
-/// A kind's own parameters as optional fields, every other kind's `None`: the one place a
-/// [`LightKind`] is taken apart into the fields the settings JSON and scene files write.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct KindFields {
-    pub radius: Option<f32>,
-    pub side: Option<f32>,
-    pub aim: Option<Vec3>,
-    /// Radians.
-    pub cutoff: Option<f32>,
-    /// Radians.
-    pub beam: Option<f32>,
-}
-
-impl LightKind {
-    /// The kind's own parameters, each in its field ([`KindFields`]).
-    pub fn fields(&self) -> KindFields {
-        let none = KindFields::default();
-        match *self {
-            LightKind::Point => none,
-            LightKind::Sphere { radius } => KindFields {
-                radius: Some(radius),
-                ..none
-            },
-            LightKind::Quad { side } => KindFields {
-                side: Some(side),
-                ..none
-            },
-            LightKind::Spot(cone) => KindFields {
-                aim: Some(cone.aim),
-                cutoff: Some(cone.cutoff),
-                beam: Some(cone.beam),
-                ..none
-            },
-        }
-    }
-
-    /// The kind's name ([`LightShape`]).
-    pub fn shape(&self) -> LightShape {
-        match self {
-            LightKind::Point => LightShape::Point,
-            LightKind::Sphere { .. } => LightShape::Sphere,
-            LightKind::Quad { .. } => LightShape::Quad,
-            LightKind::Spot(_) => LightShape::Spot,
-        }
-    }
-
-    /// The kind of this `shape` with its default parameters.
-    pub fn of_shape(shape: LightShape) -> Self {
-        match shape {
-            LightShape::Point => LightKind::Point,
-            LightShape::Sphere => LightKind::Sphere {
-                radius: DEFAULT_SPHERE_RADIUS,
-            },
-            LightShape::Quad => LightKind::Quad {
-                side: DEFAULT_QUAD_SIDE,
-            },
-            LightShape::Spot => LightKind::Spot(SpotCone::default()),
-        }
-    }
-
-    /// An area light's size (the sphere's radius, the square's side); 0 for the point and the
-    /// spot, which have none.
-    pub fn size(&self) -> f32 {
-        match *self {
-            LightKind::Sphere { radius } => radius,
-            LightKind::Quad { side } => side,
-            LightKind::Point | LightKind::Spot(_) => 0.0,
-        }
-    }
-
-    /// The kind `shape` of area size `size`: [`LightKind::of_shape`] with the sphere's radius
-    /// or the square's side set to `size` (ignored by the point and the spot).
-    pub fn sized(shape: LightShape, size: f32) -> Self {
-        match shape {
-            LightShape::Sphere => LightKind::Sphere { radius: size },
-            LightShape::Quad => LightKind::Quad { side: size },
-            LightShape::Point | LightShape::Spot => LightKind::of_shape(shape),
-        }
-    }
-}
-
 /// The scene's light: at `position`, `power` watts in the colour `colour` (so `power · colour`
 /// per channel, the lab's `lightColor = 14·(1, 1, 1)`), of the kind `kind`.
 ///
 /// [`LightSpec::emitter`] makes the [`Light`] it is. The lab's stages use equation 27 from the
 /// position for every kind (times the spot's falloff, [`DirectLight`]) and aim the shadow rays
 /// at points of the light ([`LightSpec::shadow_target`]); the path tracers see the real emitter.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "LightFields", into = "LightFields")]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "LightFields")]
 pub struct LightSpec {
     pub position: Vec3,
     /// Total emitted power P, in watts (for a spot, the power of the omni light of its
@@ -233,12 +89,10 @@ impl LightSpec {
     /// The spot light this is, if it is one.
     #[inline]
     pub fn spot(&self) -> Option<SpotLight> {
-        match self.kind {
-            LightKind::Spot(cone) => {
-                Some(SpotLight::new(self.position, self.channel_power(), cone))
-            }
-            LightKind::Point | LightKind::Sphere { .. } | LightKind::Quad { .. } => None,
+        if let LightKind::Spot(cone) = self.kind {
+            return Some(SpotLight::new(self.position, self.channel_power(), cone));
         }
+        None
     }
 
     /// The emitter this light is, behind the [`Light`] interface.
@@ -291,73 +145,102 @@ pub fn sphere_point(centre: Vec3, radius: f32, position: Vec3, u1: f32, u2: f32)
     position + t * direction
 }
 
-/// What a settings file holds for the light: the kind's name as `shape` and its parameters as
-/// fields of their own (`radius` for a sphere, `side` for a square; `aim`, `cutoff` and `beam`,
-/// in radians, for a spot). Files written before may give `power` as watts per channel
-/// (`[14, 14, 14]`, read as the largest channel's power and the colour it makes), `radius` for
-/// a square's side, a radius with no shape (a sphere), or any shape with size 0 (the point);
-/// a point light with a size is refused.
-#[derive(Serialize, Deserialize)]
-#[serde(default)]
+/// What a settings file holds for the light: `position`, `power` (watts), `colour`, the kind's
+/// name as `shape` and its parameters as fields of their own, named as `light_kinds!` names
+/// them (`radius` for a sphere, `side` for a square; `aim`, `cutoff` and `beam`, in radians,
+/// for a spot). Files written before may give `power` as watts per channel (`[14, 14, 14]`,
+/// read as the largest channel's power and the colour it makes), `radius` for a square's
+/// side, a radius with no shape (a sphere), or any shape with size 0 (the point); a point light
+/// with a size is refused. A parameter of another kind is ignored; one the kind has and the
+/// file leaves out keeps its default.
 struct LightFields {
     position: Vec3,
     power: PowerField,
-    #[serde(skip_serializing_if = "Option::is_none")]
     colour: Option<Vec3>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     shape: Option<LightShape>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    radius: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    side: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    aim: Option<Vec3>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    cutoff: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    beam: Option<f32>,
+    params: Vec<(String, RawParam)>,
 }
 
-#[derive(Serialize, Deserialize)]
+#[derive(Deserialize)]
 #[serde(untagged)]
 enum PowerField {
     Watts(f32),
     PerChannel(Vec3),
 }
 
-impl Default for LightFields {
-    /// The lab's light where a file gives no value; no colour or shape, so that the power's
-    /// form and the radius decide them.
-    fn default() -> Self {
-        let light = LightSpec::default();
-        LightFields {
-            position: light.position,
-            power: PowerField::Watts(light.power),
-            colour: None,
-            shape: None,
-            radius: None,
-            side: None,
-            aim: None,
-            cutoff: None,
-            beam: None,
+/// Every parameter name of every kind: the keys [`LightFields`] reads as parameters.
+fn is_param_name(key: &str) -> bool {
+    LightShape::ALL.iter().any(|&s| {
+        LightKind::of_shape(s)
+            .params()
+            .iter()
+            .any(|p| p.name == key)
+    })
+}
+
+impl<'de> Deserialize<'de> for LightFields {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = LightFields;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(
+                    f,
+                    "a light: its position, power, colour, shape and parameters"
+                )
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<LightFields, A::Error> {
+                // The lab's light where a file gives no value; no colour or shape, so that the
+                // power's form and the radius decide them.
+                let lab = LightSpec::default();
+                let mut f = LightFields {
+                    position: lab.position,
+                    power: PowerField::Watts(lab.power),
+                    colour: None,
+                    shape: None,
+                    params: Vec::new(),
+                };
+                while let Some(key) = map.next_key::<String>()? {
+                    match key.as_str() {
+                        "position" => f.position = map.next_value()?,
+                        "power" => f.power = map.next_value()?,
+                        "colour" => f.colour = map.next_value()?,
+                        "shape" => f.shape = map.next_value()?,
+                        name if is_param_name(name) => {
+                            let value = map.next_value()?;
+                            f.params.push((key, value));
+                        }
+                        _ => {
+                            map.next_value::<serde::de::IgnoredAny>()?;
+                        }
+                    }
+                }
+                Ok(f)
+            }
         }
+        d.deserialize_map(Visitor)
     }
 }
 
-impl From<LightSpec> for LightFields {
-    fn from(l: LightSpec) -> Self {
-        let k = l.kind.fields();
-        LightFields {
-            position: l.position,
-            power: PowerField::Watts(l.power),
-            colour: Some(l.colour),
-            shape: Some(l.kind.shape()),
-            radius: k.radius,
-            side: k.side,
-            aim: k.aim,
-            cutoff: k.cutoff,
-            beam: k.beam,
+/// As [`LightFields`] reads it: the kind's every parameter and no other.
+impl Serialize for LightSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let mut map = s.serialize_map(Some(4 + self.kind.params().len()))?;
+        map.serialize_entry("position", &self.position)?;
+        map.serialize_entry("power", &self.power)?;
+        map.serialize_entry("colour", &self.colour)?;
+        map.serialize_entry("shape", &self.kind.shape())?;
+        for (p, value) in self.kind.params_and_values() {
+            match value {
+                ParamValue::Number(x) => map.serialize_entry(p.name, &x)?,
+                ParamValue::Point(v) => map.serialize_entry(p.name, &v)?,
+            }
         }
+        map.end()
     }
 }
 
@@ -373,32 +256,49 @@ impl TryFrom<LightFields> for LightSpec {
                 (p, f.colour.unwrap_or(from_channels))
             }
         };
-        let radius = f.radius.unwrap_or(0.0);
-        let kind = match f.shape {
-            // Before lights had shapes, a radius above 0 meant a sphere.
-            None if radius > 0.0 => LightKind::Sphere { radius },
-            Some(LightShape::Point) if radius != 0.0 => {
-                return Err(format!(
-                    "the light's radius {radius}: a point light has no size: for an area light \
-                     of this size choose the shape sphere or quad (--light-shape), or give the \
-                     size 0"
-                ));
-            }
-            None | Some(LightShape::Point) => LightKind::Point,
-            Some(LightShape::Sphere) => LightKind::Sphere { radius },
-            // Before a square had its side, `radius` held it.
-            Some(LightShape::Quad) => LightKind::Quad {
-                side: f.side.unwrap_or(radius),
-            },
-            Some(LightShape::Spot) => {
-                let default = SpotCone::default();
-                LightKind::Spot(SpotCone {
-                    aim: f.aim.unwrap_or(default.aim),
-                    cutoff: f.cutoff.unwrap_or(default.cutoff),
-                    beam: f.beam.unwrap_or(default.beam),
-                })
-            }
+        let given = |name: &str| f.params.iter().find(|(k, _)| k == name).map(|(_, v)| v);
+        let radius = match given("radius") {
+            Some(RawParam::Number(r)) => *r as f32,
+            Some(RawParam::Array(_)) => return Err("the light's radius must be a number".into()),
+            None => 0.0,
         };
+        let shape = match f.shape {
+            Some(shape) => shape,
+            // Before lights had shapes, a radius above 0 meant a sphere.
+            None if radius > 0.0 => LightShape::Sphere,
+            None => LightShape::Point,
+        };
+        if shape == LightShape::Point && radius != 0.0 {
+            return Err(format!(
+                "the light's radius {radius}: a point light has no size: for an area light \
+                 of this size choose the shape sphere or quad (--light-shape), or give the \
+                 size 0"
+            ));
+        }
+        let mut kind = LightKind::of_shape(shape);
+        for p in kind.params() {
+            // Before a square had its side, `radius` held it.
+            let value = match (shape, given(p.name)) {
+                (LightShape::Quad, None) if p.name == "side" => given("radius"),
+                (_, value) => value,
+            };
+            let value = match (p.ty, value) {
+                (_, None) => continue,
+                (ParamType::Size | ParamType::Angle, Some(RawParam::Number(x))) => {
+                    ParamValue::Number(*x as f32)
+                }
+                (ParamType::Point, Some(RawParam::Array(v))) if v.len() == 3 => {
+                    ParamValue::Point(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
+                }
+                (ParamType::Point, Some(_)) => {
+                    return Err(format!("the light's {} must be 3 numbers", p.name));
+                }
+                (ParamType::Size | ParamType::Angle, Some(RawParam::Array(_))) => {
+                    return Err(format!("the light's {} must be a number", p.name));
+                }
+            };
+            kind.set(p.name, value)?;
+        }
         Ok(Self {
             position: f.position,
             power,
@@ -470,16 +370,14 @@ impl<V: Vector> DirectLight<V> {
             (to_light / r2.sqrt()).dot(normal)
         );
         let one = V::Real::splat(1.0);
-        let (falloff, lit) = match light.kind {
-            LightKind::Spot(cone) => {
-                let spot = SpotLight::new(light.position, light.channel_power(), cone);
+        // The spot's falloff (its factor in equation 27); 1 for every other light.
+        let (falloff, lit) = match light.spot() {
+            Some(spot) => {
                 let towards = -(to_light.dot(V::splat(spot.axis)) / r2.sqrt());
                 let falloff = V::Real::select(near, one, spot.falloff(towards));
                 (falloff, falloff * cos.simd_max(V::Real::ZERO))
             }
-            LightKind::Point | LightKind::Sphere { .. } | LightKind::Quad { .. } => {
-                (one, cos.simd_max(V::Real::ZERO))
-            }
+            None => (one, cos.simd_max(V::Real::ZERO)),
         };
         let r2 = V::Real::select(near, min_r2, r2);
         let four_pi_r2 = V::Real::splat(4.0 * PI) * r2;

@@ -1,119 +1,6 @@
-//! Which emitter the scene's light is: a point, a sphere, a square or a spot.
+//! Which emitter the scene's light is (`emitter`): a point, a sphere, a square or a spot.
 
-use glam::{Vec2, Vec3};
-
-use super::{
-    Light, LightKind, LightSample, LightSpec, PointLight, QuadLight, SphereLight, SpotLight,
-};
-use crate::base::geometry::Ray;
-
-/// One of the lab's lights, whichever its shape: enum dispatch, so a light is a plain `Copy`
-/// value (no allocation, no virtual call, `Send + Sync` for the render threads) and each call
-/// is a `match` the compiler can inline.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum AnyLight {
-    Point(PointLight),
-    Sphere(SphereLight),
-    Quad(QuadLight),
-    Spot(SpotLight),
-}
-
-impl From<PointLight> for AnyLight {
-    fn from(light: PointLight) -> Self {
-        AnyLight::Point(light)
-    }
-}
-
-impl From<SphereLight> for AnyLight {
-    fn from(light: SphereLight) -> Self {
-        AnyLight::Sphere(light)
-    }
-}
-
-impl From<SpotLight> for AnyLight {
-    fn from(light: SpotLight) -> Self {
-        AnyLight::Spot(light)
-    }
-}
-
-impl From<QuadLight> for AnyLight {
-    fn from(light: QuadLight) -> Self {
-        AnyLight::Quad(light)
-    }
-}
-
-/// Each call goes to the light inside.
-impl Light for AnyLight {
-    #[inline]
-    fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        match self {
-            AnyLight::Point(light) => light.sample_li(p, u),
-            AnyLight::Sphere(light) => light.sample_li(p, u),
-            AnyLight::Quad(light) => light.sample_li(p, u),
-            AnyLight::Spot(light) => light.sample_li(p, u),
-        }
-    }
-
-    #[inline]
-    fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
-        match self {
-            AnyLight::Point(light) => light.pdf_li(p, wi),
-            AnyLight::Sphere(light) => light.pdf_li(p, wi),
-            AnyLight::Quad(light) => light.pdf_li(p, wi),
-            AnyLight::Spot(light) => light.pdf_li(p, wi),
-        }
-    }
-
-    #[inline]
-    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        match self {
-            AnyLight::Point(light) => light.intersect(ray, t_max),
-            AnyLight::Sphere(light) => light.intersect(ray, t_max),
-            AnyLight::Quad(light) => light.intersect(ray, t_max),
-            AnyLight::Spot(light) => light.intersect(ray, t_max),
-        }
-    }
-
-    #[inline]
-    fn le(&self, ray_direction: Vec3) -> Vec3 {
-        match self {
-            AnyLight::Point(light) => light.le(ray_direction),
-            AnyLight::Sphere(light) => light.le(ray_direction),
-            AnyLight::Quad(light) => light.le(ray_direction),
-            AnyLight::Spot(light) => light.le(ray_direction),
-        }
-    }
-
-    #[inline]
-    fn is_delta(&self) -> bool {
-        match self {
-            AnyLight::Point(light) => light.is_delta(),
-            AnyLight::Sphere(light) => light.is_delta(),
-            AnyLight::Quad(light) => light.is_delta(),
-            AnyLight::Spot(light) => light.is_delta(),
-        }
-    }
-
-    #[inline]
-    fn power(&self) -> Vec3 {
-        match self {
-            AnyLight::Point(light) => light.power(),
-            AnyLight::Sphere(light) => light.power(),
-            AnyLight::Quad(light) => light.power(),
-            AnyLight::Spot(light) => light.power(),
-        }
-    }
-
-    #[inline]
-    fn sample_le(&self, u_point: Vec2, u_direction: Vec2) -> Option<Ray> {
-        match self {
-            AnyLight::Point(light) => light.sample_le(u_point, u_direction),
-            AnyLight::Sphere(light) => light.sample_le(u_point, u_direction),
-            AnyLight::Quad(light) => light.sample_le(u_point, u_direction),
-            AnyLight::Spot(light) => light.sample_le(u_point, u_direction),
-        }
-    }
-}
+use super::{AnyLight, LightKind, LightSpec, PointLight, QuadLight, SphereLight, SpotLight};
 
 /// The scene's light as an emitter, centred on its position, with its total power per channel
 /// (`P · colour`); the one place a kind of light becomes its [`Light`]:
@@ -152,8 +39,11 @@ pub fn emitter(light: &LightSpec) -> AnyLight {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::geometry::Ray;
     use crate::base::sampling::Rng;
+    use crate::shading::light::Light;
     use crate::shading::light::{LightShape, SpotCone};
+    use glam::{Vec2, Vec3};
 
     #[test]
     fn light_shapes_by_name() {

@@ -4,10 +4,65 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::{Light, LightSample, MIN_LIGHT_DISTANCE, SpotCone};
+use super::params::KindRules;
+use super::{Light, LightSample, MIN_LIGHT_DISTANCE};
+use crate::base::camera::{degrees, radians};
 use crate::base::geometry::Ray;
+use crate::base::invalid::SettingsError;
 use crate::base::lanes::Real;
 use crate::base::sampling::orthonormal_basis;
+
+/// A spot light's cone, its parameters in `light_kinds!` (which gives its defaults: aimed from
+/// the lab's light at (0, 1, −0.2) on the floor, cutoff 25°, beam width 15°): the point it is
+/// aimed at, the cutoff angle beyond which it sends nothing and the beam width within which it
+/// sends its full intensity (radians, measured from the axis; 0 ≤ beam ≤ cutoff < 90°).
+/// Between the two its intensity falls linearly in the angle (Mitsuba 3's `spot`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotCone {
+    /// The point the spot is aimed at (its axis runs from the light's position to it).
+    pub aim: Vec3,
+    /// The cutoff angle, in radians.
+    pub cutoff: f32,
+    /// The beam width, in radians.
+    pub beam: f32,
+}
+
+/// The smallest cutoff the workbench leaves after an edit, in degrees (the cutoff must be
+/// above 0).
+const MIN_TIDY_CUTOFF: f64 = 0.5;
+
+impl KindRules for SpotCone {
+    /// The aim at least [`MIN_LIGHT_DISTANCE`] from the light (aimed at itself a spot has no
+    /// direction), the beam width within the cutoff.
+    fn check(&self, position: Vec3) -> Result<(), SettingsError> {
+        if !((self.aim - position).length() >= MIN_LIGHT_DISTANCE) {
+            let a = self.aim;
+            return Err(SettingsError {
+                name: "light aim".into(),
+                value: format!("({}, {}, {})", a.x, a.y, a.z),
+                reason: "must be at least 0.001 from the light's position: a spot aimed at \
+                         itself has no direction (--light-aim)",
+            });
+        }
+        if !(self.beam <= self.cutoff) {
+            let deg = |a: f32| format!("{}°", degrees(a));
+            return Err(SettingsError {
+                name: "spot beam".into(),
+                value: format!("{} (cutoff {})", deg(self.beam), deg(self.cutoff)),
+                reason: "must be from 0° to the cutoff (--spot-beam, --spot-cutoff)",
+            });
+        }
+        Ok(())
+    }
+
+    /// The cutoff above 0, the beam never wider than the cutoff.
+    fn tidy(&mut self) {
+        if self.cutoff <= 0.0 {
+            self.cutoff = radians(MIN_TIDY_CUTOFF);
+        }
+        self.beam = self.beam.min(self.cutoff);
+    }
+}
 
 /// A point at `position` sending the radiant intensity `intensity · falloff(θ)` (watts per
 /// steradian, per channel) in the direction at the angle θ from its `axis`.

@@ -49,7 +49,7 @@ use crate::base::memory::with_thread_memory;
 use crate::base::sampling::Rng;
 use crate::shading::bsdf::{Bsdf, ShadingFrame};
 use crate::shading::light::{
-    AnyLight, DirectLight, LightKind, LightSpec, SHADOW_OFFSET, ShadowRays, shadow_rays_to,
+    AnyLight, DirectLight, LightSpec, SHADOW_OFFSET, ShadowRays, shadow_rays_to,
 };
 use crate::shading::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::shading::texture::planar_uv;
@@ -644,11 +644,7 @@ impl<'a> Tracer<'a> {
         let random = settings.is_stochastic();
         // The lab's direct term in lanes is the light sample of a point light; a photon map
         // is gathered at the diffuse vertices one at a time.
-        let point_light = match settings.light.kind {
-            LightKind::Point => true,
-            LightKind::Sphere { .. } | LightKind::Quad { .. } => !settings.light.is_area(),
-            LightKind::Spot(_) => false,
-        };
+        let point_light = matches!(settings.light.emitter(), AnyLight::Point(_));
         let lane_light = point_light && !settings.shading.photon_caustics();
         let plain = materials
             .iter()
@@ -1186,6 +1182,7 @@ mod tests {
     use super::*;
     use crate::Camera;
     use crate::base::lanes::LANES;
+    use crate::shading::light::LightKind;
     use crate::shapes::scene::cornell_box;
     use crate::test_support::primary_rays;
 

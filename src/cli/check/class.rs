@@ -16,7 +16,10 @@ use raylab_core::RenderSettings;
 use raylab_core::teaching::check::class::{self, Class, Submission};
 use raylab_core::teaching::check::report::ReportFolder;
 
-use super::{CheckArgs, RenderOptions, one_line, printable_lines, thread_pool};
+use super::{CheckArgs, settings_at_image_size};
+use crate::cli::options::RenderOptions;
+use crate::cli::pool::thread_pool;
+use crate::cli::terminal::{one_line, printable_lines};
 
 /// The options a line of `--csv` gives, parsed as the command line's are.
 #[derive(Debug, Parser)]
@@ -156,7 +159,7 @@ fn settings_of(
     if options.settings.is_some() || options.scene_file.is_some() {
         options.resolve_settings()
     } else {
-        super::settings_at_image_size(options, path, width, height)
+        settings_at_image_size(options, path, width, height)
     }
 }
 
