@@ -594,7 +594,11 @@ unsafe fn transpose8<const S: usize, const K: usize>(base: *const f32) -> [__m25
 /// # Safety
 /// AVX2; `base` points to `len` (1 to 8) records of `stride ≥ K` floats.
 #[inline(always)]
-unsafe fn gather8<const K: usize>(base: *const f32, stride: i32, len: usize) -> [__m256; K] {
+pub(super) unsafe fn gather8<const K: usize>(
+    base: *const f32,
+    stride: i32,
+    len: usize,
+) -> [__m256; K] {
     // SAFETY: every index gathered is stride·i + c for a record i < len and c < K ≤ stride.
     unsafe {
         let lane = _mm256_min_epi32(
