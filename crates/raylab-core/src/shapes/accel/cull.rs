@@ -226,7 +226,7 @@ impl Cone {
 }
 
 mod lanes {
-    use super::super::packet::{PacketIsa, load_at};
+    use super::super::packet::{MAX_WIDTH, PacketIsa};
     use crate::base::lanes::{Mask, Real};
 
     use super::super::SegmentLanes;
@@ -319,6 +319,14 @@ mod lanes {
     #[inline(always)]
     fn splat3<P: PacketIsa>(k: P, v: glam::Vec3) -> [P::F; 3] {
         [k.splat(v.x), k.splat(v.y), k.splat(v.z)]
+    }
+
+    /// Lanes `offset..offset + WIDTH` of `a`.
+    #[inline(always)]
+    fn load_at<P: PacketIsa>(k: P, a: &[f32; 16], offset: usize) -> P::F {
+        let mut row = [0.0f32; MAX_WIDTH];
+        row[..P::WIDTH].copy_from_slice(&a[offset..offset + P::WIDTH]);
+        k.load(&row)
     }
 
     /// Lanes `(a, b, c)` in the cone's frame, as [`Cone::local`].

@@ -608,16 +608,15 @@ pub(super) fn occluded_lanes_in_list<P: PacketIsa>(
     blocked
 }
 
-/// Lanes `offset..offset + WIDTH` of `a` (`offset` 0, or 8 for an eight-lane set's second
-/// half), loaded where they lie: copied into an array first, the load waited for the copy's
-/// stores.
+/// Lanes `offset..offset + WIDTH` of `a`.
 #[inline(always)]
-pub(super) fn load_at<P: PacketIsa>(k: P, a: &[f32; MAX_WIDTH], offset: usize) -> P::F {
-    debug_assert!(offset == 0 || (offset == 8 && P::WIDTH == 8));
-    match offset {
-        0 => k.load(a),
-        _ => k.load_lanes::<8>(a[offset..].first_chunk().expect("eight lanes past offset")),
+fn load_at<P: PacketIsa>(k: P, a: &[f32; 16], offset: usize) -> P::F {
+    if offset == 0 {
+        return k.load(a);
     }
+    let mut row = [0.0f32; MAX_WIDTH];
+    row[..P::WIDTH].copy_from_slice(&a[offset..offset + P::WIDTH]);
+    k.load(&row)
 }
 
 /// The triangles of `kept` as (packet, lane), in index order.

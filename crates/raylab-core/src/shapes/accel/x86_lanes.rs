@@ -574,13 +574,13 @@ unsafe fn transpose8<const S: usize, const K: usize>(base: *const f32) -> [__m25
     }
     // SAFETY: the loads read floats S·i + c for records i < 8 and c < S, 8 records of S floats.
     unsafe {
-        let mut rows = [[_mm256_setzero_ps(); 4]; 2];
-        for i in 0..4 {
+        let (mut a, mut b) = ([_mm256_setzero_ps(); 4], [_mm256_setzero_ps(); 4]);
+        for (i, (a, b)) in a.iter_mut().zip(&mut b).enumerate() {
             let (low, high) = (base.add(S * i), base.add(S * (i + 4)));
-            rows[0][i] = _mm256_loadu2_m128(high, low);
-            rows[1][i] = _mm256_loadu2_m128(high.add(S - 4), low.add(S - 4));
+            *a = _mm256_loadu2_m128(high, low);
+            *b = _mm256_loadu2_m128(high.add(S - 4), low.add(S - 4));
         }
-        let (a, b) = (transpose4(rows[0]), transpose4(rows[1]));
+        let (a, b) = (transpose4(a), transpose4(b));
         let mut out = [_mm256_setzero_ps(); K];
         for (c, out) in out.iter_mut().enumerate() {
             *out = if c < 4 { a[c] } else { b[c + 4 - S] };
