@@ -1,8 +1,9 @@
 //! Sixteen values into SIMD lanes, or out of them, at once, for an integrator that holds
 //! sixteen hits side by side ([`super::HitLanes`]): their rays ([`ray_lanes`]), each hit's
 //! entry of a per-triangle table in a scene of at most 32 triangles ([`table_lanes`]), and
-//! sixteen values stored back as `Vec3`s ([`store_vec3s`]). With AVX-512 each is a few register
-//! operations (loads, permutes, stores); elsewhere lane by lane. Both give the same values.
+//! sixteen values stored back as `Vec3`s ([`store_vec3s`]). With AVX-512 or AVX2 each is a few
+//! register operations (loads, permutes, shuffles, stores); elsewhere lane by lane. All give the
+//! same values.
 //!
 //! Why: filled lane by lane, sixteen hits' fields went through the stack one `f32` at a time,
 //! and the vector loads that then read them back waited for those stores (a store-forwarding
@@ -32,6 +33,12 @@ pub fn table_lanes(isa: Isa, table: &[f32; 32], index: &[u32; 16], lanes: u16) -
         // compiled with; nothing is read from memory but `table` and `index`, whole.
         return unsafe { x86_lanes::permute_avx512(table, index, lanes) };
     }
+    #[cfg(target_arch = "x86_64")]
+    if let Isa::Avx2(_) = isa {
+        // SAFETY: `Isa::Avx2` exists only on a CPU with the features `permute_avx2` is compiled
+        // with; nothing is read from memory but `table` and `index`, whole.
+        return unsafe { x86_lanes::permute_avx2(table, index, lanes) };
+    }
     let _ = isa;
     std::array::from_fn(|lane| match lanes & (1 << lane) {
         0 => 0.0,
@@ -49,6 +56,11 @@ pub fn ray_lanes(isa: Isa, rays: &[Ray]) -> [[f32; 16]; 6] {
     if let Isa::Avx512(k) = isa {
         // SAFETY: `k` proves the CPU runs AVX-512 F, DQ and VL, AVX2 and FMA.
         return unsafe { rays_avx512(k, rays) };
+    }
+    #[cfg(target_arch = "x86_64")]
+    if let (Isa::Avx2(k), Ok(rays)) = (isa, <&[Ray; 16]>::try_from(rays)) {
+        // SAFETY: `k` proves the CPU runs AVX2 and FMA.
+        return unsafe { x86_lanes::rays16_avx2(k, rays) };
     }
     let _ = isa;
     let last = rays.len() - 1;
@@ -79,6 +91,11 @@ pub fn store_vec3s(isa: Isa, x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &
     if let Isa::Avx512(_) = isa {
         // SAFETY: `Isa::Avx512` exists only on a CPU with the features of `compiled!(Avx512)`.
         return unsafe { x86_lanes::store_vec3s_avx512(x, y, z, out) };
+    }
+    #[cfg(target_arch = "x86_64")]
+    if let Isa::Avx2(_) = isa {
+        // SAFETY: `Isa::Avx2` exists only on a CPU with the features of `compiled!(Avx2)`.
+        return unsafe { x86_lanes::store_vec3s_avx2(x, y, z, out) };
     }
     let _ = isa;
     for (lane, v) in out.iter_mut().enumerate() {

@@ -239,9 +239,9 @@ impl<P: PacketIsa> Lanes<P> {
     /// missed) and the lanes of `active` that hit it with `0 < t < limit`:
     /// [`intersect_lanes`], a lane per ray, so each lane has the single ray's bits.
     #[inline(always)]
-    fn triangle<const N: usize>(
+    fn triangle<T: PacketTriangle>(
         &self,
-        p: &Packet<N>,
+        p: &T,
         tri: usize,
         active: P::Mask,
         limit: P::F,
@@ -252,25 +252,24 @@ impl<P: PacketIsa> Lanes<P> {
     /// [`Lanes::triangle`], giving up before `u` and `v` where `give_up` is set and no lane's
     /// `t` is in range ([`intersect_lanes_giving_up`]).
     #[inline(always)]
-    fn triangle_or_give_up<const N: usize>(
+    fn triangle_or_give_up<T: PacketTriangle>(
         &self,
-        p: &Packet<N>,
+        p: &T,
         tri: usize,
         active: P::Mask,
         limit: P::F,
         give_up: bool,
     ) -> ([P::F; 3], P::Mask) {
-        let lane = |rows: &[[f32; N]; 3]| Vec3::new(rows[0][tri], rows[1][tri], rows[2][tri]);
-        let (e1, e2) = (Vec3x::splat(lane(&p.e1)), Vec3x::splat(lane(&p.e2)));
+        let [v0, e1, e2, n] = p.corner_edges_normal(tri);
         let [ox, oy, oz] = self.origin;
         let [dx, dy, dz] = self.direction;
         let h = intersect_lanes_giving_up(
             Vec3x::new(ox, oy, oz),
             Vec3x::new(dx, dy, dz),
-            Vec3x::splat(lane(&p.v0)),
-            e1,
-            e2,
-            e1.cross(e2),
+            Vec3x::splat(v0),
+            Vec3x::splat(e1),
+            Vec3x::splat(e2),
+            Vec3x::splat(n),
             limit,
             give_up,
         );
@@ -291,9 +290,9 @@ impl<P: PacketIsa> Lanes<P> {
     /// lanes left out): a leaf's, or those of a list that a batch's cone keeps
     /// ([`closest_in_list`]), read where they lie, not copied.
     #[inline(always)]
-    fn nearest_among<'p, const N: usize>(
+    fn nearest_among<'p, T: PacketTriangle + 'p>(
         &self,
-        triangles: impl Iterator<Item = (&'p Packet<N>, usize)>,
+        triangles: impl Iterator<Item = (&'p T, usize)>,
         active: u32,
         b: &mut Best,
         t_max: f32,
@@ -310,7 +309,7 @@ impl<P: PacketIsa> Lanes<P> {
             if hit.bitmask() == 0 {
                 continue;
             }
-            let index_v = k.splat_u32(p.index[tri]);
+            let index_v = k.splat_u32(p.index(tri));
             // Nearer, or as near with a lower index (a lane without a hit has best_t = t_max,
             // which no hit reaches, so the index test only ever compares real hits).
             let nearer = hit & t.simd_lt(best_t);
@@ -341,9 +340,9 @@ impl<P: PacketIsa> Lanes<P> {
 
     /// [`Lanes::leaf_any`] over any triangles (see [`Lanes::nearest_among`]).
     #[inline(always)]
-    fn any_among<'p, const N: usize>(
+    fn any_among<'p, T: PacketTriangle + 'p>(
         &self,
-        triangles: impl Iterator<Item = (&'p Packet<N>, usize)>,
+        triangles: impl Iterator<Item = (&'p T, usize)>,
         active: u32,
         limit: P::F,
         give_up: bool,
@@ -365,6 +364,51 @@ impl<P: PacketIsa> Lanes<P> {
             }
         }
         active & !left
+    }
+}
+
+/// A triangle of a packet, by its lane: what [`Lanes::triangle`] tests it with.
+trait PacketTriangle {
+    /// Lane `tri`'s `v0`, `e1`, `e2` and normal `n = e1 × e2`: stored by [`Packet16`] (the
+    /// flat list's), computed for the BVH's leaves by the same expression, so the same bits
+    /// (a cross product less per triangle and packet of rays where it is stored).
+    fn corner_edges_normal(&self, tri: usize) -> [Vec3; 4];
+    /// Lane `tri`'s triangle index.
+    fn index(&self, tri: usize) -> u32;
+}
+
+/// Lane `tri` of rows of x, y and z.
+#[inline(always)]
+fn lane<const N: usize>(rows: &[[f32; N]; 3], tri: usize) -> Vec3 {
+    Vec3::new(rows[0][tri], rows[1][tri], rows[2][tri])
+}
+
+impl<const N: usize> PacketTriangle for Packet<N> {
+    #[inline(always)]
+    fn corner_edges_normal(&self, tri: usize) -> [Vec3; 4] {
+        let (e1, e2) = (lane(&self.e1, tri), lane(&self.e2, tri));
+        [lane(&self.v0, tri), e1, e2, e1.cross(e2)]
+    }
+    #[inline(always)]
+    fn index(&self, tri: usize) -> u32 {
+        self.index[tri]
+    }
+}
+
+impl PacketTriangle for Packet16 {
+    #[inline(always)]
+    fn corner_edges_normal(&self, tri: usize) -> [Vec3; 4] {
+        let p = &self.triangles;
+        [
+            lane(&p.v0, tri),
+            lane(&p.e1, tri),
+            lane(&p.e2, tri),
+            lane(&self.n, tri),
+        ]
+    }
+    #[inline(always)]
+    fn index(&self, tri: usize) -> u32 {
+        self.triangles.index[tri]
     }
 }
 
@@ -577,15 +621,12 @@ fn load_at<P: PacketIsa>(k: P, a: &[f32; 16], offset: usize) -> P::F {
 
 /// The triangles of `kept` as (packet, lane), in index order.
 #[inline(always)]
-fn kept_triangles(
-    packets: &[Packet16],
-    mut kept: u64,
-) -> impl Iterator<Item = (&Packet<16>, usize)> {
+fn kept_triangles(packets: &[Packet16], mut kept: u64) -> impl Iterator<Item = (&Packet16, usize)> {
     std::iter::from_fn(move || {
         (kept != 0).then(|| {
             let i = kept.trailing_zeros() as usize;
             kept &= kept - 1;
-            (&packets[i / 16].triangles, i % 16)
+            (&packets[i / 16], i % 16)
         })
     })
 }
@@ -789,6 +830,48 @@ mod tests {
         for (lane, r) in rays.iter().enumerate() {
             let x = floats(&gathered);
             assert_eq!([x[0][lane], x[4][lane]], [r.origin.x, r.direction.y]);
+        }
+    }
+
+    /// AVX2's full packet of rays and shadow rays read by 128-bit loads and rearranged
+    /// (`transpose8`, through [`PacketIsa::rays`] and [`PacketIsa::segments`]) equal the same
+    /// read lane by lane (`gather8`), every float.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn transposed_eight_lane_packets_equal_gathered_ones() {
+        use super::super::x86_lanes::{Avx2F32, gather8};
+        let Some(k) = Avx2::detect() else {
+            return crate::shapes::accel::skip_unless_required("avx2", "transposed_eight");
+        };
+        let mut rng = crate::base::sampling::Rng::new(5);
+        let mut v = || glam::Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let rays: Vec<Ray> = (0..8).map(|_| Ray::new(v(), v())).collect();
+        let segments: Vec<(Ray, f32)> = rays.iter().map(|r| (*r, r.origin.x + 1.0)).collect();
+        let floats = |vs: &[Avx2F32]| -> Vec<[f32; MAX_WIDTH]> {
+            vs.iter()
+                .map(|&x| {
+                    let mut a = [0.0; MAX_WIDTH];
+                    k.store(&mut a, x);
+                    a
+                })
+                .collect()
+        };
+        // SAFETY: AVX2 (detected); 8 records of RAY_FLOATS and SEGMENT_FLOATS floats.
+        let (gathered, gathered_segments) = unsafe {
+            (
+                gather8::<6>(rays.as_ptr().cast(), RAY_FLOATS, 8).map(Avx2F32),
+                gather8::<7>(segments.as_ptr().cast(), SEGMENT_FLOATS, 8).map(Avx2F32),
+            )
+        };
+        assert_eq!(floats(&k.rays(&rays)), floats(&gathered));
+        assert_eq!(floats(&k.segments(&segments)), floats(&gathered_segments));
+        let x = floats(&gathered_segments);
+        for (lane, (r, t)) in segments.iter().enumerate() {
+            let want = [r.origin.x, r.origin.y, r.direction.x, r.direction.z, *t];
+            assert_eq!(
+                [x[0][lane], x[1][lane], x[3][lane], x[5][lane], x[6][lane]],
+                want
+            );
         }
     }
 

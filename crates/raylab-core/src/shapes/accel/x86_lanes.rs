@@ -542,12 +542,63 @@ unsafe fn transpose16<const S: usize, const K: usize>(base: *const f32) -> [__m5
     }
 }
 
+/// [`gather8`] for a full packet (`len` = 8) of records of `S` floats (`4 ≤ K ≤ S ≤ 8`), read
+/// with sixteen 128-bit loads and rearranged in registers: AVX2's gathers read each lane from
+/// memory one at a time, slowly on AMD's cores.
+///
+/// Register `i` (`i < 4`) holds floats `0..4` of record `i` in its low half and of record
+/// `i + 4` in its high half (`a`), likewise floats `S − 4 .. S` (`b`); a 4 × 4 transpose in
+/// each half then gives floats `0..4` and `S − 4 .. S` with record `i` in lane `i`.
+///
+/// # Safety
+/// AVX2; `base` points to 8 records of `S` floats.
+#[inline(always)]
+unsafe fn transpose8<const S: usize, const K: usize>(base: *const f32) -> [__m256; K] {
+    const { assert!(4 <= K && K <= S && S <= 8) };
+    /// Rows `0..4` of the four registers' 4 × 4 blocks, transposed in each half.
+    #[inline(always)]
+    unsafe fn transpose4(r: [__m256; 4]) -> [__m256; 4] {
+        // SAFETY: AVX (the caller's).
+        unsafe {
+            let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+            let t1 = _mm256_unpacklo_ps(r[2], r[3]);
+            let t2 = _mm256_unpackhi_ps(r[0], r[1]);
+            let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+            [
+                _mm256_shuffle_ps::<0b01_00_01_00>(t0, t1),
+                _mm256_shuffle_ps::<0b11_10_11_10>(t0, t1),
+                _mm256_shuffle_ps::<0b01_00_01_00>(t2, t3),
+                _mm256_shuffle_ps::<0b11_10_11_10>(t2, t3),
+            ]
+        }
+    }
+    // SAFETY: the loads read floats S·i + c for records i < 8 and c < S, 8 records of S floats.
+    unsafe {
+        let (mut a, mut b) = ([_mm256_setzero_ps(); 4], [_mm256_setzero_ps(); 4]);
+        for (i, (a, b)) in a.iter_mut().zip(&mut b).enumerate() {
+            let (low, high) = (base.add(S * i), base.add(S * (i + 4)));
+            *a = _mm256_loadu2_m128(high, low);
+            *b = _mm256_loadu2_m128(high.add(S - 4), low.add(S - 4));
+        }
+        let (a, b) = (transpose4(a), transpose4(b));
+        let mut out = [_mm256_setzero_ps(); K];
+        for (c, out) in out.iter_mut().enumerate() {
+            *out = if c < 4 { a[c] } else { b[c + 4 - S] };
+        }
+        out
+    }
+}
+
 /// [`gather16`] for eight lanes.
 ///
 /// # Safety
 /// AVX2; `base` points to `len` (1 to 8) records of `stride ≥ K` floats.
 #[inline(always)]
-unsafe fn gather8<const K: usize>(base: *const f32, stride: i32, len: usize) -> [__m256; K] {
+pub(super) unsafe fn gather8<const K: usize>(
+    base: *const f32,
+    stride: i32,
+    len: usize,
+) -> [__m256; K] {
     // SAFETY: every index gathered is stride·i + c for a record i < len and c < K ≤ stride.
     unsafe {
         let lane = _mm256_min_epi32(
@@ -678,15 +729,29 @@ impl PacketIsa for Avx2 {
     #[inline(always)]
     fn rays(self, rays: &[Ray]) -> [Avx2F32; 6] {
         debug_assert!(!rays.is_empty() && rays.len() <= Self::WIDTH);
-        // SAFETY: `rays` holds rays.len() records of RAY_FLOATS floats.
-        unsafe { gather8(rays.as_ptr().cast(), RAY_FLOATS, rays.len()) }.map(Avx2F32)
+        // SAFETY: AVX2; `rays` holds rays.len() records of RAY_FLOATS floats.
+        let v = unsafe {
+            if rays.len() == 8 {
+                transpose8::<{ RAY_FLOATS as usize }, 6>(rays.as_ptr().cast())
+            } else {
+                gather8(rays.as_ptr().cast(), RAY_FLOATS, rays.len())
+            }
+        };
+        v.map(Avx2F32)
     }
 
     #[inline(always)]
     fn segments(self, segments: &[(Ray, f32)]) -> [Avx2F32; 7] {
         debug_assert!(!segments.is_empty() && segments.len() <= Self::WIDTH);
-        // SAFETY: `segments` holds segments.len() records of SEGMENT_FLOATS floats.
-        unsafe { gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len()) }.map(Avx2F32)
+        // SAFETY: AVX2; `segments` holds segments.len() records of SEGMENT_FLOATS floats.
+        let v = unsafe {
+            if segments.len() == 8 {
+                transpose8::<{ SEGMENT_FLOATS as usize }, 7>(segments.as_ptr().cast())
+            } else {
+                gather8(segments.as_ptr().cast(), SEGMENT_FLOATS, segments.len())
+            }
+        };
+        v.map(Avx2F32)
     }
 
     #[inline(always)]
@@ -833,6 +898,93 @@ pub(super) fn store_vec3s_avx512(
             let xy = _mm512_permutex2var_ps(x, _mm512_loadu_si512(xy.as_ptr().cast()), y);
             let v = _mm512_permutex2var_ps(xy, _mm512_loadu_si512(then_z.as_ptr().cast()), z);
             _mm512_storeu_ps(base.add(16 * k), v);
+        }
+    }
+});
+
+compiled!(Avx2:
+/// [`super::lane_io::table_lanes`] with AVX2: each eight lanes pick from the table's four
+/// registers of eight with one `vpermps` each (the index's low three bits), and two blends
+/// choose among the four by the index's bits 3 and 4 (shifted into the sign bit, which
+/// `vblendvps` reads).
+#[inline]
+pub(super) fn permute_avx2(table: &[f32; 32], index: &[u32; 16], lanes: u16) -> [f32; 16] {
+    let mut out = [0.0f32; 16];
+    // SAFETY: the loads read `table`'s 128 bytes and `index`'s 64, the stores write `out`'s 64,
+    // unaligned.
+    unsafe {
+        let at = table.as_ptr();
+        let t = [
+            _mm256_loadu_ps(at),
+            _mm256_loadu_ps(at.add(8)),
+            _mm256_loadu_ps(at.add(16)),
+            _mm256_loadu_ps(at.add(24)),
+        ];
+        let bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        for half in 0..2 {
+            let index = _mm256_loadu_si256(index.as_ptr().add(8 * half).cast());
+            let bit3 = _mm256_castsi256_ps(_mm256_slli_epi32::<28>(index));
+            let bit4 = _mm256_castsi256_ps(_mm256_slli_epi32::<27>(index));
+            let low = _mm256_blendv_ps(
+                _mm256_permutevar8x32_ps(t[0], index),
+                _mm256_permutevar8x32_ps(t[1], index),
+                bit3,
+            );
+            let high = _mm256_blendv_ps(
+                _mm256_permutevar8x32_ps(t[2], index),
+                _mm256_permutevar8x32_ps(t[3], index),
+                bit3,
+            );
+            let value = _mm256_blendv_ps(low, high, bit4);
+            let on = _mm256_and_si256(_mm256_set1_epi32(i32::from(lanes >> (8 * half))), bit);
+            let on = _mm256_castsi256_ps(_mm256_cmpeq_epi32(on, bit));
+            _mm256_storeu_ps(out.as_mut_ptr().add(8 * half), _mm256_and_ps(value, on));
+        }
+    }
+    out
+});
+
+compiled!(Avx2:
+/// [`super::lane_io::ray_lanes`] with AVX2, for sixteen rays: [`PacketIsa::rays`]'s loads
+/// for each eight.
+#[inline]
+pub(super) fn rays16_avx2(k: Avx2, rays: &[Ray; 16]) -> [[f32; 16]; 6] {
+    let mut out = [[0.0; 16]; 6];
+    for (half, rays) in rays.chunks_exact(8).enumerate() {
+        for (out, v) in out.iter_mut().zip(k.rays(rays)) {
+            // SAFETY: AVX; `out` holds sixteen writable f32, eight from 8·half.
+            unsafe { _mm256_storeu_ps(out.as_mut_ptr().add(8 * half), v.0) }
+        }
+    }
+    out
+});
+
+compiled!(Avx2:
+/// [`super::lane_io::store_vec3s`] with AVX2: each eight vectors are three registers, made of
+/// the lanes by six in-half shuffles and three half swaps.
+#[inline]
+pub(super) fn store_vec3s_avx2(x: &[f32; 16], y: &[f32; 16], z: &[f32; 16], out: &mut [Vec3; 16]) {
+    // SAFETY: the loads read the three inputs' 64 bytes each; the stores write `out`'s 192
+    // bytes (sixteen `Vec3`s of three `f32`, `repr(C)`), unaligned.
+    unsafe {
+        let base = out.as_mut_ptr().cast::<f32>();
+        for half in 0..2 {
+            let (x, y, z) = (
+                _mm256_loadu_ps(x.as_ptr().add(8 * half)),
+                _mm256_loadu_ps(y.as_ptr().add(8 * half)),
+                _mm256_loadu_ps(z.as_ptr().add(8 * half)),
+            );
+            // In each half of four vectors a, b, c, d (the second half: e, f, g, h):
+            let xy = _mm256_shuffle_ps::<0b10_00_10_00>(x, y); // xa xc ya yc
+            let yz = _mm256_shuffle_ps::<0b11_01_11_01>(y, z); // yb yd zb zd
+            let zx = _mm256_shuffle_ps::<0b11_01_10_00>(z, x); // za zc xb xd
+            let a = _mm256_shuffle_ps::<0b10_00_10_00>(xy, zx); // xa ya za xb
+            let b = _mm256_shuffle_ps::<0b11_01_10_00>(yz, xy); // yb zb xc yc
+            let c = _mm256_shuffle_ps::<0b11_01_11_01>(zx, yz); // zc xd yd zd
+            let at = base.add(24 * half);
+            _mm256_storeu_ps(at, _mm256_permute2f128_ps::<0x20>(a, b));
+            _mm256_storeu_ps(at.add(8), _mm256_permute2f128_ps::<0x30>(c, a));
+            _mm256_storeu_ps(at.add(16), _mm256_permute2f128_ps::<0x31>(b, c));
         }
     }
 });
