@@ -6,6 +6,7 @@
 
 use super::bvh::Bvh;
 use super::cull::{self, Cone};
+use super::segments::SegmentLanes;
 use super::set::{Compiled, InstructionSet};
 use super::wide::Flat;
 use super::{Accel, Hit, HitLanes, Structure, packet};
@@ -69,31 +70,6 @@ impl Accel {
             rays,
             out,
         })
-    }
-}
-
-/// Up to sixteen shadow rays as lanes (structure of arrays), as the lab's shading makes them:
-/// origins, directions and lengths per lane, and `cast`, bit `i` set where lane `i` holds a ray.
-/// [`Accel::occluded_lanes`] traces them without copying them into an array of rays first.
-#[derive(Clone, Copy, Debug)]
-pub struct SegmentLanes<'a> {
-    pub origin: [&'a [f32; 16]; 3],
-    pub direction: [&'a [f32; 16]; 3],
-    pub t_max: &'a [f32; 16],
-    pub cast: u16,
-}
-
-impl SegmentLanes<'_> {
-    /// Lane `i`'s ray and length.
-    pub fn ray(&self, i: usize) -> (Ray, f32) {
-        let v = |a: [&[f32; 16]; 3]| glam::Vec3::new(a[0][i], a[1][i], a[2][i]);
-        (
-            Ray {
-                origin: v(self.origin),
-                direction: v(self.direction),
-            },
-            self.t_max[i],
-        )
     }
 }
 

@@ -19,7 +19,8 @@
 //! * [`isa`]: the kernel sets by name ([`Isa`]); [`choice`]: the one every structure uses,
 //!   forced or measured ([`calibrate`]: which is fastest on this CPU, at start-up).
 //! * [`batches`]: the batch queries, written once for every set.
-//! * [`hit`]: what the queries answer ([`Hit`], [`HitLanes`], [`TraversalCost`]).
+//! * [`hit`]: what the queries answer ([`Hit`], [`HitLanes`], [`TraversalCost`]);
+//!   [`segments`]: shadow rays given as lanes ([`SegmentLanes`]).
 //!
 //! [`Accel::build`] picks per scene ([`AccelKind::Auto`]): the flat list for tiny scenes (the
 //! 30-triangle Cornell box, where it beats any tree: PERFORMANCE.md, "Design choices and what each buys"), the wide BVH
@@ -62,6 +63,7 @@ pub mod kernels;
 pub mod lane_io;
 pub mod packet;
 pub mod portable;
+pub mod segments;
 pub mod set;
 pub mod simd;
 pub mod wide;
@@ -73,9 +75,10 @@ use std::time::{Duration, Instant};
 use crate::base::geometry::{Ray, Triangle};
 use crate::base::named::named_enum;
 
-pub use self::batches::{BATCH_OF_LANES, SegmentLanes};
+pub use self::batches::BATCH_OF_LANES;
 pub use self::hit::{Hit, HitLanes, TraversalCost};
 pub use self::isa::{Isa, skip_unless_required};
+pub use self::segments::SegmentLanes;
 
 use self::bvh::Bvh;
 use self::set::{Compiled, InstructionSet};
