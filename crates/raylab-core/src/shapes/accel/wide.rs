@@ -166,11 +166,22 @@ impl Flat {
     /// Whether one ray hits anything: every packet at the set's width.
     #[inline(always)]
     pub fn occluded<S: InstructionSet>(&self, k: S, r: &RayK, t_max: f32) -> bool {
+        // Plain loops, no closures: a closure is a function of its own, which the compiler may
+        // leave out of line, compiled without the set's instructions.
         if S::WIDTH == 16 {
-            self.packets16.iter().any(|p| kernels::any(k, p, r, t_max))
+            for p in &self.packets16 {
+                if kernels::any(k, p, r, t_max) {
+                    return true;
+                }
+            }
         } else {
-            self.packets.iter().any(|p| kernels::any(k, p, r, t_max))
+            for p in &self.packets {
+                if kernels::any(k, p, r, t_max) {
+                    return true;
+                }
+            }
         }
+        false
     }
 }
 
