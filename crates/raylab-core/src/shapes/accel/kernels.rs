@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use super::set::{InstructionSet, MAX_WIDTH};
+use super::set::{Compiled, InstructionSet, MAX_WIDTH};
 use super::simd::{LANES, LaneHit, Node8, Packet, Packet16, RayK};
 use crate::base::lanes::{Mask, Real, Vec3x};
 use crate::shapes::intersect::intersect_lanes;
@@ -197,4 +197,51 @@ pub(super) fn any<P: InstructionSet, T: TriangleLanes>(
     t_limit: f32,
 ) -> bool {
     hits(k, p, r, t_limit).1.any()
+}
+
+/// [`boxes`] as its own function compiled for the set ([`InstructionSet::call`]), for the wide
+/// BVH's single-ray traversal: its loop over nodes and leaves stays small where the compiler
+/// keeps the kernels out of line.
+pub(super) struct Boxes<'a> {
+    pub node: &'a Node8,
+    pub r: &'a RayK,
+    pub t_limit: f32,
+}
+
+impl Compiled for Boxes<'_> {
+    type Output = (u32, [f32; 8]);
+    #[inline(always)]
+    fn run<S: InstructionSet>(self, k: S) -> (u32, [f32; 8]) {
+        boxes(k, self.node, self.r, self.t_limit)
+    }
+}
+
+/// [`nearest`] in an eight-wide leaf, compiled for the set, as [`Boxes`].
+pub(super) struct Nearest<'a> {
+    pub p: &'a Packet<LANES>,
+    pub r: &'a RayK,
+    pub t_limit: f32,
+}
+
+impl Compiled for Nearest<'_> {
+    type Output = Option<LaneHit>;
+    #[inline(always)]
+    fn run<S: InstructionSet>(self, k: S) -> Option<LaneHit> {
+        nearest(k, self.p, self.r, self.t_limit)
+    }
+}
+
+/// [`any`] in an eight-wide leaf, compiled for the set, as [`Boxes`].
+pub(super) struct Any<'a> {
+    pub p: &'a Packet<LANES>,
+    pub r: &'a RayK,
+    pub t_limit: f32,
+}
+
+impl Compiled for Any<'_> {
+    type Output = bool;
+    #[inline(always)]
+    fn run<S: InstructionSet>(self, k: S) -> bool {
+        any(k, self.p, self.r, self.t_limit)
+    }
 }

@@ -459,7 +459,7 @@ impl InstructionSet for Portable {
 
     #[inline(always)]
     fn call<F: Compiled>(self, f: F) -> F::Output {
-        compiled!(Portable: fn compiled<F: Compiled>(k: Portable, f: F) -> F::Output {
+        compiled!(Portable: #[inline] fn compiled<F: Compiled>(k: Portable, f: F) -> F::Output {
             f.run(k)
         });
         compiled(self, f)

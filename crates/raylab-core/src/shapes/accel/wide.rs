@@ -459,7 +459,11 @@ impl Bvh8 {
                 } else {
                     best_t.next_up()
                 };
-                if let Some(h) = kernels::nearest(k, p, r, limit) {
+                if let Some(h) = k.call(kernels::Nearest {
+                    p,
+                    r,
+                    t_limit: limit,
+                }) {
                     let i = p.index[h.lane];
                     if h.t < best_t || i < best_i {
                         best_t = h.t;
@@ -470,7 +474,11 @@ impl Bvh8 {
             } else {
                 let node = &self.nodes[item as usize];
                 count.node();
-                let (mut mask, t) = kernels::boxes(k, node, r, best_t * BOX_T_SLACK);
+                let (mut mask, t) = k.call(kernels::Boxes {
+                    node,
+                    r,
+                    t_limit: best_t * BOX_T_SLACK,
+                });
                 if mask != 0 && mask & (mask - 1) == 0 {
                     // One child hit (the common case): go straight down.
                     item = node.child[mask.trailing_zeros() as usize];
@@ -576,12 +584,20 @@ impl Bvh8 {
         let mut item = start;
         loop {
             if item & LEAF != 0 {
-                if kernels::any(k, &self.packets[(item & !LEAF) as usize], r, t_max) {
+                if k.call(kernels::Any {
+                    p: &self.packets[(item & !LEAF) as usize],
+                    r,
+                    t_limit: t_max,
+                }) {
                     return true;
                 }
             } else {
                 let node = &self.nodes[item as usize];
-                let (mut mask, _) = kernels::boxes(k, node, r, box_limit);
+                let (mut mask, _) = k.call(kernels::Boxes {
+                    node,
+                    r,
+                    t_limit: box_limit,
+                });
                 if mask != 0 {
                     // Descend into the first hit child, keep the others for later.
                     item = node.child[mask.trailing_zeros() as usize];

@@ -579,7 +579,7 @@ impl InstructionSet for Avx512 {
 
     #[inline(always)]
     fn call<F: Compiled>(self, f: F) -> F::Output {
-        compiled!(Avx512: fn compiled<F: Compiled>(k: Avx512, f: F) -> F::Output {
+        compiled!(Avx512: #[inline] fn compiled<F: Compiled>(k: Avx512, f: F) -> F::Output {
             f.run(k)
         });
         // SAFETY: an `Avx512` value exists only on a CPU that runs the features.
@@ -699,7 +699,7 @@ impl InstructionSet for Avx2 {
 
     #[inline(always)]
     fn call<F: Compiled>(self, f: F) -> F::Output {
-        compiled!(Avx2: fn compiled<F: Compiled>(k: Avx2, f: F) -> F::Output {
+        compiled!(Avx2: #[inline] fn compiled<F: Compiled>(k: Avx2, f: F) -> F::Output {
             f.run(k)
         });
         // SAFETY: an `Avx2` value exists only on a CPU that runs the features.
