@@ -146,6 +146,11 @@ pub(crate) use select_lazy;
 /// set enables: the generic code that inlines into the function (the lanes' operations, the
 /// kernels, the packet traversal) is compiled with them, so one source serves every set.
 ///
+/// A function for every set is not written with it three times: it is written once as an
+/// `accel::set::Compiled` and entered through `Isa::call` (or a proof's
+/// `InstructionSet::call`), whose one function per set is made here. This form is for code
+/// that exists for one set only (AVX-512's lane permutes).
+///
 /// `Avx512` and `Avx2` functions exist only on x86-64, and calling one is `unsafe` where the
 /// caller is not compiled with the set: its caller holds the proof value (or checks as
 /// `detect` does) and says so in a `// SAFETY:` comment. `Portable` functions are ordinary ones.

@@ -36,8 +36,8 @@ const MAX_SAH_DEPTH: u32 = 40;
 /// SAH cost of visiting a node, relative to testing one triangle.
 const COST_TRAVERSAL: f32 = 1.0;
 /// SAH cost of a triangle in a leaf: triangles are tested eight at a time, so each costs less
-/// than a node visit. 0.25 rather than 0.35: the terrain's rays and build were faster with
-/// it, the models unchanged (PERFORMANCE.md, "Design choices and what each buys").
+/// than a node visit (the value chosen by measuring: PERFORMANCE.md, "Design choices and what
+/// each buys").
 const COST_LEAF_TRIANGLE: f32 = 0.25;
 /// Relative padding of boxes against rounding, on top of the edge tolerance.
 const BOX_PAD_RELATIVE: f32 = 8e-6;

@@ -1,14 +1,15 @@
 //! Which kernels are fastest on this CPU, measured once at start-up.
 //!
-//! The widest instruction set is not the fastest everywhere. AMD's Zen 4 executes a 512-bit
-//! instruction in two 256-bit halves, so its AVX-512 kernels may lose to AVX2 ones that test the
-//! same triangles in two 8-wide steps; Zen 5 and Intel's AVX-512 cores run 512 bits at once. A
-//! table by CPU model would be wrong for the next model, so raylab measures: [`calibrate`]
-//! traces the [`Workload`]s it is handed (a scene's triangles, camera rays in batches, then the
-//! shadow rays from their hits towards the light: the scene module makes them) with every kernel
-//! set this CPU runs, a few rounds in turn, and [`super::Isa::best_with`] uses the fastest. It takes a few milliseconds, once per
-//! process. Every kernel set returns the same hits bit for bit (tests/bvh.rs, tests/packets.rs),
-//! so the choice changes the speed, never the image. `--isa` (or `RAYLAB_ISA`) forces one.
+//! The widest instruction set is not the fastest everywhere: a CPU may execute a 512-bit
+//! instruction as two 256-bit halves, and then its AVX-512 kernels may lose to AVX2 ones that
+//! test the same triangles in two 8-wide steps. A table by CPU model would be wrong for the
+//! next model, so raylab measures: [`calibrate`] traces the [`Workload`]s it is handed (a
+//! scene's triangles, camera rays in batches, then the shadow rays from their hits towards the
+//! light: the scene module makes them) with every kernel set this CPU runs, a few rounds in
+//! turn, and [`super::Isa::best_with`] uses the fastest. It takes a few milliseconds, once per
+//! process. Every kernel set returns the same hits bit for bit (tests/bvh.rs,
+//! tests/packets.rs), so the choice changes the speed, never the image. `--isa` (or
+//! `RAYLAB_ISA`) forces one.
 
 use std::time::{Duration, Instant};
 
@@ -24,7 +25,8 @@ pub struct Calibration {
 }
 
 impl Calibration {
-    /// One line for people: "avx512 (avx512 1.9 ms, avx2 2.6 ms, scalar 9.1 ms)".
+    /// One line for people: the set chosen, then each set's best time, as
+    /// "avx512 (avx512 … ms, avx2 … ms)".
     pub fn summary(&self) -> String {
         let times: Vec<String> = self
             .timings

@@ -226,7 +226,7 @@ impl Cone {
 }
 
 mod lanes {
-    use super::super::packet::{MAX_WIDTH, PacketIsa};
+    use super::super::set::{InstructionSet, MAX_WIDTH};
     use crate::base::lanes::{Mask, Real};
 
     use super::super::SegmentLanes;
@@ -235,7 +235,7 @@ mod lanes {
     use crate::base::geometry::Ray;
 
     /// Lane-wise slope bounds: `lo`/`hi` of x and y, and whether every lane so far is valid.
-    struct Acc<P: PacketIsa> {
+    struct Acc<P: InstructionSet> {
         x_lo: P::F,
         x_hi: P::F,
         y_lo: P::F,
@@ -243,7 +243,7 @@ mod lanes {
         bad: u32,
     }
 
-    impl<P: PacketIsa> Acc<P> {
+    impl<P: InstructionSet> Acc<P> {
         #[inline(always)]
         fn new(k: P) -> Self {
             Acc {
@@ -294,13 +294,13 @@ mod lanes {
 
     /// The least lane.
     #[inline(always)]
-    fn least<P: PacketIsa>(k: P, v: P::F) -> f32 {
+    fn least<P: InstructionSet>(k: P, v: P::F) -> f32 {
         k.min_of(P::Mask::from_bitmask((1 << P::WIDTH) - 1), v)
     }
 
     /// The greatest lane (exactly: −least(−v)).
     #[inline(always)]
-    fn greatest<P: PacketIsa>(k: P, v: P::F) -> f32 {
+    fn greatest<P: InstructionSet>(k: P, v: P::F) -> f32 {
         -least(k, -v)
     }
 
@@ -317,13 +317,13 @@ mod lanes {
     }
 
     #[inline(always)]
-    fn splat3<P: PacketIsa>(k: P, v: glam::Vec3) -> [P::F; 3] {
+    fn splat3<P: InstructionSet>(k: P, v: glam::Vec3) -> [P::F; 3] {
         [k.splat(v.x), k.splat(v.y), k.splat(v.z)]
     }
 
     /// Lanes `offset..offset + WIDTH` of `a`.
     #[inline(always)]
-    fn load_at<P: PacketIsa>(k: P, a: &[f32; 16], offset: usize) -> P::F {
+    fn load_at<P: InstructionSet>(k: P, a: &[f32; 16], offset: usize) -> P::F {
         let mut row = [0.0f32; MAX_WIDTH];
         row[..P::WIDTH].copy_from_slice(&a[offset..offset + P::WIDTH]);
         k.load(&row)
@@ -331,7 +331,7 @@ mod lanes {
 
     /// Lanes `(a, b, c)` in the cone's frame, as [`Cone::local`].
     #[inline(always)]
-    fn local<P: PacketIsa>(k: P, cone: &Cone, v: [P::F; 3]) -> (P::F, P::F, P::F) {
+    fn local<P: InstructionSet>(k: P, cone: &Cone, v: [P::F; 3]) -> (P::F, P::F, P::F) {
         let a = cone.axis;
         (v[(a + 1) % 3], v[(a + 2) % 3], k.splat(cone.sign) * v[a])
     }
@@ -339,7 +339,7 @@ mod lanes {
     impl Cone {
         /// [`Cone::around_rays`], a ray per lane: the same cone, bit for bit.
         #[inline(always)]
-        pub(in crate::shapes::accel) fn around_rays_simd<P: PacketIsa>(
+        pub(in crate::shapes::accel) fn around_rays_simd<P: InstructionSet>(
             k: P,
             rays: &[Ray],
         ) -> Option<Cone> {
@@ -367,7 +367,7 @@ mod lanes {
 
         /// [`Cone::around_segments`], a segment per lane: the same cone, bit for bit.
         #[inline(always)]
-        pub(in crate::shapes::accel) fn around_segments_simd<P: PacketIsa>(
+        pub(in crate::shapes::accel) fn around_segments_simd<P: InstructionSet>(
             k: P,
             segments: &[(Ray, f32)],
         ) -> Option<Cone> {
@@ -415,7 +415,7 @@ mod lanes {
         /// lanes of `cast` only): the apex is the first ray's end, the frame from the first and
         /// the last ray's starts, as for a slice of the same rays in the same order.
         #[inline(always)]
-        pub(in crate::shapes::accel) fn around_segment_lanes<P: PacketIsa>(
+        pub(in crate::shapes::accel) fn around_segment_lanes<P: InstructionSet>(
             k: P,
             groups: &[SegmentLanes],
         ) -> Option<Cone> {
@@ -464,7 +464,7 @@ mod lanes {
         /// [`Cone::may_hit`] for the triangles of `corners` (lanes `offset..offset + WIDTH`),
         /// as a bit per lane: the same operations, so the same answers.
         #[inline(always)]
-        pub(in crate::shapes::accel) fn may_hit_lanes<P: PacketIsa>(
+        pub(in crate::shapes::accel) fn may_hit_lanes<P: InstructionSet>(
             &self,
             k: P,
             corners: &Corners,
@@ -505,7 +505,7 @@ mod lanes {
     /// Bit `i` set for each triangle `i` (of `count`, in groups of sixteen) that a ray of the
     /// cone may hit: [`Cone::may_hit_lanes`] over a whole list.
     #[inline(always)]
-    pub(in crate::shapes::accel) fn kept<P: PacketIsa>(
+    pub(in crate::shapes::accel) fn kept<P: InstructionSet>(
         cone: &Cone,
         k: P,
         groups: &[Corners],
@@ -662,12 +662,12 @@ mod tests {
     /// the same cone bit for bit, the same triangles kept.
     #[test]
     fn the_simd_cone_equals_the_readable_one() {
-        use super::super::packet::PacketIsa;
         use super::super::portable::Portable;
+        use super::super::set::InstructionSet;
         #[cfg(target_arch = "x86_64")]
         use super::super::simd::{Avx2, Avx512};
 
-        fn same<P: PacketIsa>(k: P, rays: &[Ray], segments: &[(Ray, f32)], tris: &[Triangle]) {
+        fn same<P: InstructionSet>(k: P, rays: &[Ray], segments: &[(Ray, f32)], tris: &[Triangle]) {
             let cones = [
                 (Cone::around_rays(rays), Cone::around_rays_simd(k, rays)),
                 (

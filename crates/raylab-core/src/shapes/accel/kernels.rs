@@ -1,38 +1,34 @@
-//! The single-ray kernels, written once over the lanes of a kernel set ([`PacketIsa`]): one
-//! ray, in every lane, against a lane per box of a wide node ([`boxes`]) or a lane per
-//! triangle of a packet ([`nearest`], [`nearest_among`], [`any`]). The AVX2 and portable sets
-//! run them eight lanes wide ([`Kernels`] for the wide BVH and the flat list), AVX-512 sixteen
-//! wide on the flat list's [`Packet16`]s ([`Avx512::nearest16`] and the others).
+//! The single-ray kernels, written once over the lanes of an instruction set
+//! ([`InstructionSet`]): one ray, in every lane, against a lane per box of a wide node
+//! ([`boxes`]) or a lane per triangle of a packet ([`nearest`], [`nearest_among`], [`any`]).
+//! The AVX2 and portable sets run them eight lanes wide (the wide BVH and the flat list),
+//! AVX-512 sixteen wide on the flat list's [`Packet16`]s.
 //!
 //! The triangle test is [`intersect_lanes`], the scalar test's own source, so every lane's `t`,
 //! `u`, `v` are [`crate::shapes::intersect::intersect_triangle`]'s bit for bit; the nearest of several
 //! equal hits is the lowest lane's, and across packets the first packet's, as in the
 //! brute-force loop.
 //!
-//! **Compiled per set.** The functions are `#[inline(always)]`; each set's [`Kernels`] methods
-//! call them from one function compiled with the set's instruction set ([`compiled_kernels!`]),
-//! which inlines into the callers compiled with it (the batches of [`super`]) and is a call
-//! from anywhere else.
+//! **Compiled per set.** The functions are `#[inline(always)]`: they are compiled inside the
+//! function each set's entry point makes ([`InstructionSet::call`]: the batches of
+//! [`super::batches`]).
 
 use glam::Vec3;
 
-use super::packet::{MAX_WIDTH, PacketIsa};
-use super::portable::Portable;
-#[cfg(target_arch = "x86_64")]
-use super::simd::{Avx2, Avx512};
-use super::simd::{Kernels, LANES, LaneHit, Node8, Packet, Packet16, RayK};
-use crate::base::lanes::{Mask, Real, Vec3x, compiled};
+use super::set::{Compiled, InstructionSet, MAX_WIDTH};
+use super::simd::{LANES, LaneHit, Node8, Packet, Packet16, RayK};
+use crate::base::lanes::{Mask, Real, Vec3x};
 use crate::shapes::intersect::intersect_lanes;
 
 /// A packet of triangles as lanes: `v0`, `e1`, `e2` and the normal `n = e1 × e2` (stored by
 /// [`Packet16`], computed for the 8-wide packets, by the same expression: the same bits).
 pub(super) trait TriangleLanes {
-    fn lanes<P: PacketIsa>(&self, k: P) -> [Vec3x<P::F>; 4];
+    fn lanes<P: InstructionSet>(&self, k: P) -> [Vec3x<P::F>; 4];
 }
 
 /// Rows of x, y and z as lanes.
 #[inline(always)]
-fn rows<P: PacketIsa, const N: usize>(k: P, rows: &[[f32; N]; 3]) -> Vec3x<P::F> {
+fn rows<P: InstructionSet, const N: usize>(k: P, rows: &[[f32; N]; 3]) -> Vec3x<P::F> {
     Vec3x {
         x: k.load_lanes(&rows[0]),
         y: k.load_lanes(&rows[1]),
@@ -42,7 +38,7 @@ fn rows<P: PacketIsa, const N: usize>(k: P, rows: &[[f32; N]; 3]) -> Vec3x<P::F>
 
 impl TriangleLanes for Packet<LANES> {
     #[inline(always)]
-    fn lanes<P: PacketIsa>(&self, k: P) -> [Vec3x<P::F>; 4] {
+    fn lanes<P: InstructionSet>(&self, k: P) -> [Vec3x<P::F>; 4] {
         let (e1, e2) = (rows(k, &self.e1), rows(k, &self.e2));
         [
             rows(k, &self.v0),
@@ -55,7 +51,7 @@ impl TriangleLanes for Packet<LANES> {
 
 impl TriangleLanes for Packet16 {
     #[inline(always)]
-    fn lanes<P: PacketIsa>(&self, k: P) -> [Vec3x<P::F>; 4] {
+    fn lanes<P: InstructionSet>(&self, k: P) -> [Vec3x<P::F>; 4] {
         [
             rows(k, &self.v0),
             rows(k, &self.e1),
@@ -67,7 +63,7 @@ impl TriangleLanes for Packet16 {
 
 /// `t`, `u`, `v` of every lane (meaningless for a miss) and the mask of hits.
 #[inline(always)]
-fn hits<P: PacketIsa, T: TriangleLanes>(
+fn hits<P: InstructionSet, T: TriangleLanes>(
     k: P,
     p: &T,
     r: &RayK,
@@ -81,9 +77,14 @@ fn hits<P: PacketIsa, T: TriangleLanes>(
 }
 
 /// Bit `i` set when the ray enters child box `i` within `[0, t_limit]`, and each box's entry
-/// distance ([`Kernels::boxes`]).
+/// distance ([`super::simd::Scalar::boxes`] is the readable form).
 #[inline(always)]
-pub(super) fn boxes<P: PacketIsa>(k: P, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; 8]) {
+pub(super) fn boxes<P: InstructionSet>(
+    k: P,
+    node: &Node8,
+    r: &RayK,
+    t_limit: f32,
+) -> (u32, [f32; 8]) {
     debug_assert_eq!(P::WIDTH, LANES);
     let mut t0 = k.splat(0.0);
     let mut t1 = k.splat(t_limit);
@@ -104,7 +105,7 @@ pub(super) fn boxes<P: PacketIsa>(k: P, node: &Node8, r: &RayK, t_limit: f32) ->
 
 /// The nearest hit in the packet with `0 < t < t_limit`, the lowest lane among equal `t`.
 #[inline(always)]
-pub(super) fn nearest<P: PacketIsa, T: TriangleLanes>(
+pub(super) fn nearest<P: InstructionSet, T: TriangleLanes>(
     k: P,
     p: &T,
     r: &RayK,
@@ -137,7 +138,7 @@ pub(super) fn nearest<P: PacketIsa, T: TriangleLanes>(
 /// for: most of the closest-hit time of the path tracer's bounce rays, which each meet two
 /// packets of the Cornell box.
 #[inline(always)]
-pub(super) fn nearest_among<P: PacketIsa, T: TriangleLanes>(
+pub(super) fn nearest_among<P: InstructionSet, T: TriangleLanes>(
     k: P,
     packets: &[T],
     r: &RayK,
@@ -189,121 +190,58 @@ pub(super) fn nearest_among<P: PacketIsa, T: TriangleLanes>(
 
 /// Whether any triangle of the packet is hit with `0 < t < t_limit`.
 #[inline(always)]
-pub(super) fn any<P: PacketIsa, T: TriangleLanes>(k: P, p: &T, r: &RayK, t_limit: f32) -> bool {
+pub(super) fn any<P: InstructionSet, T: TriangleLanes>(
+    k: P,
+    p: &T,
+    r: &RayK,
+    t_limit: f32,
+) -> bool {
     hits(k, p, r, t_limit).1.any()
 }
 
-/// [`Kernels`] for a set whose lanes are eight wide: the functions above, each compiled for
-/// the set ([`compiled!`]; for the portable set, which every CPU of the architecture runs, an
-/// ordinary function).
-macro_rules! compiled_kernels {
-    ($set:ident) => {
-        // Without features, `compiled` is safe to call and the `unsafe` blocks are unused.
-        #[allow(unused_unsafe)]
-        impl Kernels for $set {
-            #[inline(always)]
-            fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
-                compiled!($set: #[inline] fn compiled(
-                    k: $set, node: &Node8, r: &RayK, t_limit: f32,
-                ) -> (u32, [f32; 8]) {
-                    boxes(k, node, r, t_limit)
-                });
-                // SAFETY: a value of the kernel set proves that the CPU runs its features.
-                unsafe { compiled(self, node, r, t_limit) }
-            }
-            #[inline(always)]
-            fn nearest(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-                compiled!($set: #[inline] fn compiled(
-                    k: $set, p: &Packet<8>, r: &RayK, t: f32,
-                ) -> Option<LaneHit> {
-                    nearest(k, p, r, t)
-                });
-                // SAFETY: as above.
-                unsafe { compiled(self, p, r, t_limit) }
-            }
-            #[inline(always)]
-            fn nearest_among(
-                self,
-                packets: &[Packet<LANES>],
-                r: &RayK,
-                t_limit: f32,
-            ) -> Option<(usize, LaneHit)> {
-                compiled!($set: #[inline] fn compiled(
-                    k: $set,
-                    packets: &[Packet<8>],
-                    r: &RayK,
-                    t: f32,
-                ) -> Option<(usize, LaneHit)> {
-                    nearest_among(k, packets, r, t)
-                });
-                // SAFETY: as above.
-                unsafe { compiled(self, packets, r, t_limit) }
-            }
-            #[inline(always)]
-            fn any(self, p: &Packet<LANES>, r: &RayK, t_limit: f32) -> bool {
-                compiled!($set: #[inline] fn compiled(
-                    k: $set, p: &Packet<8>, r: &RayK, t: f32,
-                ) -> bool {
-                    any(k, p, r, t)
-                });
-                // SAFETY: as above.
-                unsafe { compiled(self, p, r, t_limit) }
-            }
-        }
-    };
+/// [`boxes`] as its own function compiled for the set ([`InstructionSet::call`]), for the wide
+/// BVH's single-ray traversal: its loop over nodes and leaves stays small where the compiler
+/// keeps the kernels out of line.
+pub(super) struct Boxes<'a> {
+    pub node: &'a Node8,
+    pub r: &'a RayK,
+    pub t_limit: f32,
 }
 
-compiled_kernels!(Portable);
-#[cfg(target_arch = "x86_64")]
-compiled_kernels!(Avx2);
-
-/// The AVX-512 kernels for the flat list's 16-wide packets: the functions above, sixteen lanes.
-#[cfg(target_arch = "x86_64")]
-impl Avx512 {
-    compiled!(Avx512: #[inline] fn nearest16_compiled(
-        self, p: &Packet16, r: &RayK, t_limit: f32,
-    ) -> Option<LaneHit> {
-        nearest(self, p, r, t_limit)
-    });
-
-    /// The nearest hit in a 16-wide packet, lowest lane among equal `t`.
+impl Compiled for Boxes<'_> {
+    type Output = (u32, [f32; 8]);
     #[inline(always)]
-    pub fn nearest16(self, p: &Packet16, r: &RayK, t_limit: f32) -> Option<LaneHit> {
-        // SAFETY: an `Avx512` value is only made by `detect`, after checking for AVX-512.
-        unsafe { self.nearest16_compiled(p, r, t_limit) }
+    fn run<S: InstructionSet>(self, k: S) -> (u32, [f32; 8]) {
+        boxes(k, self.node, self.r, self.t_limit)
     }
+}
 
-    compiled!(Avx512: #[inline] fn nearest16_among_compiled(
-        self,
-        packets: &[Packet16],
-        r: &RayK,
-        t_limit: f32,
-    ) -> Option<(usize, LaneHit)> {
-        nearest_among(self, packets, r, t_limit)
-    });
+/// [`nearest`] in an eight-wide leaf, compiled for the set, as [`Boxes`].
+pub(super) struct Nearest<'a> {
+    pub p: &'a Packet<LANES>,
+    pub r: &'a RayK,
+    pub t_limit: f32,
+}
 
-    /// The nearest hit among 16-wide `packets` ([`nearest_among`]).
+impl Compiled for Nearest<'_> {
+    type Output = Option<LaneHit>;
     #[inline(always)]
-    pub fn nearest16_among(
-        self,
-        packets: &[Packet16],
-        r: &RayK,
-        t_limit: f32,
-    ) -> Option<(usize, LaneHit)> {
-        // SAFETY: as above.
-        unsafe { self.nearest16_among_compiled(packets, r, t_limit) }
+    fn run<S: InstructionSet>(self, k: S) -> Option<LaneHit> {
+        nearest(k, self.p, self.r, self.t_limit)
     }
+}
 
-    compiled!(Avx512: #[inline] fn any16_compiled(
-        self, p: &Packet16, r: &RayK, t_limit: f32,
-    ) -> bool {
-        any(self, p, r, t_limit)
-    });
+/// [`any`] in an eight-wide leaf, compiled for the set, as [`Boxes`].
+pub(super) struct Any<'a> {
+    pub p: &'a Packet<LANES>,
+    pub r: &'a RayK,
+    pub t_limit: f32,
+}
 
-    /// Whether any triangle of a 16-wide packet is hit.
+impl Compiled for Any<'_> {
+    type Output = bool;
     #[inline(always)]
-    pub fn any16(self, p: &Packet16, r: &RayK, t_limit: f32) -> bool {
-        // SAFETY: as above.
-        unsafe { self.any16_compiled(p, r, t_limit) }
+    fn run<S: InstructionSet>(self, k: S) -> bool {
+        any(k, self.p, self.r, self.t_limit)
     }
 }

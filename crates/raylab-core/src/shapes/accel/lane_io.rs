@@ -14,7 +14,7 @@ use glam::Vec3;
 
 use super::Isa;
 #[cfg(target_arch = "x86_64")]
-use super::packet::PacketIsa;
+use super::set::InstructionSet;
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx512;
 #[cfg(target_arch = "x86_64")]
@@ -48,7 +48,7 @@ pub fn table_lanes(isa: Isa, table: &[f32; 32], index: &[u32; 16], lanes: u16) -
 
 /// Up to sixteen rays in lanes: `[origin x, y, z, direction x, y, z]`, ray `i` in lane `i`,
 /// the lanes past the last ray repeating it. With AVX-512, the packet traversal's own loads
-/// ([`PacketIsa::rays`]: six loads rearranged in registers for sixteen rays).
+/// ([`InstructionSet::rays`]: six loads rearranged in registers for sixteen rays).
 #[inline(always)]
 pub fn ray_lanes(isa: Isa, rays: &[Ray]) -> [[f32; 16]; 6] {
     assert!(!rays.is_empty() && rays.len() <= 16);

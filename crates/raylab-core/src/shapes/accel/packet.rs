@@ -8,16 +8,16 @@
 //! packet enters, far fewer instructions (PERFORMANCE.md, "Design choices and what each buys", gives what it
 //! buys).
 //!
-//! The traversal is written once, generic over [`PacketIsa`]: the lane width, a lane type
+//! The traversal is written once, generic over [`InstructionSet`]: the lane width, a lane type
 //! with the arithmetic, comparisons and masks of [`crate::base::lanes`] (`Real`, `Mask`), and the
 //! few operations a packet needs beyond (loads and stores of lanes, a masked horizontal
 //! minimum, the gather of the rays), implemented by the AVX-512 and the AVX2 kernel proof
 //! types (in [`super::x86_lanes`]) and by the portable set ([`super::portable`]). Every
-//! function of it is `#[inline(always)]`, so it is compiled inside the functions
-//! [`crate::base::lanes::compiled!`] makes for each instruction set, where the intrinsics inline.
+//! function of it is `#[inline(always)]`, so it is compiled inside each set's entry points
+//! ([`InstructionSet::call`]), where the intrinsics inline.
 //!
-//! Each lane computes exactly what [`super::simd::Kernels::boxes`] computes for its ray (the
-//! same planes, the same [`PacketIsa::plane_distance`], the same order of `max` and `min`), against
+//! Each lane computes exactly what [`super::kernels::boxes`] computes for its ray (the
+//! same planes, the same [`InstructionSet::plane_distance`], the same order of `max` and `min`), against
 //! its own best hit; leaves are tested a triangle at a time against every lane by the single
 //! ray's triangle test itself ([`crate::shapes::intersect::intersect_lanes`], a lane per ray), with
 //! the same rule for ties. So a packet returns exactly what each ray returns alone (tests/packets.rs checks
@@ -33,15 +33,12 @@ use glam::Vec3;
 use super::Hit;
 use super::bvh::BOX_T_SLACK;
 use super::bvh::INV_HUGE;
+use super::set::{InstructionSet, MAX_WIDTH};
 use super::simd::{Node8, Packet, Packet16, RayK};
-use super::wide::{Bvh8, Bvh8Big, EMPTY, KernelSet, LEAF, STACK_INLINE};
+use super::wide::{Bvh8, Bvh8Big, EMPTY, LEAF, STACK_INLINE};
 use crate::base::geometry::Ray;
 use crate::base::lanes::{Mask, Real, Vec3x, Vector};
 use crate::shapes::intersect::intersect_lanes_giving_up;
-
-/// The most rays in a packet (AVX-512's sixteen lanes of `f32`): the length of the per-lane
-/// arrays, whatever the width.
-pub const MAX_WIDTH: usize = 16;
 
 /// A ray is six `f32` (origin, direction): lane i gathers floats 6i + c.
 pub(super) const RAY_FLOATS: i32 = (size_of::<Ray>() / size_of::<f32>()) as i32;
@@ -89,75 +86,8 @@ fn directions_agree(mut directions: impl ExactSizeIterator<Item = glam::Vec3>) -
     n > ALONE as usize && directions.all(|d| d.dot(first) >= COHERENT_COS)
 }
 
-/// What the packet traversal needs of a SIMD instruction set beyond its lanes: one register of
-/// `f32` with a lane per ray ([`Real`]: the arithmetic, comparisons, `max`/`min` and `select`
-/// of [`crate::base::lanes`], each declared there once), its comparisons' results ([`Mask`], as bits
-/// too), a register of `u32` (the best triangle's index), and the few operations below, each
-/// one instruction or a short fixed sequence. Implemented by the kernel proof types, whose values
-/// exist only on a CPU that runs them: `Avx512` (sixteen rays, masks in mask registers) and
-/// `Avx2` (eight rays, masks as all-ones lanes); and by [`super::portable::Portable`] (eight
-/// rays in two four-lane registers), which every CPU runs. The single-ray kernels are written
-/// over it too ([`super::kernels`]).
-///
-/// Every method is `#[inline(always)]` and every caller in this module too: the traversal is
-/// compiled inside the functions [`crate::base::lanes::compiled!`] makes in [`super`] (one generic
-/// body per query, instantiated for each set), where the intrinsics inline.
-pub(super) trait PacketIsa: KernelSet {
-    /// Lanes, so rays in a packet.
-    const WIDTH: usize;
-    /// `WIDTH` lanes of `f32`.
-    type F: Real<Mask = Self::Mask>;
-    /// `WIDTH` lanes of `u32`.
-    type U: Copy;
-    /// A comparison's result, lane by lane.
-    type Mask: Mask;
-
-    /// The rays' origins and directions (x, y, z, dx, dy, dz), one ray a lane; lanes past
-    /// `rays.len()` (at least one, at most `WIDTH`) repeat the last ray.
-    fn rays(self, rays: &[Ray]) -> [Self::F; 6];
-    /// [`PacketIsa::rays`] for shadow rays: (x, y, z, dx, dy, dz, t_max).
-    fn segments(self, segments: &[(Ray, f32)]) -> [Self::F; 7];
-
-    #[inline(always)]
-    fn splat(self, x: f32) -> Self::F {
-        Self::F::splat(x)
-    }
-    /// The first `WIDTH` floats of `a`.
-    fn load(self, a: &[f32; MAX_WIDTH]) -> Self::F;
-    /// The first `WIDTH` floats of `a` (`N ≥ WIDTH`: checked).
-    fn load_lanes<const N: usize>(self, a: &[f32; N]) -> Self::F;
-    /// Lane `i` of `v` (`i < WIDTH`), moved to lane 0 in registers where the set can: a
-    /// store and a read back of one float would stall on the store (store forwarding).
-    fn lane(self, v: Self::F, i: usize) -> f32;
-    /// Lane `i` of `v` (`i < WIDTH`).
-    fn lane_u32(self, v: Self::U, i: usize) -> u32;
-    /// Into the first `WIDTH` floats of `a`.
-    fn store(self, a: &mut [f32; MAX_WIDTH], v: Self::F);
-    /// Each lane's distance along its ray to the plane `plane` (of the axis whose origin,
-    /// reciprocal direction and their product are given): `plane·inv − o·inv` in one rounding
-    /// where the set has a fused multiply-subtract, else `(plane − o)·inv`. Either way close
-    /// enough for the padding of the boxes (`bvh`).
-    fn plane_distance(
-        self,
-        plane: Self::F,
-        origin: Self::F,
-        inv: Self::F,
-        origin_inv: Self::F,
-    ) -> Self::F;
-
-    /// The least of the lanes of `m` (at least one).
-    fn min_of(self, m: Self::Mask, v: Self::F) -> f32;
-
-    fn splat_u32(self, x: u32) -> Self::U;
-    fn load_u32(self, a: &[u32; MAX_WIDTH]) -> Self::U;
-    fn store_u32(self, a: &mut [u32; MAX_WIDTH], v: Self::U);
-    /// Lane by lane `a < b`, unsigned.
-    fn lt_u32(self, a: Self::U, b: Self::U) -> Self::Mask;
-    fn blend_u32(self, m: Self::Mask, a: Self::U, b: Self::U) -> Self::U;
-}
-
 /// The packet's rays, one per lane: what the box test needs (as in [`RayK`]).
-struct Lanes<P: PacketIsa> {
+struct Lanes<P: InstructionSet> {
     k: P,
     origin: [P::F; 3],
     direction: [P::F; 3],
@@ -167,7 +97,7 @@ struct Lanes<P: PacketIsa> {
     negative: [P::Mask; 3],
 }
 
-impl<P: PacketIsa> Lanes<P> {
+impl<P: InstructionSet> Lanes<P> {
     /// The rays' origins and directions, one lane each (lanes past `rays.len()` repeat the
     /// last ray and are never active), and what the box test needs, computed as
     /// [`RayK::new`] computes it, a packet at a time: the same divisions, so the same bits.
@@ -207,10 +137,10 @@ impl<P: PacketIsa> Lanes<P> {
     }
 
     /// Child `slot`'s box against the lanes of `active`, each up to its own `limit`: the lanes
-    /// that enter it (as [`Kernels::boxes`] decides for each ray alone) and the nearest of
+    /// that enter it (as [`kernels::boxes`] decides for each ray alone) and the nearest of
     /// their entry distances.
     ///
-    /// [`Kernels::boxes`]: super::simd::Kernels::boxes
+    /// [`kernels::boxes`]: super::kernels::boxes
     #[inline(always)]
     fn enter(&self, node: &Node8, slot: usize, active: P::Mask, limit: P::F) -> (u32, f32) {
         let k = self.k;
@@ -416,7 +346,7 @@ impl PacketTriangle for Packet16 {
 /// `RayBoxData::new` computes it (1/d, or ±INV_HUGE where |d| ≤ 1/INV_HUGE), origin times it,
 /// and the lanes going towards negative coordinates.
 #[inline(always)]
-fn axis<P: PacketIsa>(k: P, o: P::F, d: P::F) -> (P::F, P::F, P::Mask) {
+fn axis<P: InstructionSet>(k: P, o: P::F, d: P::F) -> (P::F, P::F, P::Mask) {
     let huge = k.splat(INV_HUGE).copysign(d);
     let small = d.abs().simd_ngt(k.splat(1.0 / INV_HUGE));
     let inv = P::F::select(small, huge, k.splat(1.0) / d);
@@ -441,24 +371,24 @@ fn first_lanes(n: usize) -> u32 {
 }
 
 /// Each lane's best hit so far, as the single-ray traversal keeps it (the first
-/// [`PacketIsa::WIDTH`] entries): the lanes a closest-hit query hands back
+/// [`InstructionSet::WIDTH`] entries): the lanes a closest-hit query hands back
 /// ([`super::HitLanes`]).
 use super::HitLanes as Best;
 
 impl Best {
     /// Each lane's box limit: its best `t` with the boxes' slack.
     #[inline(always)]
-    fn box_limit<P: PacketIsa>(&self, k: P) -> P::F {
+    fn box_limit<P: InstructionSet>(&self, k: P) -> P::F {
         k.load(&self.t) * k.splat(BOX_T_SLACK)
     }
 }
 
 impl Bvh8Big {
-    /// [`Bvh8Big`]'s closest hits for up to [`PacketIsa::WIDTH`] rays at once, `out[i]` for
+    /// [`Bvh8Big`]'s closest hits for up to [`InstructionSet::WIDTH`] rays at once, `out[i]` for
     /// `rays[i]`: the large triangles first (a triangle at a time against every ray), then the
     /// tree.
     #[inline(always)]
-    pub(super) fn closest_packet<P: PacketIsa>(
+    pub(super) fn closest_packet<P: InstructionSet>(
         &self,
         k: P,
         rays: &[Ray],
@@ -478,10 +408,10 @@ impl Bvh8Big {
         }
     }
 
-    /// [`Bvh8Big`]'s any-hit queries for up to [`PacketIsa::WIDTH`] rays at once, each with
+    /// [`Bvh8Big`]'s any-hit queries for up to [`InstructionSet::WIDTH`] rays at once, each with
     /// its own `t_max`: `blocked[i]` for `rays[i]`.
     #[inline(always)]
-    pub(super) fn occluded_packet<P: PacketIsa>(
+    pub(super) fn occluded_packet<P: InstructionSet>(
         &self,
         k: P,
         rays: &[(Ray, f32)],
@@ -511,14 +441,14 @@ impl Bvh8Big {
     }
 }
 
-/// Closest hits of up to [`PacketIsa::WIDTH`] rays against the triangles `kept` (bit `i` for
+/// Closest hits of up to [`InstructionSet::WIDTH`] rays against the triangles `kept` (bit `i` for
 /// the triangle in lane `i % 16` of `packets[i / 16]`: the flat list, culled for a batch by
 /// its cone, [`super::cull`]), a triangle at a time against every ray: `out[i]` for
 /// `rays[i]`, as the brute-force loop finds it (lowest index among equal `t`). With a few
 /// triangles this beats a ray at a time, whose sixteen-lane minimum and lane extraction are a
 /// chain of dependent steps per ray.
 #[inline(always)]
-pub(super) fn closest_in_list<P: PacketIsa>(
+pub(super) fn closest_in_list<P: InstructionSet>(
     k: P,
     packets: &[Packet16],
     kept: u64,
@@ -537,7 +467,7 @@ pub(super) fn closest_in_list<P: PacketIsa>(
 /// [`closest_in_list`] into lanes: lane `i` of `out` (made [`HitLanes::new`] by the caller) is
 /// `rays[i]`'s hit.
 #[inline(always)]
-pub(super) fn nearest_in_list<P: PacketIsa>(
+pub(super) fn nearest_in_list<P: InstructionSet>(
     k: P,
     packets: &[Packet16],
     kept: u64,
@@ -551,10 +481,10 @@ pub(super) fn nearest_in_list<P: PacketIsa>(
     lanes.nearest_among(kept_triangles(packets, kept), all, out, t_max);
 }
 
-/// Any-hit queries of up to [`PacketIsa::WIDTH`] rays, each with its own `t_max`, against the
+/// Any-hit queries of up to [`InstructionSet::WIDTH`] rays, each with its own `t_max`, against the
 /// triangles `kept` of `packets`, a triangle at a time (see [`closest_in_list`]).
 #[inline(always)]
-pub(super) fn occluded_in_list<P: PacketIsa>(
+pub(super) fn occluded_in_list<P: InstructionSet>(
     k: P,
     packets: &[Packet16],
     kept: u64,
@@ -577,7 +507,7 @@ pub(super) fn occluded_in_list<P: PacketIsa>(
 /// plane within its segment ([`Lanes::triangle_or_give_up`]), worth it where the lanes are
 /// alike.
 #[inline(always)]
-pub(super) fn occluded_lanes_in_list<P: PacketIsa>(
+pub(super) fn occluded_lanes_in_list<P: InstructionSet>(
     k: P,
     packets: &[Packet16],
     kept: u64,
@@ -610,7 +540,7 @@ pub(super) fn occluded_lanes_in_list<P: PacketIsa>(
 
 /// Lanes `offset..offset + WIDTH` of `a`.
 #[inline(always)]
-fn load_at<P: PacketIsa>(k: P, a: &[f32; 16], offset: usize) -> P::F {
+fn load_at<P: InstructionSet>(k: P, a: &[f32; 16], offset: usize) -> P::F {
     if offset == 0 {
         return k.load(a);
     }
@@ -635,7 +565,7 @@ impl Bvh8 {
     /// The closest-hit traversal of a packet: lanes `active` of `lanes` (made of `rays`),
     /// each keeping its best hit in `b`.
     #[inline(always)]
-    fn closest_lanes<P: PacketIsa>(
+    fn closest_lanes<P: InstructionSet>(
         &self,
         lanes: &Lanes<P>,
         rays: &[Ray],
@@ -717,7 +647,7 @@ impl Bvh8 {
 
     /// The any-hit traversal of a packet: the lanes of `active` blocked before their `t_max`.
     #[inline(always)]
-    fn occluded_lanes<P: PacketIsa>(
+    fn occluded_lanes<P: InstructionSet>(
         &self,
         lanes: &Lanes<P>,
         rays: &[Ray],
@@ -890,7 +820,7 @@ mod tests {
         }
     }
 
-    fn eight_lane_masks<P: PacketIsa>(k: P) {
+    fn eight_lane_masks<P: InstructionSet>(k: P) {
         assert_eq!(P::WIDTH, 8);
         for bits in 0..256u32 {
             assert_eq!(P::Mask::from_bitmask(bits).bitmask(), bits);
@@ -950,7 +880,7 @@ mod tests {
         let rays: Vec<Ray> = (0..5)
             .map(|i| Ray::new(Vec3::new(i as f32, 1.0, 2.0), Vec3::new(1.0, i as f32, 0.5)))
             .collect();
-        fn check<P: PacketIsa>(k: P, rays: &[Ray]) {
+        fn check<P: InstructionSet>(k: P, rays: &[Ray]) {
             for (c, v) in k.rays(rays).into_iter().enumerate() {
                 let mut got = [0.0; MAX_WIDTH];
                 k.store(&mut got, v);

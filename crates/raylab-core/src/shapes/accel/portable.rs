@@ -6,7 +6,7 @@
 //! CPU runs (so nothing is detected and no `#[target_feature]` is needed), and four plain
 //! `f32`s elsewhere, which the compiler turns into the CPU's own four-lane vectors (NEON on
 //! aarch64). The traversals, the culling and the triangle test are the generic code the SIMD
-//! sets run ([`PacketIsa`], [`crate::shapes::intersect::intersect_lanes`]); this module only says
+//! sets run ([`InstructionSet`], [`crate::shapes::intersect::intersect_lanes`]); this module only says
 //! what one lane operation is.
 //!
 //! **Bit for bit.** Every arithmetic operation is the `f32` one in each lane, exactly rounded
@@ -14,12 +14,10 @@
 //! test computes `(plane − o)·inv` as the readable traversal does; boxes only decide which
 //! triangles are tested, never what a test returns.
 
-use super::Hit;
-use super::packet::{MAX_WIDTH, PacketIsa};
-use super::simd::{LANES, RayK};
-use super::wide::{Flat, KernelSet};
+use super::set::{Compiled, InstructionSet, MAX_WIDTH};
+use super::simd::LANES;
 use crate::base::geometry::Ray;
-use crate::base::lanes::{Mask, Real};
+use crate::base::lanes::{Mask, Real, compiled};
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
@@ -447,11 +445,25 @@ fn ray_float(r: &Ray, c: usize) -> f32 {
     }
 }
 
-impl PacketIsa for Portable {
+impl InstructionSet for Portable {
     const WIDTH: usize = LANES;
     type F = F8;
     type U = U8;
     type Mask = M8;
+    type Tree = Portable;
+
+    #[inline(always)]
+    fn tree(self) -> Portable {
+        self
+    }
+
+    #[inline(always)]
+    fn call<F: Compiled>(self, f: F) -> F::Output {
+        compiled!(Portable: #[inline] fn compiled<F: Compiled>(k: Portable, f: F) -> F::Output {
+            f.run(k)
+        });
+        compiled(self, f)
+    }
 
     #[inline(always)]
     fn rays(self, rays: &[Ray]) -> [F8; 6] {
@@ -527,5 +539,3 @@ impl PacketIsa for Portable {
         U8(m.blend(a.0, b.0))
     }
 }
-
-super::wide::one_width_kernel_set!(Portable);

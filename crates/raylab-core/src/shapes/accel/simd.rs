@@ -1,8 +1,8 @@
 //! The two inner loops of tracing, eight lanes at a time: a ray against the eight boxes of a
 //! wide node, and a ray against a packet of eight triangles — their data ([`Node8`],
-//! [`Packet`], [`RayK`]), what the traversals ask of them ([`Kernels`]), the kernel sets'
-//! proof types ([`Avx2`], [`Avx512`]: a value exists only on a CPU that runs the set) and the
-//! readable scalar twin ([`Scalar`]): plain loops over the lanes, the definition.
+//! [`Packet`], [`RayK`]), the x86 sets' proof types ([`Avx2`], [`Avx512`]: a value exists only
+//! on a CPU that runs the set) and the readable scalar twin of the kernels ([`Scalar`]): plain
+//! loops over the lanes, the definition the tests compare every set with.
 //!
 //! The kernels every set runs are written once, generic over the set's lanes
 //! ([`super::kernels`]). The triangle kernels are the scalar test's own source,
@@ -181,30 +181,6 @@ impl RayK {
     }
 }
 
-/// The kernels the traversals are written against.
-pub trait Kernels: Copy {
-    /// Bit `i` set when the ray enters child box `i` within `[0, t_limit]`, and each box's
-    /// entry distance.
-    fn boxes(self, node: &Node8, ray: &RayK, t_limit: f32) -> (u32, [f32; LANES]);
-    /// The nearest hit in the packet with `0 < t < t_limit`, the lowest lane among equal `t`.
-    fn nearest(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> Option<LaneHit>;
-    /// The nearest hit among `packets`: the packet's position in the slice, and the hit; among
-    /// equal `t`, the first packet's, then its lowest lane's. Unless a kernel set keeps each
-    /// lane's nearest across the packets (as [`Avx512::nearest16_among`] does), the packets one
-    /// after another, each with the limit of the nearest hit so far.
-    #[inline(always)]
-    fn nearest_among(
-        self,
-        packets: &[Packet8],
-        ray: &RayK,
-        t_limit: f32,
-    ) -> Option<(usize, LaneHit)> {
-        nearest_packet_by_packet(packets, t_limit, |p, limit| self.nearest(p, ray, limit))
-    }
-    /// Whether any triangle of the packet is hit with `0 < t < t_limit`.
-    fn any(self, packet: &Packet8, ray: &RayK, t_limit: f32) -> bool;
-}
-
 /// A hit in a packet: the lane, and `t`, `u`, `v` as `intersect_triangle` computes them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LaneHit {
@@ -241,9 +217,11 @@ fn lane_hit<const N: usize>(
     h.hit.then_some((h.t, h.u, h.v))
 }
 
-impl Kernels for Scalar {
+impl Scalar {
+    /// Bit `i` set when the ray enters child box `i` within `[0, t_limit]`, and each box's
+    /// entry distance.
     #[inline(always)]
-    fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
+    pub fn boxes(self, node: &Node8, r: &RayK, t_limit: f32) -> (u32, [f32; LANES]) {
         let mut mask = 0;
         let mut t_near = [0.0; LANES];
         for (i, t_out) in t_near.iter_mut().enumerate() {
@@ -263,13 +241,27 @@ impl Kernels for Scalar {
         (mask, t_near)
     }
 
+    /// The nearest hit in the packet with `0 < t < t_limit`, the lowest lane among equal `t`.
     #[inline(always)]
-    fn nearest(self, p: &Packet8, r: &RayK, t_limit: f32) -> Option<LaneHit> {
+    pub fn nearest(self, p: &Packet8, r: &RayK, t_limit: f32) -> Option<LaneHit> {
         p.nearest_scalar(r, t_limit)
     }
 
+    /// The nearest hit among `packets`: the packet's position in the slice, and the hit; among
+    /// equal `t`, the first packet's, then its lowest lane's.
     #[inline(always)]
-    fn any(self, p: &Packet8, r: &RayK, t_limit: f32) -> bool {
+    pub fn nearest_among(
+        self,
+        packets: &[Packet8],
+        r: &RayK,
+        t_limit: f32,
+    ) -> Option<(usize, LaneHit)> {
+        nearest_packet_by_packet(packets, t_limit, |p, limit| self.nearest(p, r, limit))
+    }
+
+    /// Whether any triangle of the packet is hit with `0 < t < t_limit`.
+    #[inline(always)]
+    pub fn any(self, p: &Packet8, r: &RayK, t_limit: f32) -> bool {
         p.any_scalar(r, t_limit)
     }
 }
@@ -322,7 +314,7 @@ impl Avx512 {
 
 /// The nearest hit among `packets`, one packet after another, each tested by `nearest` with
 /// the limit of the nearest hit so far (strict, so the first of equal hits wins): the readable
-/// definition of [`Kernels::nearest_among`] and [`Avx512::nearest16_among`].
+/// definition of [`super::kernels::nearest_among`].
 #[inline(always)]
 pub fn nearest_packet_by_packet<P>(
     packets: &[P],
@@ -344,6 +336,7 @@ pub fn nearest_packet_by_packet<P>(
 mod tests {
     use glam::Vec3;
 
+    use super::super::kernels;
     use super::super::portable::Portable;
     use super::*;
     use crate::base::geometry::{Ray, Triangle};
@@ -408,8 +401,8 @@ mod tests {
             assert_eq!(p16.any_scalar(&r, limit), want.is_some());
             #[cfg(target_arch = "x86_64")]
             if let Some(k) = avx512 {
-                assert_eq!(k.nearest16(&p16, &r, limit), as_hit(want));
-                assert_eq!(k.any16(&p16, &r, limit), want.is_some());
+                assert_eq!(kernels::nearest(k, &p16, &r, limit), as_hit(want));
+                assert_eq!(kernels::any(k, &p16, &r, limit), want.is_some());
             }
             // The first eight in an 8-wide packet.
             let want8 = {
@@ -424,12 +417,12 @@ mod tests {
             };
             let p8 = Packet8::new(&tris, &ids[..8]);
             assert_eq!(Scalar.nearest(&p8, &r, limit), as_hit(want8));
-            assert_eq!(Portable.nearest(&p8, &r, limit), as_hit(want8));
-            assert_eq!(Portable.any(&p8, &r, limit), want8.is_some());
+            assert_eq!(kernels::nearest(Portable, &p8, &r, limit), as_hit(want8));
+            assert_eq!(kernels::any(Portable, &p8, &r, limit), want8.is_some());
             #[cfg(target_arch = "x86_64")]
             if let Some(k) = avx2 {
-                assert_eq!(k.nearest(&p8, &r, limit), as_hit(want8));
-                assert_eq!(k.any(&p8, &r, limit), want8.is_some());
+                assert_eq!(kernels::nearest(k, &p8, &r, limit), as_hit(want8));
+                assert_eq!(kernels::any(k, &p8, &r, limit), want8.is_some());
             }
             hits += usize::from(want.is_some());
         }
@@ -467,8 +460,9 @@ mod tests {
             } else {
                 rng.uniform(0.0, 5.0)
             };
-            let want = nearest_packet_by_packet(&packets, limit, |p, l| k.nearest16(p, &r, l));
-            let got = k.nearest16_among(&packets, &r, limit);
+            let want =
+                nearest_packet_by_packet(&packets, limit, |p, l| kernels::nearest(k, p, &r, l));
+            let got = kernels::nearest_among(k, &packets, &r, limit);
             assert_eq!(
                 got.map(|(p, h)| (p, h.lane, h.t.to_bits(), h.u.to_bits(), h.v.to_bits())),
                 want.map(|(p, h)| (p, h.lane, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
@@ -524,12 +518,15 @@ mod tests {
             let want = nearest_packet_by_packet(&packets, limit, |p, l| Scalar.nearest(p, &r, l));
             assert_eq!(bits(Scalar.nearest_among(&packets, &r, limit)), bits(want));
             assert_eq!(
-                bits(Portable.nearest_among(&packets, &r, limit)),
+                bits(kernels::nearest_among(Portable, &packets, &r, limit)),
                 bits(want)
             );
             #[cfg(target_arch = "x86_64")]
             if let Some(k) = avx2 {
-                assert_eq!(bits(k.nearest_among(&packets, &r, limit)), bits(want));
+                assert_eq!(
+                    bits(kernels::nearest_among(k, &packets, &r, limit)),
+                    bits(want)
+                );
             }
             if let Some((_, h)) = want {
                 let equal = tris
@@ -570,14 +567,14 @@ mod tests {
             let limit = rng.uniform(0.0, 4.0);
             let (ms, ts) = Scalar.boxes(&node, &r, limit);
             // The portable kernels compute the scalar twin's form: the same answers exactly.
-            let (mp, tp) = Portable.boxes(&node, &r, limit);
+            let (mp, tp) = kernels::boxes(Portable, &node, &r, limit);
             assert_eq!(mp, ms);
             for i in (0..LANES).filter(|i| ms & (1 << i) != 0) {
                 assert_eq!(tp[i].to_bits(), ts[i].to_bits());
             }
             #[cfg(target_arch = "x86_64")]
             if let Some(k) = avx2 {
-                let (mv, tv) = k.boxes(&node, &r, limit);
+                let (mv, tv) = kernels::boxes(k, &node, &r, limit);
                 for i in 0..LANES {
                     if (ms ^ mv) & (1 << i) != 0 {
                         disagreements += 1;

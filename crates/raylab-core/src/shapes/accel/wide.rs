@@ -1,5 +1,5 @@
 //! The fast path: an 8-wide BVH collapsed from the binary one, with triangles in 8-wide
-//! packets, traversed with the [`Kernels`] of [`super::simd`] — and the flat packet list that
+//! packets, traversed with the single-ray [`super::kernels`] — and the flat packet list that
 //! beats any tree on a scene as small as the Cornell box.
 //!
 //! A child reference is a `u32`: a node index, or [`LEAF`] | packet index (a leaf is exactly one
@@ -14,9 +14,9 @@ use glam::Vec3;
 use crate::base::geometry::{Ray, Triangle};
 
 use super::bvh::{BOX_T_SLACK, Bvh};
-#[cfg(target_arch = "x86_64")]
-use super::simd::{Avx2, Avx512};
-use super::simd::{Kernels, LANES, LaneHit, Node8, Packet8, Packet16, RayK, Scalar};
+use super::kernels;
+use super::set::InstructionSet;
+use super::simd::{LANES, LaneHit, Node8, Packet8, Packet16, RayK};
 use super::{Hit, TraversalCost};
 
 pub const LEAF: u32 = 1 << 31;
@@ -148,104 +148,41 @@ impl Flat {
         self.count <= CULL_MAX_TRIANGLES
     }
 
-    /// [`Flat::closest`] on 16-wide packets with the AVX-512 kernels.
-    #[cfg(target_arch = "x86_64")]
+    /// One ray's closest hit, lowest index among equal `t`: every packet at the set's width
+    /// (sixteen triangles a packet for AVX-512, eight otherwise).
     #[inline(always)]
-    pub fn closest16(&self, k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
-        closest16_in(&self.packets16, k, r, t_max)
+    pub fn closest<S: InstructionSet>(&self, k: S, r: &RayK, t_max: f32) -> Option<Hit> {
+        // Packets and lanes are in index order and the first of equal hits wins, as in the
+        // brute-force loop.
+        if S::WIDTH == 16 {
+            let (p, h) = kernels::nearest_among(k, &self.packets16, r, t_max)?;
+            Some(scene_hit(&self.packets16[p].index, h))
+        } else {
+            let (p, h) = kernels::nearest_among(k, &self.packets, r, t_max)?;
+            Some(scene_hit(&self.packets[p].index, h))
+        }
     }
 
-    /// [`Flat::occluded`] on 16-wide packets with the AVX-512 kernels.
-    #[cfg(target_arch = "x86_64")]
+    /// Whether one ray hits anything: every packet at the set's width.
     #[inline(always)]
-    pub fn occluded16(&self, k: Avx512, r: &RayK, t_max: f32) -> bool {
-        self.packets16.iter().any(|p| k.any16(p, r, t_max))
-    }
-
-    #[inline(always)]
-    pub fn closest<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> Option<Hit> {
-        closest_in(&self.packets, k, r, t_max)
-    }
-
-    #[inline(always)]
-    pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
-        self.packets.iter().any(|p| k.any(p, r, t_max))
-    }
-}
-
-/// A kernel set as the structures use it: the flat list's loop at the set's width and the
-/// kernels of the wide tree's nodes and leaves. Implemented by [`Scalar`] and [`Avx2`] (both
-/// eight wide) and [`Avx512`] (the flat list sixteen wide, the tree with its AVX2 kernels), so
-/// a query is written once for all three ([`Bvh8Big::closest_with`], the batches of
-/// [`super::Accel`]).
-pub trait KernelSet: Copy {
-    /// The kernels of the wide tree.
-    type Tree: Kernels;
-    fn tree(self) -> Self::Tree;
-    /// One ray's closest hit in a flat list, lowest index among equal `t`.
-    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit>;
-    /// Whether one ray hits anything in a flat list.
-    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool;
-}
-
-/// A [`KernelSet`] whose one set of kernels serves the wide tree and the flat list alike.
-macro_rules! one_width_kernel_set {
-    ($set:ty) => {
-        impl KernelSet for $set {
-            type Tree = $set;
-            #[inline(always)]
-            fn tree(self) -> $set {
-                self
+    pub fn occluded<S: InstructionSet>(&self, k: S, r: &RayK, t_max: f32) -> bool {
+        // Plain loops, no closures: a closure is a function of its own, which the compiler may
+        // leave out of line, compiled without the set's instructions.
+        if S::WIDTH == 16 {
+            for p in &self.packets16 {
+                if kernels::any(k, p, r, t_max) {
+                    return true;
+                }
             }
-            #[inline(always)]
-            fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
-                f.closest(self, r, t_max)
-            }
-            #[inline(always)]
-            fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
-                f.occluded(self, r, t_max)
+        } else {
+            for p in &self.packets {
+                if kernels::any(k, p, r, t_max) {
+                    return true;
+                }
             }
         }
-    };
-}
-pub(super) use one_width_kernel_set;
-
-one_width_kernel_set!(Scalar);
-#[cfg(target_arch = "x86_64")]
-one_width_kernel_set!(Avx2);
-
-#[cfg(target_arch = "x86_64")]
-impl KernelSet for Avx512 {
-    type Tree = Avx2;
-    #[inline(always)]
-    fn tree(self) -> Avx2 {
-        self.avx2()
+        false
     }
-    #[inline(always)]
-    fn flat_closest(self, f: &Flat, r: &RayK, t_max: f32) -> Option<Hit> {
-        f.closest16(self, r, t_max)
-    }
-    #[inline(always)]
-    fn flat_occluded(self, f: &Flat, r: &RayK, t_max: f32) -> bool {
-        f.occluded16(self, r, t_max)
-    }
-}
-
-/// The nearest hit among 16-wide `packets` (the flat list, or its culled copy).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-pub fn closest16_in(packets: &[Packet16], k: Avx512, r: &RayK, t_max: f32) -> Option<Hit> {
-    let (p, h) = k.nearest16_among(packets, r, t_max)?;
-    Some(scene_hit(&packets[p].index, h))
-}
-
-/// The nearest hit among 8-wide `packets` (the flat list, or its culled copy).
-#[inline(always)]
-pub fn closest_in<K: Kernels>(packets: &[Packet8], k: K, r: &RayK, t_max: f32) -> Option<Hit> {
-    // Packets and lanes are in index order and the first of equal hits wins, as in the
-    // brute-force loop.
-    let (p, h) = k.nearest_among(packets, r, t_max)?;
-    Some(scene_hit(&packets[p].index, h))
 }
 
 /// A packet's hit `h` as the scene's: its lane's triangle, from the packet's `index`.
@@ -468,7 +405,7 @@ impl Bvh8 {
     ///
     /// `best` is a hit found elsewhere (or `None`): the result is the better of it and the
     /// tree's closest hit.
-    pub fn closest<K: Kernels>(
+    pub fn closest<K: InstructionSet>(
         &self,
         k: K,
         r: &RayK,
@@ -496,7 +433,7 @@ impl Bvh8 {
     /// nothing and compiles away; a [`TraversalCost`] counts, for the BVH-cost view).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn closest_on<K: Kernels, C: CountWork>(
+    pub(super) fn closest_on<K: InstructionSet, C: CountWork>(
         &self,
         k: K,
         r: &RayK,
@@ -522,7 +459,11 @@ impl Bvh8 {
                 } else {
                     best_t.next_up()
                 };
-                if let Some(h) = k.nearest(p, r, limit) {
+                if let Some(h) = k.call(kernels::Nearest {
+                    p,
+                    r,
+                    t_limit: limit,
+                }) {
                     let i = p.index[h.lane];
                     if h.t < best_t || i < best_i {
                         best_t = h.t;
@@ -533,7 +474,11 @@ impl Bvh8 {
             } else {
                 let node = &self.nodes[item as usize];
                 count.node();
-                let (mut mask, t) = k.boxes(node, r, best_t * BOX_T_SLACK);
+                let (mut mask, t) = k.call(kernels::Boxes {
+                    node,
+                    r,
+                    t_limit: best_t * BOX_T_SLACK,
+                });
                 if mask != 0 && mask & (mask - 1) == 0 {
                     // One child hit (the common case): go straight down.
                     item = node.child[mask.trailing_zeros() as usize];
@@ -591,7 +536,7 @@ impl Bvh8 {
     ///
     /// Children whose boxes are skipped when popped (beyond the best hit) are not counted:
     /// the fast traversal never opens them.
-    pub fn closest_counting<K: Kernels>(
+    pub fn closest_counting<K: InstructionSet>(
         &self,
         k: K,
         r: &RayK,
@@ -608,7 +553,7 @@ impl Bvh8 {
 
     /// Whether any triangle is hit with `0 < t < t_max`; stops at the first.
     #[inline(always)]
-    pub fn occluded<K: Kernels>(&self, k: K, r: &RayK, t_max: f32) -> bool {
+    pub fn occluded<K: InstructionSet>(&self, k: K, r: &RayK, t_max: f32) -> bool {
         if self.root == EMPTY {
             return false;
         }
@@ -626,7 +571,7 @@ impl Bvh8 {
 
     /// Whether anything in the subtree `start` is hit with `0 < t < t_max`.
     #[inline(always)]
-    pub(super) fn occluded_on<K: Kernels>(
+    pub(super) fn occluded_on<K: InstructionSet>(
         &self,
         k: K,
         r: &RayK,
@@ -639,12 +584,20 @@ impl Bvh8 {
         let mut item = start;
         loop {
             if item & LEAF != 0 {
-                if k.any(&self.packets[(item & !LEAF) as usize], r, t_max) {
+                if k.call(kernels::Any {
+                    p: &self.packets[(item & !LEAF) as usize],
+                    r,
+                    t_limit: t_max,
+                }) {
                     return true;
                 }
             } else {
                 let node = &self.nodes[item as usize];
-                let (mut mask, _) = k.boxes(node, r, box_limit);
+                let (mut mask, _) = k.call(kernels::Boxes {
+                    node,
+                    r,
+                    t_limit: box_limit,
+                });
                 if mask != 0 {
                     // Descend into the first hit child, keep the others for later.
                     item = node.child[mask.trailing_zeros() as usize];
@@ -690,14 +643,14 @@ impl Flat {
     /// One ray's closest hit with the kernels `k`. (No boxes: the ray needs no reciprocal
     /// direction.)
     #[inline(always)]
-    pub fn closest_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
-        k.flat_closest(self, &RayK::for_triangles(ray), t_max)
+    pub fn closest_with<K: InstructionSet>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.closest(k, &RayK::for_triangles(ray), t_max)
     }
 
     /// Whether one ray hits anything, with the kernels `k`.
     #[inline(always)]
-    pub fn occluded_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
-        k.flat_occluded(self, &RayK::for_triangles(ray), t_max)
+    pub fn occluded_with<K: InstructionSet>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
+        self.occluded(k, &RayK::for_triangles(ray), t_max)
     }
 }
 
@@ -705,18 +658,18 @@ impl Bvh8Big {
     /// One ray's closest hit with the kernels `k`: the large triangles first (their hit bounds
     /// the tree's), then the tree.
     #[inline(always)]
-    pub fn closest_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
+    pub fn closest_with<K: InstructionSet>(&self, k: K, ray: &Ray, t_max: f32) -> Option<Hit> {
         let r = RayK::new(ray);
-        let best = k.flat_closest(&self.big, &r, t_max);
+        let best = self.big.closest(k, &r, t_max);
         self.tree.closest(k.tree(), &r, t_max, best)
     }
 
     /// Whether one ray hits anything, with the kernels `k`: the tree first, then the large
     /// triangles.
     #[inline(always)]
-    pub fn occluded_with<K: KernelSet>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
+    pub fn occluded_with<K: InstructionSet>(&self, k: K, ray: &Ray, t_max: f32) -> bool {
         let r = RayK::new(ray);
-        self.tree.occluded(k.tree(), &r, t_max) || k.flat_occluded(&self.big, &r, t_max)
+        self.tree.occluded(k.tree(), &r, t_max) || self.big.occluded(k, &r, t_max)
     }
 
     pub fn build(triangles: &[Triangle]) -> Self {

@@ -1,7 +1,7 @@
 //! The only x86 code of the kernels: the SIMD registers as [`lanes`](crate::base::lanes), eight
 //! `f32` lanes of AVX2 ([`Avx2F32`]) and sixteen of AVX-512 ([`Avx512F32`]), with their masks,
 //! implementing [`Real`] and [`Mask`] one instruction an operation; what a packet needs of them
-//! beyond ([`PacketIsa`]: the gather of the rays, lane loads and stores, `u32` lanes); the
+//! beyond ([`InstructionSet`]: the gather of the rays, lane loads and stores, `u32` lanes); the
 //! portable set's four-lane SSE register (`quad`); and AVX-512's lane loads and stores for the
 //! integrators ([`super::lane_io`]). So the ray–triangle arithmetic
 //! ([`crate::shapes::intersect::intersect_lanes`]) is one source for one ray and one triangle (`f32`),
@@ -15,14 +15,15 @@
 //! a CPU with it runs. So these types are private to [`super`] and used only in code reached
 //! through a kernel proof ([`Avx2`](super::simd::Avx2), [`Avx512`](super::simd::Avx512),
 //! whose values exist only on a CPU that runs them): the functions
-//! [`compiled!`](crate::base::lanes::compiled) makes and what inlines into them. (`ZERO` and `load` are plain memory; everything else, `splat`
+//! [`InstructionSet::call`] makes and what inlines into them. (`ZERO` and `load` are plain memory; everything else, `splat`
 //! included, is an instruction of the set.)
 
 use std::arch::x86_64::*;
 use std::mem::transmute;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
-use super::packet::{MAX_WIDTH, PacketIsa, RAY_FLOATS, SEGMENT_FLOATS};
+use super::packet::{RAY_FLOATS, SEGMENT_FLOATS};
+use super::set::{Compiled, InstructionSet, MAX_WIDTH};
 use super::simd::{Avx2, Avx512};
 use crate::base::geometry::Ray;
 use crate::base::lanes::{Mask, Real, compiled};
@@ -31,22 +32,22 @@ use glam::Vec3;
 /// Eight `f32` lanes in an AVX register.
 #[derive(Clone, Copy, Debug)]
 #[repr(transparent)]
-pub(in crate::shapes::accel) struct Avx2F32(pub(in crate::shapes::accel) __m256);
+pub struct Avx2F32(pub(in crate::shapes::accel) __m256);
 
 /// Eight comparison answers in an AVX register: all ones in a lane that is true.
 #[derive(Clone, Copy, Debug)]
 #[repr(transparent)]
-pub(in crate::shapes::accel) struct Avx2Mask(pub(in crate::shapes::accel) __m256);
+pub struct Avx2Mask(pub(in crate::shapes::accel) __m256);
 
 /// Sixteen `f32` lanes in an AVX-512 register.
 #[derive(Clone, Copy, Debug)]
 #[repr(transparent)]
-pub(in crate::shapes::accel) struct Avx512F32(pub(in crate::shapes::accel) __m512);
+pub struct Avx512F32(pub(in crate::shapes::accel) __m512);
 
 /// Sixteen comparison answers in an AVX-512 mask register: bit `i` for lane `i`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(transparent)]
-pub(in crate::shapes::accel) struct Avx512Mask(pub(in crate::shapes::accel) __mmask16);
+pub struct Avx512Mask(pub(in crate::shapes::accel) __mmask16);
 
 impl Avx2F32 {
     /// The eight floats of `a`.
@@ -615,11 +616,26 @@ pub(super) unsafe fn gather8<const K: usize>(
     }
 }
 
-impl PacketIsa for Avx512 {
+impl InstructionSet for Avx512 {
     const WIDTH: usize = 16;
     type F = Avx512F32;
     type U = __m512i;
     type Mask = Avx512Mask;
+    type Tree = Avx2;
+
+    #[inline(always)]
+    fn tree(self) -> Avx2 {
+        self.avx2()
+    }
+
+    #[inline(always)]
+    fn call<F: Compiled>(self, f: F) -> F::Output {
+        compiled!(Avx512: #[inline] fn compiled<F: Compiled>(k: Avx512, f: F) -> F::Output {
+            f.run(k)
+        });
+        // SAFETY: an `Avx512` value exists only on a CPU that runs the features.
+        unsafe { compiled(self, f) }
+    }
 
     #[inline(always)]
     fn rays(self, rays: &[Ray]) -> [Avx512F32; 6] {
@@ -720,11 +736,26 @@ impl PacketIsa for Avx512 {
     }
 }
 
-impl PacketIsa for Avx2 {
+impl InstructionSet for Avx2 {
     const WIDTH: usize = 8;
     type F = Avx2F32;
     type U = __m256i;
     type Mask = Avx2Mask;
+    type Tree = Avx2;
+
+    #[inline(always)]
+    fn tree(self) -> Avx2 {
+        self
+    }
+
+    #[inline(always)]
+    fn call<F: Compiled>(self, f: F) -> F::Output {
+        compiled!(Avx2: #[inline] fn compiled<F: Compiled>(k: Avx2, f: F) -> F::Output {
+            f.run(k)
+        });
+        // SAFETY: an `Avx2` value exists only on a CPU that runs the features.
+        unsafe { compiled(self, f) }
+    }
 
     #[inline(always)]
     fn rays(self, rays: &[Ray]) -> [Avx2F32; 6] {

@@ -44,7 +44,7 @@ use glam::Vec3;
 
 use crate::base::camera::ImagePoints;
 use crate::base::geometry::Ray;
-use crate::base::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, compiled, select_lazy};
+use crate::base::lanes::{F32x16, M16, Mask, MaskOf, Real, Vec3x16, Vector, select_lazy};
 use crate::base::memory::with_thread_memory;
 use crate::base::sampling::Rng;
 use crate::shading::bsdf::{Bsdf, ShadingFrame};
@@ -54,11 +54,7 @@ use crate::shading::light::{
 use crate::shading::material::{Material, MaterialPreset, Scatter, TexturePreset};
 use crate::shading::texture::planar_uv;
 use crate::shapes::accel::SegmentLanes;
-#[cfg(target_arch = "x86_64")]
-use crate::shapes::accel::{
-    Isa,
-    simd::{Avx2, Avx512},
-};
+use crate::shapes::accel::set::{Compiled, InstructionSet};
 use crate::shapes::intersect::Intersection;
 use crate::shapes::scene::Scene;
 use crate::shapes::scene::spec::PartMaterial;
@@ -599,6 +595,28 @@ enum Primary<'a> {
     Camera(&'a ImagePoints<'a>),
 }
 
+/// [`Tracer::trace_primary`] compiled for each instruction set ([`Compiled`]): with AVX-512's
+/// 32 vector registers instead of 16, the long body of a path vertex spills less; with AVX2
+/// and FMA, or the portable baseline. (A closure handed to the compiled function would stay
+/// out of line, compiled without the set; so the camera rays come as data, [`Primary`].)
+struct TracePrimary<'t, 'a> {
+    tracer: &'t Tracer<'a>,
+    primary: Primary<'t>,
+    rngs: &'t mut [Rng],
+    out: &'t mut [Vec3],
+    seen: &'t mut [Option<Seen>],
+    scratch: &'t mut Scratch,
+}
+
+impl Compiled for TracePrimary<'_, '_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<S: InstructionSet>(self, _set: S) {
+        let t = self.tracer;
+        t.trace_primary(self.primary, self.rngs, self.out, self.seen, self.scratch);
+    }
+}
+
 /// Everything an integrator needs for one pass: the scene, its materials with the preset
 /// applied, the light and the shading switches.
 #[derive(Debug)]
@@ -1011,7 +1029,8 @@ impl<'a> Tracer<'a> {
         self.trace_for_cpu(Primary::Camera(points), rngs, out, seen, scratch);
     }
 
-    /// [`Tracer::trace_primary`] in the code compiled for the CPU.
+    /// [`Tracer::trace_primary`] in the code compiled for the CPU's instruction set
+    /// ([`TracePrimary`]).
     #[inline(always)]
     fn trace_for_cpu(
         &self,
@@ -1021,51 +1040,15 @@ impl<'a> Tracer<'a> {
         seen: &mut [Option<Seen>],
         scratch: &mut Scratch,
     ) {
-        match self.scene.accel().isa() {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2(k) => {
-                // SAFETY: `k` proves the CPU has AVX2 and FMA.
-                unsafe { self.trace_avx2(k, primary, rngs, out, seen, scratch) }
-            }
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512(k) => {
-                // SAFETY: `k` proves the CPU has AVX-512 F, DQ and VL, AVX2 and FMA.
-                unsafe { self.trace_avx512(k, primary, rngs, out, seen, scratch) }
-            }
-            _ => self.trace_primary(primary, rngs, out, seen, scratch),
-        }
+        self.scene.accel().isa().call(TracePrimary {
+            tracer: self,
+            primary,
+            rngs,
+            out,
+            seen,
+            scratch,
+        });
     }
-
-    compiled!(Avx512:
-    /// [`Tracer::trace_primary`] compiled with AVX-512 as well: 32 vector registers instead of
-    /// 16, which the long body of a path vertex spills less with.
-    fn trace_avx512(
-        &self,
-        _proof: Avx512,
-        primary: Primary,
-        rngs: &mut [Rng],
-        out: &mut [Vec3],
-        seen: &mut [Option<Seen>],
-        scratch: &mut Scratch,
-    ) {
-        self.trace_primary(primary, rngs, out, seen, scratch);
-    });
-
-    compiled!(Avx2:
-    /// [`Tracer::trace_primary`] compiled with AVX2 and FMA. (A closure passed to such a
-    /// function stays out of line, compiled without them; so the camera rays come as data,
-    /// [`Primary::Camera`].)
-    fn trace_avx2(
-        &self,
-        _proof: Avx2,
-        primary: Primary,
-        rngs: &mut [Rng],
-        out: &mut [Vec3],
-        seen: &mut [Option<Seen>],
-        scratch: &mut Scratch,
-    ) {
-        self.trace_primary(primary, rngs, out, seen, scratch);
-    });
 
     /// The rays of `primary`, made in batches of [`Tracer::batch_len`] if they come as image
     /// points, traced by [`Tracer::trace_seen`].
@@ -1343,27 +1326,21 @@ mod tests {
         (lit, asked)
     }
 
-    compiled!(Avx512:
-    /// [`lit_lanes`] compiled for AVX-512, as the lab's wave is.
-    fn lit_lanes_avx512(
-        light: &LightSpec,
-        shading: &Shading,
-        surfaces: &Surfaces<Vec3x16>,
+    /// [`lit_lanes`] compiled for each instruction set, as the lab's wave is.
+    struct LitLanes<'a> {
+        light: &'a LightSpec,
+        shading: &'a Shading,
+        surfaces: &'a Surfaces<Vec3x16>,
         sphere: bool,
-    ) -> (Lighting<Vec3x16>, M16) {
-        lit_lanes(light, shading, surfaces, sphere)
-    });
+    }
 
-    compiled!(Avx2:
-    /// [`lit_lanes`] compiled for AVX2 and FMA.
-    fn lit_lanes_avx2(
-        light: &LightSpec,
-        shading: &Shading,
-        surfaces: &Surfaces<Vec3x16>,
-        sphere: bool,
-    ) -> (Lighting<Vec3x16>, M16) {
-        lit_lanes(light, shading, surfaces, sphere)
-    });
+    impl Compiled for LitLanes<'_> {
+        type Output = (Lighting<Vec3x16>, M16);
+        #[inline(always)]
+        fn run<S: InstructionSet>(self, _set: S) -> Self::Output {
+            lit_lanes(self.light, self.shading, self.surfaces, self.sphere)
+        }
+    }
 
     /// The lab's terms sixteen hits at a time ([`Lighting::at`] at [`Vec3x16`], as the lab's
     /// wave computes them, compiled portably and for each instruction set the CPU has) equal
@@ -1389,21 +1366,8 @@ mod tests {
             ..coloured
         };
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-        let mut builds: Vec<(&str, LanesFn)> = vec![("portable", lit_lanes)];
-        #[cfg(target_arch = "x86_64")]
-        {
-            // The kernels' own detection: what the renderer checks before it calls them.
-            if crate::shapes::accel::simd::Avx512::detect().is_some() {
-                // SAFETY: the CPU has every feature the function is compiled with.
-                builds.push(("avx512", |l, s, x, y| unsafe {
-                    lit_lanes_avx512(l, s, x, y)
-                }));
-            }
-            if crate::shapes::accel::simd::Avx2::detect().is_some() {
-                // SAFETY: the CPU has every feature the function is compiled with.
-                builds.push(("avx2", |l, s, x, y| unsafe { lit_lanes_avx2(l, s, x, y) }));
-            }
-        }
+        // Every set this CPU runs, the portable one first.
+        let builds = crate::shapes::accel::Isa::available_for_tests("sixteen_hits_at_a_time");
         let mut cast = 0;
         for light in [LightSpec::default(), coloured, spot] {
             let surfaces = awkward_surfaces(&light);
@@ -1418,8 +1382,14 @@ mod tests {
                             for (k, s) in group.iter().enumerate() {
                                 lanes.set(k, *s);
                             }
-                            for &(build, lit_lanes) in &builds {
-                                let (lit, asked) = lit_lanes(&light, &shading, &lanes, sphere);
+                            for isa in &builds {
+                                let build = isa.name();
+                                let (lit, asked) = isa.call(LitLanes {
+                                    light: &light,
+                                    shading: &shading,
+                                    surfaces: &lanes,
+                                    sphere,
+                                });
                                 for (k, s) in group.iter().enumerate() {
                                     let mut one_asked = false;
                                     let one = HitTerms::at(&light, stage, shadows, *s, |p| {
@@ -1467,9 +1437,6 @@ mod tests {
         }
         assert!(cast > 10_000, "{cast}");
     }
-
-    /// How the test calls one build of [`lit_lanes`].
-    type LanesFn = fn(&LightSpec, &Shading, &Surfaces<Vec3x16>, bool) -> (Lighting<Vec3x16>, M16);
 
     /// The code compiled for the CPU (AVX2 and FMA, or AVX-512 where the kernels use it) gives
     /// bit for bit what the portable build gives, in every stage and with every preset (Rust
