@@ -764,7 +764,7 @@ mod tests {
     }
 
     /// AVX2's full packet of rays and shadow rays read by 128-bit loads and rearranged
-    /// (`transpose8`, through [`PacketIsa::rays`] and [`PacketIsa::segments`]) equal the same
+    /// (`transpose8`, through [`InstructionSet::rays`] and [`InstructionSet::segments`]) equal the same
     /// read lane by lane (`gather8`), every float.
     #[cfg(target_arch = "x86_64")]
     #[test]

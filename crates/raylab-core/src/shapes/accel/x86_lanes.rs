@@ -976,7 +976,7 @@ pub(super) fn permute_avx2(table: &[f32; 32], index: &[u32; 16], lanes: u16) -> 
 });
 
 compiled!(Avx2:
-/// [`super::lane_io::ray_lanes`] with AVX2, for sixteen rays: [`PacketIsa::rays`]'s loads
+/// [`super::lane_io::ray_lanes`] with AVX2, for sixteen rays: [`InstructionSet::rays`]'s loads
 /// for each eight.
 #[inline]
 pub(super) fn rays16_avx2(k: Avx2, rays: &[Ray; 16]) -> [[f32; 16]; 6] {
