@@ -336,49 +336,33 @@ pub fn try_primary_rays(camera: &Camera) -> Result<Vec<Ray>, AllocError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::base::lanes::compiled;
+    use crate::shapes::accel::Isa;
+    use crate::shapes::accel::set::{Compiled, InstructionSet};
 
-    /// [`ImagePoints::rays`], as the tracer calls it.
-    #[inline(always)]
-    fn rays_of(points: &ImagePoints, out: &mut [Ray]) {
-        points.rays(0, out);
+    /// [`ImagePoints::rays`] as the tracer calls it, compiled for an instruction set as
+    /// `Tracer::trace_camera` is.
+    struct Rays<'a, 'b> {
+        points: &'a ImagePoints<'b>,
+        out: &'a mut [Ray],
     }
 
-    /// How the test calls one build of [`rays_of`].
-    type RaysFn = fn(&ImagePoints, &mut [Ray]);
+    impl Compiled for Rays<'_, '_> {
+        type Output = ();
 
-    compiled!(Avx512:
-    /// [`rays_of`] compiled for AVX-512, as `Tracer::trace_camera` is.
-    fn rays_avx512(points: &ImagePoints, out: &mut [Ray]) {
-        rays_of(points, out);
-    });
+        #[inline(always)]
+        fn run<S: InstructionSet>(self, _: S) {
+            self.points.rays(0, self.out);
+        }
+    }
 
-    compiled!(Avx2:
-    /// [`rays_of`] compiled for AVX2 and FMA.
-    fn rays_avx2(points: &ImagePoints, out: &mut [Ray]) {
-        rays_of(points, out);
-    });
-
-    /// The camera rays made a batch at a time ([`ImagePoints::rays`], compiled portably and for
-    /// each instruction set the CPU has) are the rays [`Camera::primary_ray_rotated`] and
+    /// The camera rays made a batch at a time ([`ImagePoints::rays`], compiled for each
+    /// instruction set the CPU has) are the rays [`Camera::primary_ray_rotated`] and
     /// [`Camera::lens_ray_rotated`] make one at a time, bit for bit: pixel centres, jittered
     /// points, points far outside the image and the image's centre (a zero direction for a
     /// zero focal length), batches of every length up to 64.
     #[test]
     fn camera_rays_a_batch_at_a_time_equal_one_at_a_time() {
-        let mut builds: Vec<(&str, RaysFn)> = vec![("portable", rays_of)];
-        #[cfg(target_arch = "x86_64")]
-        {
-            // The kernels' own detection: what the renderer checks before it calls them.
-            if crate::shapes::accel::simd::Avx512::detect().is_some() {
-                // SAFETY: the CPU has every feature the function is compiled with.
-                builds.push(("avx512", |p, o| unsafe { rays_avx512(p, o) }));
-            }
-            if crate::shapes::accel::simd::Avx2::detect().is_some() {
-                // SAFETY: the CPU has every feature the function is compiled with.
-                builds.push(("avx2", |p, o| unsafe { rays_avx2(p, o) }));
-            }
-        }
+        let builds = Isa::available_for_tests("camera_rays_a_batch_at_a_time_equal_one_at_a_time");
         let mut rng = crate::base::sampling::Rng::for_pixel_sample(3, 1, 4, 1);
         let mut turned = Camera::default_for(61, 47);
         turned.yaw = 0.7;
@@ -419,9 +403,13 @@ mod tests {
                     let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                     (bits(r.origin), bits(r.direction))
                 };
-                for &(build, rays) in &builds {
+                for &isa in &builds {
+                    let build = isa.name();
                     let mut out = vec![Ray::new(Vec3::ZERO, Vec3::Z); n];
-                    rays(&points, &mut out);
+                    isa.call(Rays {
+                        points: &points,
+                        out: &mut out,
+                    });
                     for (k, got) in out.iter().enumerate() {
                         let one = if camera.aperture > 0.0 {
                             let lens = glam::Vec2::new(lx[k], ly[k]);

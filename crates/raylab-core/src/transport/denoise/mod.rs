@@ -67,7 +67,8 @@ use rayon::prelude::*;
 pub use features::{FEATURE_SAMPLES, Features};
 pub use outliers::{Noisy, OUTLIER_DEVIATIONS, OUTLIER_MIN_SAMPLES, SPREAD_RADIUS};
 
-use crate::base::lanes::compiled;
+use crate::shapes::accel::Isa;
+use crate::shapes::accel::set::{Compiled, InstructionSet};
 use crate::shapes::scene::Scene;
 use crate::transport::film::{Film, Image};
 use crate::transport::integrator::Tracer;
@@ -268,7 +269,7 @@ impl Denoiser {
     /// estimated from its neighbourhood. `colour`, `variance` and `features` must be of one
     /// size.
     pub fn denoise(&self, colour: &Image, variance: Option<&[f32]>, features: &Features) -> Image {
-        self.denoise_with(Isa::best(), colour, variance, features)
+        self.denoise_with(Isa::widest(), colour, variance, features)
     }
 
     /// The denoised `noisy` image: its colour without the outliers denoised, and their excess
@@ -464,7 +465,7 @@ impl Denoiser {
                     lum: &mut lum[at.clone()],
                     v: &mut v[at],
                 };
-                row.filter(isa, out);
+                isa.call(Filter { row: &row, out });
             });
     }
 }
@@ -511,57 +512,24 @@ struct Out<'a> {
     v: &'a mut [f32],
 }
 
-/// The instruction sets the filter's row loop is compiled for, the widest the CPU has chosen
-/// at run time. Each is the same code ([`Row::filter_portable`]) and gives the same bits: Rust
-/// never fuses a multiply and an add, whatever the instruction set (a test compares them).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Isa {
-    Portable,
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-    #[cfg(target_arch = "x86_64")]
-    Avx512,
+/// A row of a pass ([`Row::filter_portable`]), compiled for each instruction set: the same
+/// code and the same bits on each (Rust never fuses a multiply and an add, whatever the
+/// instruction set; a test compares them), the widest set's registers for its arrays.
+struct Filter<'a, 'b> {
+    row: &'a Row<'b>,
+    out: Out<'a>,
 }
 
-impl Isa {
-    fn best() -> Isa {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // The kernels' own detection: the features `compiled!` enables for each set.
-            if crate::shapes::accel::simd::Avx512::detect().is_some() {
-                return Isa::Avx512;
-            }
-            if crate::shapes::accel::simd::Avx2::detect().is_some() {
-                return Isa::Avx2;
-            }
-        }
-        Isa::Portable
+impl Compiled for Filter<'_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<S: InstructionSet>(self, _: S) {
+        self.row.filter_portable(self.out)
     }
 }
 
 impl Row<'_> {
-    /// The row, with the row loop compiled for `isa` (which the CPU must have: [`Isa::best`]).
-    fn filter(&self, isa: Isa, out: Out) {
-        match isa {
-            Isa::Portable => self.filter_portable(out),
-            // SAFETY: `isa` is Avx2 or Avx512 only where `Isa::best` found the CPU to have it.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { self.filter_avx2(out) },
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { self.filter_avx512(out) },
-        }
-    }
-
-    compiled!(Avx2:
-    fn filter_avx2(&self, out: Out) {
-        self.filter_portable(out)
-    });
-
-    compiled!(Avx512:
-    fn filter_avx512(&self, out: Out) {
-        self.filter_portable(out)
-    });
-
     /// Sixteen pixels at a time: their own values and running sums stay in registers (fixed
     /// arrays the compiler keeps in vector registers) through all 25 taps, each tap reading
     /// its sixteen neighbours straight from the padded planes (those outside the image weigh

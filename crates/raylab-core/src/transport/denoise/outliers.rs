@@ -35,8 +35,9 @@
 
 use glam::Vec3;
 
-use super::{BINOMIAL, Features, Isa, effective, exp_neg};
-use crate::base::lanes::compiled;
+use super::{BINOMIAL, Features, effective, exp_neg};
+use crate::shapes::accel::Isa;
+use crate::shapes::accel::set::{Compiled, InstructionSet};
 use crate::transport::film::{Film, FilmSums, Image, channel_mean, mean_and_variance_of_mean};
 
 /// How many standard deviations of a pixel's other samples its brightest may lie above their
@@ -203,6 +204,25 @@ struct Surface {
     sigma_depth: f32,
 }
 
+/// A row of [`Surface::gather`] ([`Surface::row`]), compiled for each instruction set: the same
+/// code and bits on each.
+struct GatherRow<'a> {
+    surface: &'a Surface,
+    y: usize,
+    step: usize,
+    x: &'a [Vec<f32>; 3],
+    row: &'a mut [f32],
+}
+
+impl Compiled for GatherRow<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<S: InstructionSet>(self, _: S) {
+        self.surface.row(self.y, self.step, self.x, self.row)
+    }
+}
+
 impl Surface {
     /// Per channel, each pixel p's Σ over the 3 × 3 taps q, `step` apart and inside the image,
     /// of the binomial kernel's weight times s(p, q)·x(q), s the surface test: exp(−σn·|n − n'|²/2 − |z − z'|/(σz·the
@@ -211,18 +231,18 @@ impl Surface {
     fn gather(&self, step: usize, x: &[Vec<f32>; 3]) -> [Vec<f32>; 3] {
         use rayon::prelude::*;
         let width = self.width;
-        let isa = Isa::best();
+        let isa = Isa::widest();
         let mut out = vec![0.0f32; 3 * width * self.height];
         out.par_chunks_mut(3 * width)
             .enumerate()
-            .for_each(|(y, row)| match isa {
-                Isa::Portable => self.row(y, step, x, row),
-                // SAFETY: `isa` is Avx2 or Avx512 only where `Isa::best` found the CPU to
-                // have it.
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx2 => unsafe { self.row_avx2(y, step, x, row) },
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx512 => unsafe { self.row_avx512(y, step, x, row) },
+            .for_each(|(y, row)| {
+                isa.call(GatherRow {
+                    surface: self,
+                    y,
+                    step,
+                    x,
+                    row,
+                })
             });
         // Back to a plane per channel.
         std::array::from_fn(|c| {
@@ -232,16 +252,6 @@ impl Surface {
                 .collect()
         })
     }
-
-    compiled!(Avx2:
-    fn row_avx2(&self, y: usize, step: usize, x: &[Vec<f32>; 3], row: &mut [f32]) {
-        self.row(y, step, x, row)
-    });
-
-    compiled!(Avx512:
-    fn row_avx512(&self, y: usize, step: usize, x: &[Vec<f32>; 3], row: &mut [f32]) {
-        self.row(y, step, x, row)
-    });
 
     /// Row `y` of [`Surface::gather`], its three channels one after the other in `row`.
     #[inline(always)]

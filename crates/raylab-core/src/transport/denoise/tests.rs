@@ -222,31 +222,10 @@ fn every_instruction_set_gives_the_same_bits() {
     }
     let variance = vec![0.04; (w * h) as usize];
     let denoiser = Denoiser::default();
-    let portable = denoiser.denoise_with(Isa::Portable, &colour, Some(&variance), &features);
-    let test = "every_instruction_set_gives_the_same_bits";
-    #[cfg(target_arch = "x86_64")]
-    for (isa, name, detected) in [
-        (
-            Isa::Avx2,
-            "avx2",
-            std::arch::is_x86_feature_detected!("avx2"),
-        ),
-        (
-            Isa::Avx512,
-            "avx512",
-            std::arch::is_x86_feature_detected!("avx512f"),
-        ),
-    ] {
-        if detected {
-            let fast = denoiser.denoise_with(isa, &colour, Some(&variance), &features);
-            assert_eq!(fast, portable, "{isa:?} against the portable loop");
-        } else {
-            crate::shapes::accel::skip_unless_required(name, test);
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    for name in ["avx2", "avx512"] {
-        crate::shapes::accel::skip_unless_required(name, test);
+    let portable = denoiser.denoise_with(Isa::Scalar, &colour, Some(&variance), &features);
+    for isa in Isa::available_for_tests("every_instruction_set_gives_the_same_bits") {
+        let fast = denoiser.denoise_with(isa, &colour, Some(&variance), &features);
+        assert_eq!(fast, portable, "{isa:?} against the portable loop");
     }
 }
 
