@@ -810,12 +810,26 @@ impl Default for Sah {
 const LAST_BIN: f32 = (BINS - 1) as f32;
 
 /// The three lanes of `v` truncated towards zero, as `as usize` does for the values binning
-/// gives (from 0 to [`LAST_BIN`]): one instruction for the three on x86-64.
+/// gives (from 0 to [`LAST_BIN`]), in one instruction for the three (`cvttps2dq`) instead of
+/// three conversions that each check for overflow.
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn truncate(v: Vec3A) -> [usize; 3] {
-    #[cfg(target_arch = "x86_64")]
-    return super::x86_lanes::truncate3(v);
-    #[cfg(not(target_arch = "x86_64"))]
+    use std::arch::x86_64::{_mm_cvtsi128_si32, _mm_cvttps_epi32, _mm_shuffle_epi32};
+    // SAFETY: register-only SSE2 instructions, which every x86-64 processor has.
+    unsafe {
+        let i = _mm_cvttps_epi32(v.into());
+        [
+            _mm_cvtsi128_si32(i) as usize,
+            _mm_cvtsi128_si32(_mm_shuffle_epi32::<1>(i)) as usize,
+            _mm_cvtsi128_si32(_mm_shuffle_epi32::<2>(i)) as usize,
+        ]
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn truncate(v: Vec3A) -> [usize; 3] {
     v.to_array().map(|x| x as usize)
 }
 

@@ -276,7 +276,8 @@ impl Avx2 {
     /// The AVX2 kernels if this CPU runs them.
     pub fn detect() -> Option<Self> {
         #[cfg(target_arch = "x86_64")]
-        if super::x86_lanes::has_avx2() {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
             return Some(Self { _proof: () });
         }
         None
@@ -295,7 +296,10 @@ impl Avx512 {
     pub fn detect() -> Option<Self> {
         let avx2 = Avx2::detect()?;
         #[cfg(target_arch = "x86_64")]
-        if super::x86_lanes::has_avx512() {
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+        {
             return Some(Self { avx2 });
         }
         let _ = avx2;

@@ -384,6 +384,7 @@ impl Bvh8 {
         let _ = item;
         #[cfg(target_arch = "x86_64")]
         {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             let (start, bytes) = if item & LEAF != 0 {
                 let p = self.packets.as_ptr().wrapping_add((item & !LEAF) as usize);
                 (p.cast::<i8>(), std::mem::size_of::<Packet8>())
@@ -391,7 +392,11 @@ impl Bvh8 {
                 let n = self.nodes.as_ptr().wrapping_add(item as usize);
                 (n.cast::<i8>(), std::mem::size_of::<Node8>())
             };
-            super::x86_lanes::prefetch(start, bytes);
+            for offset in (0..bytes).step_by(64) {
+                // SAFETY: a prefetch is a hint: it never faults and reads nothing the program
+                // sees, whatever the address.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(offset)) };
+            }
         }
     }
 

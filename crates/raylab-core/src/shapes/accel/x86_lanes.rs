@@ -1,10 +1,9 @@
-//! The only x86 code of the tracer (besides it, `compiled!`'s list of each set's features): the SIMD registers as [`lanes`](crate::base::lanes), eight
+//! The only x86 code of the kernels: the SIMD registers as [`lanes`](crate::base::lanes), eight
 //! `f32` lanes of AVX2 ([`Avx2F32`]) and sixteen of AVX-512 ([`Avx512F32`]), with their masks,
 //! implementing [`Real`] and [`Mask`] one instruction an operation; what a packet needs of them
 //! beyond ([`InstructionSet`]: the gather of the rays, lane loads and stores, `u32` lanes); the
 //! portable set's four-lane SSE register (`quad`); and AVX-512's lane loads and stores for the
-//! integrators ([`super::lane_io`]); and the CPU's detection, cache prefetches for the BVH and the
-//! build's binning in one instruction. So the ray–triangle arithmetic
+//! integrators ([`super::lane_io`]). So the ray–triangle arithmetic
 //! ([`crate::shapes::intersect::intersect_lanes`]) is one source for one ray and one triangle (`f32`),
 //! for one ray against a packet of triangles ([`super::kernels`]) and for a packet of rays
 //! against one triangle ([`super::packet`]).
@@ -1180,43 +1179,4 @@ pub(super) mod quad {
             })
         }
     }
-}
-
-/// Asks the processor to start loading the `bytes` bytes from `start` into its cache, a
-/// 64-byte line at a time (`prefetcht0`): for a traversal that will visit them after others.
-#[inline(always)]
-pub(super) fn prefetch(start: *const i8, bytes: usize) {
-    for offset in (0..bytes).step_by(64) {
-        // SAFETY: a prefetch is a hint: it never faults and reads nothing the program sees,
-        // whatever the address.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(offset)) };
-    }
-}
-
-/// The three lanes of `v` truncated towards zero, as `as usize` does for values from 0 to
-/// `i32::MAX`, in one instruction for the three (`cvttps2dq`) instead of three conversions
-/// that each check for overflow.
-#[inline(always)]
-pub(super) fn truncate3(v: glam::Vec3A) -> [usize; 3] {
-    // SAFETY: register-only SSE2 instructions, which every x86-64 processor has.
-    unsafe {
-        let i = _mm_cvttps_epi32(v.into());
-        [
-            _mm_cvtsi128_si32(i) as usize,
-            _mm_cvtsi128_si32(_mm_shuffle_epi32::<1>(i)) as usize,
-            _mm_cvtsi128_si32(_mm_shuffle_epi32::<2>(i)) as usize,
-        ]
-    }
-}
-
-/// Whether this CPU runs the AVX2 set: AVX2 and FMA.
-pub(super) fn has_avx2() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-}
-
-/// Whether this CPU runs the AVX-512 set's extra instructions: AVX-512 F, DQ and VL.
-pub(super) fn has_avx512() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("avx512vl")
 }
