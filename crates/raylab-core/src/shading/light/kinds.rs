@@ -127,6 +127,17 @@ macro_rules! light_kinds {
                 }
             }
 
+            /// An area light's size (its size parameter), 0 for a kind with none: read from
+            /// the fields with no list made, as the lab stages ask it for every batch.
+            #[inline]
+            pub fn size(&self) -> f32 {
+                match *self {
+                    $( light_kinds!(@pat $variant $(($inner))? { $($field),* }) => {
+                        0.0 $( + <ty::$ty as LightParam>::size_of($field) )*
+                    } )+
+                }
+            }
+
             /// The kind's parameters' values, in the order of [`LightKind::params`].
             pub fn values(&self) -> Vec<ParamValue> {
                 match *self {
@@ -303,14 +314,6 @@ impl LightKind {
     /// The kind's size parameter (a sphere's radius, a square's side), if it has one.
     pub fn size_param(&self) -> Option<&'static Param> {
         self.params().iter().find(|p| p.ty == ParamType::Size)
-    }
-
-    /// An area light's size (its [`ParamType::Size`] parameter); 0 for a kind with none.
-    pub fn size(&self) -> f32 {
-        self.params_and_values()
-            .find(|(p, _)| p.ty == ParamType::Size)
-            .and_then(|(_, v)| v.number())
-            .unwrap_or(0.0)
     }
 
     /// The kind `shape` of size `size`: [`LightKind::of_shape`] with its size parameter set to

@@ -171,6 +171,11 @@ pub trait LightParam {
     const TYPE: ParamType;
     fn value(v: Self::Value) -> ParamValue;
     fn of_value(value: ParamValue) -> Option<Self::Value>;
+    /// What the parameter adds to a light's size: its value for a size, else 0.
+    #[inline(always)]
+    fn size_of(_: Self::Value) -> f32 {
+        0.0
+    }
 }
 
 /// Markers naming the parameter types in `light_kinds!`.
@@ -189,6 +194,10 @@ pub mod ty {
         }
         fn of_value(value: ParamValue) -> Option<f32> {
             value.number()
+        }
+        #[inline(always)]
+        fn size_of(v: f32) -> f32 {
+            v
         }
     }
 
